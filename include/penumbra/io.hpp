@@ -1,0 +1,29 @@
+// Writing results: PFM and EXR hold linear fluence, PNG a tone-mapped picture.
+#pragma once
+
+#include <string>
+
+#include "penumbra/error.hpp"
+#include "penumbra/image.hpp"
+#include "penumbra/scene.hpp"
+
+namespace penumbra {
+
+struct DisplayOptions {
+  float exposure = 0;  // EV: the displayed radiance is multiplied by 2^exposure
+};
+
+// Writes `fluence` to `path`, chosen by extension (.pfm, .exr, .png, case-insensitive).
+// PNG shows mean radiance F / 2pi with the scene's emitters composited, exposed, tone-mapped
+// (ACES fit) and sRGB-encoded. The file appears atomically (temporary file, then rename);
+// on failure nothing is left behind.
+Status write_image(const std::string& path, const ImageRgb& fluence, const Scene& scene,
+                   const DisplayOptions& display = {});
+
+// True when write_image knows the extension of `path`.
+bool is_supported_output(const std::string& path);
+
+// Reads a PFM or EXR file as linear RGB (used by tests and by tools that compare results).
+Expected<ImageRgb> read_rgb_image(const std::string& path);
+
+}  // namespace penumbra

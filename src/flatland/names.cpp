@@ -1,0 +1,28 @@
+// Names of methods and options as they appear on the command line and in --json output.
+#include "penumbra/render.hpp"
+
+namespace penumbra {
+
+const char* to_string(Method m) {
+  switch (m) {
+    case Method::rc:
+      return "rc";
+  }
+  return "?";
+}
+
+const char* to_string(MergeFix f) {
+  switch (f) {
+    case MergeFix::bilinear:
+      return "bilinear";
+    case MergeFix::none:
+      return "none";
+    case MergeFix::nearest:
+      return "nearest";
+    case MergeFix::parallax:
+      return "parallax";
+  }
+  return "?";
+}
+
+}  // namespace penumbra

@@ -1,0 +1,31 @@
+// Internal image reading and writing (PNG through stb, EXR through OpenEXR, PFM by hand).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "penumbra/error.hpp"
+#include "penumbra/image.hpp"
+
+namespace penumbra::io {
+
+// A decoded image file: interleaved channels, row 0 at the top.
+struct RawImage {
+  int width = 0, height = 0, channels = 0;
+  std::vector<float> pixels;  // width * height * channels
+  bool integer_png = false;   // values came from an 8- or 16-bit PNG, scaled to [0, 1], not decoded
+};
+
+// Reads .png, .exr or .pfm (by extension, case-insensitive). Messages name the file.
+Expected<RawImage> read_image(const std::string& path);
+
+// sRGB transfer functions on [0, 1].
+float srgb_to_linear(float v);
+float linear_to_srgb(float v);
+
+// Low-level writers; each writes atomically (temporary file beside the target, then rename).
+Status write_pfm(const std::string& path, const ImageRgb& image);
+Status write_exr(const std::string& path, const ImageRgb& image);
+Status write_png8(const std::string& path, int width, int height, const std::vector<unsigned char>& rgb);
+
+}  // namespace penumbra::io

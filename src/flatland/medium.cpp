@@ -1,0 +1,92 @@
+#include "flatland/medium.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/parallel.hpp"
+
+namespace penumbra {
+
+float extinction(float opacity) {
+  if (opacity >= 1.0f) return kOpaque;
+  if (opacity <= 0.0f) return 0.0f;
+  return -std::log1p(-opacity);
+}
+
+Medium make_medium(const Scene& scene, const std::vector<float>* emission) {
+  Medium m;
+  m.width = scene.width;
+  m.height = scene.height;
+  m.cells.resize(scene.cells());
+  const std::vector<float>& le = emission ? *emission : scene.emission;
+  parallel_for(scene.height, [&](int y) {
+    for (int x = 0; x < scene.width; ++x) {
+      const std::size_t i = scene.index(x, y);
+      m.cells[i] = {le[3 * i], le[3 * i + 1], le[3 * i + 2], extinction(scene.opacity[i])};
+    }
+  });
+  return m;
+}
+
+std::uint64_t distance_field_bytes(int width, int height) {
+  return std::uint64_t(width) * height * (sizeof(float) + 2 * sizeof(std::int32_t));
+}
+
+void build_distance_field(Medium& m) {
+  const int w = m.width, h = m.height;
+  const std::size_t n = std::size_t(w) * h;
+  // Each cell holds the index of the nearest seed found so far, -1 for none.
+  std::vector<std::int32_t> a(n), b(n);
+  parallel_for(h, [&](int y) {
+    for (int x = 0; x < w; ++x) {
+      const std::size_t i = std::size_t(y) * w + x;
+      a[i] = m.cells[i].sigma > 0 ? std::int32_t(i) : -1;
+    }
+  });
+  auto dist2 = [w](int x, int y, std::int32_t s) {
+    const float dx = float(s % w - x), dy = float(s / w - y);
+    return dx * dx + dy * dy;
+  };
+  auto pass = [&](const std::vector<std::int32_t>& in, std::vector<std::int32_t>& out, int step) {
+    parallel_for(h, [&](int y) {
+      for (int x = 0; x < w; ++x) {
+        std::int32_t best = in[std::size_t(y) * w + x];
+        float best_d = best >= 0 ? dist2(x, y, best) : std::numeric_limits<float>::infinity();
+        for (int oy = -step; oy <= step; oy += step) {
+          const int sy = y + oy;
+          if (sy < 0 || sy >= h) continue;
+          for (int ox = -step; ox <= step; ox += step) {
+            const int sx = x + ox;
+            if (sx < 0 || sx >= w || (ox == 0 && oy == 0)) continue;
+            const std::int32_t s = in[std::size_t(sy) * w + sx];
+            if (s < 0) continue;
+            const float d = dist2(x, y, s);
+            // Ties go to the lower index so the result does not depend on visiting order.
+            if (d < best_d || (d == best_d && s < best)) best = s, best_d = d;
+          }
+        }
+        out[std::size_t(y) * w + x] = best;
+      }
+    });
+  };
+  int top = 1;
+  while (top * 2 < std::max(w, h)) top *= 2;
+  std::vector<int> steps;
+  for (int s = top; s >= 1; s /= 2) steps.push_back(s);
+  steps.push_back(2);
+  steps.push_back(1);
+  for (int s : steps) {
+    pass(a, b, s);
+    std::swap(a, b);
+  }
+  m.distance.resize(n);
+  parallel_for(h, [&](int y) {
+    for (int x = 0; x < w; ++x) {
+      const std::size_t i = std::size_t(y) * w + x;
+      m.distance[i] =
+          a[i] >= 0 ? std::sqrt(dist2(x, y, a[i])) : std::numeric_limits<float>::infinity();
+    }
+  });
+}
+
+}  // namespace penumbra

@@ -1,0 +1,119 @@
+// render(): the library's entry point for running a method on a scene.
+#include <cmath>
+#include <string>
+
+#include <tbb/task_arena.h>
+
+#include "core/parallel.hpp"
+#include "core/timer.hpp"
+#include "flatland/medium.hpp"
+#include "flatland/rc/rc.hpp"
+#include "penumbra/render.hpp"
+
+namespace penumbra {
+
+namespace {
+
+Status check_options(const Scene& scene, const RenderOptions& o) {
+  auto bad = [](const std::string& what) { return Status(Error{what}); };
+  if (scene.width < 1 || scene.height < 1 || scene.cells() != scene.opacity.size() ||
+      scene.emission.size() != 3 * scene.cells() || scene.albedo.size() != 3 * scene.cells())
+    return bad("scene: inconsistent grid (build it with build_scene)");
+  if (o.bounces < 1 || o.bounces > 64) return bad("bounces: expected 1..64, found " + std::to_string(o.bounces));
+  if (o.threads < 0) return bad("threads: expected >= 0, found " + std::to_string(o.threads));
+  const RcOptions& rc = o.rc;
+  if (rc.probe_spacing < 1 || rc.probe_spacing > 64)
+    return bad("probe spacing: expected 1..64 cells, found " + std::to_string(rc.probe_spacing));
+  if (rc.directions < 1 || rc.directions > 64)
+    return bad("directions: expected 1..64, found " + std::to_string(rc.directions));
+  if (rc.branching != 2 && rc.branching != 4)
+    return bad("branching: expected 2 or 4, found " + std::to_string(rc.branching));
+  if (!(rc.interval > 0.0f) || !std::isfinite(rc.interval))
+    return bad("interval t0: expected a number > 0, found " + std::to_string(rc.interval));
+  if (rc.cascades < 0 || rc.cascades > 16)
+    return bad("cascades: expected 0 (automatic) or 1..16, found " + std::to_string(rc.cascades));
+  if (rc.extend) {
+    if (rc.fix == MergeFix::bilinear)
+      return bad("extend: interval extension builds each probe's own interval, which the bilinear "
+                 "fix does not use; choose --fix none, nearest or parallax");
+    if (rc.preaverage) return bad("extend: cannot be combined with pre-averaging");
+    if (!(rc.extend_length >= 1.0f) || !std::isfinite(rc.extend_length))
+      return bad("extend length: expected a number >= 1, found " + std::to_string(rc.extend_length));
+  }
+  return {};
+}
+
+std::uint64_t estimate(const Scene& scene, const RenderOptions& o,
+                       const std::vector<rc::Cascade>& plan) {
+  const std::uint64_t cells = scene.cells();
+  std::uint64_t bytes = cells * sizeof(Cell);                             // medium
+  bytes += distance_field_bytes(scene.width, scene.height);              // distance field
+  bytes += rc::cascade_bytes(plan, o.rc);                                // cascades
+  bytes += cells * 3 * sizeof(float);                                    // fluence
+  return bytes;
+}
+
+std::string human_bytes(std::uint64_t b) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.2f GiB", double(b) / double(1ull << 30));
+  return buf;
+}
+
+}  // namespace
+
+std::uint64_t estimate_memory(const Scene& scene, const RenderOptions& options) {
+  if (scene.width < 1 || scene.height < 1) return 0;
+  return estimate(scene, options, rc::plan_cascades(scene.width, scene.height, options.rc));
+}
+
+Expected<RenderResult> render(const Scene& scene, const RenderOptions& options) {
+  if (Status s = check_options(scene, options); !s) return s.error();
+  RenderResult result;
+  result.options = options;
+  std::vector<rc::Cascade> plan = rc::plan_cascades(scene.width, scene.height, options.rc);
+  result.options.rc.cascades = int(plan.size());
+  result.memory_bytes = estimate(scene, options, plan);
+  if (result.memory_bytes > options.max_memory)
+    return Error{"grid " + std::to_string(scene.width) + "x" + std::to_string(scene.height) +
+                 " needs " + human_bytes(result.memory_bytes) + " of working memory, more than the " +
+                 human_bytes(options.max_memory) +
+                 " limit (raise it with --max-memory, or use a larger --probe-spacing)"};
+
+  tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
+  arena.execute([&] {
+    Stopwatch watch;
+    Medium medium = make_medium(scene);
+    result.stages.push_back({"medium", watch.ms()});
+    watch.restart();
+    build_distance_field(medium);
+    result.stages.push_back({"distance field", watch.ms()});
+
+    std::vector<float> f = rc::solve(medium, scene.environment, plan, options.rc, result.stages);
+    // More bounces: diffuse re-emission albedo * F / 2pi added to the scene's own emission.
+    for (int bounce = 2; bounce <= options.bounces; ++bounce) {
+      watch.restart();
+      const float k = float(1.0 / (2.0 * 3.14159265358979323846));
+      parallel_for(scene.height, [&](int y) {
+        for (int x = 0; x < scene.width; ++x) {
+          const std::size_t i = scene.index(x, y);
+          const float* le = &scene.emission[3 * i];
+          const float* rho = &scene.albedo[3 * i];
+          Cell& c = medium.cells[i];
+          c.r = le[0] + rho[0] * f[3 * i] * k;
+          c.g = le[1] + rho[1] * f[3 * i + 1] * k;
+          c.b = le[2] + rho[2] * f[3 * i + 2] * k;
+        }
+      });
+      result.stages.push_back({"bounce " + std::to_string(bounce) + " emission", watch.ms()});
+      std::vector<StageTime> inner;
+      f = rc::solve(medium, scene.environment, plan, options.rc, inner);
+      for (StageTime& s : inner) result.stages.push_back({"bounce " + std::to_string(bounce) + " " + s.name, s.ms});
+    }
+    result.fluence = ImageRgb(scene.width, scene.height);
+    std::copy(f.begin(), f.end(), result.fluence.data());
+  });
+  for (const StageTime& s : result.stages) result.time_ms += s.ms;
+  return result;
+}
+
+}  // namespace penumbra

@@ -1,1 +1,221 @@
-int main() { return 0; }
+// penumbra: the command line. A thin front end over libpenumbra.
+// Exit codes: 0 success, 1 bad input or runtime failure, 2 usage error.
+#include <CLI/CLI.hpp>
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "core/timer.hpp"
+#include "penumbra/penumbra.hpp"
+
+namespace {
+
+using penumbra::MergeFix;
+
+constexpr int kUsage = 2;
+constexpr int kFailure = 1;
+
+// "512M", "8G", "1.5GiB", or a plain number of bytes.
+bool parse_size(const std::string& text, std::uint64_t& bytes) {
+  std::size_t used = 0;
+  double v = 0;
+  try {
+    v = std::stod(text, &used);
+  } catch (...) {
+    return false;
+  }
+  std::string unit = text.substr(used);
+  double scale = 1;
+  if (unit == "" || unit == "B")
+    scale = 1;
+  else if (unit == "K" || unit == "KiB")
+    scale = 1024.0;
+  else if (unit == "M" || unit == "MiB")
+    scale = 1024.0 * 1024;
+  else if (unit == "G" || unit == "GiB")
+    scale = 1024.0 * 1024 * 1024;
+  else
+    return false;
+  if (!(v > 0) || !std::isfinite(v)) return false;
+  bytes = std::uint64_t(v * scale);
+  return true;
+}
+
+nlohmann::json parameters_json(const penumbra::RenderOptions& o) {
+  const penumbra::RcOptions& rc = o.rc;
+  nlohmann::json p = {{"probe_spacing", rc.probe_spacing},
+                      {"directions", rc.directions},
+                      {"branching", rc.branching},
+                      {"interval", rc.interval},
+                      {"cascades", rc.cascades},
+                      {"fix", penumbra::to_string(rc.fix)},
+                      {"preaverage", rc.preaverage},
+                      {"extend", rc.extend},
+                      {"bounces", o.bounces},
+                      {"threads", o.threads},
+                      {"max_memory", o.max_memory}};
+  if (rc.extend) p["extend_length"] = rc.extend_length;
+  return p;
+}
+
+struct RenderArgs {
+  std::string scene;
+  std::vector<std::string> outputs;
+  std::string method = "rc";
+  std::string fix = "bilinear";
+  std::string max_memory = "8G";
+  float exposure = 0;
+  bool json = false;
+  bool quiet = false;
+  penumbra::RenderOptions options;
+};
+
+int run_render(const RenderArgs& a) {
+  for (const std::string& out : a.outputs)
+    if (!penumbra::is_supported_output(out)) {
+      std::cerr << "penumbra render: " << out << ": unknown output type (use .png, .exr or .pfm)\n";
+      return kUsage;
+    }
+  penumbra::RenderOptions options = a.options;
+  if (!parse_size(a.max_memory, options.max_memory)) {
+    std::cerr << "penumbra render: --max-memory: expected a size such as 512M or 8G, found '"
+              << a.max_memory << "'\n";
+    return kUsage;
+  }
+  static const std::map<std::string, MergeFix> fixes = {{"bilinear", MergeFix::bilinear},
+                                                        {"none", MergeFix::none},
+                                                        {"nearest", MergeFix::nearest},
+                                                        {"parallax", MergeFix::parallax}};
+  options.rc.fix = fixes.at(a.fix);
+
+  penumbra::Stopwatch load_watch;
+  penumbra::Expected<penumbra::SceneDesc> desc =
+      a.scene.empty() ? penumbra::Expected<penumbra::SceneDesc>(penumbra::default_scene())
+                      : penumbra::load_scene(a.scene);
+  if (!desc) {
+    std::cerr << "penumbra render: " << desc.error().message << "\n";
+    return kFailure;
+  }
+  penumbra::Stopwatch raster_watch;
+  penumbra::Expected<penumbra::Scene> scene = penumbra::build_scene(*desc);
+  if (!scene) {
+    std::cerr << "penumbra render: " << scene.error().message << "\n";
+    return kFailure;
+  }
+  const double raster_ms = raster_watch.ms();
+  const double load_ms = load_watch.ms() - raster_ms;
+
+  penumbra::Expected<penumbra::RenderResult> result = penumbra::render(*scene, options);
+  if (!result) {
+    std::cerr << "penumbra render: " << desc->source << ": " << result.error().message << "\n";
+    return kFailure;
+  }
+  penumbra::Stopwatch write_watch;
+  for (const std::string& out : a.outputs) {
+    penumbra::Status s = penumbra::write_image(out, result->fluence, *scene, {a.exposure});
+    if (!s) {
+      std::cerr << "penumbra render: " << s.error().message << "\n";
+      return kFailure;
+    }
+  }
+  const double write_ms = write_watch.ms();
+
+  if (a.json) {
+    nlohmann::json stages = nlohmann::json::object();
+    for (const penumbra::StageTime& s : result->stages) stages[s.name] = s.ms;
+    nlohmann::json j = {{"method", penumbra::to_string(options.method)},
+                        {"scene", desc->source},
+                        {"width", scene->width},
+                        {"height", scene->height},
+                        {"time_ms", result->time_ms},
+                        {"stages", stages},
+                        {"rasterize_ms", raster_ms},
+                        {"load_ms", load_ms},
+                        {"write_ms", write_ms},
+                        {"memory_bytes", result->memory_bytes},
+                        {"parameters", parameters_json(result->options)},
+                        {"outputs", a.outputs}};
+    std::cout << j.dump(2) << "\n";
+  } else if (!a.quiet) {
+    std::printf("penumbra %s: %s, %dx%d cells, method %s, %d cascades, fix %s\n",
+                penumbra::kVersion, desc->source.c_str(), scene->width, scene->height,
+                penumbra::to_string(options.method), result->options.rc.cascades,
+                penumbra::to_string(options.rc.fix));
+    std::printf("  %-24s %9.1f ms\n", "load scene", load_ms);
+    std::printf("  %-24s %9.1f ms\n", "rasterise", raster_ms);
+    for (const penumbra::StageTime& s : result->stages)
+      std::printf("  %-24s %9.1f ms\n", s.name.c_str(), s.ms);
+    std::printf("  %-24s %9.1f ms  (computation)\n", "total", result->time_ms);
+    std::printf("  %-24s %9.1f ms\n", "write outputs", write_ms);
+    std::printf("  working memory %.1f MiB\n", double(result->memory_bytes) / (1 << 20));
+    for (const std::string& out : a.outputs) std::printf("  wrote %s\n", out.c_str());
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Penumbra: global illumination with radiance cascades."};
+  app.set_version_flag("--version", std::string("penumbra ") + penumbra::kVersion);
+  app.require_subcommand(1);
+
+  RenderArgs a;
+  CLI::App* render = app.add_subcommand("render", "Render a 2D scene file (or the built-in scene)");
+  render->add_option("scene", a.scene, "Scene file (JSON, format 1); omitted: the built-in scene");
+  render->add_option("-o,--output", a.outputs, "Output file: .png (display), .exr or .pfm (fluence); repeatable")
+      ->required();
+  render->add_option("--method", a.method, "Method")
+      ->check(CLI::IsMember({"rc"}))
+      ->capture_default_str();
+  penumbra::RcOptions& rc = a.options.rc;
+  render->add_option("--probe-spacing", rc.probe_spacing, "Cascade-0 probe spacing s0 in cells")
+      ->check(CLI::Range(1, 64))
+      ->capture_default_str();
+  render->add_option("--directions", rc.directions, "Directions Q0 of a cascade-0 probe")
+      ->check(CLI::Range(1, 64))
+      ->capture_default_str();
+  render->add_option("--branching", rc.branching, "Angular branching per cascade")
+      ->check(CLI::IsMember({2, 4}))
+      ->capture_default_str();
+  render->add_option("--interval", rc.interval, "Cascade-0 interval length t0 in cells")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  render->add_option("--cascades", rc.cascades, "Number of cascades (0: reach the grid diagonal)")
+      ->check(CLI::Range(0, 16))
+      ->capture_default_str();
+  render->add_option("--fix", a.fix, "Merge: bilinear (fix), none (vanilla), nearest, parallax")
+      ->check(CLI::IsMember({"bilinear", "none", "nearest", "parallax"}))
+      ->capture_default_str();
+  render->add_flag("--preaverage", rc.preaverage, "Trace a 2x2 sub-probe neighbourhood and store the average");
+  render->add_flag("--extend", rc.extend, "Build long intervals by extending a short traced one");
+  render->add_option("--extend-length", rc.extend_length, "Traced length before extension, cells")
+      ->check(CLI::Range(1.0f, 1.0e6f))
+      ->capture_default_str();
+  render->add_option("--bounces", a.options.bounces, "Diffuse bounces (1: direct light only)")
+      ->check(CLI::Range(1, 64))
+      ->capture_default_str();
+  render->add_option("--threads", a.options.threads, "Worker threads (0: all cores)")
+      ->check(CLI::Range(0, 1024))
+      ->capture_default_str();
+  render->add_option("--max-memory", a.max_memory, "Refuse work needing more working memory")
+      ->capture_default_str();
+  render->add_option("--exposure", a.exposure, "PNG exposure in EV")->capture_default_str();
+  render->add_flag("--json", a.json, "Print one JSON object with timings, memory and parameters");
+  render->add_flag("-q,--quiet", a.quiet, "Print nothing on success");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::Success& e) {
+    return app.exit(e);  // --help, --version
+  } catch (const CLI::ParseError& e) {
+    app.exit(e);
+    return kUsage;
+  }
+  if (render->parsed()) return run_render(a);
+  return kUsage;
+}

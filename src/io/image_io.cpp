@@ -1,0 +1,467 @@
+// Image files: PNG through stb, EXR through OpenEXR, PFM by hand. Every failure becomes an
+// Error naming the file; writers go through a temporary file so a target is never half-written.
+#include "io/image_io.hpp"
+
+#include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfIO.h>
+#include <ImfInputFile.h>
+#include <ImfOutputFile.h>
+#include <stb_image.h>
+#include <stb_image_write.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <bit>
+#include <cctype>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <exception>
+#include <limits>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "io/path_util.hpp"
+#include "penumbra/scene.hpp"
+
+namespace penumbra::io {
+namespace {
+
+Error fail(const std::string& path, const std::string& what) {
+  return Error{path + ": " + what};
+}
+
+// errno as words; "I/O error" when a failing call left errno unset.
+std::string errno_text(int err) {
+  return err != 0 ? std::strerror(err) : "I/O error";
+}
+
+struct FileCloser {
+  void operator()(std::FILE* f) const { std::fclose(f); }
+};
+using FilePtr = std::unique_ptr<std::FILE, FileCloser>;
+
+Expected<FilePtr> open_for_reading(const std::string& path) {
+  errno = 0;
+  FilePtr f(std::fopen(path.c_str(), "rb"));
+  if (!f) return fail(path, "cannot open: " + errno_text(errno));
+  return f;
+}
+
+// Size of what is left in `f` from the current position, or -1 when it cannot be told.
+long long remaining_bytes(std::FILE* f) {
+  const long here = std::ftell(f);
+  if (here < 0 || std::fseek(f, 0, SEEK_END) != 0) return -1;
+  const long end = std::ftell(f);
+  if (end < 0 || std::fseek(f, here, SEEK_SET) != 0) return -1;
+  return static_cast<long long>(end) - here;
+}
+
+Status check_size(const std::string& path, long long width, long long height) {
+  if (width <= 0 || height <= 0) {
+    return fail(path, "image has zero size (" + std::to_string(width) + " x " +
+                          std::to_string(height) + ")");
+  }
+  if (width > kMaxGridSide || height > kMaxGridSide) {
+    return fail(path, "image too large (" + std::to_string(width) + " x " + std::to_string(height) +
+                          ", the limit is " + std::to_string(kMaxGridSide) + " per side)");
+  }
+  return {};
+}
+
+// ---- PNG ---------------------------------------------------------------------------------
+
+std::string malformed_png() {
+  const char* why = stbi_failure_reason();  // null if stb recorded no reason
+  return std::string("malformed PNG: ") + (why ? why : "unknown error");
+}
+
+Expected<std::vector<unsigned char>> read_all(const std::string& path) {
+  auto f = open_for_reading(path);
+  if (!f) return f.error();
+  std::vector<unsigned char> bytes;
+  unsigned char chunk[1 << 16];
+  for (;;) {
+    errno = 0;
+    const std::size_t n = std::fread(chunk, 1, sizeof chunk, f->get());
+    bytes.insert(bytes.end(), chunk, chunk + n);
+    if (n < sizeof chunk) break;
+  }
+  // A directory opens fine on Linux and only fails on read.
+  if (std::ferror(f->get())) return fail(path, "cannot read: " + errno_text(errno));
+  return bytes;
+}
+
+Expected<RawImage> read_png(const std::string& path) {
+  auto bytes = read_all(path);
+  if (!bytes) return bytes.error();
+  static constexpr unsigned char kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  if (bytes->size() < sizeof kSignature ||
+      !std::equal(kSignature, kSignature + sizeof kSignature, bytes->begin())) {
+    return fail(path, "not a PNG file (bad signature)");
+  }
+  if (bytes->size() > static_cast<std::size_t>(std::numeric_limits<int>::max())) {
+    return fail(path, "file too large");
+  }
+  const int len = static_cast<int>(bytes->size());
+  const unsigned char* data = bytes->data();
+
+  int w = 0, h = 0, comp = 0;
+  if (!stbi_info_from_memory(data, len, &w, &h, &comp)) {
+    return fail(path, malformed_png());
+  }
+  // Checked before decoding so a hostile header cannot ask for gigabytes.
+  if (Status s = check_size(path, w, h); !s) return s.error();
+
+  RawImage img;
+  const bool sixteen = stbi_is_16_bit_from_memory(data, len) != 0;
+  if (sixteen) {
+    std::unique_ptr<stbi_us, void (*)(void*)> px(
+        stbi_load_16_from_memory(data, len, &img.width, &img.height, &img.channels, 0),
+        stbi_image_free);
+    if (!px) return fail(path, malformed_png());
+    const std::size_t n = std::size_t(img.width) * img.height * img.channels;
+    img.pixels.resize(n);
+    for (std::size_t i = 0; i < n; ++i) img.pixels[i] = px.get()[i] / 65535.0f;
+  } else {
+    std::unique_ptr<stbi_uc, void (*)(void*)> px(
+        stbi_load_from_memory(data, len, &img.width, &img.height, &img.channels, 0),
+        stbi_image_free);
+    if (!px) return fail(path, malformed_png());
+    const std::size_t n = std::size_t(img.width) * img.height * img.channels;
+    img.pixels.resize(n);
+    for (std::size_t i = 0; i < n; ++i) img.pixels[i] = px.get()[i] / 255.0f;
+  }
+  if (img.channels < 1 || img.channels > 4) {
+    return fail(path, "unsupported PNG channel count " + std::to_string(img.channels));
+  }
+  img.integer_png = true;
+  return img;
+}
+
+// ---- PFM ---------------------------------------------------------------------------------
+
+enum class TokenResult { kOk, kEof, kTooLong };
+
+// Reads one whitespace-delimited header token and the single whitespace byte that ends it.
+TokenResult read_token(std::FILE* f, std::string& out) {
+  out.clear();
+  int c = std::fgetc(f);
+  while (c != EOF && std::isspace(c)) c = std::fgetc(f);
+  while (c != EOF && !std::isspace(c)) {
+    if (out.size() >= 64) return TokenResult::kTooLong;
+    out.push_back(static_cast<char>(c));
+    c = std::fgetc(f);
+  }
+  return c == EOF ? TokenResult::kEof : TokenResult::kOk;
+}
+
+template <class T>
+bool parse_number(const std::string& s, T& value) {
+  const char* end = s.data() + s.size();
+  auto [ptr, ec] = std::from_chars(s.data(), end, value);
+  return ec == std::errc() && ptr == end;
+}
+
+std::uint32_t byteswap32(std::uint32_t v) {
+  return (v >> 24) | ((v >> 8) & 0xff00u) | ((v << 8) & 0xff0000u) | (v << 24);
+}
+
+Expected<RawImage> read_pfm(const std::string& path) {
+  auto file = open_for_reading(path);
+  if (!file) return file.error();
+  std::FILE* f = file->get();
+
+  std::string magic, ws, hs, ss;
+  for (std::string* tok : {&magic, &ws, &hs, &ss}) {
+    const TokenResult r = read_token(f, *tok);
+    if (r == TokenResult::kTooLong) return fail(path, "bad PFM header (token too long)");
+    if (r == TokenResult::kEof) {
+      if (std::ferror(f)) return fail(path, "cannot read: " + errno_text(errno));
+      return fail(path, "bad PFM header (truncated)");
+    }
+  }
+  int channels = 0;
+  if (magic == "PF") {
+    channels = 3;
+  } else if (magic == "Pf") {
+    channels = 1;
+  } else {
+    return fail(path, "bad PFM header (expected 'PF' or 'Pf', found '" + magic + "')");
+  }
+  long long width = 0, height = 0;
+  double scale = 0;
+  if (!parse_number(ws, width) || !parse_number(hs, height)) {
+    return fail(path, "bad PFM header (size '" + ws + " " + hs + "')");
+  }
+  if (!parse_number(ss, scale) || scale == 0 || !std::isfinite(scale)) {
+    return fail(path, "bad PFM header (scale '" + ss + "')");
+  }
+  if (Status s = check_size(path, width, height); !s) return s.error();
+
+  // Check the length before allocating, so a lying header cannot ask for gigabytes.
+  const std::size_t count = std::size_t(width) * height * channels;
+  const std::size_t expected = count * sizeof(float);
+  const long long left = remaining_bytes(f);
+  if (left >= 0 && static_cast<unsigned long long>(left) < expected) {
+    return fail(path, "truncated data (expected " + std::to_string(expected) + " bytes, found " +
+                          std::to_string(left) + ")");
+  }
+  std::vector<float> raw(count);
+  errno = 0;
+  const std::size_t got = std::fread(raw.data(), sizeof(float), count, f);
+  if (got < count) {
+    if (std::ferror(f)) return fail(path, "cannot read: " + errno_text(errno));
+    return fail(path, "truncated data (expected " + std::to_string(expected) + " bytes, found " +
+                          std::to_string(got * sizeof(float)) + ")");
+  }
+  // Negative scale: little-endian data; positive: big-endian. Its magnitude is not applied.
+  const bool file_little = scale < 0;
+  if (file_little != (std::endian::native == std::endian::little)) {
+    for (float& v : raw) v = std::bit_cast<float>(byteswap32(std::bit_cast<std::uint32_t>(v)));
+  }
+
+  RawImage img;
+  img.width = static_cast<int>(width);
+  img.height = static_cast<int>(height);
+  img.channels = channels;
+  img.pixels.resize(count);
+  // PFM stores the bottom row first; ours has row 0 at the top.
+  const std::size_t row = std::size_t(width) * channels;
+  for (int y = 0; y < img.height; ++y) {
+    std::copy_n(raw.data() + std::size_t(img.height - 1 - y) * row, row,
+                img.pixels.data() + std::size_t(y) * row);
+  }
+  return img;
+}
+
+// ---- EXR ---------------------------------------------------------------------------------
+
+Expected<RawImage> read_exr(const std::string& path) {
+  // Open once ourselves for a plain errno message on a missing or unreadable file.
+  if (auto f = open_for_reading(path); !f) return f.error();
+  try {
+    Imf::InputFile file(path.c_str());
+    const Imath::Box2i dw = file.header().dataWindow();
+    const long long width = static_cast<long long>(dw.max.x) - dw.min.x + 1;
+    const long long height = static_cast<long long>(dw.max.y) - dw.min.y + 1;
+    if (Status s = check_size(path, width, height); !s) return s.error();
+
+    const Imf::ChannelList& list = file.header().channels();
+    std::vector<std::string> names;
+    if (list.findChannel("R") && list.findChannel("G") && list.findChannel("B")) {
+      names = {"R", "G", "B"};  // A, if any, is not needed
+    } else if (list.findChannel("Y")) {
+      names = {"Y"};
+    } else {
+      std::string all;
+      for (auto it = list.begin(); it != list.end(); ++it) {
+        names.push_back(it.name());
+        all += (all.empty() ? "" : ", ") + std::string(it.name());
+      }
+      if (names.size() != 1) {
+        return fail(path, "no R, G, B or Y channel and not a single channel (channels: " +
+                              (all.empty() ? std::string("none") : all) + ")");
+      }
+    }
+    for (const std::string& name : names) {
+      const Imf::Channel* ch = list.findChannel(name);
+      if (ch->xSampling != 1 || ch->ySampling != 1) {
+        return fail(path, "subsampled channel '" + name + "' is not supported");
+      }
+    }
+
+    RawImage img;
+    img.width = static_cast<int>(width);
+    img.height = static_cast<int>(height);
+    img.channels = static_cast<int>(names.size());
+    img.pixels.resize(std::size_t(img.width) * img.height * img.channels);
+    const std::size_t xs = sizeof(float) * img.channels;
+    const std::size_t ys = xs * img.width;
+    Imf::FrameBuffer fb;
+    for (int c = 0; c < img.channels; ++c) {
+      // Make() offsets the base so that data-window pixel (min.x, min.y) lands at index 0.
+      fb.insert(names[c], Imf::Slice::Make(Imf::FLOAT, img.pixels.data() + c, dw, xs, ys));
+    }
+    file.setFrameBuffer(fb);
+    file.readPixels(dw.min.y, dw.max.y);
+    return img;
+  } catch (const std::exception& e) {
+    return fail(path, std::string("cannot read EXR: ") + e.what());
+  } catch (...) {
+    return fail(path, "cannot read EXR: unknown error");
+  }
+}
+
+// Collects an EXR file in memory, so the bytes reach disk through the same atomic path.
+class MemoryOStream : public Imf::OStream {
+ public:
+  explicit MemoryOStream(const char* name) : Imf::OStream(name) {}
+  void write(const char c[], int n) override {
+    if (pos_ + n > bytes_.size()) bytes_.resize(pos_ + n);
+    std::memcpy(bytes_.data() + pos_, c, n);
+    pos_ += n;
+  }
+  uint64_t tellp() override { return pos_; }
+  void seekp(uint64_t pos) override { pos_ = pos; }
+  const std::vector<char>& bytes() const { return bytes_; }
+
+ private:
+  std::vector<char> bytes_;
+  std::size_t pos_ = 0;
+};
+
+// ---- Atomic writing ----------------------------------------------------------------------
+
+std::string temp_name(const std::string& path) {
+  // pid plus a counter: unique across processes and across threads of this one.
+  static std::atomic<unsigned> counter{0};
+  return path + ".tmp." + std::to_string(::getpid()) + "." + std::to_string(counter++);
+}
+
+// Writes through `fill(FILE*) -> bool` into a temporary file beside `path`, then renames it
+// into place. On any failure the temporary file is removed and nothing appears at `path`.
+template <class Fill>
+Status write_atomic(const std::string& path, Fill&& fill) {
+  const std::string tmp = temp_name(path);
+  errno = 0;
+  std::FILE* f = std::fopen(tmp.c_str(), "wb");
+  if (!f) return fail(path, "cannot create file: " + errno_text(errno));
+  errno = 0;
+  bool ok = fill(f) && std::ferror(f) == 0;
+  int err = errno;
+  // fclose flushes, so a full disk may only show up here.
+  errno = 0;
+  if (std::fclose(f) != 0 && ok) {
+    ok = false;
+    err = errno;
+  }
+  if (!ok) {
+    std::remove(tmp.c_str());
+    return fail(path, "cannot write: " + errno_text(err));
+  }
+  errno = 0;
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    err = errno;
+    std::remove(tmp.c_str());
+    return fail(path, "cannot rename temporary file into place: " + errno_text(err));
+  }
+  return {};
+}
+
+bool write_bytes(std::FILE* f, const void* data, std::size_t n) {
+  return std::fwrite(data, 1, n, f) == n;
+}
+
+Status check_writable_size(const std::string& path, int width, int height) {
+  if (width <= 0 || height <= 0) return fail(path, "cannot write an empty image");
+  if (width > kMaxGridSide || height > kMaxGridSide) {
+    return fail(path, "image too large to write (" + std::to_string(width) + " x " +
+                          std::to_string(height) + ")");
+  }
+  return {};
+}
+
+}  // namespace
+
+Expected<RawImage> read_image(const std::string& path) {
+  const std::string ext = lowercase_extension(path);
+  if (ext == ".png") return read_png(path);
+  if (ext == ".exr") return read_exr(path);
+  if (ext == ".pfm") return read_pfm(path);
+  return fail(path, "unsupported image format '" + ext + "' (supported: .png, .exr, .pfm)");
+}
+
+float srgb_to_linear(float v) {
+  if (!(v > 0)) return 0;  // also maps NaN to 0
+  if (v >= 1) return 1;
+  return v <= 0.04045f ? v / 12.92f : std::pow((v + 0.055f) / 1.055f, 2.4f);
+}
+
+float linear_to_srgb(float v) {
+  if (!(v > 0)) return 0;
+  if (v >= 1) return 1;
+  return v <= 0.0031308f ? v * 12.92f : 1.055f * std::pow(v, 1.0f / 2.4f) - 0.055f;
+}
+
+Status write_pfm(const std::string& path, const ImageRgb& image) {
+  if (Status s = check_writable_size(path, image.width(), image.height()); !s) return s;
+  const int w = image.width(), h = image.height();
+  const std::string header = "PF\n" + std::to_string(w) + " " + std::to_string(h) + "\n-1.0\n";
+  return write_atomic(path, [&](std::FILE* f) {
+    if (!write_bytes(f, header.data(), header.size())) return false;
+    const std::size_t row = std::size_t(w) * 3;
+    std::vector<std::uint32_t> swapped;
+    for (int y = h - 1; y >= 0; --y) {  // bottom row first
+      const float* src = image.data() + std::size_t(y) * row;
+      if constexpr (std::endian::native == std::endian::little) {
+        if (!write_bytes(f, src, row * sizeof(float))) return false;
+      } else {
+        swapped.resize(row);
+        for (std::size_t i = 0; i < row; ++i) {
+          swapped[i] = byteswap32(std::bit_cast<std::uint32_t>(src[i]));
+        }
+        if (!write_bytes(f, swapped.data(), row * sizeof(float))) return false;
+      }
+    }
+    return true;
+  });
+}
+
+Status write_exr(const std::string& path, const ImageRgb& image) {
+  if (Status s = check_writable_size(path, image.width(), image.height()); !s) return s;
+  const int w = image.width(), h = image.height();
+  MemoryOStream out(path.c_str());
+  try {
+    Imf::Header header(w, h);
+    header.compression() = Imf::ZIP_COMPRESSION;
+    for (const char* name : {"R", "G", "B"})
+      header.channels().insert(name, Imf::Channel(Imf::FLOAT));
+    Imf::FrameBuffer fb;
+    // OpenEXR's Slice wants a non-const pointer even for writing; it only reads through it.
+    char* base = reinterpret_cast<char*>(const_cast<float*>(image.data()));
+    const std::size_t xs = 3 * sizeof(float), ys = xs * w;
+    fb.insert("R", Imf::Slice(Imf::FLOAT, base, xs, ys));
+    fb.insert("G", Imf::Slice(Imf::FLOAT, base + sizeof(float), xs, ys));
+    fb.insert("B", Imf::Slice(Imf::FLOAT, base + 2 * sizeof(float), xs, ys));
+    Imf::OutputFile file(out, header);  // its destructor writes the line offset table
+    file.setFrameBuffer(fb);
+    file.writePixels(h);
+  } catch (const std::exception& e) {
+    return fail(path, std::string("cannot encode EXR: ") + e.what());
+  } catch (...) {
+    return fail(path, "cannot encode EXR: unknown error");
+  }
+  return write_atomic(
+      path, [&](std::FILE* f) { return write_bytes(f, out.bytes().data(), out.bytes().size()); });
+}
+
+Status write_png8(const std::string& path, int width, int height,
+                  const std::vector<unsigned char>& rgb) {
+  if (Status s = check_writable_size(path, width, height); !s) return s;
+  if (rgb.size() != std::size_t(width) * height * 3) {
+    return fail(path, "pixel buffer holds " + std::to_string(rgb.size()) + " bytes, expected " +
+                          std::to_string(std::size_t(width) * height * 3));
+  }
+  std::vector<unsigned char> encoded;
+  auto sink = [](void* ctx, void* data, int size) {
+    auto* v = static_cast<std::vector<unsigned char>*>(ctx);
+    const auto* p = static_cast<const unsigned char*>(data);
+    v->insert(v->end(), p, p + size);
+  };
+  if (!stbi_write_png_to_func(sink, &encoded, width, height, 3, rgb.data(), width * 3)) {
+    return fail(path, "cannot encode PNG");
+  }
+  return write_atomic(path,
+                      [&](std::FILE* f) { return write_bytes(f, encoded.data(), encoded.size()); });
+}
+
+}  // namespace penumbra::io

@@ -1,0 +1,591 @@
+// Reading and checking 2D scene documents (docs/scene-format.md, version 1).
+//
+// Parsing has two steps: the JSON is walked for structure and types (unknown keys, missing
+// fields, wrong types, non-finite numbers), giving a SceneDesc; then the layers are loaded and
+// `validate` checks every value range on the SceneDesc. Range rules therefore live in one place
+// and a file and a scene built in code get the same messages.
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <initializer_list>
+#include <iterator>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <string_view>
+#include <utility>
+
+#include "io/image_io.hpp"
+#include "penumbra/scene.hpp"
+
+namespace penumbra {
+namespace {
+
+using nlohmann::json;
+
+// Internal only: thrown by the checkers below and turned into an Error at the API boundary.
+struct SceneFailure {
+  std::string message;
+};
+
+[[noreturn]] void fail(const std::string& file, const std::string& path, const std::string& what) {
+  throw SceneFailure{file + ": " + path + ": " + what};
+}
+
+// Shortest text that reads back as the same float ("-0.1", "16385", "inf", "nan").
+std::string format_number(float v) {
+  char buf[64];
+  auto r = std::to_chars(buf, buf + sizeof buf, v);
+  return std::string(buf, r.ptr);
+}
+
+std::string format_number(double v) {
+  char buf[64];
+  auto r = std::to_chars(buf, buf + sizeof buf, v);
+  return std::string(buf, r.ptr);
+}
+
+// What a JSON value is, for "found ..." in messages.
+std::string describe(const json& j) {
+  switch (j.type()) {
+    case json::value_t::number_integer:
+    case json::value_t::number_unsigned:
+      return j.dump();
+    case json::value_t::number_float: {
+      // "512.0", not "512": the point is that it is not an integer.
+      double d = j.get<double>();
+      std::string s = format_number(d);
+      if (std::isfinite(d) && d == std::floor(d) && std::fabs(d) < 1e15) s += ".0";
+      return s;
+    }
+    case json::value_t::string: {
+      std::string s = j.dump();
+      if (s.size() > 60) s = s.substr(0, 56) + "...\"";
+      return "the string " + s;
+    }
+    case json::value_t::boolean:
+      return j.get<bool>() ? "true" : "false";
+    case json::value_t::null:
+      return "null";
+    case json::value_t::array:
+      return "an array of " + std::to_string(j.size()) + (j.size() == 1 ? " element" : " elements");
+    case json::value_t::object:
+      return "an object";
+    default:
+      return "an unsupported value";
+  }
+}
+
+// Value ranges, shared by the JSON walk and `validate`.
+enum class Range { any, nonneg, positive, unit };
+
+const char* expected_text(Range r) {
+  switch (r) {
+    case Range::any:
+      return "a finite number";
+    case Range::nonneg:
+      return "a number >= 0";
+    case Range::positive:
+      return "a number > 0";
+    case Range::unit:
+      return "a number in [0, 1]";
+  }
+  return "a number";
+}
+
+bool in_range(float v, Range r) {
+  if (!std::isfinite(v)) return false;
+  switch (r) {
+    case Range::any:
+      return true;
+    case Range::nonneg:
+      return v >= 0;
+    case Range::positive:
+      return v > 0;
+    case Range::unit:
+      return v >= 0 && v <= 1;
+  }
+  return false;
+}
+
+void check_float(const std::string& file, const std::string& path, float v, Range r) {
+  if (!std::isfinite(v)) fail(file, path, "expected a finite number, found " + format_number(v));
+  if (!in_range(v, r))
+    fail(file, path, std::string("expected ") + expected_text(r) + ", found " + format_number(v));
+}
+
+void check_rgb(const std::string& file, const std::string& path, const Rgb& c, Range r) {
+  check_float(file, path + "[0]", c.r, r);
+  check_float(file, path + "[1]", c.g, r);
+  check_float(file, path + "[2]", c.b, r);
+}
+
+void check_point(const std::string& file, const std::string& path, const std::array<float, 2>& p) {
+  check_float(file, path + "[0]", p[0], Range::any);
+  check_float(file, path + "[1]", p[1], Range::any);
+}
+
+void check_grid_side(const std::string& file, const std::string& path, int v) {
+  if (v < 1 || v > kMaxGridSide)
+    fail(file, path,
+         "expected an integer in 1.." + std::to_string(kMaxGridSide) + ", found " +
+             std::to_string(v));
+}
+
+// Checks `channels` interleaved values per pixel of a w x h layer; reports the first bad pixel.
+void check_layer_values(const std::string& file, const std::string& name, const float* v, int width,
+                        int height, int channels, Range r) {
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      for (int c = 0; c < channels; ++c) {
+        float value = v[(std::size_t(y) * width + x) * channels + c];
+        if (in_range(value, r)) continue;
+        std::string what = std::string("expected finite values ") +
+                           (r == Range::unit ? "in [0, 1]" : ">= 0") + ", found " +
+                           format_number(value) + " at pixel (" + std::to_string(x) + ", " +
+                           std::to_string(y) + ")";
+        if (channels > 1) what += " channel " + std::to_string(c);
+        fail(file, "layers." + name, what);
+      }
+    }
+  }
+}
+
+void check_layer_size(const std::string& file, const std::string& name, int w, int h,
+                      const SceneDesc& desc) {
+  if (w != desc.width || h != desc.height)
+    fail(file, "layers." + name,
+         "expected an image of " + std::to_string(desc.width) + "x" + std::to_string(desc.height) +
+             " pixels (the grid size), found " + std::to_string(w) + "x" + std::to_string(h));
+}
+
+void check_material(const std::string& file, const std::string& path, const Material& m) {
+  check_rgb(file, path + ".emission", m.emission, Range::nonneg);
+  check_float(file, path + ".opacity", m.opacity, Range::unit);
+  check_rgb(file, path + ".albedo", m.albedo, Range::unit);
+}
+
+void check_desc(const SceneDesc& desc) {
+  const std::string& file = desc.source;
+  check_grid_side(file, "width", desc.width);
+  check_grid_side(file, "height", desc.height);
+  check_rgb(file, "environment", desc.environment, Range::nonneg);
+
+  const Layers& layers = desc.layers;
+  if (layers.emission) {
+    check_layer_size(file, "emission", layers.emission->width(), layers.emission->height(), desc);
+    check_layer_values(file, "emission", layers.emission->data(), desc.width, desc.height, 3,
+                       Range::nonneg);
+  }
+  if (layers.opacity) {
+    const std::size_t cells = std::size_t(desc.width) * desc.height;
+    if (layers.opacity->size() != cells)
+      fail(file, "layers.opacity",
+           "expected " + std::to_string(cells) + " values (" + std::to_string(desc.width) + "x" +
+               std::to_string(desc.height) + "), found " + std::to_string(layers.opacity->size()));
+    check_layer_values(file, "opacity", layers.opacity->data(), desc.width, desc.height, 1,
+                       Range::unit);
+  }
+  if (layers.albedo) {
+    check_layer_size(file, "albedo", layers.albedo->width(), layers.albedo->height(), desc);
+    check_layer_values(file, "albedo", layers.albedo->data(), desc.width, desc.height, 3,
+                       Range::unit);
+  }
+
+  for (std::size_t i = 0; i < desc.shapes.size(); ++i) {
+    const Shape& shape = desc.shapes[i];
+    const std::string path = "shapes[" + std::to_string(i) + "]";
+    if (const auto* c = std::get_if<Circle>(&shape.geometry)) {
+      check_point(file, path + ".center", c->center);
+      check_float(file, path + ".radius", c->radius, Range::positive);
+    } else if (const auto* b = std::get_if<Box>(&shape.geometry)) {
+      check_point(file, path + ".center", b->center);
+      check_float(file, path + ".size[0]", b->size[0], Range::positive);
+      check_float(file, path + ".size[1]", b->size[1], Range::positive);
+      check_float(file, path + ".angle", b->angle, Range::any);
+    } else if (const auto* s = std::get_if<Segment>(&shape.geometry)) {
+      check_point(file, path + ".a", s->a);
+      check_point(file, path + ".b", s->b);
+      check_float(file, path + ".width", s->width, Range::positive);
+    } else if (const auto* p = std::get_if<Polygon>(&shape.geometry)) {
+      if (p->points.size() < 3)
+        fail(file, path + ".points",
+             "expected at least 3 [x, y] points, found " + std::to_string(p->points.size()));
+      for (std::size_t k = 0; k < p->points.size(); ++k)
+        check_point(file, path + ".points[" + std::to_string(k) + "]", p->points[k]);
+    }
+    check_material(file, path, shape.material);
+  }
+}
+
+// ---- The JSON walk: structure and types. ----
+
+class Walker {
+ public:
+  explicit Walker(std::string file) : file_(std::move(file)) {}
+
+  [[noreturn]] void fail_at(const std::string& path, const std::string& what) const {
+    fail(file_, path, what);
+  }
+  [[noreturn]] void expected(const std::string& path, const std::string& what,
+                             const json& found) const {
+    fail(file_, path, "expected " + what + ", found " + describe(found));
+  }
+
+  static bool is_comment_key(const std::string& key) {
+    return (!key.empty() && key[0] == '_') || key == "comment" || key == "description";
+  }
+
+  // Rejects keys that are neither known nor comments, so a typo is never silently ignored.
+  void check_keys(const json& obj, const std::string& prefix,
+                  std::initializer_list<std::string_view> allowed) const {
+    for (const auto& item : obj.items()) {
+      const std::string& key = item.key();
+      if (is_comment_key(key)) continue;
+      if (std::find(allowed.begin(), allowed.end(), key) != allowed.end()) continue;
+      std::string list;
+      for (std::string_view a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
+      fail_at(prefix.empty() ? key : prefix + "." + key,
+              "unknown key \"" + key + "\", expected one of: " + list +
+                  " (or a comment key: \"comment\", \"description\", \"_...\")");
+    }
+  }
+
+  const json& require(const json& obj, const std::string& prefix, const char* key,
+                      const std::string& what) const {
+    auto it = obj.find(key);
+    std::string path = prefix.empty() ? key : prefix + "." + key;
+    if (it == obj.end()) fail_at(path, "missing, expected " + what);
+    return *it;
+  }
+
+  // A finite number that fits a float; ranges are checked later by `validate`.
+  float number(const json& j, const std::string& path, Range r) const {
+    if (!j.is_number()) expected(path, expected_text(r), j);
+    double d = j.get<double>();
+    float f = static_cast<float>(d);
+    if (!std::isfinite(d) || !std::isfinite(f)) expected(path, "a finite number", j);
+    return f;
+  }
+
+  int grid_side(const json& j, const std::string& path) const {
+    std::string what = "an integer in 1.." + std::to_string(kMaxGridSide);
+    if (!j.is_number_integer()) expected(path, what, j);
+    bool ok = j.is_number_unsigned() ? j.get<std::uint64_t>() <= std::uint64_t(kMaxGridSide)
+                                     : j.get<std::int64_t>() <= kMaxGridSide;
+    if (!ok || j.get<std::int64_t>() < 1) expected(path, what, j);
+    return static_cast<int>(j.get<std::int64_t>());
+  }
+
+  std::array<float, 2> point(const json& j, const std::string& path) const {
+    if (!j.is_array() || j.size() != 2) expected(path, "an [x, y] pair of numbers", j);
+    return {number(j[0], path + "[0]", Range::any), number(j[1], path + "[1]", Range::any)};
+  }
+
+  std::array<float, 2> size2(const json& j, const std::string& path) const {
+    if (!j.is_array() || j.size() != 2) expected(path, "a [w, h] pair of numbers > 0", j);
+    return {number(j[0], path + "[0]", Range::positive),
+            number(j[1], path + "[1]", Range::positive)};
+  }
+
+  Rgb rgb(const json& j, const std::string& path, Range r) const {
+    std::string what = std::string("an array of 3 numbers") + (r == Range::unit     ? " in [0, 1]"
+                                                               : r == Range::nonneg ? " >= 0"
+                                                                                    : "");
+    if (!j.is_array() || j.size() != 3) expected(path, what, j);
+    return {number(j[0], path + "[0]", r), number(j[1], path + "[1]", r),
+            number(j[2], path + "[2]", r)};
+  }
+
+  std::string string(const json& j, const std::string& path, const std::string& what) const {
+    if (!j.is_string()) expected(path, what, j);
+    return j.get<std::string>();
+  }
+
+  Shape shape(const json& j, const std::string& path) const {
+    if (!j.is_object()) expected(path, "a shape object", j);
+    const char* kTypes = "one of circle, box, segment, polygon";
+    const json& type_j = require(j, path, "type", std::string("a shape type, ") + kTypes);
+    if (!type_j.is_string())
+      expected(path + ".type", std::string("a shape type, ") + kTypes, type_j);
+    const std::string type = type_j.get<std::string>();
+
+    Shape s;
+    if (type == "circle") {
+      check_keys(j, path, {"type", "center", "radius", "emission", "opacity", "albedo"});
+      Circle c;
+      c.center = point(require(j, path, "center", "an [x, y] pair of numbers"), path + ".center");
+      c.radius = number(require(j, path, "radius", expected_text(Range::positive)),
+                        path + ".radius", Range::positive);
+      s.geometry = c;
+    } else if (type == "box") {
+      check_keys(j, path, {"type", "center", "size", "angle", "emission", "opacity", "albedo"});
+      Box b;
+      b.center = point(require(j, path, "center", "an [x, y] pair of numbers"), path + ".center");
+      b.size = size2(require(j, path, "size", "a [w, h] pair of numbers > 0"), path + ".size");
+      if (j.contains("angle")) b.angle = number(j["angle"], path + ".angle", Range::any);
+      s.geometry = b;
+    } else if (type == "segment") {
+      check_keys(j, path, {"type", "a", "b", "width", "emission", "opacity", "albedo"});
+      Segment g;
+      g.a = point(require(j, path, "a", "an [x, y] pair of numbers"), path + ".a");
+      g.b = point(require(j, path, "b", "an [x, y] pair of numbers"), path + ".b");
+      g.width = number(require(j, path, "width", expected_text(Range::positive)), path + ".width",
+                       Range::positive);
+      s.geometry = g;
+    } else if (type == "polygon") {
+      check_keys(j, path, {"type", "points", "emission", "opacity", "albedo"});
+      const std::string what = "an array of at least 3 [x, y] points";
+      const json& pts = require(j, path, "points", what);
+      if (!pts.is_array() || pts.size() < 3) expected(path + ".points", what, pts);
+      Polygon p;
+      for (std::size_t k = 0; k < pts.size(); ++k)
+        p.points.push_back(point(pts[k], path + ".points[" + std::to_string(k) + "]"));
+      s.geometry = std::move(p);
+    } else {
+      fail_at(path + ".type", "unknown shape type \"" + type + "\", expected " + kTypes);
+    }
+
+    if (j.contains("emission"))
+      s.material.emission = rgb(j["emission"], path + ".emission", Range::nonneg);
+    if (j.contains("opacity"))
+      s.material.opacity = number(j["opacity"], path + ".opacity", Range::unit);
+    if (j.contains("albedo")) s.material.albedo = rgb(j["albedo"], path + ".albedo", Range::unit);
+    return s;
+  }
+
+ private:
+  std::string file_;
+};
+
+// One decoded layer file: RGB (grey expanded) or its first channel.
+ImageRgb load_rgb_layer(const io::RawImage& raw, bool srgb_decode, float scale) {
+  ImageRgb out(raw.width, raw.height);
+  const int ch = raw.channels;
+  const std::size_t n = std::size_t(raw.width) * raw.height;
+  float* dst = out.data();
+  for (std::size_t i = 0; i < n; ++i) {
+    const float* p = &raw.pixels[i * ch];
+    float rgb[3] = {p[0], ch >= 3 ? p[1] : p[0], ch >= 3 ? p[2] : p[0]};
+    for (int c = 0; c < 3; ++c) {
+      float v = srgb_decode ? io::srgb_to_linear(rgb[c]) : rgb[c];
+      dst[i * 3 + c] = v * scale;
+    }
+  }
+  return out;
+}
+
+std::vector<float> load_first_channel(const io::RawImage& raw) {
+  const std::size_t n = std::size_t(raw.width) * raw.height;
+  std::vector<float> out(n);
+  for (std::size_t i = 0; i < n; ++i) out[i] = raw.pixels[i * raw.channels];
+  return out;
+}
+
+// Line and column (1-based) of a byte offset, for JSON syntax errors.
+std::pair<std::size_t, std::size_t> line_column(std::string_view text, std::size_t offset) {
+  offset = std::min(offset, text.size());
+  std::size_t line = 1, line_start = 0;
+  for (std::size_t i = 0; i < offset; ++i) {
+    if (text[i] == '\n') {
+      ++line;
+      line_start = i + 1;
+    }
+  }
+  return {line, offset - line_start + 1};
+}
+
+// A SAX pass that only tracks the JSON path, to name the value nlohmann refuses as out of
+// range (it rejects 1e999 while parsing, before any value reaches the walk).
+class PathTracker {
+ public:
+  bool null() { return value(); }
+  bool boolean(bool) { return value(); }
+  bool number_integer(json::number_integer_t) { return value(); }
+  bool number_unsigned(json::number_unsigned_t) { return value(); }
+  bool number_float(json::number_float_t, const std::string&) { return value(); }
+  bool string(std::string&) { return value(); }
+  bool binary(json::binary_t&) { return value(); }
+  bool start_object(std::size_t) { return push(false); }
+  bool key(std::string& k) {
+    stack_.back().key = k;
+    return true;
+  }
+  bool end_object() { return pop(); }
+  bool start_array(std::size_t) { return push(true); }
+  bool end_array() { return pop(); }
+  bool parse_error(std::size_t, const std::string& token, const nlohmann::detail::exception&) {
+    error_path_ = path();
+    token_ = token;
+    return false;
+  }
+
+  const std::string& error_path() const { return error_path_; }
+  const std::string& token() const { return token_; }
+
+ private:
+  struct Frame {
+    bool array;
+    std::size_t index = 0;
+    std::string key;
+  };
+  bool value() {
+    if (!stack_.empty() && stack_.back().array) ++stack_.back().index;
+    return true;
+  }
+  bool push(bool array) {
+    stack_.push_back({array, 0, {}});
+    return true;
+  }
+  bool pop() {
+    stack_.pop_back();
+    return value();
+  }
+  std::string path() const {
+    std::string p;
+    for (const Frame& f : stack_) {
+      if (f.array) {
+        p += "[" + std::to_string(f.index) + "]";
+      } else {
+        p += (p.empty() ? "" : ".") + f.key;
+      }
+    }
+    return p.empty() ? "(document)" : p;
+  }
+
+  std::vector<Frame> stack_;
+  std::string error_path_, token_;
+};
+
+SceneDesc parse_or_throw(std::string_view text, const std::string& path) {
+  json doc;
+  try {
+    doc = json::parse(text.begin(), text.end());
+  } catch (const json::out_of_range&) {
+    // nlohmann refuses numbers beyond double range (1e999) while parsing: find their path.
+    PathTracker tracker;
+    json::sax_parse(text.begin(), text.end(), &tracker);
+    throw SceneFailure{path + ": " + tracker.error_path() + ": expected a finite number, found " +
+                       (tracker.token().empty() ? "a number out of range" : tracker.token()) +
+                       " (out of range)"};
+  } catch (const json::parse_error& e) {
+    // nlohmann's byte is the 1-based index of the last character read (the offending one).
+    auto [line, column] = line_column(text, e.byte > 0 ? e.byte - 1 : 0);
+    std::string detail = e.what();
+    // Drop nlohmann's "[json.exception...] parse error at line L, column C: " prefix.
+    if (auto colon = detail.find(": "); colon != std::string::npos)
+      detail = detail.substr(colon + 2);
+    throw SceneFailure{path + ": line " + std::to_string(line) + ", column " +
+                       std::to_string(column) + ": invalid JSON: " + detail};
+  }
+
+  Walker w(path);
+  SceneDesc desc;
+  desc.source = path;
+  if (!doc.is_object()) w.expected("(document)", "a JSON object", doc);
+
+  // The version first: a document of another version may have other keys.
+  const json& version = w.require(doc, "", "penumbra", "the format version 1");
+  if (!version.is_number_integer())
+    w.expected("penumbra", "the format version, the integer 1", version);
+  bool is_one = version.is_number_unsigned() ? version.get<std::uint64_t>() == 1
+                                             : version.get<std::int64_t>() == 1;
+  if (!is_one) w.fail_at("penumbra", "unknown version, expected 1, found " + version.dump());
+
+  w.check_keys(doc, "", {"penumbra", "width", "height", "environment", "layers", "shapes"});
+  desc.width = w.grid_side(w.require(doc, "", "width", "an integer in 1..16384"), "width");
+  desc.height = w.grid_side(w.require(doc, "", "height", "an integer in 1..16384"), "height");
+  if (doc.contains("environment"))
+    desc.environment = w.rgb(doc["environment"], "environment", Range::nonneg);
+
+  std::string layer_files[3];  // emission, opacity, albedo
+  static const char* kLayerNames[3] = {"emission", "opacity", "albedo"};
+  float emission_scale = 1;
+  if (doc.contains("layers")) {
+    const json& layers = doc["layers"];
+    if (!layers.is_object()) w.expected("layers", "an object", layers);
+    w.check_keys(layers, "layers", {"emission", "opacity", "albedo", "emission_scale"});
+    for (int k = 0; k < 3; ++k) {
+      if (!layers.contains(kLayerNames[k])) continue;
+      std::string lpath = std::string("layers.") + kLayerNames[k];
+      layer_files[k] = w.string(layers[kLayerNames[k]], lpath, "an image file name");
+      if (layer_files[k].empty()) w.fail_at(lpath, "expected an image file name, found \"\"");
+    }
+    if (layers.contains("emission_scale")) {
+      emission_scale = w.number(layers["emission_scale"], "layers.emission_scale", Range::nonneg);
+      check_float(path, "layers.emission_scale", emission_scale, Range::nonneg);
+    }
+  }
+
+  if (doc.contains("shapes")) {
+    const json& shapes = doc["shapes"];
+    if (!shapes.is_array()) w.expected("shapes", "an array of shapes", shapes);
+    for (std::size_t i = 0; i < shapes.size(); ++i)
+      desc.shapes.push_back(w.shape(shapes[i], "shapes[" + std::to_string(i) + "]"));
+  }
+
+  // Layers, relative to the scene file's directory.
+  const std::filesystem::path base = std::filesystem::path(path).parent_path();
+  for (int k = 0; k < 3; ++k) {
+    if (layer_files[k].empty()) continue;
+    const std::string name = kLayerNames[k];
+    std::filesystem::path file(layer_files[k]);
+    if (file.is_relative()) file = base / file;
+    auto raw = io::read_image(file.string());
+    if (!raw) w.fail_at("layers." + name, "cannot load the image: " + raw.error().message);
+    if (raw->channels < 1 ||
+        raw->pixels.size() != std::size_t(raw->width) * raw->height * raw->channels)
+      w.fail_at("layers." + name, "the image reader returned malformed pixels");
+    check_layer_size(path, name, raw->width, raw->height, desc);
+    if (k == 0) {
+      desc.layers.emission = load_rgb_layer(*raw, raw->integer_png, emission_scale);
+    } else if (k == 1) {
+      // Opacity is a linear fraction, never sRGB-decoded.
+      desc.layers.opacity = load_first_channel(*raw);
+    } else {
+      desc.layers.albedo = load_rgb_layer(*raw, raw->integer_png, 1);
+    }
+  }
+
+  check_desc(desc);
+  return desc;
+}
+
+}  // namespace
+
+Expected<SceneDesc> parse_scene(std::string_view json_text, const std::string& path) {
+  try {
+    return parse_or_throw(json_text, path);
+  } catch (const SceneFailure& f) {
+    return Error{f.message};
+  } catch (const std::exception& e) {  // e.g. allocation failure: still no throw across the API
+    return Error{path + ": " + e.what()};
+  }
+}
+
+Expected<SceneDesc> load_scene(const std::string& path) {
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec))
+    return Error{path + ": cannot read the scene file: no such file"};
+  if (std::filesystem::is_directory(path, ec))
+    return Error{path + ": cannot read the scene file: it is a directory"};
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return Error{path + ": cannot read the scene file: cannot open it"};
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (in.bad()) return Error{path + ": cannot read the scene file: read error"};
+  return parse_scene(text, path);
+}
+
+Status validate(const SceneDesc& desc) {
+  try {
+    check_desc(desc);
+  } catch (const SceneFailure& f) {
+    return Error{f.message};
+  }
+  return {};
+}
+
+}  // namespace penumbra

@@ -136,6 +136,16 @@ float coverage(const Geom& g, int i, int j) {
   return float(hits) / float(kSamples * kSamples);
 }
 
+// A ray grazing the edge of an opaque shape crosses several partly covered cells in a row and
+// their opacities compound, so blending opaque coverage linearly makes a disk look up to half a
+// cell wider than it is. Sharpening the coverage to c^4 keeps the silhouette of disks of radius 4
+// to 30 within 0.16 cells of the true one (measured; see docs/scene-format.md). Materials that
+// are not opaque blend linearly, which keeps their optical depth on average.
+float opaque_edge(float c) {
+  const float c2 = c * c;
+  return c2 * c2;
+}
+
 // Premultiplied "over": the shape replaces the old values in the covered fraction c, with
 // emission and albedo weighted by opacity so that a partly covered emitter cell emits like its
 // covered part. c == 1 copies the material exactly.
@@ -178,8 +188,8 @@ void draw(Scene& s, const Geom& g, const Material& m) {
   parallel_for(j1 - j0, [&](int r) {
     const int j = j0 + r;
     for (int i = i0; i < i1; ++i) {
-      float c = coverage(g, i, j);
-      if (c > 0) blend(s, s.index(i, j), c, m);
+      const float c = coverage(g, i, j);
+      if (c > 0) blend(s, s.index(i, j), m.opacity >= 1 ? opaque_edge(c) : c, m);
     }
   });
 }

@@ -1,0 +1,24 @@
+#!/usr/bin/env bash
+# `make demo`: install, build, render the built-in scene, and say how long each stage took.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+BUILD=${BUILD:-build}
+JOBS=${JOBS:-$(nproc)}
+
+now() { date +%s.%N; }
+stage() {  # stage NAME COMMAND...
+  local name=$1
+  shift
+  local t0
+  t0=$(now)
+  "$@"
+  awk -v n="$name" -v a="$t0" -v b="$(now)" 'BEGIN { printf "demo: %-28s %7.1f s\n", n, b - a }'
+}
+
+stage "install dependencies" bash scripts/install-deps.sh
+stage "configure (Release)" bash -c "cmake -S . -B '$BUILD' -DCMAKE_BUILD_TYPE=Release -DPENUMBRA_WERROR=${WERROR:-OFF} > '$BUILD.configure.log' 2>&1 || { cat '$BUILD.configure.log'; exit 1; }"
+stage "build" bash -c "cmake --build '$BUILD' -j '$JOBS' --target penumbra_cli > '$BUILD.build.log' 2>&1 || { cat '$BUILD.build.log'; exit 1; }"
+mkdir -p out
+echo "demo: rendering the built-in scene with radiance cascades:"
+stage "render" "$BUILD/bin/penumbra" render -o out/demo.png -o out/demo.exr
+echo "demo: open out/demo.png (display) or out/demo.exr (linear fluence)"

@@ -26,7 +26,7 @@ struct RcOptions {
   int probe_spacing = 1;    // s0: cascade-0 probe spacing in cells; cascade n uses s0 * 2^n
   int directions = 4;       // Q0: directions of a cascade-0 probe
   int branching = 4;        // angular branching per cascade: 4 or 2
-  float interval = 1.0f;    // t0: length of the cascade-0 interval [0, t0], in cells
+  float interval = 4.0f;    // t0: length of the cascade-0 interval [0, t0], in cells
   int cascades = 0;         // 0: enough that the last interval reaches past the grid diagonal
   MergeFix fix = MergeFix::bilinear;
   bool preaverage = false;  // trace a 2x2 sub-probe neighbourhood and store the average

@@ -25,6 +25,10 @@ struct Medium {
   // Distance from each cell centre to the nearest non-empty (sigma > 0) cell centre, in cells,
   // from the jump flooding algorithm; empty when distance-field skipping is off.
   std::vector<float> distance;
+  // What the tracer reads first at each step, one float per cell so the hot loop touches a
+  // quarter of the memory: sigma > 0 for a cell that interacts, otherwise minus the length a ray
+  // may jump from anywhere in the cell without meeting such a cell (0 when it may not jump).
+  std::vector<float> step;
 
   const Cell& at(int x, int y) const { return cells[std::size_t(y) * width + x]; }
 };

@@ -46,7 +46,7 @@ Status check_options(const Scene& scene, const RenderOptions& o) {
 std::uint64_t estimate(const Scene& scene, const RenderOptions& o,
                        const std::vector<rc::Cascade>& plan) {
   const std::uint64_t cells = scene.cells();
-  std::uint64_t bytes = cells * sizeof(Cell);                             // medium
+  std::uint64_t bytes = cells * (sizeof(Cell) + sizeof(float));           // medium
   bytes += distance_field_bytes(scene.width, scene.height);              // distance field
   bytes += rc::cascade_bytes(plan, o.rc);                                // cascades
   bytes += cells * 3 * sizeof(float);                                    // fluence

@@ -10,13 +10,6 @@ namespace {
 
 constexpr float kInf = std::numeric_limits<float>::infinity();
 
-// A jump from anywhere in a cell whose centre is `distance` from the nearest non-empty cell
-// centre stays in empty cells for distance - sqrt(2) (half a diagonal at each end); the extra
-// half cell absorbs the rare inexact answer of jump flooding.
-constexpr float kJumpMargin = 1.4142136f + 0.5f;
-// Below this a jump saves less than plain cell stepping costs.
-constexpr float kMinJump = 2.0f;
-
 // Clips [ta, tb] to the grid box [0, w] x [0, h]. Returns false when nothing is left.
 bool clip_to_grid(float ox, float oy, float dx, float dy, float w, float h, float& ta, float& tb) {
   auto slab = [&](float o, float d, float hi) {
@@ -38,7 +31,6 @@ Interval trace_interval(const Medium& m, float ox, float oy, float dx, float dy,
   Interval out = Interval::empty();
   float t = ta, tend = tb;
   if (!clip_to_grid(ox, oy, dx, dy, float(m.width), float(m.height), t, tend)) return out;
-  const bool use_distance = !m.distance.empty();
   const int step_x = dx > 0 ? 1 : -1, step_y = dy > 0 ? 1 : -1;
   // Cell exits are always computed from the origin with the same formula (never accumulated),
   // so a ray that jumped meets every later cell boundary at exactly the same parameter.
@@ -71,10 +63,11 @@ Interval trace_interval(const Medium& m, float ox, float oy, float dx, float dy,
 
   while (t < tend) {
     const std::size_t idx = std::size_t(iy) * m.width + ix;
-    const Cell& c = m.cells[idx];
+    const float step = m.step[idx];
     const float t_exit = std::min(std::min(tmax_x, tmax_y), tend);
-    if (c.sigma > 0) {
-      if (c.sigma == kOpaque) {
+    if (step > 0) {
+      const Cell& c = m.cells[idx];
+      if (step == kOpaque) {
         if (!skip) {
           out.r += out.t * c.r;
           out.g += out.t * c.g;
@@ -83,22 +76,19 @@ Interval trace_interval(const Medium& m, float ox, float oy, float dx, float dy,
           return out;
         }
       } else {
-        const float tr = std::exp(-c.sigma * (t_exit - t));
+        const float tr = std::exp(-step * (t_exit - t));
         const float a = out.t * (1.0f - tr);
         out.r += a * c.r;
         out.g += a * c.g;
         out.b += a * c.b;
         out.t *= tr;
       }
-    } else if (use_distance) {
-      const float jump = m.distance[idx] - kJumpMargin;
-      if (jump > kMinJump) {
-        t += jump;
-        if (t >= tend) break;
-        locate(t);
-        skip = false;
-        continue;
-      }
+    } else if (step < 0) {
+      t -= step;  // jump through empty space (see Medium::step)
+      if (t >= tend) break;
+      locate(t);
+      skip = false;
+      continue;
     }
     skip = false;
     t = t_exit;

@@ -57,6 +57,7 @@ nlohmann::json parameters_json(const penumbra::RenderOptions& o) {
                       {"extend", rc.extend},
                       {"bounces", o.bounces},
                       {"threads", o.threads},
+                      {"distance_field", o.distance_field},
                       {"max_memory", o.max_memory}};
   if (rc.extend) p["extend_length"] = rc.extend_length;
   return p;
@@ -202,6 +203,9 @@ int main(int argc, char** argv) {
   render->add_option("--threads", a.options.threads, "Worker threads (0: all cores)")
       ->check(CLI::Range(0, 1024))
       ->capture_default_str();
+  bool no_distance_field = false;
+  render->add_flag("--no-distance-field", no_distance_field,
+                   "Step every cell (plain DDA) instead of jumping over empty space");
   render->add_option("--max-memory", a.max_memory, "Refuse work needing more working memory")
       ->capture_default_str();
   render->add_option("--exposure", a.exposure, "PNG exposure in EV")->capture_default_str();
@@ -216,6 +220,7 @@ int main(int argc, char** argv) {
     app.exit(e);
     return kUsage;
   }
+  a.options.distance_field = !no_distance_field;
   if (render->parsed()) return run_render(a);
   return kUsage;
 }

@@ -39,6 +39,7 @@ struct RenderOptions {
   RcOptions rc;
   int bounces = 1;  // 1: direct light only; N: N-1 more diffuse bounces
   int threads = 0;  // 0: all hardware threads
+  bool distance_field = true;  // jump over empty space (same answer, faster); off: plain DDA
   std::uint64_t max_memory = std::uint64_t(8) << 30;  // refuse work whose memory need is larger
 };
 

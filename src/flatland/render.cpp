@@ -47,7 +47,7 @@ std::uint64_t estimate(const Scene& scene, const RenderOptions& o,
                        const std::vector<rc::Cascade>& plan) {
   const std::uint64_t cells = scene.cells();
   std::uint64_t bytes = cells * (sizeof(Cell) + sizeof(float));           // medium
-  bytes += distance_field_bytes(scene.width, scene.height);              // distance field
+  if (o.distance_field) bytes += distance_field_bytes(scene.width, scene.height);
   bytes += rc::cascade_bytes(plan, o.rc);                                // cascades
   bytes += cells * 3 * sizeof(float);                                    // fluence
   return bytes;
@@ -85,7 +85,7 @@ Expected<RenderResult> render(const Scene& scene, const RenderOptions& options) 
     Medium medium = make_medium(scene);
     result.stages.push_back({"medium", watch.ms()});
     watch.restart();
-    build_distance_field(medium);
+    if (options.distance_field) build_distance_field(medium);
     result.stages.push_back({"distance field", watch.ms()});
 
     std::vector<float> f = rc::solve(medium, scene.environment, plan, options.rc, result.stages);

@@ -1,0 +1,32 @@
+// Scenes the benchmarks and quality tools share.
+#pragma once
+
+#include <cmath>
+#include <random>
+
+#include "penumbra/scene.hpp"
+
+namespace penumbra::bench {
+
+// `lights` small coloured disk lights (radius 2) scattered over a size x size grid, with a fixed
+// set of walls, so the geometry is the same whatever the number of lights.
+inline SceneDesc lights_scene(int size, int lights, unsigned seed = 1) {
+  SceneDesc d;
+  d.width = d.height = size;
+  d.environment = {0.01f, 0.01f, 0.015f};
+  const float s = float(size) / 512.0f;
+  d.shapes.push_back({Box{{180 * s, 256 * s}, {12 * s, 220 * s}, 0}, Material{}});
+  d.shapes.push_back({Box{{340 * s, 150 * s}, {160 * s, 10 * s}, 25}, Material{}});
+  d.shapes.push_back({Segment{{300 * s, 420 * s}, {470 * s, 380 * s}, 6 * s}, Material{}});
+  d.shapes.push_back({Circle{{400 * s, 280 * s}, 30 * s}, Material{}});
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u(0, 1);
+  for (int i = 0; i < lights; ++i) {
+    const float x = (8 + u(rng) * 496) * s, y = (8 + u(rng) * 496) * s;
+    const float k = 4.0f / std::sqrt(float(std::max(lights, 1)) / 2.0f);
+    d.shapes.push_back({Circle{{x, y}, 2 * s}, Material{{k * u(rng), k * u(rng), k * u(rng)}, 1, {}}});
+  }
+  return d;
+}
+
+}  // namespace penumbra::bench

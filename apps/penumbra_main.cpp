@@ -89,8 +89,7 @@ int run_render(const RenderArgs& a) {
   }
   static const std::map<std::string, MergeFix> fixes = {{"bilinear", MergeFix::bilinear},
                                                         {"none", MergeFix::none},
-                                                        {"nearest", MergeFix::nearest},
-                                                        {"parallax", MergeFix::parallax}};
+                                                        {"nearest", MergeFix::nearest}};
   options.rc.fix = fixes.at(a.fix);
 
   penumbra::Stopwatch load_watch;
@@ -189,8 +188,8 @@ int main(int argc, char** argv) {
   render->add_option("--cascades", rc.cascades, "Number of cascades (0: reach the grid diagonal)")
       ->check(CLI::Range(0, 16))
       ->capture_default_str();
-  render->add_option("--fix", a.fix, "Merge: bilinear (fix), none (vanilla), nearest, parallax")
-      ->check(CLI::IsMember({"bilinear", "none", "nearest", "parallax"}))
+  render->add_option("--fix", a.fix, "Merge: bilinear (fix), none (vanilla), nearest")
+      ->check(CLI::IsMember({"bilinear", "none", "nearest"}))
       ->capture_default_str();
   render->add_flag("--preaverage", rc.preaverage, "Trace a 2x2 sub-probe neighbourhood and store the average");
   render->add_flag("--extend", rc.extend, "Build long intervals by extending a short traced one");

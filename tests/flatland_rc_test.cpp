@@ -93,7 +93,6 @@ TEST(FlatlandRc, DiskLightAcrossOptions) {
   };
   add("vanilla", [](RcOptions& o) { o.fix = MergeFix::none; }, 0.08);
   add("nearest", [](RcOptions& o) { o.fix = MergeFix::nearest; }, 0.15);
-  add("parallax", [](RcOptions& o) { o.fix = MergeFix::parallax; }, 0.10);
   add("branching 2", [](RcOptions& o) { o.branching = 2, o.interval = 8; }, 0.08);
   add("spacing 2", [](RcOptions& o) { o.probe_spacing = 2; }, 0.05);
   add("preaverage", [](RcOptions& o) { o.preaverage = true; }, 0.05);
@@ -169,7 +168,7 @@ TEST(FlatlandRc, UniformEnvironmentGivesTwoPiE) {
   d.height = 61;  // not a power of two, not square
   d.environment = {0.5f, 1.0f, 2.0f};
   Scene s = build(d);
-  for (MergeFix fix : {MergeFix::bilinear, MergeFix::none, MergeFix::nearest, MergeFix::parallax})
+  for (MergeFix fix : {MergeFix::bilinear, MergeFix::none, MergeFix::nearest})
     for (int branching : {4, 2}) {
       RenderOptions o;
       o.rc.fix = fix;

@@ -199,7 +199,9 @@ TEST(FlatlandTrace, CascadeGeometry) {
         mean += std::atan2(dy, dx);
       }
       rc::ray_direction(k, 8, dx, dy);
-      if (k < 3) EXPECT_NEAR(mean / b, std::atan2(dy, dx), 1e-5) << "k " << k;
+      if (k < 3) {
+        EXPECT_NEAR(mean / b, std::atan2(dy, dx), 1e-5) << "k " << k;
+      }
     }
   }
   // Intervals are adjacent and grow by the branching factor; the last reaches the diagonal.

@@ -18,7 +18,6 @@ enum class MergeFix {
   bilinear,  // "bilinear fix": trace to each of the 4 upper probes, merge, then weight
   none,      // "vanilla": merge with the bilinear interpolation of the 4 upper probes
   nearest,   // merge with the nearest upper probe only (blocky; for teaching)
-  parallax,  // vanilla, but each upper probe is read in the direction that meets the ray
 };
 
 // Flatland radiance cascades (seed 001 sections 2-3, seed 002). See docs/METHODS.md.

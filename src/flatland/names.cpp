@@ -19,8 +19,6 @@ const char* to_string(MergeFix f) {
       return "none";
     case MergeFix::nearest:
       return "nearest";
-    case MergeFix::parallax:
-      return "parallax";
   }
   return "?";
 }

@@ -35,7 +35,7 @@ Status check_options(const Scene& scene, const RenderOptions& o) {
   if (rc.extend) {
     if (rc.fix == MergeFix::bilinear)
       return bad("extend: interval extension builds each probe's own interval, which the bilinear "
-                 "fix does not use; choose --fix none, nearest or parallax");
+                 "fix does not use; choose --fix none or nearest");
     if (rc.preaverage) return bad("extend: cannot be combined with pre-averaging");
     if (!(rc.extend_length >= 1.0f) || !std::isfinite(rc.extend_length))
       return bad("extend length: expected a number >= 1, found " + std::to_string(rc.extend_length));

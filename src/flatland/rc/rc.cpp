@@ -102,28 +102,6 @@ Interval merged_radiance(const Level& L, int k, float px, float py, const Interv
       for (int ci = 0; ci < b; ++ci) accumulate(far, L.upper[u.index(b * k + ci, qi, qj)], inv_b);
       break;
     }
-    case MergeFix::parallax: {
-      // Read each upper probe in the direction from it to where this child ray enters the
-      // upper interval, interpolated between its two nearest rays.
-      const Footprint f = bilinear(u, px, py);
-      for (int ci = 0; ci < b; ++ci) {
-        const int kk = b * k + ci;
-        const float ex = px + u.dir_x[kk] * u.t_begin, ey = py + u.dir_y[kk] * u.t_begin;
-        for (int a = 0; a < 4; ++a) {
-          if (f.w[a] == 0.0f) continue;
-          const int qi = f.x[a & 1], qj = f.y[a >> 1];
-          const double angle = std::atan2(double(ey - u.probe_y(qj)), double(ex - u.probe_x(qi)));
-          double s = angle / kTwoPi * u.directions - 0.5;
-          s -= std::floor(s / u.directions) * u.directions;
-          const int k0 = int(std::floor(s)) % u.directions, k1 = (k0 + 1) % u.directions;
-          const float fr = float(s - std::floor(s));
-          const float w = f.w[a] * inv_b;
-          accumulate(far, L.upper[u.index(k0, qi, qj)], w * (1 - fr));
-          accumulate(far, L.upper[u.index(k1, qi, qj)], w * fr);
-        }
-      }
-      break;
-    }
   }
   return merge_intervals(trace_near(), far);
 }

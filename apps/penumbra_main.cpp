@@ -137,6 +137,7 @@ int run_render(const RenderArgs& a) {
                         {"load_ms", load_ms},
                         {"write_ms", write_ms},
                         {"memory_bytes", result->memory_bytes},
+                        {"intervals", result->intervals},
                         {"parameters", parameters_json(result->options)},
                         {"outputs", a.outputs}};
     std::cout << j.dump(2) << "\n";
@@ -151,7 +152,9 @@ int run_render(const RenderArgs& a) {
       std::printf("  %-24s %9.1f ms\n", s.name.c_str(), s.ms);
     std::printf("  %-24s %9.1f ms  (computation)\n", "total", result->time_ms);
     std::printf("  %-24s %9.1f ms\n", "write outputs", write_ms);
-    std::printf("  working memory %.1f MiB\n", double(result->memory_bytes) / (1 << 20));
+    std::printf("  working memory %.1f MiB, %.1f M intervals traced (%.1f M/s)\n",
+                double(result->memory_bytes) / (1 << 20), double(result->intervals) / 1e6,
+                double(result->intervals) / 1e3 / result->time_ms);
     for (const std::string& out : a.outputs) std::printf("  wrote %s\n", out.c_str());
   }
   return 0;

@@ -11,7 +11,7 @@ using namespace penumbra;
 
 void run(benchmark::State& state, const Scene& scene, const RenderOptions& options) {
   double ms = 0;
-  std::uint64_t memory = 0;
+  std::uint64_t memory = 0, intervals = 0;
   for (auto _ : state) {
     Expected<RenderResult> r = render(scene, options);
     if (!r) {
@@ -20,11 +20,13 @@ void run(benchmark::State& state, const Scene& scene, const RenderOptions& optio
     }
     ms += r->time_ms;
     memory = r->memory_bytes;
+    intervals = r->intervals;
     benchmark::DoNotOptimize(r->fluence.data());
   }
   state.counters["cells/s"] =
       benchmark::Counter(double(scene.cells()) * state.iterations(), benchmark::Counter::kIsRate);
   state.counters["memory_MiB"] = double(memory) / (1 << 20);
+  state.counters["Mintervals/s"] = double(intervals) / (ms / double(state.iterations())) / 1e3;
   state.counters["compute_ms"] = ms / double(state.iterations());
 }
 

@@ -52,6 +52,7 @@ struct RenderResult {
   std::vector<StageTime> stages;  // in the order they ran
   double time_ms = 0;             // computation only, no file I/O
   std::uint64_t memory_bytes = 0; // peak working memory of the method (not the scene)
+  std::uint64_t intervals = 0;    // ray intervals traced (all bounces)
   RenderOptions options;          // the options used, with derived values filled in
 };
 

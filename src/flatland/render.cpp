@@ -113,6 +113,7 @@ Expected<RenderResult> render(const Scene& scene, const RenderOptions& options) 
     std::copy(f.begin(), f.end(), result.fluence.data());
   });
   for (const StageTime& s : result.stages) result.time_ms += s.ms;
+  result.intervals = rc::traced_intervals(plan, options.rc) * std::uint64_t(options.bounces);
   return result;
 }
 

@@ -213,6 +213,18 @@ std::vector<float> fluence(const Medium& m, const Cascade& c0, const Interval* r
 
 }  // namespace
 
+std::uint64_t traced_intervals(const std::vector<Cascade>& plan, const RcOptions& o) {
+  std::uint64_t total = 0;
+  for (const Cascade& c : plan) {
+    const bool top = c.n + 1 == int(plan.size());
+    std::uint64_t per = 1;
+    if (!top && o.fix == MergeFix::bilinear) per = std::uint64_t(o.branching) * 4;
+    if (o.preaverage) per *= 4;
+    total += per * c.size();
+  }
+  return total;
+}
+
 std::vector<float> solve(const Medium& medium, const Rgb& environment,
                          const std::vector<Cascade>& plan, const RcOptions& o,
                          std::vector<StageTime>& stages) {

@@ -9,6 +9,11 @@
 
 namespace penumbra::rc {
 
+// Ray intervals one solve traces: per probe and direction, one (the top cascade, vanilla and
+// nearest merges), or one per child ray and upper probe (the bilinear fix); four times that
+// with pre-averaging. Extension counts its short traced pieces.
+std::uint64_t traced_intervals(const std::vector<Cascade>& plan, const RcOptions& options);
+
 // Runs the cascades top down over `medium` and returns the fluence at every cell centre
 // (3 floats per cell). Stage times are appended to `stages`.
 std::vector<float> solve(const Medium& medium, const Rgb& environment,

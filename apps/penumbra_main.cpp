@@ -3,6 +3,7 @@
 #include <CLI/CLI.hpp>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -81,6 +82,14 @@ int run_render(const RenderArgs& a) {
       std::cerr << "penumbra render: " << out << ": unknown output type (use .png, .exr or .pfm)\n";
       return kUsage;
     }
+  for (const std::string& out : a.outputs) {
+    const std::filesystem::path dir = std::filesystem::path(out).parent_path();
+    if (!dir.empty() && !std::filesystem::is_directory(dir)) {
+      std::cerr << "penumbra render: " << out << ": directory " << dir.string()
+                << " does not exist\n";
+      return kFailure;
+    }
+  }
   penumbra::RenderOptions options = a.options;
   if (!parse_size(a.max_memory, options.max_memory)) {
     std::cerr << "penumbra render: --max-memory: expected a size such as 512M or 8G, found '"
@@ -100,6 +109,18 @@ int run_render(const RenderArgs& a) {
     std::cerr << "penumbra render: " << desc.error().message << "\n";
     return kFailure;
   }
+  // Refuse up front, before the grid itself is allocated.
+  const std::uint64_t need = penumbra::estimate_memory(desc->width, desc->height, options) +
+                             penumbra::scene_bytes(desc->width, desc->height);
+  if (need > options.max_memory) {
+    std::fprintf(stderr,
+                 "penumbra render: %s: a %dx%d grid needs %.2f GiB (scene and working memory), "
+                 "more than the %.2f GiB limit (raise it with --max-memory, or use a larger "
+                 "--probe-spacing)\n",
+                 desc->source.c_str(), desc->width, desc->height, double(need) / (1 << 30),
+                 double(options.max_memory) / (1 << 30));
+    return kFailure;
+  }
   penumbra::Stopwatch raster_watch;
   penumbra::Expected<penumbra::Scene> scene = penumbra::build_scene(*desc);
   if (!scene) {
@@ -115,12 +136,16 @@ int run_render(const RenderArgs& a) {
     return kFailure;
   }
   penumbra::Stopwatch write_watch;
+  // All outputs or none: if a later one fails, the ones this run already wrote are removed.
+  std::vector<std::string> written;
   for (const std::string& out : a.outputs) {
     penumbra::Status s = penumbra::write_image(out, result->fluence, *scene, {a.exposure});
     if (!s) {
       std::cerr << "penumbra render: " << s.error().message << "\n";
+      for (const std::string& w : written) std::remove(w.c_str());
       return kFailure;
     }
+    written.push_back(out);
   }
   const double write_ms = write_watch.ms();
 

@@ -149,8 +149,8 @@ TEST_F(Cli, QuietPrintsNothing) {
 }
 
 TEST_F(Cli, JsonReportsTimingsMemoryAndParameters) {
-  const Result r = render_ok({"--json", "--probe-spacing", "2", "--fix", "none", "--branching",
-                              "2", "-o", out("j.pfm")});
+  const Result r = render_ok(
+      {"--json", "--probe-spacing", "2", "--fix", "none", "--branching", "2", "-o", out("j.pfm")});
   nlohmann::json j;
   ASSERT_NO_THROW(j = nlohmann::json::parse(r.out)) << r.out;  // the whole of stdout
   ASSERT_TRUE(j.is_object());
@@ -240,7 +240,9 @@ TEST_F(Cli, UnparsableMemoryLimitIsAUsageError) {
   EXPECT_NE(r.err.find("banana"), std::string::npos) << r.err;
 }
 
-TEST_F(Cli, NoSubcommandIsAUsageError) { expect_failure(run({}), 2); }
+TEST_F(Cli, NoSubcommandIsAUsageError) {
+  expect_failure(run({}), 2);
+}
 
 // ---- input and runtime errors: exit 1 ------------------------------------------------------
 
@@ -279,9 +281,9 @@ TEST_F(Cli, OutputInMissingDirectoryFails) {
 
 // Disabled: the CLI writes outputs one by one, so a.pfm stays when b.pfm then fails. Enable once
 // it checks every output's directory before writing (or removes what it wrote on failure).
-TEST_F(Cli, DISABLED_FailedSecondOutputLeavesNoFirstOutput) {
-  const Result r =
-      run({"render", scene_, "-o", out("a.pfm"), "-o", (dir_ / "out" / "nodir" / "b.pfm").string()});
+TEST_F(Cli, FailedSecondOutputLeavesNoFirstOutput) {
+  const Result r = run(
+      {"render", scene_, "-o", out("a.pfm"), "-o", (dir_ / "out" / "nodir" / "b.pfm").string()});
   expect_failure(r, 1);
 }
 
@@ -291,6 +293,16 @@ TEST_F(Cli, MemoryLimitIsEnforcedBeforeRendering) {
   EXPECT_NE(r.err.find("working memory"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("limit"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("--max-memory"), std::string::npos) << r.err;
+}
+
+// The largest grid the format allows needs about 50 GiB: refused before the grid is allocated.
+TEST_F(Cli, LargestGridIsRefusedUpFront) {
+  const std::string huge = write("huge.json", R"({"penumbra": 1, "width": 16384, "height": 16384})");
+  const Result r = run({"render", huge, "-o", out("x.pfm")});
+  expect_failure(r, 1);
+  EXPECT_NE(r.err.find("huge.json"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("16384x16384"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("limit"), std::string::npos) << r.err;
 }
 
 TEST_F(Cli, ExtendNeedsAFixOtherThanBilinear) {

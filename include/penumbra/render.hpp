@@ -56,8 +56,12 @@ struct RenderResult {
   RenderOptions options;          // the options used, with derived values filled in
 };
 
-// Memory the method would need, known before anything is allocated.
+// Working memory the method would need, known before anything is allocated.
 std::uint64_t estimate_memory(const Scene& scene, const RenderOptions& options);
+std::uint64_t estimate_memory(int width, int height, const RenderOptions& options);
+
+// Bytes of a rasterised Scene of this size (emission, opacity, albedo).
+std::uint64_t scene_bytes(int width, int height);
 
 // Runs the method. Refuses up front (Error, nothing allocated) when options are invalid or the
 // memory estimate exceeds options.max_memory.

@@ -43,11 +43,11 @@ Status check_options(const Scene& scene, const RenderOptions& o) {
   return {};
 }
 
-std::uint64_t estimate(const Scene& scene, const RenderOptions& o,
+std::uint64_t estimate(int width, int height, const RenderOptions& o,
                        const std::vector<rc::Cascade>& plan) {
-  const std::uint64_t cells = scene.cells();
+  const std::uint64_t cells = std::uint64_t(width) * height;
   std::uint64_t bytes = cells * (sizeof(Cell) + sizeof(float));           // medium
-  if (o.distance_field) bytes += distance_field_bytes(scene.width, scene.height);
+  if (o.distance_field) bytes += distance_field_bytes(width, height);
   bytes += rc::cascade_bytes(plan, o.rc);                                // cascades
   bytes += cells * 3 * sizeof(float);                                    // fluence
   return bytes;
@@ -61,9 +61,17 @@ std::string human_bytes(std::uint64_t b) {
 
 }  // namespace
 
+std::uint64_t estimate_memory(int width, int height, const RenderOptions& options) {
+  if (width < 1 || height < 1) return 0;
+  return estimate(width, height, options, rc::plan_cascades(width, height, options.rc));
+}
+
 std::uint64_t estimate_memory(const Scene& scene, const RenderOptions& options) {
-  if (scene.width < 1 || scene.height < 1) return 0;
-  return estimate(scene, options, rc::plan_cascades(scene.width, scene.height, options.rc));
+  return estimate_memory(scene.width, scene.height, options);
+}
+
+std::uint64_t scene_bytes(int width, int height) {
+  return std::uint64_t(width) * height * 7 * sizeof(float);
 }
 
 Expected<RenderResult> render(const Scene& scene, const RenderOptions& options) {
@@ -72,7 +80,7 @@ Expected<RenderResult> render(const Scene& scene, const RenderOptions& options) 
   result.options = options;
   std::vector<rc::Cascade> plan = rc::plan_cascades(scene.width, scene.height, options.rc);
   result.options.rc.cascades = int(plan.size());
-  result.memory_bytes = estimate(scene, options, plan);
+  result.memory_bytes = estimate(scene.width, scene.height, options, plan);
   if (result.memory_bytes > options.max_memory)
     return Error{"grid " + std::to_string(scene.width) + "x" + std::to_string(scene.height) +
                  " needs " + human_bytes(result.memory_bytes) + " of working memory, more than the " +

@@ -137,6 +137,13 @@ TEST(FlatlandRc, RefusesBadOptionsAndTooMuchMemory) {
   ASSERT_FALSE(r.ok());
   EXPECT_NE(r.error().message.find("limit"), std::string::npos) << r.error().message;
   EXPECT_GT(estimate_memory(s, {}), std::uint64_t(1) << 20);
+  // 16 cascades of 4x branching would give the top probes 4^16 directions: refused, not tried.
+  o = {};
+  o.rc.cascades = 16;
+  o.max_memory = ~std::uint64_t(0);
+  r = render(s, o);
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find("cascades"), std::string::npos) << r.error().message;
 }
 
 // The N-th bounce re-emits albedo * F / 2pi of the previous pass: rendering with 2 bounces

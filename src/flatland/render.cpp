@@ -80,6 +80,12 @@ Expected<RenderResult> render(const Scene& scene, const RenderOptions& options) 
   result.options = options;
   std::vector<rc::Cascade> plan = rc::plan_cascades(scene.width, scene.height, options.rc);
   result.options.rc.cascades = int(plan.size());
+  const std::int64_t top = rc::top_directions(options.rc.directions, options.rc.branching,
+                                              int(plan.size()) - 1);
+  if (top > rc::kMaxDirections)
+    return Error{"cascades: " + std::to_string(plan.size()) + " cascades give the top probes " +
+                 std::to_string(top) + " directions, more than " +
+                 std::to_string(rc::kMaxDirections) + "; use fewer cascades or directions"};
   result.memory_bytes = estimate(scene.width, scene.height, options, plan);
   if (result.memory_bytes > options.max_memory)
     return Error{"grid " + std::to_string(scene.width) + "x" + std::to_string(scene.height) +
@@ -87,6 +93,7 @@ Expected<RenderResult> render(const Scene& scene, const RenderOptions& options) 
                  human_bytes(options.max_memory) +
                  " limit (raise it with --max-memory, or use a larger --probe-spacing)"};
 
+  rc::fill_directions(plan);
   tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
   arena.execute([&] {
     Stopwatch watch;

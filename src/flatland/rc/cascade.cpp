@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "flatland/interval.hpp"
 
@@ -25,6 +26,20 @@ int cascade_count(int width, int height, float t0, int branching) {
   return count;
 }
 
+std::int64_t top_directions(int q0, int branching, int n) {
+  std::int64_t q = q0;
+  for (int i = 0; i < n && q <= (std::int64_t(1) << 40); ++i) q *= branching;
+  return q;
+}
+
+void fill_directions(std::vector<Cascade>& plan) {
+  for (Cascade& c : plan) {
+    c.dir_x.resize(c.directions);
+    c.dir_y.resize(c.directions);
+    for (int k = 0; k < c.directions; ++k) ray_direction(k, c.directions, c.dir_x[k], c.dir_y[k]);
+  }
+}
+
 std::vector<Cascade> plan_cascades(int width, int height, const RcOptions& o) {
   const int count =
       o.cascades > 0 ? o.cascades : cascade_count(width, height, o.interval, o.branching);
@@ -35,11 +50,9 @@ std::vector<Cascade> plan_cascades(int width, int height, const RcOptions& o) {
     c.spacing = o.probe_spacing << n;
     c.probes_x = (width + c.spacing - 1) / c.spacing;
     c.probes_y = (height + c.spacing - 1) / c.spacing;
-    c.directions = o.directions * int(std::lround(std::pow(double(o.branching), n)));
+    c.directions = int(std::min<std::int64_t>(top_directions(o.directions, o.branching, n),
+                                              std::numeric_limits<int>::max()));
     cascade_interval(n, o.interval, o.branching, c.t_begin, c.t_end);
-    c.dir_x.resize(c.directions);
-    c.dir_y.resize(c.directions);
-    for (int k = 0; k < c.directions; ++k) ray_direction(k, c.directions, c.dir_x[k], c.dir_y[k]);
   }
   return plan;
 }

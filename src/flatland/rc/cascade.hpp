@@ -40,8 +40,19 @@ void cascade_interval(int n, float t0, int branching, float& t_begin, float& t_e
 // Enough cascades that the last interval ends beyond the grid diagonal.
 int cascade_count(int width, int height, float t0, int branching);
 
-// The whole hierarchy for a grid (options.cascades == 0 derives the count).
+// Directions of a cascade-n probe, Q0 * b^n, saturating far above any usable count.
+std::int64_t top_directions(int q0, int branching, int n);
+
+// Largest number of directions a probe may have (the top cascade's direction tables and the
+// merges index directions with int).
+inline constexpr std::int64_t kMaxDirections = std::int64_t(1) << 24;
+
+// The whole hierarchy for a grid (options.cascades == 0 derives the count): sizes only, so it
+// can be planned and its memory estimated before anything large is allocated.
 std::vector<Cascade> plan_cascades(int width, int height, const RcOptions& options);
+
+// Fills every cascade's direction tables (after the memory check).
+void fill_directions(std::vector<Cascade>& plan);
 
 // Bytes of cascade storage the method keeps alive at once.
 std::uint64_t cascade_bytes(const std::vector<Cascade>& plan, const RcOptions& options);

@@ -97,9 +97,19 @@ Interval trace_interval(const Medium& m, float ox, float oy, float dx, float dy,
       ix += step_x;
       if (ix < 0 || ix >= m.width) break;
       tmax_x = exit_x(ix);
-    } else {
+    } else if (tmax_y < tmax_x) {
       iy += step_y;
       if (iy < 0 || iy >= m.height) break;
+      tmax_y = exit_y(iy);
+    } else {
+      // Exactly through a corner (the 45-degree rays from cell centres of a 4-direction
+      // cascade do this): the ray only touches the two cells beside the corner at a point, so
+      // it passes between them into the diagonal cell. Stepping x first or y first instead
+      // would make results depend on the ray's orientation.
+      ix += step_x;
+      iy += step_y;
+      if (ix < 0 || ix >= m.width || iy < 0 || iy >= m.height) break;
+      tmax_x = exit_x(ix);
       tmax_y = exit_y(iy);
     }
   }

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <tbb/task_arena.h>
+#include <unistd.h>
 #include <iostream>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -41,7 +43,7 @@ bool parse_size(const std::string& text, std::uint64_t& bytes) {
     scale = 1024.0 * 1024 * 1024;
   else
     return false;
-  if (!(v > 0) || !std::isfinite(v)) return false;
+  if (!(v > 0) || !std::isfinite(v) || v * scale >= 18446744073709551615.0) return false;
   bytes = std::uint64_t(v * scale);
   return true;
 }
@@ -89,6 +91,10 @@ int run_render(const RenderArgs& a) {
                 << " does not exist\n";
       return kFailure;
     }
+    if (std::filesystem::is_directory(out)) {
+      std::cerr << "penumbra render: " << out << ": is a directory\n";
+      return kFailure;
+    }
   }
   penumbra::RenderOptions options = a.options;
   if (!parse_size(a.max_memory, options.max_memory)) {
@@ -100,6 +106,10 @@ int run_render(const RenderArgs& a) {
                                                         {"none", MergeFix::none},
                                                         {"nearest", MergeFix::nearest}};
   options.rc.fix = fixes.at(a.fix);
+  if (!std::isfinite(a.exposure)) {
+    std::cerr << "penumbra render: --exposure: expected a finite number of EV\n";
+    return kUsage;
+  }
 
   penumbra::Stopwatch load_watch;
   penumbra::Expected<penumbra::SceneDesc> desc =
@@ -108,6 +118,11 @@ int run_render(const RenderArgs& a) {
   if (!desc) {
     std::cerr << "penumbra render: " << desc.error().message << "\n";
     return kFailure;
+  }
+  // Option values that cannot work for this grid are usage errors.
+  if (penumbra::Status s = penumbra::check_options(desc->width, desc->height, options); !s) {
+    std::cerr << "penumbra render: " << s.error().message << "\n";
+    return kUsage;
   }
   // Refuse up front, before the grid itself is allocated.
   const std::uint64_t need = penumbra::estimate_memory(desc->width, desc->height, options) +
@@ -121,8 +136,11 @@ int run_render(const RenderArgs& a) {
                  double(options.max_memory) / (1 << 30));
     return kFailure;
   }
+  // Rasterising runs on the same number of threads as the method.
+  tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
   penumbra::Stopwatch raster_watch;
-  penumbra::Expected<penumbra::Scene> scene = penumbra::build_scene(*desc);
+  penumbra::Expected<penumbra::Scene> scene =
+      arena.execute([&] { return penumbra::build_scene(*desc); });
   if (!scene) {
     std::cerr << "penumbra render: " << scene.error().message << "\n";
     return kFailure;
@@ -136,16 +154,37 @@ int run_render(const RenderArgs& a) {
     return kFailure;
   }
   penumbra::Stopwatch write_watch;
-  // All outputs or none: if a later one fails, the ones this run already wrote are removed.
-  std::vector<std::string> written;
+  // All outputs or none: each is written to a temporary file beside its target (keeping its
+  // extension, which picks the format), and only when all succeeded are they renamed into place.
+  std::vector<std::string> staged;
+  auto discard = [&] {
+    for (const std::string& t : staged) std::remove(t.c_str());
+  };
   for (const std::string& out : a.outputs) {
-    penumbra::Status s = penumbra::write_image(out, result->fluence, *scene, {a.exposure});
+    const std::filesystem::path target(out);
+    const std::string temp = (target.parent_path() / ("." + target.stem().string() + ".partial-" +
+                                                      std::to_string(::getpid()) +
+                                                      target.extension().string()))
+                                 .string();
+    penumbra::Status s = penumbra::write_image(temp, result->fluence, *scene, {a.exposure});
     if (!s) {
       std::cerr << "penumbra render: " << s.error().message << "\n";
-      for (const std::string& w : written) std::remove(w.c_str());
+      discard();
       return kFailure;
     }
-    written.push_back(out);
+    staged.push_back(temp);
+  }
+  for (std::size_t i = 0; i < staged.size(); ++i) {
+    std::error_code ec;
+    std::filesystem::rename(staged[i], a.outputs[i], ec);
+    if (ec) {
+      std::cerr << "penumbra render: " << a.outputs[i] << ": cannot write: " << ec.message()
+                << "\n";
+      for (std::size_t j = 0; j < i; ++j) std::remove(a.outputs[j].c_str());
+      staged.erase(staged.begin(), staged.begin() + std::ptrdiff_t(i));
+      discard();
+      return kFailure;
+    }
   }
   const double write_ms = write_watch.ms();
 
@@ -248,6 +287,13 @@ int main(int argc, char** argv) {
     return kUsage;
   }
   a.options.distance_field = !no_distance_field;
-  if (render->parsed()) return run_render(a);
+  if (render->parsed()) {
+    try {
+      return run_render(a);
+    } catch (const std::exception& e) {  // the library reports errors as values; this is a bug
+      std::cerr << "penumbra render: internal error: " << e.what() << "\n";
+      return kFailure;
+    }
+  }
   return kUsage;
 }

@@ -307,9 +307,36 @@ TEST_F(Cli, LargestGridIsRefusedUpFront) {
 
 TEST_F(Cli, ExtendNeedsAFixOtherThanBilinear) {
   const Result r = run({"render", scene_, "--extend", "-o", out("x.png")});
-  expect_failure(r, 1);
+  expect_failure(r, 2);  // a combination of options that cannot work: usage error
   EXPECT_NE(r.err.find("extend"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("bilinear"), std::string::npos) << r.err;
+}
+
+// A failed run leaves files that were there before untouched.
+TEST_F(Cli, FailedRunKeepsExistingOutputs) {
+  const std::string keep = out("keep.pfm");
+  {
+    std::ofstream f(keep);
+    f << "precious";
+  }
+  fs::create_directories(out("dir.pfm"));
+  const Result r = run({"render", scene_, "-o", keep, "-o", out("dir.pfm")});
+  EXPECT_EQ(r.status, 1) << r.err;
+  EXPECT_EQ(slurp(keep), "precious");
+  for (const auto& e : fs::directory_iterator(dir_ / "out"))
+    EXPECT_TRUE(e.path().filename() == "keep.pfm" || e.path().filename() == "dir.pfm") << e.path();
+}
+
+TEST_F(Cli, BadOptionValuesAreUsageErrors) {
+  for (const std::vector<std::string>& bad :
+       {std::vector<std::string>{"--interval", "nan"}, {"--exposure", "inf"},
+        {"--max-memory", "1e30G"}, {"--interval", "1e-18"}}) {
+    std::vector<std::string> args = {"render", scene_, "-o", out("x.pfm")};
+    args.insert(args.end(), bad.begin(), bad.end());
+    const Result r = run(args);
+    EXPECT_EQ(r.status, 2) << bad[0] << " " << bad[1] << ": " << r.err;
+    EXPECT_FALSE(fs::exists(out("x.pfm")));
+  }
 }
 
 TEST_F(Cli, ExtendWorksWithVanillaMerge) {

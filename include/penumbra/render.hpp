@@ -56,7 +56,11 @@ struct RenderResult {
   RenderOptions options;          // the options used, with derived values filled in
 };
 
-// Working memory the method would need, known before anything is allocated.
+// Checks options against a grid size: ranges, combinations, and hierarchies too deep to build.
+Status check_options(int width, int height, const RenderOptions& options);
+
+// Working memory the method would need, known before anything is allocated (the largest value
+// when the options are invalid).
 std::uint64_t estimate_memory(const Scene& scene, const RenderOptions& options);
 std::uint64_t estimate_memory(int width, int height, const RenderOptions& options);
 

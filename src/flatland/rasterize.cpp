@@ -196,7 +196,9 @@ void draw(Scene& s, const Geom& g, const Material& m) {
 
 }  // namespace
 
-Expected<Scene> build_scene(const SceneDesc& desc) {
+namespace {
+
+Expected<Scene> build_scene_unchecked(const SceneDesc& desc) {
   if (Status st = validate(desc); !st) return st.error();
 
   Scene s;
@@ -240,6 +242,18 @@ Expected<Scene> build_scene(const SceneDesc& desc) {
         shape.geometry);
   }
   return s;
+}
+
+}  // namespace
+
+Expected<Scene> build_scene(const SceneDesc& desc) {
+  try {
+    return build_scene_unchecked(desc);
+  } catch (const std::bad_alloc&) {
+    return Error{desc.source + ": out of memory while rasterising the scene"};
+  } catch (const std::exception& e) {
+    return Error{desc.source + ": " + e.what()};
+  }
 }
 
 }  // namespace penumbra

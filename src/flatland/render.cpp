@@ -14,11 +14,13 @@ namespace penumbra {
 
 namespace {
 
-Status check_options(const Scene& scene, const RenderOptions& o) {
+}  // namespace
+
+Status check_options(int width, int height, const RenderOptions& o) {
   auto bad = [](const std::string& what) { return Status(Error{what}); };
-  if (scene.width < 1 || scene.height < 1 || scene.cells() != scene.opacity.size() ||
-      scene.emission.size() != 3 * scene.cells() || scene.albedo.size() != 3 * scene.cells())
-    return bad("scene: inconsistent grid (build it with build_scene)");
+  if (width < 1 || height < 1 || width > kMaxGridSide || height > kMaxGridSide)
+    return bad("grid: expected 1..16384 cells a side, found " + std::to_string(width) + "x" +
+               std::to_string(height));
   if (o.bounces < 1 || o.bounces > 64) return bad("bounces: expected 1..64, found " + std::to_string(o.bounces));
   if (o.threads < 0) return bad("threads: expected >= 0, found " + std::to_string(o.threads));
   const RcOptions& rc = o.rc;
@@ -40,8 +42,22 @@ Status check_options(const Scene& scene, const RenderOptions& o) {
     if (!(rc.extend_length >= 1.0f) || !std::isfinite(rc.extend_length))
       return bad("extend length: expected a number >= 1, found " + std::to_string(rc.extend_length));
   }
+  // The derived count grows as t0 shrinks; spacing s0 * 2^n and Q0 * b^n must stay sane.
+  const int count =
+      rc.cascades > 0 ? rc.cascades : rc::cascade_count(width, height, rc.interval, rc.branching);
+  if (count > 16)
+    return bad("interval t0: " + std::to_string(rc.interval) + " needs " + std::to_string(count) +
+               " cascades to reach the grid diagonal, more than 16; use a larger --interval");
+  const std::int64_t top = rc::top_directions(rc.directions, rc.branching, count - 1);
+  if (top > rc::kMaxDirections)
+    return bad("cascades: " + std::to_string(count) + " cascades give the top probes " +
+               std::to_string(top) + " directions, more than " +
+               std::to_string(rc::kMaxDirections) + "; use fewer cascades or directions");
   return {};
 }
+
+namespace {
+
 
 std::uint64_t estimate(int width, int height, const RenderOptions& o,
                        const std::vector<rc::Cascade>& plan) {
@@ -62,7 +78,7 @@ std::string human_bytes(std::uint64_t b) {
 }  // namespace
 
 std::uint64_t estimate_memory(int width, int height, const RenderOptions& options) {
-  if (width < 1 || height < 1) return 0;
+  if (!check_options(width, height, options)) return ~std::uint64_t(0);
   return estimate(width, height, options, rc::plan_cascades(width, height, options.rc));
 }
 
@@ -74,18 +90,17 @@ std::uint64_t scene_bytes(int width, int height) {
   return std::uint64_t(width) * height * 7 * sizeof(float);
 }
 
-Expected<RenderResult> render(const Scene& scene, const RenderOptions& options) {
-  if (Status s = check_options(scene, options); !s) return s.error();
+namespace {
+
+Expected<RenderResult> render_unchecked(const Scene& scene, const RenderOptions& options) {
+  if (scene.width < 1 || scene.height < 1 || scene.cells() != scene.opacity.size() ||
+      scene.emission.size() != 3 * scene.cells() || scene.albedo.size() != 3 * scene.cells())
+    return Error{"scene: inconsistent grid (build it with build_scene)"};
+  if (Status s = check_options(scene.width, scene.height, options); !s) return s.error();
   RenderResult result;
   result.options = options;
   std::vector<rc::Cascade> plan = rc::plan_cascades(scene.width, scene.height, options.rc);
   result.options.rc.cascades = int(plan.size());
-  const std::int64_t top = rc::top_directions(options.rc.directions, options.rc.branching,
-                                              int(plan.size()) - 1);
-  if (top > rc::kMaxDirections)
-    return Error{"cascades: " + std::to_string(plan.size()) + " cascades give the top probes " +
-                 std::to_string(top) + " directions, more than " +
-                 std::to_string(rc::kMaxDirections) + "; use fewer cascades or directions"};
   result.memory_bytes = estimate(scene.width, scene.height, options, plan);
   if (result.memory_bytes > options.max_memory)
     return Error{"grid " + std::to_string(scene.width) + "x" + std::to_string(scene.height) +
@@ -130,6 +145,20 @@ Expected<RenderResult> render(const Scene& scene, const RenderOptions& options) 
   for (const StageTime& s : result.stages) result.time_ms += s.ms;
   result.intervals = rc::traced_intervals(plan, options.rc) * std::uint64_t(options.bounces);
   return result;
+}
+
+}  // namespace
+
+Expected<RenderResult> render(const Scene& scene, const RenderOptions& options) {
+  // Nothing is thrown across the API: an allocation that fails despite the estimate (another
+  // process took the memory) becomes an Error.
+  try {
+    return render_unchecked(scene, options);
+  } catch (const std::bad_alloc&) {
+    return Error{"out of memory while rendering"};
+  } catch (const std::exception& e) {
+    return Error{std::string("render failed: ") + e.what()};
+  }
 }
 
 }  // namespace penumbra

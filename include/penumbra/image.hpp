@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstddef>
+#include <utility>
 #include <vector>
 
 namespace penumbra {
@@ -15,6 +16,11 @@ class ImageRgb {
  public:
   ImageRgb() = default;
   ImageRgb(int width, int height) : w_(width), h_(height), px_(std::size_t(width) * height * 3) {}
+  // Takes over `pixels` (width * height * 3 floats) without copying.
+  ImageRgb(int width, int height, std::vector<float>&& pixels)
+      : w_(width), h_(height), px_(std::move(pixels)) {
+    px_.resize(std::size_t(width) * height * 3);
+  }
 
   int width() const { return w_; }
   int height() const { return h_; }

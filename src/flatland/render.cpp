@@ -66,6 +66,7 @@ std::uint64_t estimate(int width, int height, const RenderOptions& o,
   if (o.distance_field) bytes += distance_field_bytes(width, height);
   bytes += rc::cascade_bytes(plan, o.rc);                                // cascades
   bytes += cells * 3 * sizeof(float);                                    // fluence
+  if (o.bounces > 1) bytes += cells * 3 * sizeof(float);  // the previous bounce's fluence
   return bytes;
 }
 
@@ -139,8 +140,7 @@ Expected<RenderResult> render_unchecked(const Scene& scene, const RenderOptions&
       f = rc::solve(medium, scene.environment, plan, options.rc, inner);
       for (StageTime& s : inner) result.stages.push_back({"bounce " + std::to_string(bounce) + " " + s.name, s.ms});
     }
-    result.fluence = ImageRgb(scene.width, scene.height);
-    std::copy(f.begin(), f.end(), result.fluence.data());
+    result.fluence = ImageRgb(scene.width, scene.height, std::move(f));
   });
   for (const StageTime& s : result.stages) result.time_ms += s.ms;
   result.intervals = rc::traced_intervals(plan, options.rc) * std::uint64_t(options.bounces);

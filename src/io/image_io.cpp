@@ -65,7 +65,13 @@ long long remaining_bytes(std::FILE* f) {
   return static_cast<long long>(end) - here;
 }
 
-Status check_size(const std::string& path, long long width, long long height) {
+// The size an image must have (0: any), checked from its header before pixels are decoded so a
+// layer of the wrong size costs nothing.
+struct Expect {
+  int width = 0, height = 0;
+};
+
+Status check_size(const std::string& path, long long width, long long height, Expect e) {
   if (width <= 0 || height <= 0) {
     return fail(path, "image has zero size (" + std::to_string(width) + " x " +
                           std::to_string(height) + ")");
@@ -73,6 +79,11 @@ Status check_size(const std::string& path, long long width, long long height) {
   if (width > kMaxGridSide || height > kMaxGridSide) {
     return fail(path, "image too large (" + std::to_string(width) + " x " + std::to_string(height) +
                           ", the limit is " + std::to_string(kMaxGridSide) + " per side)");
+  }
+  if (e.width > 0 && (width != e.width || height != e.height)) {
+    return fail(path, "the image is " + std::to_string(width) + "x" + std::to_string(height) +
+                          ", expected " + std::to_string(e.width) + "x" +
+                          std::to_string(e.height) + " (the grid's size)");
   }
   return {};
 }
@@ -100,7 +111,7 @@ Expected<std::vector<unsigned char>> read_all(const std::string& path) {
   return bytes;
 }
 
-Expected<RawImage> read_png(const std::string& path) {
+Expected<RawImage> read_png(const std::string& path, Expect e) {
   auto bytes = read_all(path);
   if (!bytes) return bytes.error();
   static constexpr unsigned char kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
@@ -119,7 +130,7 @@ Expected<RawImage> read_png(const std::string& path) {
     return fail(path, malformed_png());
   }
   // Checked before decoding so a hostile header cannot ask for gigabytes.
-  if (Status s = check_size(path, w, h); !s) return s.error();
+  if (Status s = check_size(path, w, h, e); !s) return s.error();
 
   RawImage img;
   const bool sixteen = stbi_is_16_bit_from_memory(data, len) != 0;
@@ -175,7 +186,7 @@ std::uint32_t byteswap32(std::uint32_t v) {
   return (v >> 24) | ((v >> 8) & 0xff00u) | ((v << 8) & 0xff0000u) | (v << 24);
 }
 
-Expected<RawImage> read_pfm(const std::string& path) {
+Expected<RawImage> read_pfm(const std::string& path, Expect e) {
   auto file = open_for_reading(path);
   if (!file) return file.error();
   std::FILE* f = file->get();
@@ -205,7 +216,7 @@ Expected<RawImage> read_pfm(const std::string& path) {
   if (!parse_number(ss, scale) || scale == 0 || !std::isfinite(scale)) {
     return fail(path, "bad PFM header (scale '" + ss + "')");
   }
-  if (Status s = check_size(path, width, height); !s) return s.error();
+  if (Status s = check_size(path, width, height, e); !s) return s.error();
 
   // Check the length before allocating, so a lying header cannot ask for gigabytes.
   const std::size_t count = std::size_t(width) * height * channels;
@@ -245,7 +256,7 @@ Expected<RawImage> read_pfm(const std::string& path) {
 
 // ---- EXR ---------------------------------------------------------------------------------
 
-Expected<RawImage> read_exr(const std::string& path) {
+Expected<RawImage> read_exr(const std::string& path, Expect e) {
   // Open once ourselves for a plain errno message on a missing or unreadable file.
   if (auto f = open_for_reading(path); !f) return f.error();
   try {
@@ -253,7 +264,7 @@ Expected<RawImage> read_exr(const std::string& path) {
     const Imath::Box2i dw = file.header().dataWindow();
     const long long width = static_cast<long long>(dw.max.x) - dw.min.x + 1;
     const long long height = static_cast<long long>(dw.max.y) - dw.min.y + 1;
-    if (Status s = check_size(path, width, height); !s) return s.error();
+    if (Status s = check_size(path, width, height, e); !s) return s.error();
 
     const Imf::ChannelList& list = file.header().channels();
     std::vector<std::string> names;
@@ -372,11 +383,12 @@ Status check_writable_size(const std::string& path, int width, int height) {
 
 }  // namespace
 
-Expected<RawImage> read_image(const std::string& path) {
+Expected<RawImage> read_image(const std::string& path, int expect_width, int expect_height) {
   const std::string ext = lowercase_extension(path);
-  if (ext == ".png") return read_png(path);
-  if (ext == ".exr") return read_exr(path);
-  if (ext == ".pfm") return read_pfm(path);
+  const Expect e{expect_width, expect_height};
+  if (ext == ".png") return read_png(path, e);
+  if (ext == ".exr") return read_exr(path, e);
+  if (ext == ".pfm") return read_pfm(path, e);
   return fail(path, "unsupported image format '" + ext + "' (supported: .png, .exr, .pfm)");
 }
 

@@ -16,8 +16,10 @@ struct RawImage {
   bool integer_png = false;   // values came from an 8- or 16-bit PNG, scaled to [0, 1], not decoded
 };
 
-// Reads .png, .exr or .pfm (by extension, case-insensitive). Messages name the file.
-Expected<RawImage> read_image(const std::string& path);
+// Reads .png, .exr or .pfm (by extension, case-insensitive). Messages name the file. With an
+// expected size, an image of another size is refused from its header, before decoding.
+Expected<RawImage> read_image(const std::string& path, int expect_width = 0,
+                              int expect_height = 0);
 
 // sRGB transfer functions on [0, 1].
 float srgb_to_linear(float v);

@@ -534,7 +534,7 @@ SceneDesc parse_or_throw(std::string_view text, const std::string& path) {
     const std::string name = kLayerNames[k];
     std::filesystem::path file(layer_files[k]);
     if (file.is_relative()) file = base / file;
-    auto raw = io::read_image(file.string());
+    auto raw = io::read_image(file.string(), desc.width, desc.height);
     if (!raw) w.fail_at("layers." + name, "cannot load the image: " + raw.error().message);
     if (raw->channels < 1 ||
         raw->pixels.size() != std::size_t(raw->width) * raw->height * raw->channels)

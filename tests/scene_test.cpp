@@ -198,6 +198,13 @@ std::vector<ErrorCase> error_cases() {
        "missing"},
       {"ShapeNotObject", shape_doc("[1, 2]"), "shapes[1]", "object"},
       {"ShapesNotArray", scene_doc(R"(, "shapes": {})"), "shapes", "array"},
+      // Ranges apply to the number as written, not to its float rounding.
+      {"OpacityJustAboveOne",
+       shape_doc(R"({"type": "box", "center": [1, 1], "size": [1, 1], "opacity": 1.00000001})"),
+       "shapes[1].opacity", "found 1.00000001"},
+      {"RadiusRoundingToZero",
+       shape_doc(R"({"type": "circle", "center": [1, 1], "radius": 1e-50})"), "shapes[1].radius",
+       "found 1e-50"},
       {"MissingRadius", shape_doc(R"({"type": "circle", "center": [1, 1]})"), "shapes[1].radius",
        "missing"},
       {"MissingCenter", shape_doc(R"({"type": "circle", "radius": 1})"), "shapes[1].center",

@@ -96,7 +96,7 @@ const char* expected_text(Range r) {
   return "a number";
 }
 
-bool in_range(float v, Range r) {
+bool in_range(double v, Range r) {
   if (!std::isfinite(v)) return false;
   switch (r) {
     case Range::any:
@@ -268,6 +268,8 @@ class Walker {
     double d = j.get<double>();
     float f = static_cast<float>(d);
     if (!std::isfinite(d) || !std::isfinite(f)) expected(path, "a finite number", j);
+    // The range is checked on the number as written too: 1.00000001 rounds to the float 1.
+    if (!in_range(d, r) || !in_range(f, r)) expected(path, expected_text(r), j);
     return f;
   }
 

@@ -1,11 +1,12 @@
 // penumbra: the command line. A thin front end over libpenumbra.
 // Exit codes: 0 success, 1 bad input or runtime failure, 2 usage error.
+#include <tbb/task_arena.h>
+#include <unistd.h>
+
 #include <CLI/CLI.hpp>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <tbb/task_arena.h>
-#include <unistd.h>
 #include <iostream>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -102,9 +103,8 @@ int run_render(const RenderArgs& a) {
               << a.max_memory << "'\n";
     return kUsage;
   }
-  static const std::map<std::string, MergeFix> fixes = {{"bilinear", MergeFix::bilinear},
-                                                        {"none", MergeFix::none},
-                                                        {"nearest", MergeFix::nearest}};
+  static const std::map<std::string, MergeFix> fixes = {
+      {"bilinear", MergeFix::bilinear}, {"none", MergeFix::none}, {"nearest", MergeFix::nearest}};
   options.rc.fix = fixes.at(a.fix);
   if (!std::isfinite(a.exposure)) {
     std::cerr << "penumbra render: --exposure: expected a finite number of EV\n";
@@ -162,10 +162,10 @@ int run_render(const RenderArgs& a) {
   };
   for (const std::string& out : a.outputs) {
     const std::filesystem::path target(out);
-    const std::string temp = (target.parent_path() / ("." + target.stem().string() + ".partial-" +
-                                                      std::to_string(::getpid()) +
-                                                      target.extension().string()))
-                                 .string();
+    const std::string temp =
+        (target.parent_path() / ("." + target.stem().string() + ".partial-" +
+                                 std::to_string(::getpid()) + target.extension().string()))
+            .string();
     penumbra::Status s = penumbra::write_image(temp, result->fluence, *scene, {a.exposure});
     if (!s) {
       std::cerr << "penumbra render: " << s.error().message << "\n";
@@ -234,7 +234,9 @@ int main(int argc, char** argv) {
   RenderArgs a;
   CLI::App* render = app.add_subcommand("render", "Render a 2D scene file (or the built-in scene)");
   render->add_option("scene", a.scene, "Scene file (JSON, format 1); omitted: the built-in scene");
-  render->add_option("-o,--output", a.outputs, "Output file: .png (display), .exr or .pfm (fluence); repeatable")
+  render
+      ->add_option("-o,--output", a.outputs,
+                   "Output file: .png (display), .exr or .pfm (fluence); repeatable")
       ->required();
   render->add_option("--method", a.method, "Method")
       ->check(CLI::IsMember({"rc"}))
@@ -258,7 +260,8 @@ int main(int argc, char** argv) {
   render->add_option("--fix", a.fix, "Merge: bilinear (fix), none (vanilla), nearest")
       ->check(CLI::IsMember({"bilinear", "none", "nearest"}))
       ->capture_default_str();
-  render->add_flag("--preaverage", rc.preaverage, "Trace a 2x2 sub-probe neighbourhood and store the average");
+  render->add_flag("--preaverage", rc.preaverage,
+                   "Trace a 2x2 sub-probe neighbourhood and store the average");
   render->add_flag("--extend", rc.extend, "Build long intervals by extending a short traced one");
   render->add_option("--extend-length", rc.extend_length, "Traced length before extension, cells")
       ->check(CLI::Range(1.0f, 1.0e6f))

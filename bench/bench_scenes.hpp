@@ -24,7 +24,8 @@ inline SceneDesc lights_scene(int size, int lights, unsigned seed = 1) {
   for (int i = 0; i < lights; ++i) {
     const float x = (8 + u(rng) * 496) * s, y = (8 + u(rng) * 496) * s;
     const float k = 4.0f / std::sqrt(float(std::max(lights, 1)) / 2.0f);
-    d.shapes.push_back({Circle{{x, y}, 2 * s}, Material{{k * u(rng), k * u(rng), k * u(rng)}, 1, {}}});
+    d.shapes.push_back(
+        {Circle{{x, y}, 2 * s}, Material{{k * u(rng), k * u(rng), k * u(rng)}, 1, {}}});
   }
   return d;
 }

@@ -46,7 +46,8 @@ std::vector<double> grid_reference(const Disk& d, const Scene& s) {
       for (int k = 0; k < rays; ++k) {
         const double a = 2 * kPi * (k + 0.5) / rays;
         sum += trace_interval(m, x + 0.5f, y + 0.5f, float(std::cos(a)), float(std::sin(a)), 0,
-                              1e5f, true).g;
+                              1e5f, true)
+                   .g;
       }
       ref[std::size_t(y) * d.n + x] = sum * 2 * kPi / rays;
     }
@@ -72,7 +73,8 @@ void write_error_png(const std::string& path, const Disk& d, const ImageRgb& f) 
       p[1] = (unsigned char)(255 * w);
       p[2] = (unsigned char)(255 * (e < 0 ? 1 : w));
     }
-  if (Status st = io::write_png8(path, d.n, d.n, px); !st) std::fprintf(stderr, "%s\n", st.error().message.c_str());
+  if (Status st = io::write_png8(path, d.n, d.n, px); !st)
+    std::fprintf(stderr, "%s\n", st.error().message.c_str());
 }
 
 }  // namespace
@@ -102,11 +104,16 @@ int main(int argc, char** argv) {
   add("t0 4, fix bilinear, preaverage", [](RenderOptions& o) { o.rc.preaverage = true; });
   add("t0 4, fix bilinear, spacing 2", [](RenderOptions& o) { o.rc.probe_spacing = 2; });
   add("t0 4, fix bilinear, 8 directions", [](RenderOptions& o) { o.rc.directions = 8; });
-  add("t0 8, fix bilinear, 8 directions", [](RenderOptions& o) { o.rc.directions = 8, o.rc.interval = 8; });
-  add("t0 8, fix bilinear, branching 2", [](RenderOptions& o) { o.rc.branching = 2, o.rc.interval = 8; });
-  add("t0 4, fix none, extend 8", [](RenderOptions& o) { o.rc.fix = MergeFix::none, o.rc.extend = true; });
+  add("t0 8, fix bilinear, 8 directions",
+      [](RenderOptions& o) { o.rc.directions = 8, o.rc.interval = 8; });
+  add("t0 8, fix bilinear, branching 2",
+      [](RenderOptions& o) { o.rc.branching = 2, o.rc.interval = 8; });
+  add("t0 4, fix none, extend 8",
+      [](RenderOptions& o) { o.rc.fix = MergeFix::none, o.rc.extend = true; });
 
-  std::printf("| options | mean rel. error vs closed form | max | mean rel. error vs exact grid | max | time (ms) |\n");
+  std::printf(
+      "| options | mean rel. error vs closed form | max | mean rel. error vs exact grid | max | "
+      "time (ms) |\n");
   std::printf("| --- | ---: | ---: | ---: | ---: | ---: |\n");
   for (const Row& row : rows) {
     Expected<RenderResult> r = render(scene, row.o);

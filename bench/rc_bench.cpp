@@ -30,7 +30,9 @@ void run(benchmark::State& state, const Scene& scene, const RenderOptions& optio
   state.counters["compute_ms"] = ms / double(state.iterations());
 }
 
-Scene build(const SceneDesc& d) { return *build_scene(d); }
+Scene build(const SceneDesc& d) {
+  return *build_scene(d);
+}
 
 // Grid size: a fixed layout of walls and 102 lights scaled to the grid.
 void BM_RcGrid(benchmark::State& state) {
@@ -44,7 +46,12 @@ void BM_RcLights512(benchmark::State& state) {
   const Scene scene = build(bench::lights_scene(512, int(state.range(0))));
   run(state, scene, {});
 }
-BENCHMARK(BM_RcLights512)->Arg(2)->Arg(102)->Arg(1002)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_RcLights512)
+    ->Arg(2)
+    ->Arg(102)
+    ->Arg(1002)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 // Merge options at 512^2 (the fix costs a trace per upper probe and child ray).
 void BM_RcMerge512(benchmark::State& state) {

@@ -297,7 +297,8 @@ TEST_F(Cli, MemoryLimitIsEnforcedBeforeRendering) {
 
 // The largest grid the format allows needs about 50 GiB: refused before the grid is allocated.
 TEST_F(Cli, LargestGridIsRefusedUpFront) {
-  const std::string huge = write("huge.json", R"({"penumbra": 1, "width": 16384, "height": 16384})");
+  const std::string huge =
+      write("huge.json", R"({"penumbra": 1, "width": 16384, "height": 16384})");
   const Result r = run({"render", huge, "-o", out("x.pfm")});
   expect_failure(r, 1);
   EXPECT_NE(r.err.find("huge.json"), std::string::npos) << r.err;
@@ -328,9 +329,10 @@ TEST_F(Cli, FailedRunKeepsExistingOutputs) {
 }
 
 TEST_F(Cli, BadOptionValuesAreUsageErrors) {
-  for (const std::vector<std::string>& bad :
-       {std::vector<std::string>{"--interval", "nan"}, {"--exposure", "inf"},
-        {"--max-memory", "1e30G"}, {"--interval", "1e-18"}}) {
+  for (const std::vector<std::string>& bad : {std::vector<std::string>{"--interval", "nan"},
+                                              {"--exposure", "inf"},
+                                              {"--max-memory", "1e30G"},
+                                              {"--interval", "1e-18"}}) {
     std::vector<std::string> args = {"render", scene_, "-o", out("x.pfm")};
     args.insert(args.end(), bad.begin(), bad.end());
     const Result r = run(args);

@@ -91,13 +91,19 @@ TEST(FlatlandRc, DiskLightAcrossOptions) {
     edit(o);
     cases.push_back({name, o, limit});
   };
-  add("vanilla", [](RcOptions& o) { o.fix = MergeFix::none; }, 0.08);
-  add("nearest", [](RcOptions& o) { o.fix = MergeFix::nearest; }, 0.15);
-  add("branching 2", [](RcOptions& o) { o.branching = 2, o.interval = 8; }, 0.08);
-  add("spacing 2", [](RcOptions& o) { o.probe_spacing = 2; }, 0.05);
-  add("preaverage", [](RcOptions& o) { o.preaverage = true; }, 0.05);
+  add(
+      "vanilla", [](RcOptions& o) { o.fix = MergeFix::none; }, 0.08);
+  add(
+      "nearest", [](RcOptions& o) { o.fix = MergeFix::nearest; }, 0.15);
+  add(
+      "branching 2", [](RcOptions& o) { o.branching = 2, o.interval = 8; }, 0.08);
+  add(
+      "spacing 2", [](RcOptions& o) { o.probe_spacing = 2; }, 0.05);
+  add(
+      "preaverage", [](RcOptions& o) { o.preaverage = true; }, 0.05);
   // Extension trades accuracy for time: each doubling interpolates the probe grid.
-  add("extend", [](RcOptions& o) { o.fix = MergeFix::none, o.extend = true; }, 0.15);
+  add(
+      "extend", [](RcOptions& o) { o.fix = MergeFix::none, o.extend = true; }, 0.15);
   for (const Case& c : cases) {
     RenderOptions o;
     o.rc = c.o;
@@ -184,7 +190,8 @@ TEST(FlatlandRc, UniformEnvironmentGivesTwoPiE) {
       for (int y = 0; y < d.height; ++y)
         for (int x = 0; x < d.width; ++x) {
           const Rgb f = r.fluence.at(x, y);
-          ASSERT_NEAR(f.r, 2 * kPi * 0.5, 1e-3 * 2 * kPi * 0.5) << to_string(fix) << " " << x << "," << y;
+          ASSERT_NEAR(f.r, 2 * kPi * 0.5, 1e-3 * 2 * kPi * 0.5)
+              << to_string(fix) << " " << x << "," << y;
           ASSERT_NEAR(f.g, 2 * kPi * 1.0, 1e-3 * 2 * kPi * 1.0);
           ASSERT_NEAR(f.b, 2 * kPi * 2.0, 1e-3 * 2 * kPi * 2.0);
         }
@@ -220,7 +227,7 @@ TEST(FlatlandRc, WallCastsShadow) {
   d.shapes.push_back({Box{{50, 64}, {4, 60}, 0}, Material{}});
   Scene s = build(d);
   RenderResult r = run(s);
-  const float open = r.fluence.at(60, 4).r;  // sees the light past the wall's end
+  const float open = r.fluence.at(60, 4).r;    // sees the light past the wall's end
   const float umbra = r.fluence.at(70, 64).r;  // right behind the wall's middle
   EXPECT_GT(open, 0.5f);
   EXPECT_LT(umbra, 0.01f * open);

@@ -74,8 +74,8 @@ TEST(FlatlandTrace, OneIntervalEqualsTwoMergedHalves) {
     const float dx = std::cos(a), dy = std::sin(a);
     const float t0 = 10 * u(rng), t2 = t0 + 60 * u(rng), t1 = t0 + (t2 - t0) * u(rng);
     const Interval whole = trace_interval(m, ox, oy, dx, dy, t0, t2);
-    const Interval split =
-        merge_intervals(trace_interval(m, ox, oy, dx, dy, t0, t1), trace_interval(m, ox, oy, dx, dy, t1, t2));
+    const Interval split = merge_intervals(trace_interval(m, ox, oy, dx, dy, t0, t1),
+                                           trace_interval(m, ox, oy, dx, dy, t1, t2));
     expect_interval_near(whole, split, 2e-4f);
   }
 }
@@ -137,7 +137,8 @@ TEST(FlatlandTrace, DistanceFieldMatchesBruteForce) {
       double best = INFINITY;
       for (int sy = 0; sy < m.height; ++sy)
         for (int sx = 0; sx < m.width; ++sx)
-          if (m.at(sx, sy).sigma > 0) best = std::min(best, std::hypot(double(sx - x), double(sy - y)));
+          if (m.at(sx, sy).sigma > 0)
+            best = std::min(best, std::hypot(double(sx - x), double(sy - y)));
       const double got = m.distance[std::size_t(y) * m.width + x];
       worst_over = std::max(worst_over, got - best);
       exact += std::abs(got - best) < 1e-4;
@@ -178,7 +179,9 @@ TEST(FlatlandTrace, OpaqueEdgesKeepTheSilhouette) {
       double width = 0;
       for (int i = 0; i < n; ++i) {
         const float b = -(r + 4) + 2 * (r + 4) * (i + 0.5f) / n;
-        width += (1 - trace_interval(m, 64.3f + nx * b - dx * 60, 64.1f + ny * b - dy * 60, dx, dy, 0, 120).t) *
+        width += (1 - trace_interval(m, 64.3f + nx * b - dx * 60, 64.1f + ny * b - dy * 60, dx, dy,
+                                     0, 120)
+                          .t) *
                  2 * (r + 4) / n;
       }
       EXPECT_NEAR(width, 2 * r, 0.4) << "r " << r << " angle " << angle;

@@ -22,11 +22,11 @@ enum class MergeFix {
 
 // Flatland radiance cascades (seed 001 sections 2-3, seed 002). See docs/METHODS.md.
 struct RcOptions {
-  int probe_spacing = 1;    // s0: cascade-0 probe spacing in cells; cascade n uses s0 * 2^n
-  int directions = 4;       // Q0: directions of a cascade-0 probe
-  int branching = 4;        // angular branching per cascade: 4 or 2
-  float interval = 4.0f;    // t0: length of the cascade-0 interval [0, t0], in cells
-  int cascades = 0;         // 0: enough that the last interval reaches past the grid diagonal
+  int probe_spacing = 1;  // s0: cascade-0 probe spacing in cells; cascade n uses s0 * 2^n
+  int directions = 4;     // Q0: directions of a cascade-0 probe
+  int branching = 4;      // angular branching per cascade: 4 or 2
+  float interval = 4.0f;  // t0: length of the cascade-0 interval [0, t0], in cells
+  int cascades = 0;       // 0: enough that the last interval reaches past the grid diagonal
   MergeFix fix = MergeFix::bilinear;
   bool preaverage = false;  // trace a 2x2 sub-probe neighbourhood and store the average
   bool extend = false;      // build long intervals by extending a short traced one (eq. 16)
@@ -36,8 +36,8 @@ struct RcOptions {
 struct RenderOptions {
   Method method = Method::rc;
   RcOptions rc;
-  int bounces = 1;  // 1: direct light only; N: N-1 more diffuse bounces
-  int threads = 0;  // 0: all hardware threads
+  int bounces = 1;             // 1: direct light only; N: N-1 more diffuse bounces
+  int threads = 0;             // 0: all hardware threads
   bool distance_field = true;  // jump over empty space (same answer, faster); off: plain DDA
   std::uint64_t max_memory = std::uint64_t(8) << 30;  // refuse work whose memory need is larger
 };
@@ -48,12 +48,12 @@ struct StageTime {
 };
 
 struct RenderResult {
-  ImageRgb fluence;               // linear RGB fluence at every cell centre
-  std::vector<StageTime> stages;  // in the order they ran
-  double time_ms = 0;             // computation only, no file I/O
-  std::uint64_t memory_bytes = 0; // peak working memory of the method (not the scene)
-  std::uint64_t intervals = 0;    // ray intervals traced (all bounces)
-  RenderOptions options;          // the options used, with derived values filled in
+  ImageRgb fluence;                // linear RGB fluence at every cell centre
+  std::vector<StageTime> stages;   // in the order they ran
+  double time_ms = 0;              // computation only, no file I/O
+  std::uint64_t memory_bytes = 0;  // peak working memory of the method (not the scene)
+  std::uint64_t intervals = 0;     // ray intervals traced (all bounces)
+  RenderOptions options;           // the options used, with derived values filled in
 };
 
 // Checks options against a grid size: ranges, combinations, and hierarchies too deep to build.

@@ -17,9 +17,9 @@ namespace penumbra {
 inline constexpr int kMaxGridSide = 16384;
 
 struct Material {
-  Rgb emission{};      // radiance emitted by the material
-  float opacity = 1;   // fraction absorbed along one cell length, in [0, 1]; 1 is opaque
-  Rgb albedo{};        // diffuse reflectance, used when more than one bounce is asked for
+  Rgb emission{};     // radiance emitted by the material
+  float opacity = 1;  // fraction absorbed along one cell length, in [0, 1]; 1 is opaque
+  Rgb albedo{};       // diffuse reflectance, used when more than one bounce is asked for
 };
 
 struct Circle {
@@ -46,9 +46,9 @@ struct Shape {
 
 // Image layers, one value per cell, already decoded to linear values (row 0 at the top).
 struct Layers {
-  std::optional<ImageRgb> emission;          // linear radiance, emission_scale applied
+  std::optional<ImageRgb> emission;           // linear radiance, emission_scale applied
   std::optional<std::vector<float>> opacity;  // width * height values in [0, 1]
-  std::optional<ImageRgb> albedo;            // in [0, 1]
+  std::optional<ImageRgb> albedo;             // in [0, 1]
 };
 
 // The scene as written: what a file holds, or what a program builds in code.

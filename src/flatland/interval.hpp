@@ -25,6 +25,8 @@ inline void accumulate(Interval& sum, const Interval& x, float w) {
   sum.t += w * x.t;
 }
 
-inline Interval zero_interval() { return {0, 0, 0, 0}; }
+inline Interval zero_interval() {
+  return {0, 0, 0, 0};
+}
 
 }  // namespace penumbra

@@ -1,27 +1,25 @@
 // render(): the library's entry point for running a method on a scene.
-#include <cmath>
-#include <string>
+#include "penumbra/render.hpp"
 
 #include <tbb/task_arena.h>
+
+#include <cmath>
+#include <string>
 
 #include "core/parallel.hpp"
 #include "core/timer.hpp"
 #include "flatland/medium.hpp"
 #include "flatland/rc/rc.hpp"
-#include "penumbra/render.hpp"
 
 namespace penumbra {
-
-namespace {
-
-}  // namespace
 
 Status check_options(int width, int height, const RenderOptions& o) {
   auto bad = [](const std::string& what) { return Status(Error{what}); };
   if (width < 1 || height < 1 || width > kMaxGridSide || height > kMaxGridSide)
     return bad("grid: expected 1..16384 cells a side, found " + std::to_string(width) + "x" +
                std::to_string(height));
-  if (o.bounces < 1 || o.bounces > 64) return bad("bounces: expected 1..64, found " + std::to_string(o.bounces));
+  if (o.bounces < 1 || o.bounces > 64)
+    return bad("bounces: expected 1..64, found " + std::to_string(o.bounces));
   if (o.threads < 0) return bad("threads: expected >= 0, found " + std::to_string(o.threads));
   const RcOptions& rc = o.rc;
   if (rc.probe_spacing < 1 || rc.probe_spacing > 64)
@@ -36,11 +34,13 @@ Status check_options(int width, int height, const RenderOptions& o) {
     return bad("cascades: expected 0 (automatic) or 1..16, found " + std::to_string(rc.cascades));
   if (rc.extend) {
     if (rc.fix == MergeFix::bilinear)
-      return bad("extend: interval extension builds each probe's own interval, which the bilinear "
-                 "fix does not use; choose --fix none or nearest");
+      return bad(
+          "extend: interval extension builds each probe's own interval, which the bilinear "
+          "fix does not use; choose --fix none or nearest");
     if (rc.preaverage) return bad("extend: cannot be combined with pre-averaging");
     if (!(rc.extend_length >= 1.0f) || !std::isfinite(rc.extend_length))
-      return bad("extend length: expected a number >= 1, found " + std::to_string(rc.extend_length));
+      return bad("extend length: expected a number >= 1, found " +
+                 std::to_string(rc.extend_length));
   }
   // The derived count grows as t0 shrinks; spacing s0 * 2^n and Q0 * b^n must stay sane.
   const int count =
@@ -58,14 +58,13 @@ Status check_options(int width, int height, const RenderOptions& o) {
 
 namespace {
 
-
 std::uint64_t estimate(int width, int height, const RenderOptions& o,
                        const std::vector<rc::Cascade>& plan) {
   const std::uint64_t cells = std::uint64_t(width) * height;
-  std::uint64_t bytes = cells * (sizeof(Cell) + sizeof(float));           // medium
+  std::uint64_t bytes = cells * (sizeof(Cell) + sizeof(float));  // medium
   if (o.distance_field) bytes += distance_field_bytes(width, height);
-  bytes += rc::cascade_bytes(plan, o.rc);                                // cascades
-  bytes += cells * 3 * sizeof(float);                                    // fluence
+  bytes += rc::cascade_bytes(plan, o.rc);                 // cascades
+  bytes += cells * 3 * sizeof(float);                     // fluence
   if (o.bounces > 1) bytes += cells * 3 * sizeof(float);  // the previous bounce's fluence
   return bytes;
 }
@@ -105,8 +104,8 @@ Expected<RenderResult> render_unchecked(const Scene& scene, const RenderOptions&
   result.memory_bytes = estimate(scene.width, scene.height, options, plan);
   if (result.memory_bytes > options.max_memory)
     return Error{"grid " + std::to_string(scene.width) + "x" + std::to_string(scene.height) +
-                 " needs " + human_bytes(result.memory_bytes) + " of working memory, more than the " +
-                 human_bytes(options.max_memory) +
+                 " needs " + human_bytes(result.memory_bytes) +
+                 " of working memory, more than the " + human_bytes(options.max_memory) +
                  " limit (raise it with --max-memory, or use a larger --probe-spacing)"};
 
   rc::fill_directions(plan);
@@ -138,7 +137,8 @@ Expected<RenderResult> render_unchecked(const Scene& scene, const RenderOptions&
       result.stages.push_back({"bounce " + std::to_string(bounce) + " emission", watch.ms()});
       std::vector<StageTime> inner;
       f = rc::solve(medium, scene.environment, plan, options.rc, inner);
-      for (StageTime& s : inner) result.stages.push_back({"bounce " + std::to_string(bounce) + " " + s.name, s.ms});
+      for (StageTime& s : inner)
+        result.stages.push_back({"bounce " + std::to_string(bounce) + " " + s.name, s.ms});
     }
     result.fluence = ImageRgb(scene.width, scene.height, std::move(f));
   });

@@ -82,8 +82,8 @@ Status check_size(const std::string& path, long long width, long long height, Ex
   }
   if (e.width > 0 && (width != e.width || height != e.height)) {
     return fail(path, "the image is " + std::to_string(width) + "x" + std::to_string(height) +
-                          ", expected " + std::to_string(e.width) + "x" +
-                          std::to_string(e.height) + " (the grid's size)");
+                          ", expected " + std::to_string(e.width) + "x" + std::to_string(e.height) +
+                          " (the grid's size)");
   }
   return {};
 }

@@ -18,8 +18,7 @@ struct RawImage {
 
 // Reads .png, .exr or .pfm (by extension, case-insensitive). Messages name the file. With an
 // expected size, an image of another size is refused from its header, before decoding.
-Expected<RawImage> read_image(const std::string& path, int expect_width = 0,
-                              int expect_height = 0);
+Expected<RawImage> read_image(const std::string& path, int expect_width = 0, int expect_height = 0);
 
 // sRGB transfer functions on [0, 1].
 float srgb_to_linear(float v);
@@ -28,6 +27,7 @@ float linear_to_srgb(float v);
 // Low-level writers; each writes atomically (temporary file beside the target, then rename).
 Status write_pfm(const std::string& path, const ImageRgb& image);
 Status write_exr(const std::string& path, const ImageRgb& image);
-Status write_png8(const std::string& path, int width, int height, const std::vector<unsigned char>& rgb);
+Status write_png8(const std::string& path, int width, int height,
+                  const std::vector<unsigned char>& rgb);
 
 }  // namespace penumbra::io

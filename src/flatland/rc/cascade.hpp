@@ -14,10 +14,10 @@ inline constexpr double kTwoPi = 6.283185307179586;
 // Cascade n: probes every s0 * 2^n cells, Q0 * b^n directions, interval [t_n, t_{n+1}].
 struct Cascade {
   int n = 0;
-  int spacing = 1;            // cells between probes
+  int spacing = 1;  // cells between probes
   int probes_x = 0, probes_y = 0;
   int directions = 0;
-  float t_begin = 0, t_end = 0;  // the radiance interval, distance from the probe in cells
+  float t_begin = 0, t_end = 0;     // the radiance interval, distance from the probe in cells
   std::vector<float> dir_x, dir_y;  // unit direction of ray k
 
   std::size_t size() const { return std::size_t(directions) * probes_x * probes_y; }

@@ -47,8 +47,8 @@ Interval merge_sky(const Interval& near, const Rgb& env) {
 struct Level {
   const Medium& medium;
   const Cascade& c;
-  const Cascade* up;     // cascade n+1, null for the top cascade
-  const Interval* upper; // merged cascade n+1 (direction-first), null for the top cascade
+  const Cascade* up;      // cascade n+1, null for the top cascade
+  const Interval* upper;  // merged cascade n+1 (direction-first), null for the top cascade
   const RcOptions& o;
   Rgb environment;
   bool skip_start;  // cascade-0 rays leave the opaque cell they start in (see trace.hpp)
@@ -81,9 +81,9 @@ Interval merged_radiance(const Level& L, int k, float px, float py, const Interv
         for (int a = 0; a < 4; ++a) {
           if (f.w[a] == 0.0f) continue;
           const int qi = f.x[a & 1], qj = f.y[a >> 1];
-          const Interval seg = trace_segment(
-              L.medium, px + dx * c.t_begin, py + dy * c.t_begin, u.probe_x(qi) + dx * u.t_begin,
-              u.probe_y(qj) + dy * u.t_begin, L.skip_start);
+          const Interval seg = trace_segment(L.medium, px + dx * c.t_begin, py + dy * c.t_begin,
+                                             u.probe_x(qi) + dx * u.t_begin,
+                                             u.probe_y(qj) + dy * u.t_begin, L.skip_start);
           accumulate(sum, merge_intervals(seg, L.upper[u.index(kk, qi, qj)]), f.w[a] * inv_b);
         }
       }
@@ -120,7 +120,8 @@ void merge_cascade(const Level& L, Interval* out, const Interval* near) {
         // Pre-averaging (seed 000, section 5.1): the 2x2 sub-probes of a probe, averaged.
         Interval v = zero_interval();
         for (int a = 0; a < 4; ++a)
-          accumulate(v, merged_radiance(L, k, px + (a & 1 ? h : -h), py + (a & 2 ? h : -h), nullptr),
+          accumulate(v,
+                     merged_radiance(L, k, px + (a & 1 ? h : -h), py + (a & 2 ? h : -h), nullptr),
                      0.25f);
         out[idx] = v;
       } else {
@@ -243,8 +244,8 @@ std::vector<float> solve(const Medium& medium, const Rgb& environment,
     int f = 0;
     for (int i = 0; i < count && f < 2; ++i)
       if (buffers[i].data() != upper) free_buf[f++] = buffers[i].data();
-    const Level level{medium, c,           n + 1 < int(plan.size()) ? &plan[n + 1] : nullptr,
-                      upper,  o,           environment,
+    const Level level{medium, c, n + 1 < int(plan.size()) ? &plan[n + 1] : nullptr,
+                      upper,  o, environment,
                       n == 0};
     Interval* out = free_buf[0];
     const Interval* near = nullptr;

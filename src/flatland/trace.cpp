@@ -29,6 +29,15 @@ bool clip_to_grid(float ox, float oy, float dx, float dy, float w, float h, floa
 Interval trace_interval(const Medium& m, float ox, float oy, float dx, float dy, float ta, float tb,
                         bool skip_start) {
   Interval out = Interval::empty();
+  // Fast exit: an interval that starts in an empty cell and ends within the jump allowed from
+  // there meets nothing (most short intervals away from walls).
+  {
+    const float px = ox + dx * ta, py = oy + dy * ta;
+    if (px >= 0.0f && py >= 0.0f && px < float(m.width) && py < float(m.height)) {
+      const float step = m.step[std::size_t(py) * m.width + std::size_t(px)];
+      if (step < 0.0f && tb - ta <= -step) return out;
+    }
+  }
   float t = ta, tend = tb;
   if (!clip_to_grid(ox, oy, dx, dy, float(m.width), float(m.height), t, tend)) return out;
   const int step_x = dx > 0 ? 1 : -1, step_y = dy > 0 ? 1 : -1;

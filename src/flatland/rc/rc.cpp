@@ -74,10 +74,10 @@ Interval merged_radiance(const Level& L, int k, float px, float py, const Interv
       // Each child ray runs from this probe's interval start to the start of the interval of
       // each of the 4 upper probes, so no interval is skipped or counted twice.
       Interval sum = zero_interval();
+      const Footprint f = bilinear(u, px, py);
       for (int ci = 0; ci < b; ++ci) {
         const int kk = b * k + ci;
         const float dx = u.dir_x[kk], dy = u.dir_y[kk];
-        const Footprint f = bilinear(u, px, py);
         for (int a = 0; a < 4; ++a) {
           if (f.w[a] == 0.0f) continue;
           const int qi = f.x[a & 1], qj = f.y[a >> 1];

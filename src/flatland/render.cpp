@@ -4,6 +4,7 @@
 #include <tbb/task_arena.h>
 
 #include <cmath>
+#include <limits>
 #include <string>
 
 #include "core/parallel.hpp"
@@ -101,6 +102,11 @@ Expected<RenderResult> render_unchecked(const Scene& scene, const RenderOptions&
   result.options = options;
   std::vector<rc::Cascade> plan = rc::plan_cascades(scene.width, scene.height, options.rc);
   result.options.rc.cascades = int(plan.size());
+  for (const rc::Cascade& c : plan)  // kernels index rows of (direction, probe row) with int
+    if (std::int64_t(c.directions) * c.probes_y > std::numeric_limits<int>::max())
+      return Error{"cascade " + std::to_string(c.n) + " is too large (" +
+                   std::to_string(c.directions) + " directions x " + std::to_string(c.probes_y) +
+                   " probe rows); use fewer directions or a larger --probe-spacing"};
   result.memory_bytes = estimate(scene.width, scene.height, options, plan);
   if (result.memory_bytes > options.max_memory)
     return Error{"grid " + std::to_string(scene.width) + "x" + std::to_string(scene.height) +

@@ -13,18 +13,18 @@ float extinction(float opacity) {
   return -std::log1p(-opacity);
 }
 
-Medium make_medium(const Scene& scene, const std::vector<float>* emission) {
+Medium make_medium(const Scene& scene) {
   Medium m;
   m.width = scene.width;
   m.height = scene.height;
   m.cells.resize(scene.cells());
   m.step.resize(scene.cells());
-  const std::vector<float>& le = emission ? *emission : scene.emission;
+  const std::vector<float>& le = scene.emission;
   parallel_for(scene.height, [&](int y) {
     for (int x = 0; x < scene.width; ++x) {
       const std::size_t i = scene.index(x, y);
-      m.cells[i] = {le[3 * i], le[3 * i + 1], le[3 * i + 2], extinction(scene.opacity[i])};
-      m.step[i] = m.cells[i].sigma;
+      m.cells[i] = {le[3 * i], le[3 * i + 1], le[3 * i + 2]};
+      m.step[i] = extinction(scene.opacity[i]);
     }
   });
   return m;
@@ -34,7 +34,7 @@ std::uint64_t distance_field_bytes(int width, int height) {
   return std::uint64_t(width) * height * (sizeof(float) + 2 * sizeof(std::int32_t));
 }
 
-void build_distance_field(Medium& m) {
+std::vector<float> jump_flood_distance(const Medium& m) {
   const int w = m.width, h = m.height;
   const std::size_t n = std::size_t(w) * h;
   // Each cell holds the index of the nearest seed found so far, -1 for none.
@@ -42,7 +42,7 @@ void build_distance_field(Medium& m) {
   parallel_for(h, [&](int y) {
     for (int x = 0; x < w; ++x) {
       const std::size_t i = std::size_t(y) * w + x;
-      a[i] = m.cells[i].sigma > 0 ? std::int32_t(i) : -1;
+      a[i] = m.step[i] > 0 ? std::int32_t(i) : -1;
     }
   });
   auto dist2 = [w](int x, int y, std::int32_t s) {
@@ -81,16 +81,26 @@ void build_distance_field(Medium& m) {
     pass(a, b, s);
     std::swap(a, b);
   }
-  m.distance.resize(n);
+  std::vector<float> distance(n);
   parallel_for(h, [&](int y) {
     for (int x = 0; x < w; ++x) {
       const std::size_t i = std::size_t(y) * w + x;
-      m.distance[i] =
+      distance[i] =
           a[i] >= 0 ? std::sqrt(dist2(x, y, a[i])) : std::numeric_limits<float>::infinity();
+    }
+  });
+  return distance;
+}
+
+void build_distance_field(Medium& m) {
+  const std::vector<float> distance = jump_flood_distance(m);
+  parallel_for(m.height, [&](int y) {
+    for (int x = 0; x < m.width; ++x) {
+      const std::size_t i = std::size_t(y) * m.width + x;
       // A jump from anywhere in this cell stays in empty cells for distance - sqrt(2) (half a
       // diagonal at each end); the extra half cell absorbs JFA's rare inexact answers. Short
       // jumps save less than plain cell stepping costs.
-      const float jump = m.distance[i] - (1.4142136f + 0.5f);
+      const float jump = distance[i] - (1.4142136f + 0.5f);
       if (m.step[i] <= 0) m.step[i] = jump > 2.0f ? -jump : 0.0f;
     }
   });

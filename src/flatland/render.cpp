@@ -62,7 +62,7 @@ namespace {
 std::uint64_t estimate(int width, int height, const RenderOptions& o,
                        const std::vector<rc::Cascade>& plan) {
   const std::uint64_t cells = std::uint64_t(width) * height;
-  std::uint64_t bytes = cells * (sizeof(Cell) + sizeof(float));  // medium
+  std::uint64_t bytes = cells * (sizeof(Cell) + sizeof(float));  // medium: emission and step
   if (o.distance_field) bytes += distance_field_bytes(width, height);
   bytes += rc::cascade_bytes(plan, o.rc);                 // cascades
   bytes += cells * 3 * sizeof(float);                     // fluence

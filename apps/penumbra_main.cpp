@@ -1,12 +1,10 @@
 // penumbra: the command line. A thin front end over libpenumbra.
 // Exit codes: 0 success, 1 bad input or runtime failure, 2 usage error.
 #include <tbb/task_arena.h>
-#include <unistd.h>
 
 #include <CLI/CLI.hpp>
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
 #include <iostream>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -85,18 +83,12 @@ int run_render(const RenderArgs& a) {
       std::cerr << "penumbra render: " << out << ": unknown output type (use .png, .exr or .pfm)\n";
       return kUsage;
     }
-  for (const std::string& out : a.outputs) {
-    const std::filesystem::path dir = std::filesystem::path(out).parent_path();
-    if (!dir.empty() && !std::filesystem::is_directory(dir)) {
-      std::cerr << "penumbra render: " << out << ": directory " << dir.string()
-                << " does not exist\n";
+  // Refuse unwritable outputs before spending time on the render.
+  for (const std::string& out : a.outputs)
+    if (penumbra::Status s = penumbra::check_output(out); !s) {
+      std::cerr << "penumbra render: " << s.error().message << "\n";
       return kFailure;
     }
-    if (std::filesystem::is_directory(out)) {
-      std::cerr << "penumbra render: " << out << ": is a directory\n";
-      return kFailure;
-    }
-  }
   penumbra::RenderOptions options = a.options;
   if (!parse_size(a.max_memory, options.max_memory)) {
     std::cerr << "penumbra render: --max-memory: expected a size such as 512M or 8G, found '"
@@ -154,37 +146,11 @@ int run_render(const RenderArgs& a) {
     return kFailure;
   }
   penumbra::Stopwatch write_watch;
-  // All outputs or none: each is written to a temporary file beside its target (keeping its
-  // extension, which picks the format), and only when all succeeded are they renamed into place.
-  std::vector<std::string> staged;
-  auto discard = [&] {
-    for (const std::string& t : staged) std::remove(t.c_str());
-  };
-  for (const std::string& out : a.outputs) {
-    const std::filesystem::path target(out);
-    const std::string temp =
-        (target.parent_path() / ("." + target.stem().string() + ".partial-" +
-                                 std::to_string(::getpid()) + target.extension().string()))
-            .string();
-    penumbra::Status s = penumbra::write_image(temp, result->fluence, *scene, {a.exposure});
-    if (!s) {
-      std::cerr << "penumbra render: " << s.error().message << "\n";
-      discard();
-      return kFailure;
-    }
-    staged.push_back(temp);
-  }
-  for (std::size_t i = 0; i < staged.size(); ++i) {
-    std::error_code ec;
-    std::filesystem::rename(staged[i], a.outputs[i], ec);
-    if (ec) {
-      std::cerr << "penumbra render: " << a.outputs[i] << ": cannot write: " << ec.message()
-                << "\n";
-      for (std::size_t j = 0; j < i; ++j) std::remove(a.outputs[j].c_str());
-      staged.erase(staged.begin(), staged.begin() + std::ptrdiff_t(i));
-      discard();
-      return kFailure;
-    }
+  // All outputs or none; files already there stay untouched if any output fails.
+  if (penumbra::Status s = penumbra::write_images(a.outputs, result->fluence, *scene, {a.exposure});
+      !s) {
+    std::cerr << "penumbra render: " << s.error().message << "\n";
+    return kFailure;
   }
   const double write_ms = write_watch.ms();
 

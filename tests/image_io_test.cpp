@@ -562,6 +562,19 @@ TEST_F(ImageIo, FluenceSceneSizeMismatchIsAnError) {
   EXPECT_TRUE(entries().empty());
 }
 
+// Several outputs are written all or nothing: a later one that fails leaves no earlier one (and
+// no temporary file) behind.
+TEST_F(ImageIo, WriteImagesIsAllOrNothing) {
+  const ImageRgb f = uniform(4, 3, 1);
+  const Scene sc = empty_scene(4, 3);
+  Status s = write_images({path("a.pfm"), path("b.exr"), path("c.bmp")}, f, sc);
+  ASSERT_FALSE(s.ok());
+  EXPECT_TRUE(starts_with(s.error().message, path("c.bmp") + ": ")) << s.error().message;
+  EXPECT_TRUE(entries().empty());
+  ASSERT_TRUE(write_images({path("a.pfm"), path("b.exr"), path("c.png")}, f, sc).ok());
+  EXPECT_EQ(entries().size(), 3u);
+}
+
 TEST_F(ImageIo, EmptyImageIsNotWritten) {
   const std::string p = path("empty.pfm");
   EXPECT_FALSE(io::write_pfm(p, ImageRgb()).ok());

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "penumbra/error.hpp"
 #include "penumbra/image.hpp"
@@ -19,6 +20,16 @@ struct DisplayOptions {
 // on failure nothing is left behind.
 Status write_image(const std::string& path, const ImageRgb& fluence, const Scene& scene,
                    const DisplayOptions& display = {});
+
+// Writes the same fluence to several files (each as write_image would), all or nothing: every
+// file is first written under a temporary name beside its target, and they are renamed into
+// place only when all of them succeeded.
+Status write_images(const std::vector<std::string>& paths, const ImageRgb& fluence,
+                    const Scene& scene, const DisplayOptions& display = {});
+
+// Whether `path` can be written at all: its folder exists and it is not a folder itself. Lets a
+// program refuse before it spends time computing.
+Status check_output(const std::string& path);
 
 // True when write_image knows the extension of `path`.
 bool is_supported_output(const std::string& path);

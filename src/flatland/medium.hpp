@@ -25,7 +25,6 @@ struct Medium {
   // interacts, otherwise minus the length a ray may jump from anywhere in the cell without
   // meeting one (0: it may not jump, as before build_distance_field).
   std::vector<float> step;
-
 };
 
 // sigma = -ln(1 - opacity) per cell length; opacity 1 is opaque.

@@ -338,10 +338,10 @@ std::string temp_name(const std::string& path) {
   return path + ".tmp." + std::to_string(::getpid()) + "." + std::to_string(counter++);
 }
 
-// Writes through `fill(FILE*) -> bool` into a temporary file beside `path`, then renames it
-// into place. On any failure the temporary file is removed and nothing appears at `path`.
+// Writes through `fill(FILE*) -> bool` into a temporary file beside `path`; nothing appears at
+// `path` yet. On failure the temporary file is removed.
 template <class Fill>
-Status write_atomic(const std::string& path, Fill&& fill) {
+Expected<StagedFile> stage(const std::string& path, Fill&& fill) {
   const std::string tmp = temp_name(path);
   errno = 0;
   std::FILE* f = std::fopen(tmp.c_str(), "wb");
@@ -359,13 +359,12 @@ Status write_atomic(const std::string& path, Fill&& fill) {
     std::remove(tmp.c_str());
     return fail(path, "cannot write: " + errno_text(err));
   }
-  errno = 0;
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    err = errno;
-    std::remove(tmp.c_str());
-    return fail(path, "cannot rename temporary file into place: " + errno_text(err));
-  }
-  return {};
+  return StagedFile{tmp, path};
+}
+
+Status publish_staged(Expected<StagedFile> staged) {
+  if (!staged) return staged.error();
+  return publish(*staged);
 }
 
 bool write_bytes(std::FILE* f, const void* data, std::size_t n) {
@@ -382,6 +381,20 @@ Status check_writable_size(const std::string& path, int width, int height) {
 }
 
 }  // namespace
+
+Status publish(const StagedFile& file) {
+  errno = 0;
+  if (std::rename(file.temp.c_str(), file.target.c_str()) != 0) {
+    const int err = errno;
+    std::remove(file.temp.c_str());
+    return fail(file.target, "cannot rename temporary file into place: " + errno_text(err));
+  }
+  return {};
+}
+
+void discard(const StagedFile& file) {
+  std::remove(file.temp.c_str());
+}
 
 Expected<RawImage> read_image(const std::string& path, int expect_width, int expect_height) {
   const std::string ext = lowercase_extension(path);
@@ -404,11 +417,11 @@ float linear_to_srgb(float v) {
   return v <= 0.0031308f ? v * 12.92f : 1.055f * std::pow(v, 1.0f / 2.4f) - 0.055f;
 }
 
-Status write_pfm(const std::string& path, const ImageRgb& image) {
-  if (Status s = check_writable_size(path, image.width(), image.height()); !s) return s;
+Expected<StagedFile> stage_pfm(const std::string& path, const ImageRgb& image) {
+  if (Status s = check_writable_size(path, image.width(), image.height()); !s) return s.error();
   const int w = image.width(), h = image.height();
   const std::string header = "PF\n" + std::to_string(w) + " " + std::to_string(h) + "\n-1.0\n";
-  return write_atomic(path, [&](std::FILE* f) {
+  return stage(path, [&](std::FILE* f) {
     if (!write_bytes(f, header.data(), header.size())) return false;
     const std::size_t row = std::size_t(w) * 3;
     std::vector<std::uint32_t> swapped;
@@ -428,8 +441,8 @@ Status write_pfm(const std::string& path, const ImageRgb& image) {
   });
 }
 
-Status write_exr(const std::string& path, const ImageRgb& image) {
-  if (Status s = check_writable_size(path, image.width(), image.height()); !s) return s;
+Expected<StagedFile> stage_exr(const std::string& path, const ImageRgb& image) {
+  if (Status s = check_writable_size(path, image.width(), image.height()); !s) return s.error();
   const int w = image.width(), h = image.height();
   MemoryOStream out(path.c_str());
   try {
@@ -452,13 +465,13 @@ Status write_exr(const std::string& path, const ImageRgb& image) {
   } catch (...) {
     return fail(path, "cannot encode EXR: unknown error");
   }
-  return write_atomic(
+  return stage(
       path, [&](std::FILE* f) { return write_bytes(f, out.bytes().data(), out.bytes().size()); });
 }
 
-Status write_png8(const std::string& path, int width, int height,
-                  const std::vector<unsigned char>& rgb) {
-  if (Status s = check_writable_size(path, width, height); !s) return s;
+Expected<StagedFile> stage_png8(const std::string& path, int width, int height,
+                                const std::vector<unsigned char>& rgb) {
+  if (Status s = check_writable_size(path, width, height); !s) return s.error();
   if (rgb.size() != std::size_t(width) * height * 3) {
     return fail(path, "pixel buffer holds " + std::to_string(rgb.size()) + " bytes, expected " +
                           std::to_string(std::size_t(width) * height * 3));
@@ -472,8 +485,20 @@ Status write_png8(const std::string& path, int width, int height,
   if (!stbi_write_png_to_func(sink, &encoded, width, height, 3, rgb.data(), width * 3)) {
     return fail(path, "cannot encode PNG");
   }
-  return write_atomic(path,
-                      [&](std::FILE* f) { return write_bytes(f, encoded.data(), encoded.size()); });
+  return stage(path, [&](std::FILE* f) { return write_bytes(f, encoded.data(), encoded.size()); });
+}
+
+Status write_pfm(const std::string& path, const ImageRgb& image) {
+  return publish_staged(stage_pfm(path, image));
+}
+
+Status write_exr(const std::string& path, const ImageRgb& image) {
+  return publish_staged(stage_exr(path, image));
+}
+
+Status write_png8(const std::string& path, int width, int height,
+                  const std::vector<unsigned char>& rgb) {
+  return publish_staged(stage_png8(path, width, height, rgb));
 }
 
 }  // namespace penumbra::io

@@ -24,7 +24,20 @@ Expected<RawImage> read_image(const std::string& path, int expect_width = 0, int
 float srgb_to_linear(float v);
 float linear_to_srgb(float v);
 
-// Low-level writers; each writes atomically (temporary file beside the target, then rename).
+// A file written under a temporary name beside its target, not yet in place: writing several
+// outputs all or nothing stages them all, then publishes them.
+struct StagedFile {
+  std::string temp, target;
+};
+Expected<StagedFile> stage_pfm(const std::string& path, const ImageRgb& image);
+Expected<StagedFile> stage_exr(const std::string& path, const ImageRgb& image);
+Expected<StagedFile> stage_png8(const std::string& path, int width, int height,
+                                const std::vector<unsigned char>& rgb);
+// Renames a staged file into place (removing it if that fails); discard removes it.
+Status publish(const StagedFile& file);
+void discard(const StagedFile& file);
+
+// Writers that stage and publish at once, so the target appears whole or not at all.
 Status write_pfm(const std::string& path, const ImageRgb& image);
 Status write_exr(const std::string& path, const ImageRgb& image);
 Status write_png8(const std::string& path, int width, int height,

@@ -1,6 +1,8 @@
 // The public image functions: results out (linear PFM/EXR, display PNG), linear RGB in.
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <system_error>
 #include <numbers>
 #include <string>
 #include <vector>
@@ -24,8 +26,8 @@ unsigned char to_byte(float v) {
   return static_cast<unsigned char>(std::lround(v * 255.0f));
 }
 
-Status write_display_png(const std::string& path, const ImageRgb& fluence, const Scene& scene,
-                         const DisplayOptions& display) {
+Expected<io::StagedFile> stage_display_png(const std::string& path, const ImageRgb& fluence,
+                                           const Scene& scene, const DisplayOptions& display) {
   const int w = fluence.width(), h = fluence.height();
   if (scene.width != w || scene.height != h) {
     return Error{path + ": fluence is " + std::to_string(w) + " x " + std::to_string(h) +
@@ -52,7 +54,18 @@ Status write_display_png(const std::string& path, const ImageRgb& fluence, const
       rgb[k] = to_byte(io::linear_to_srgb(aces_fit(shown * gain)));
     }
   }
-  return io::write_png8(path, w, h, rgb);
+  return io::stage_png8(path, w, h, rgb);
+}
+
+Expected<io::StagedFile> stage_image(const std::string& path, const ImageRgb& fluence,
+                                     const Scene& scene, const DisplayOptions& display) {
+  const std::string ext = io::lowercase_extension(path);
+  if (ext == ".pfm") return io::stage_pfm(path, fluence);
+  if (ext == ".exr") return io::stage_exr(path, fluence);
+  if (ext == ".png") return stage_display_png(path, fluence, scene, display);
+  return Error{path + ": unsupported output format " +
+               (ext.empty() ? std::string("(no extension)") : "'" + ext + "'") +
+               " (supported: .pfm, .exr, .png)"};
 }
 
 }  // namespace
@@ -62,15 +75,47 @@ bool is_supported_output(const std::string& path) {
   return ext == ".pfm" || ext == ".exr" || ext == ".png";
 }
 
+Status check_output(const std::string& path) {
+  std::error_code ec;
+  const std::filesystem::path target(path);
+  const std::filesystem::path dir = target.parent_path();
+  if (!dir.empty() && !std::filesystem::is_directory(dir, ec))
+    return Error{path + ": cannot write into " + dir.string() + ": " +
+                 std::make_error_code(std::errc::no_such_file_or_directory).message()};
+  if (std::filesystem::is_directory(target, ec))
+    return Error{path + ": " + std::make_error_code(std::errc::is_a_directory).message()};
+  return {};
+}
+
 Status write_image(const std::string& path, const ImageRgb& fluence, const Scene& scene,
                    const DisplayOptions& display) {
-  const std::string ext = io::lowercase_extension(path);
-  if (ext == ".pfm") return io::write_pfm(path, fluence);
-  if (ext == ".exr") return io::write_exr(path, fluence);
-  if (ext == ".png") return write_display_png(path, fluence, scene, display);
-  return Error{path + ": unsupported output format " +
-               (ext.empty() ? std::string("(no extension)") : "'" + ext + "'") +
-               " (supported: .pfm, .exr, .png)"};
+  return write_images({path}, fluence, scene, display);
+}
+
+Status write_images(const std::vector<std::string>& paths, const ImageRgb& fluence,
+                    const Scene& scene, const DisplayOptions& display) {
+  // Targets that cannot be renamed onto are refused before anything is written.
+  for (const std::string& path : paths)
+    if (Status s = check_output(path); !s) return s;
+  std::vector<io::StagedFile> staged;
+  auto discard_from = [&](std::size_t first) {
+    for (std::size_t i = first; i < staged.size(); ++i) io::discard(staged[i]);
+  };
+  for (const std::string& path : paths) {
+    Expected<io::StagedFile> f = stage_image(path, fluence, scene, display);
+    if (!f) {
+      discard_from(0);
+      return f.error();
+    }
+    staged.push_back(*f);
+  }
+  for (std::size_t i = 0; i < staged.size(); ++i) {
+    if (Status s = io::publish(staged[i]); !s) {
+      discard_from(i + 1);
+      return s;
+    }
+  }
+  return {};
 }
 
 Expected<ImageRgb> read_rgb_image(const std::string& path) {

@@ -117,15 +117,8 @@ int run_render(const RenderArgs& a) {
     return kUsage;
   }
   // Refuse up front, before the grid itself is allocated.
-  const std::uint64_t need = penumbra::estimate_memory(desc->width, desc->height, options) +
-                             penumbra::scene_bytes(desc->width, desc->height);
-  if (need > options.max_memory) {
-    std::fprintf(stderr,
-                 "penumbra render: %s: a %dx%d grid needs %.2f GiB (scene and working memory), "
-                 "more than the %.2f GiB limit (raise it with --max-memory, or use a larger "
-                 "--probe-spacing)\n",
-                 desc->source.c_str(), desc->width, desc->height, double(need) / (1 << 30),
-                 double(options.max_memory) / (1 << 30));
+  if (penumbra::Status s = penumbra::check_memory(desc->width, desc->height, options, true); !s) {
+    std::cerr << "penumbra render: " << desc->source << ": " << s.error().message << "\n";
     return kFailure;
   }
   // Rasterising runs on the same number of threads as the method.

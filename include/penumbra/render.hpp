@@ -67,6 +67,11 @@ std::uint64_t estimate_memory(int width, int height, const RenderOptions& option
 // Bytes of a rasterised Scene of this size (emission, opacity, albedo).
 std::uint64_t scene_bytes(int width, int height);
 
+// Refuses, before anything is allocated, work whose memory need exceeds options.max_memory: the
+// method's working memory, plus the rasterised scene when `with_scene` (a program that has not
+// built the scene yet).
+Status check_memory(int width, int height, const RenderOptions& options, bool with_scene);
+
 // Runs the method. Refuses up front (Error, nothing allocated) when options are invalid or the
 // memory estimate exceeds options.max_memory.
 Expected<RenderResult> render(const Scene& scene, const RenderOptions& options);

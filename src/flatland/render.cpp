@@ -54,6 +54,12 @@ Status check_options(int width, int height, const RenderOptions& o) {
     return bad("cascades: " + std::to_string(count) + " cascades give the top probes " +
                std::to_string(top) + " directions, more than " +
                std::to_string(rc::kMaxDirections) + "; use fewer cascades or directions");
+  for (const rc::Cascade& c : rc::plan_cascades(width, height, rc))
+    // Kernels index rows of (direction, probe row) with int.
+    if (std::int64_t(c.directions) * c.probes_y > std::numeric_limits<int>::max())
+      return bad("cascade " + std::to_string(c.n) + " is too large (" +
+                 std::to_string(c.directions) + " directions x " + std::to_string(c.probes_y) +
+                 " probe rows); use fewer directions or a larger --probe-spacing");
   return {};
 }
 
@@ -87,6 +93,17 @@ std::uint64_t estimate_memory(const Scene& scene, const RenderOptions& options) 
   return estimate_memory(scene.width, scene.height, options);
 }
 
+Status check_memory(int width, int height, const RenderOptions& options, bool with_scene) {
+  const std::uint64_t need =
+      estimate_memory(width, height, options) + (with_scene ? scene_bytes(width, height) : 0);
+  if (need <= options.max_memory) return {};
+  return Error{"a " + std::to_string(width) + "x" + std::to_string(height) + " grid needs " +
+               human_bytes(need) + " of " +
+               (with_scene ? "scene and working memory" : "working memory") + ", more than the " +
+               human_bytes(options.max_memory) +
+               " limit (raise it with --max-memory, or use a larger --probe-spacing)"};
+}
+
 std::uint64_t scene_bytes(int width, int height) {
   return std::uint64_t(width) * height * 7 * sizeof(float);
 }
@@ -102,17 +119,8 @@ Expected<RenderResult> render_unchecked(const Scene& scene, const RenderOptions&
   result.options = options;
   std::vector<rc::Cascade> plan = rc::plan_cascades(scene.width, scene.height, options.rc);
   result.options.rc.cascades = int(plan.size());
-  for (const rc::Cascade& c : plan)  // kernels index rows of (direction, probe row) with int
-    if (std::int64_t(c.directions) * c.probes_y > std::numeric_limits<int>::max())
-      return Error{"cascade " + std::to_string(c.n) + " is too large (" +
-                   std::to_string(c.directions) + " directions x " + std::to_string(c.probes_y) +
-                   " probe rows); use fewer directions or a larger --probe-spacing"};
+  if (Status s = check_memory(scene.width, scene.height, options, false); !s) return s.error();
   result.memory_bytes = estimate(scene.width, scene.height, options, plan);
-  if (result.memory_bytes > options.max_memory)
-    return Error{"grid " + std::to_string(scene.width) + "x" + std::to_string(scene.height) +
-                 " needs " + human_bytes(result.memory_bytes) +
-                 " of working memory, more than the " + human_bytes(options.max_memory) +
-                 " limit (raise it with --max-memory, or use a larger --probe-spacing)"};
 
   rc::fill_directions(plan);
   tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);

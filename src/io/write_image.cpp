@@ -2,9 +2,9 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <system_error>
 #include <numbers>
 #include <string>
+#include <system_error>
 #include <vector>
 
 #include "io/image_io.hpp"

@@ -77,8 +77,12 @@ std::uint64_t estimate(int width, int height, const RenderOptions& o,
 }
 
 std::string human_bytes(std::uint64_t b) {
+  const char* unit[] = {"B", "KiB", "MiB", "GiB", "TiB"};
+  double v = double(b);
+  int u = 0;
+  while (v >= 1024.0 && u < 4) v /= 1024.0, ++u;
   char buf[64];
-  std::snprintf(buf, sizeof buf, "%.2f GiB", double(b) / double(1ull << 30));
+  std::snprintf(buf, sizeof buf, u == 0 ? "%.0f %s" : "%.2f %s", v, unit[u]);
   return buf;
 }
 

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "penumbra/version.hpp"
+#include "test_support.hpp"
 
 namespace {
 
@@ -51,22 +52,12 @@ std::string quote(const std::string& s) {
 class Cli : public ::testing::Test {
  protected:
   void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::path(::testing::TempDir()) /
-           ("penumbra_cli_" + std::string(info->name()) + "_" + std::to_string(::getpid()));
-    fs::remove_all(dir_);
     fs::create_directories(dir_ / "out");
     scene_ = write("scene.json", kScene);
   }
-  void TearDown() override {
-    std::error_code ec;
-    fs::remove_all(dir_, ec);
-  }
 
-  std::string write(const std::string& name, const std::string& text) {
-    const fs::path p = dir_ / name;
-    std::ofstream(p, std::ios::binary) << text;
-    return p.string();
+  std::string write(const std::string& name, const std::string& text) const {
+    return tmp_.write(name, text);
   }
   // Where outputs go: a directory that must stay empty whenever the CLI fails.
   std::string out(const std::string& name) const { return (dir_ / "out" / name).string(); }
@@ -117,7 +108,8 @@ class Cli : public ::testing::Test {
     EXPECT_TRUE(out_files().empty()) << "left behind: " << ::testing::PrintToString(out_files());
   }
 
-  fs::path dir_;
+  penumbra::testing::TestDir tmp_{"cli"};
+  const fs::path& dir_ = tmp_.root();
   std::string scene_;
 };
 

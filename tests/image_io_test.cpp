@@ -18,6 +18,7 @@
 
 #include "penumbra/io.hpp"
 #include "penumbra/scene.hpp"
+#include "test_support.hpp"
 
 namespace penumbra {
 namespace {
@@ -29,25 +30,11 @@ constexpr float kTwoPi = 2.0f * std::numbers::pi_v<float>;
 
 class ImageIo : public ::testing::Test {
  protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::path(::testing::TempDir()) /
-           ("penumbra_image_io_" + std::string(info->name()) + "_" + std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
-  std::string path(const std::string& name) const { return (dir_ / name).string(); }
-
+  std::string path(const std::string& name) const { return dir_.file(name); }
   // Every entry left in the test directory, to catch stray temporary files.
-  std::vector<std::string> entries() const {
-    std::vector<std::string> names;
-    for (const auto& e : fs::directory_iterator(dir_)) names.push_back(e.path().filename());
-    return names;
-  }
+  std::vector<std::string> entries() const { return dir_.entries(); }
 
-  fs::path dir_;
+  testing::TestDir dir_{"image_io"};
 };
 
 Bytes read_bytes(const std::string& p) {

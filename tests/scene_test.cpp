@@ -13,6 +13,8 @@
 #include <string>
 #include <vector>
 
+#include "test_support.hpp"
+
 namespace penumbra {
 namespace {
 
@@ -32,29 +34,9 @@ constexpr const char* kExample = R"({
   ]
 })";
 
-// A directory of its own under the system temporary directory, removed at the end.
-class TempDir {
- public:
-  TempDir() {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    path_ = fs::temp_directory_path() /
-            ("penumbra_scene_" + std::string(info->test_suite_name()) + "_" + info->name() + "_" +
-             std::to_string(std::uintptr_t(this)));
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  std::string file(const std::string& name) const { return (path_ / name).string(); }
-  std::string write(const std::string& name, const std::string& text) const {
-    std::ofstream(file(name), std::ios::binary) << text;
-    return file(name);
-  }
-
- private:
-  fs::path path_;
+// A directory of the test's own, removed at the end.
+struct TempDir : testing::TestDir {
+  TempDir() : testing::TestDir("scene") {}
 };
 
 // A PFM written by hand: header, then little-endian float32 RGB, bottom row first.

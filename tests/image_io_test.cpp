@@ -2,7 +2,6 @@
 #include "io/image_io.hpp"
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>

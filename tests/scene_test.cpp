@@ -404,28 +404,28 @@ TEST(Scene, OpacityLayerReadsFirstChannel) {
   for (int i = 0; i < 8; ++i) EXPECT_FLOAT_EQ((*r->layers.opacity)[i], 0.1f * float(i));
 }
 
-TEST(Scene, LayerOfWrongSize) {
-  TempDir dir;
-  write_pfm(dir.file("e.pfm"), 3, 3, std::vector<float>(27, 1.0f));
+// Loads a scene whose layers are `layers_json` and expects it refused with a message that
+// starts with the file and `layers.<layer>: ` and contains each of `words`.
+void expect_layer_error(const TempDir& dir, const std::string& layers_json,
+                        const std::string& layer, const std::vector<std::string>& words) {
   const std::string path =
-      dir.write("scene.json", scene_doc(R"(, "layers": {"emission": "e.pfm"})"));
+      dir.write("scene_" + layer + ".json", scene_doc(", \"layers\": " + layers_json));
   auto r = load_scene(path);
   ASSERT_FALSE(r.ok());
   const std::string& m = r.error().message;
-  EXPECT_EQ(m.rfind(path + ": layers.emission: ", 0), 0u) << m;
-  EXPECT_NE(m.find("4x2"), std::string::npos) << m;
-  EXPECT_NE(m.find("3x3"), std::string::npos) << m;
+  EXPECT_EQ(m.rfind(path + ": layers." + layer + ": ", 0), 0u) << m;
+  for (const std::string& w : words) EXPECT_NE(m.find(w), std::string::npos) << w << ": " << m;
+}
+
+TEST(Scene, LayerOfWrongSize) {
+  TempDir dir;
+  write_pfm(dir.file("e.pfm"), 3, 3, std::vector<float>(27, 1.0f));
+  expect_layer_error(dir, R"({"emission": "e.pfm"})", "emission", {"4x2", "3x3"});
 }
 
 TEST(Scene, MissingLayerFile) {
   TempDir dir;
-  const std::string path =
-      dir.write("scene.json", scene_doc(R"(, "layers": {"opacity": "missing.png"})"));
-  auto r = load_scene(path);
-  ASSERT_FALSE(r.ok());
-  const std::string& m = r.error().message;
-  EXPECT_EQ(m.rfind(path + ": layers.opacity: ", 0), 0u) << m;
-  EXPECT_NE(m.find("missing.png"), std::string::npos) << m;
+  expect_layer_error(dir, R"({"opacity": "missing.png"})", "opacity", {"missing.png"});
 }
 
 TEST(Scene, LayerWithNan) {
@@ -433,13 +433,7 @@ TEST(Scene, LayerWithNan) {
   std::vector<float> rgb(24, 0.5f);
   rgb[(0 * 4 + 1) * 3 + 2] = std::numeric_limits<float>::quiet_NaN();  // pixel (1, 0), blue
   write_pfm(dir.file("e.pfm"), 4, 2, rgb);
-  const std::string path =
-      dir.write("scene.json", scene_doc(R"(, "layers": {"emission": "e.pfm"})"));
-  auto r = load_scene(path);
-  ASSERT_FALSE(r.ok());
-  const std::string& m = r.error().message;
-  EXPECT_EQ(m.rfind(path + ": layers.emission: ", 0), 0u) << m;
-  EXPECT_NE(m.find("(1, 0)"), std::string::npos) << m;
+  expect_layer_error(dir, R"({"emission": "e.pfm"})", "emission", {"(1, 0)"});
 }
 
 TEST(Scene, LayerWithNegativeOrInfiniteValue) {
@@ -447,18 +441,12 @@ TEST(Scene, LayerWithNegativeOrInfiniteValue) {
   std::vector<float> rgb(24, 0.5f);
   rgb[(1 * 4 + 3) * 3] = -1.0f;  // pixel (3, 1)
   write_pfm(dir.file("e.pfm"), 4, 2, rgb);
-  auto r = load_scene(dir.write("scene.json", scene_doc(R"(, "layers": {"emission": "e.pfm"})")));
-  ASSERT_FALSE(r.ok());
-  EXPECT_NE(r.error().message.find("layers.emission"), std::string::npos);
-  EXPECT_NE(r.error().message.find("(3, 1)"), std::string::npos) << r.error().message;
+  expect_layer_error(dir, R"({"emission": "e.pfm"})", "emission", {"(3, 1)"});
 
   rgb[(1 * 4 + 3) * 3] = 0.5f;
   rgb[0] = std::numeric_limits<float>::infinity();
   write_pfm(dir.file("a.pfm"), 4, 2, rgb);
-  r = load_scene(dir.write("scene2.json", scene_doc(R"(, "layers": {"albedo": "a.pfm"})")));
-  ASSERT_FALSE(r.ok());
-  EXPECT_NE(r.error().message.find("layers.albedo"), std::string::npos);
-  EXPECT_NE(r.error().message.find("(0, 0)"), std::string::npos) << r.error().message;
+  expect_layer_error(dir, R"({"albedo": "a.pfm"})", "albedo", {"(0, 0)"});
 }
 
 }  // namespace

@@ -39,8 +39,9 @@ TEST(FlatlandTrace, MergeIsAssociative) {
   expect_interval_near(merge_intervals(a, Interval::empty()), a, 0);
 }
 
-// A random scene of fog, opaque blocks and emitters; `distance` selects the accelerated path.
-Medium random_medium(int w, int h, unsigned seed, bool distance) {
+// A random scene of fog, opaque blocks and emitters; `distance` and `blocks` select the ways of
+// skipping empty space.
+Medium random_medium(int w, int h, unsigned seed, bool distance, bool blocks = false) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<float> u(0, 1);
   Scene s;
@@ -62,6 +63,7 @@ Medium random_medium(int w, int h, unsigned seed, bool distance) {
   }
   Medium m = make_medium(s);
   if (distance) build_distance_field(m);
+  if (blocks) build_blocks(m);
   return m;
 }
 
@@ -148,20 +150,45 @@ TEST(FlatlandTrace, DistanceFieldMatchesBruteForce) {
   EXPECT_LT(worst_over, 0.5);  // within the margin the tracer allows for
 }
 
-TEST(FlatlandTrace, DistanceJumpsGiveTheSameAnswerAsPlainDda) {
+TEST(FlatlandTrace, SkippingEmptySpaceGivesTheSameAnswerAsPlainDda) {
   const Medium exact = random_medium(96, 80, 11, false);
-  const Medium fast = random_medium(96, 80, 11, true);
+  const Medium jumps = random_medium(96, 80, 11, true);
+  const Medium blocks = random_medium(96, 80, 11, false, true);
+  const Medium both = random_medium(96, 80, 11, true, true);
+  int empty_blocks = 0;
+  for (std::uint8_t e : blocks.block_empty) empty_blocks += e;
+  ASSERT_GT(empty_blocks, 20);  // the test exercises block skips
   std::mt19937 rng(5);
   std::uniform_real_distribution<float> u(0, 1);
-  for (int i = 0; i < 5000; ++i) {
-    const float ox = 96 * u(rng), oy = 80 * u(rng), a = 6.2831853f * u(rng);
-    const float dx = std::cos(a), dy = std::sin(a), t1 = 150 * u(rng);
+  for (int i = 0; i < 8000; ++i) {
+    float ox = 96 * u(rng), oy = 80 * u(rng), a = 6.2831853f * u(rng);
+    if (i % 4 == 0) a = 1.5707963f * float(i % 16 / 4);  // axis-aligned rays
+    if (i % 8 == 1) ox = std::floor(ox), oy = std::floor(oy) + 0.5f;  // starts on boundaries
+    const float dx = i % 4 == 0 ? std::round(std::cos(a)) : std::cos(a);
+    const float dy = i % 4 == 0 ? std::round(std::sin(a)) : std::sin(a);
+    const float t1 = i % 3 == 0 ? INFINITY : 150 * u(rng);
     const Interval p = trace_interval(exact, ox, oy, dx, dy, 0, t1, true);
-    const Interval q = trace_interval(fast, ox, oy, dx, dy, 0, t1, true);
-    ASSERT_EQ(p.t, q.t) << i;
-    ASSERT_EQ(p.r, q.r) << i;
-    ASSERT_EQ(p.b, q.b) << i;
+    for (const Medium* m : {&jumps, &blocks, &both}) {
+      const Interval q = trace_interval(*m, ox, oy, dx, dy, 0, t1, true);
+      ASSERT_EQ(p.t, q.t) << i;
+      ASSERT_EQ(p.r, q.r) << i;
+      ASSERT_EQ(p.b, q.b) << i;
+    }
   }
+}
+
+TEST(FlatlandTrace, BlocksMarkExactlyTheEmptyOnes) {
+  const Medium m = random_medium(70, 50, 3, false, true);
+  ASSERT_EQ(m.blocks_x, 9);
+  ASSERT_EQ(m.blocks_y, 7);
+  for (int by = 0; by < m.blocks_y; ++by)
+    for (int bx = 0; bx < m.blocks_x; ++bx) {
+      bool empty = true;
+      for (int y = by * 8; y < std::min(m.height, by * 8 + 8); ++y)
+        for (int x = bx * 8; x < std::min(m.width, bx * 8 + 8); ++x)
+          empty = empty && !(m.step[std::size_t(y) * m.width + x] > 0);
+      EXPECT_EQ(m.block_empty[std::size_t(by) * m.blocks_x + bx], empty ? 1 : 0) << bx << "," << by;
+    }
 }
 
 // Opaque edge cells are sharpened so a rasterised disk casts the shadow of a disk of its size:

@@ -1,7 +1,9 @@
 // Running a method on a scene: options in, fluence and timings out.
 #pragma once
 
+#include <atomic>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -11,7 +13,10 @@
 
 namespace penumbra {
 
-enum class Method { rc };
+enum class Method {
+  rc,  // radiance cascades (seed 001, seed 002)
+  pt,  // the reference path tracer: converges to the exact fluence of the cell grid
+};
 
 // How a ray of cascade n continues into cascade n+1 when merging.
 enum class MergeFix {
@@ -33,13 +38,44 @@ struct RcOptions {
   float extend_length = 8;  // length traced before extension doubles it, in cells
 };
 
+// Where the path tracer's directions come from.
+enum class Sampler {
+  r1,      // golden-ratio (R1) sequence with a per-cell random rotation (Cranley-Patterson)
+  random,  // independent uniform numbers per cell and sample (error falls as 1/sqrt(spp))
+};
+
+// The reference path tracer (seed 004 section 5). See docs/METHODS.md.
+struct PtOptions {
+  int spp = 64;            // samples (directions) per cell; with `seconds`, the most to take
+                           // (0: no limit)
+  double seconds = 0;      // > 0: add samples until this much time has passed
+  bool nee = false;        // next event estimation: also aim at emitting regions, combined by MIS
+  Sampler sampler = Sampler::r1;
+  std::uint64_t seed = 0;  // changes every random number; same seed, same result
+};
+
+// Reported between passes of progressive methods.
+struct RenderProgress {
+  std::uint64_t samples = 0;  // samples per cell taken so far
+  std::uint64_t target = 0;   // samples per cell asked for (0: until the time is up)
+  double elapsed_s = 0;
+  double fraction = 0;  // of the work asked for (samples or time), 0..1
+};
+
 struct RenderOptions {
   Method method = Method::rc;
   RcOptions rc;
+  PtOptions pt;
   int bounces = 1;             // 1: direct light only; N: N-1 more diffuse bounces
   int threads = 0;             // 0: all hardware threads
   bool distance_field = true;  // jump over empty space (same answer, faster); off: plain DDA
+  bool blocks = true;          // skip empty 8x8 blocks (two-level DDA; same answer, faster)
   std::uint64_t max_memory = std::uint64_t(8) << 30;  // refuse work whose memory need is larger
+  // Progressive methods (pt) call this from the calling thread between passes.
+  std::function<void(const RenderProgress&)> progress;
+  // When set to true, progressive methods stop after the current pass and return what they have
+  // (RenderResult::cancelled); others ignore it.
+  const std::atomic<bool>* cancel = nullptr;
 };
 
 struct StageTime {
@@ -52,7 +88,9 @@ struct RenderResult {
   std::vector<StageTime> stages;   // in the order they ran
   double time_ms = 0;              // computation only, no file I/O
   std::uint64_t memory_bytes = 0;  // peak working memory of the method (not the scene)
-  std::uint64_t intervals = 0;     // ray intervals traced (all bounces)
+  std::uint64_t intervals = 0;     // ray intervals traced (all bounces; pt: rays)
+  std::uint64_t samples = 0;       // pt: samples per cell in the result
+  bool cancelled = false;          // pt: stopped early through RenderOptions::cancel
   RenderOptions options;           // the options used, with derived values filled in
 };
 
@@ -78,5 +116,6 @@ Expected<RenderResult> render(const Scene& scene, const RenderOptions& options);
 
 const char* to_string(Method m);
 const char* to_string(MergeFix f);
+const char* to_string(Sampler s);
 
 }  // namespace penumbra

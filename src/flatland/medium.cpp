@@ -106,4 +106,21 @@ void build_distance_field(Medium& m) {
   });
 }
 
+std::uint64_t blocks_bytes(int width, int height) {
+  return std::uint64_t((width + 7) >> kBlockShift) * ((height + 7) >> kBlockShift);
+}
+
+void build_blocks(Medium& m) {
+  m.blocks_x = (m.width + 7) >> kBlockShift;
+  m.blocks_y = (m.height + 7) >> kBlockShift;
+  m.block_empty.assign(std::size_t(m.blocks_x) * m.blocks_y, 1);
+  parallel_for(m.blocks_y, [&](int by) {
+    const int y1 = std::min((by + 1) << kBlockShift, m.height);
+    for (int y = by << kBlockShift; y < y1; ++y)
+      for (int x = 0; x < m.width; ++x)
+        if (m.step[std::size_t(y) * m.width + x] > 0)
+          m.block_empty[std::size_t(by) * m.blocks_x + (x >> kBlockShift)] = 0;
+  });
+}
+
 }  // namespace penumbra

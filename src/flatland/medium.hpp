@@ -25,7 +25,14 @@ struct Medium {
   // interacts, otherwise minus the length a ray may jump from anywhere in the cell without
   // meeting one (0: it may not jump, as before build_distance_field).
   std::vector<float> step;
+  // The block level of the two-level DDA: 1 where an 8x8 block of cells has no interacting cell
+  // (empty until build_blocks).
+  int blocks_x = 0, blocks_y = 0;
+  std::vector<std::uint8_t> block_empty;
 };
+
+inline constexpr int kBlockShift = 3;  // blocks of 8x8 cells
+
 
 // sigma = -ln(1 - opacity) per cell length; opacity 1 is opaque.
 float extinction(float opacity);
@@ -40,6 +47,11 @@ std::vector<float> jump_flood_distance(const Medium& medium);
 
 // Writes the jump length of every empty cell into medium.step, from jump_flood_distance.
 void build_distance_field(Medium& medium);
+
+// Marks the 8x8 blocks that hold no interacting cell. Call after the step values are final
+// (before or after build_distance_field: jumps are not interactions).
+void build_blocks(Medium& medium);
+std::uint64_t blocks_bytes(int width, int height);
 
 // Bytes build_distance_field allocates at its peak (the distances and two seed buffers).
 std::uint64_t distance_field_bytes(int width, int height);

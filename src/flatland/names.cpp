@@ -7,6 +7,8 @@ const char* to_string(Method m) {
   switch (m) {
     case Method::rc:
       return "rc";
+    case Method::pt:
+      return "pt";
   }
   return "?";
 }
@@ -19,6 +21,16 @@ const char* to_string(MergeFix f) {
       return "none";
     case MergeFix::nearest:
       return "nearest";
+  }
+  return "?";
+}
+
+const char* to_string(Sampler s) {
+  switch (s) {
+    case Sampler::r1:
+      return "r1";
+    case Sampler::random:
+      return "random";
   }
   return "?";
 }

@@ -10,6 +10,7 @@
 #include "core/parallel.hpp"
 #include "core/timer.hpp"
 #include "flatland/medium.hpp"
+#include "flatland/pt/pt.hpp"
 #include "flatland/rc/rc.hpp"
 
 namespace penumbra {
@@ -22,6 +23,15 @@ Status check_options(int width, int height, const RenderOptions& o) {
   if (o.bounces < 1 || o.bounces > 64)
     return bad("bounces: expected 1..64, found " + std::to_string(o.bounces));
   if (o.threads < 0) return bad("threads: expected >= 0, found " + std::to_string(o.threads));
+  if (o.method == Method::pt) {
+    const PtOptions& pt = o.pt;
+    if (pt.spp < 0) return bad("spp: expected >= 0, found " + std::to_string(pt.spp));
+    if (!(pt.seconds >= 0) || !std::isfinite(pt.seconds))
+      return bad("time: expected a number of seconds >= 0, found " + std::to_string(pt.seconds));
+    if (pt.spp == 0 && pt.seconds == 0)
+      return bad("spp: 0 (no limit) needs a time limit (--time)");
+    return {};
+  }
   const RcOptions& rc = o.rc;
   if (rc.probe_spacing < 1 || rc.probe_spacing > 64)
     return bad("probe spacing: expected 1..64 cells, found " + std::to_string(rc.probe_spacing));
@@ -70,6 +80,8 @@ std::uint64_t estimate(int width, int height, const RenderOptions& o,
   const std::uint64_t cells = std::uint64_t(width) * height;
   std::uint64_t bytes = cells * (sizeof(Cell) + sizeof(float));  // medium: emission and step
   if (o.distance_field) bytes += distance_field_bytes(width, height);
+  if (o.blocks) bytes += blocks_bytes(width, height);
+  if (o.method == Method::pt) return bytes + pt::working_bytes(width, height, o.pt);
   bytes += rc::cascade_bytes(plan, o.rc);                 // cascades
   bytes += cells * 3 * sizeof(float);                     // fluence
   if (o.bounces > 1) bytes += cells * 3 * sizeof(float);  // the previous bounce's fluence
@@ -90,6 +102,7 @@ std::string human_bytes(std::uint64_t b) {
 
 std::uint64_t estimate_memory(int width, int height, const RenderOptions& options) {
   if (!check_options(width, height, options)) return ~std::uint64_t(0);
+  if (options.method == Method::pt) return estimate(width, height, options, {});
   return estimate(width, height, options, rc::plan_cascades(width, height, options.rc));
 }
 
@@ -121,8 +134,11 @@ Expected<RenderResult> render_unchecked(const Scene& scene, const RenderOptions&
   if (Status s = check_options(scene.width, scene.height, options); !s) return s.error();
   RenderResult result;
   result.options = options;
-  std::vector<rc::Cascade> plan = rc::plan_cascades(scene.width, scene.height, options.rc);
-  result.options.rc.cascades = int(plan.size());
+  std::vector<rc::Cascade> plan;
+  if (options.method == Method::rc) {
+    plan = rc::plan_cascades(scene.width, scene.height, options.rc);
+    result.options.rc.cascades = int(plan.size());
+  }
   if (Status s = check_memory(scene.width, scene.height, options, false); !s) return s.error();
   result.memory_bytes = estimate(scene.width, scene.height, options, plan);
 
@@ -135,6 +151,16 @@ Expected<RenderResult> render_unchecked(const Scene& scene, const RenderOptions&
     watch.restart();
     if (options.distance_field) build_distance_field(medium);
     result.stages.push_back({"distance field", watch.ms()});
+    if (options.blocks) {
+      watch.restart();
+      build_blocks(medium);
+      result.stages.push_back({"blocks", watch.ms()});
+    }
+    if (options.method == Method::pt) {
+      std::vector<float> f = pt::solve(medium, scene.albedo, scene.environment, options, result);
+      result.fluence = ImageRgb(scene.width, scene.height, std::move(f));
+      return;
+    }
 
     std::vector<float> f = rc::solve(medium, scene.environment, plan, options.rc, result.stages);
     // More bounces: diffuse re-emission albedo * F / 2pi added to the scene's own emission.
@@ -161,7 +187,8 @@ Expected<RenderResult> render_unchecked(const Scene& scene, const RenderOptions&
     result.fluence = ImageRgb(scene.width, scene.height, std::move(f));
   });
   for (const StageTime& s : result.stages) result.time_ms += s.ms;
-  result.intervals = rc::traced_intervals(plan, options.rc) * std::uint64_t(options.bounces);
+  if (options.method == Method::rc)
+    result.intervals = rc::traced_intervals(plan, options.rc) * std::uint64_t(options.bounces);
   return result;
 }
 

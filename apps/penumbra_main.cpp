@@ -2,8 +2,12 @@
 // Exit codes: 0 success, 1 bad input or runtime failure, 2 usage error.
 #include <tbb/task_arena.h>
 
+#include <unistd.h>
+
 #include <CLI/CLI.hpp>
+#include <atomic>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <iostream>
 #include <map>
@@ -20,6 +24,7 @@ using penumbra::MergeFix;
 
 constexpr int kUsage = 2;
 constexpr int kFailure = 1;
+constexpr int kInterrupted = 130;  // the shell's code for SIGINT; the output is still written
 
 // "512M", "8G", "1.5GiB", or a plain number of bytes.
 bool parse_size(const std::string& text, std::uint64_t& bytes) {
@@ -48,21 +53,59 @@ bool parse_size(const std::string& text, std::uint64_t& bytes) {
 }
 
 nlohmann::json parameters_json(const penumbra::RenderOptions& o) {
-  const penumbra::RcOptions& rc = o.rc;
-  nlohmann::json p = {{"probe_spacing", rc.probe_spacing},
-                      {"directions", rc.directions},
-                      {"branching", rc.branching},
-                      {"interval", rc.interval},
-                      {"cascades", rc.cascades},
-                      {"fix", penumbra::to_string(rc.fix)},
-                      {"preaverage", rc.preaverage},
-                      {"extend", rc.extend},
-                      {"bounces", o.bounces},
+  nlohmann::json p = {{"bounces", o.bounces},
                       {"threads", o.threads},
                       {"distance_field", o.distance_field},
+                      {"blocks", o.blocks},
                       {"max_memory", o.max_memory}};
+  if (o.method == penumbra::Method::pt) {
+    const penumbra::PtOptions& pt = o.pt;
+    p.update({{"spp", pt.spp},
+              {"time", pt.seconds},
+              {"nee", pt.nee},
+              {"sampler", penumbra::to_string(pt.sampler)},
+              {"seed", pt.seed}});
+    return p;
+  }
+  const penumbra::RcOptions& rc = o.rc;
+  p.update({{"probe_spacing", rc.probe_spacing},
+            {"directions", rc.directions},
+            {"branching", rc.branching},
+            {"interval", rc.interval},
+            {"cascades", rc.cascades},
+            {"fix", penumbra::to_string(rc.fix)},
+            {"preaverage", rc.preaverage},
+            {"extend", rc.extend}});
   if (rc.extend) p["extend_length"] = rc.extend_length;
   return p;
+}
+
+// Ctrl-C while a progressive method runs: the first asks it to stop after the current pass (the
+// image of the samples so far is still written); a second one ends the process at once.
+std::atomic<bool> g_cancel{false};
+
+extern "C" void on_interrupt(int) {
+  g_cancel.store(true);
+  static const char msg[] = "\npenumbra: stopping after this pass (Ctrl-C again to abort)\n";
+  [[maybe_unused]] ssize_t n = write(STDERR_FILENO, msg, sizeof msg - 1);
+  std::signal(SIGINT, SIG_DFL);
+}
+
+// A one-line progress bar with an estimate of the time left, redrawn in place.
+void draw_progress(const penumbra::RenderProgress& p) {
+  const int width = 30;
+  const int filled = int(std::lround(std::clamp(p.fraction, 0.0, 1.0) * width));
+  const double eta = p.fraction > 0 ? p.elapsed_s * (1 - p.fraction) / p.fraction : 0;
+  std::string bar(std::size_t(filled), '#');
+  bar.resize(std::size_t(width), '.');
+  if (p.target > 0)
+    std::fprintf(stderr, "\r[%s] %3.0f%%  %llu/%llu spp  %.1f s, %.1f s left ", bar.c_str(),
+                 100 * p.fraction, (unsigned long long)p.samples, (unsigned long long)p.target,
+                 p.elapsed_s, eta);
+  else
+    std::fprintf(stderr, "\r[%s] %3.0f%%  %llu spp  %.1f s, %.1f s left ", bar.c_str(),
+                 100 * p.fraction, (unsigned long long)p.samples, p.elapsed_s, eta);
+  std::fflush(stderr);
 }
 
 struct RenderArgs {
@@ -70,6 +113,7 @@ struct RenderArgs {
   std::vector<std::string> outputs;
   std::string method = "rc";
   std::string fix = "bilinear";
+  std::string sampler = "r1";
   std::string max_memory = "8G";
   float exposure = 0;
   bool json = false;
@@ -98,6 +142,8 @@ int run_render(const RenderArgs& a) {
   static const std::map<std::string, MergeFix> fixes = {
       {"bilinear", MergeFix::bilinear}, {"none", MergeFix::none}, {"nearest", MergeFix::nearest}};
   options.rc.fix = fixes.at(a.fix);
+  options.method = a.method == "pt" ? penumbra::Method::pt : penumbra::Method::rc;
+  options.pt.sampler = a.sampler == "random" ? penumbra::Sampler::random : penumbra::Sampler::r1;
   if (!std::isfinite(a.exposure)) {
     std::cerr << "penumbra render: --exposure: expected a finite number of EV\n";
     return kUsage;
@@ -133,7 +179,16 @@ int run_render(const RenderArgs& a) {
   const double raster_ms = raster_watch.ms();
   const double load_ms = load_watch.ms() - raster_ms;
 
+  // Progressive methods report progress on a terminal and stop early on Ctrl-C.
+  const bool progress = !a.quiet && isatty(STDERR_FILENO);
+  if (options.method == penumbra::Method::pt) {
+    if (progress) options.progress = draw_progress;
+    options.cancel = &g_cancel;
+    std::signal(SIGINT, on_interrupt);
+  }
   penumbra::Expected<penumbra::RenderResult> result = penumbra::render(*scene, options);
+  std::signal(SIGINT, SIG_DFL);
+  if (progress && options.method == penumbra::Method::pt) std::fprintf(stderr, "\n");
   if (!result) {
     std::cerr << "penumbra render: " << desc->source << ": " << result.error().message << "\n";
     return kFailure;
@@ -161,24 +216,38 @@ int run_render(const RenderArgs& a) {
                         {"write_ms", write_ms},
                         {"memory_bytes", result->memory_bytes},
                         {"intervals", result->intervals},
+                        {"samples", result->samples},
+                        {"cancelled", result->cancelled},
                         {"parameters", parameters_json(result->options)},
                         {"outputs", a.outputs}};
     std::cout << j.dump(2) << "\n";
   } else if (!a.quiet) {
-    std::printf("penumbra %s: %s, %dx%d cells, method %s, %d cascades, fix %s\n",
-                penumbra::kVersion, desc->source.c_str(), scene->width, scene->height,
-                penumbra::to_string(options.method), result->options.rc.cascades,
-                penumbra::to_string(options.rc.fix));
+    std::printf("penumbra %s: %s, %dx%d cells, method %s, ", penumbra::kVersion,
+                desc->source.c_str(), scene->width, scene->height,
+                penumbra::to_string(options.method));
+    if (options.method == penumbra::Method::pt)
+      std::printf("%llu samples per cell, sampler %s%s\n", (unsigned long long)result->samples,
+                  penumbra::to_string(options.pt.sampler), options.pt.nee ? ", nee" : "");
+    else
+      std::printf("%d cascades, fix %s\n", result->options.rc.cascades,
+                  penumbra::to_string(options.rc.fix));
     std::printf("  %-24s %9.1f ms\n", "load scene", load_ms);
     std::printf("  %-24s %9.1f ms\n", "rasterise", raster_ms);
     for (const penumbra::StageTime& s : result->stages)
       std::printf("  %-24s %9.1f ms\n", s.name.c_str(), s.ms);
     std::printf("  %-24s %9.1f ms  (computation)\n", "total", result->time_ms);
     std::printf("  %-24s %9.1f ms\n", "write outputs", write_ms);
-    std::printf("  working memory %.1f MiB, %.1f M intervals traced (%.1f M/s)\n",
+    std::printf(options.method == penumbra::Method::pt
+                    ? "  working memory %.1f MiB, %.1f M rays traced (%.1f M/s)\n"
+                    : "  working memory %.1f MiB, %.1f M intervals traced (%.1f M/s)\n",
                 double(result->memory_bytes) / (1 << 20), double(result->intervals) / 1e6,
                 double(result->intervals) / 1e3 / result->time_ms);
     for (const std::string& out : a.outputs) std::printf("  wrote %s\n", out.c_str());
+  }
+  if (result->cancelled) {
+    std::fprintf(stderr, "penumbra render: interrupted; wrote the image of %llu samples per cell\n",
+                 (unsigned long long)result->samples);
+    return kInterrupted;
   }
   return 0;
 }
@@ -198,8 +267,24 @@ int main(int argc, char** argv) {
                    "Output file: .png (display), .exr or .pfm (fluence); repeatable")
       ->required();
   render->add_option("--method", a.method, "Method")
-      ->check(CLI::IsMember({"rc"}))
+      ->check(CLI::IsMember({"rc", "pt"}))
       ->capture_default_str();
+  penumbra::PtOptions& pt = a.options.pt;
+  CLI::Option* spp = render
+                         ->add_option("--spp", pt.spp,
+                                      "pt: samples per cell (with --time: the most; 0: no limit)")
+                         ->check(CLI::Range(0, 1 << 30))
+                         ->capture_default_str();
+  CLI::Option* time = render
+                          ->add_option("--time", pt.seconds,
+                                       "pt: add samples until this many seconds have passed")
+                          ->check(CLI::NonNegativeNumber);
+  render->add_flag("--nee", pt.nee,
+                   "pt: next event estimation (aim at emitting regions, combined by MIS)");
+  render->add_option("--sampler", a.sampler, "pt: direction sequence: r1 (low discrepancy), random")
+      ->check(CLI::IsMember({"r1", "random"}))
+      ->capture_default_str();
+  render->add_option("--seed", pt.seed, "pt: random seed")->capture_default_str();
   penumbra::RcOptions& rc = a.options.rc;
   render->add_option("--probe-spacing", rc.probe_spacing, "Cascade-0 probe spacing s0 in cells")
       ->check(CLI::Range(1, 64))
@@ -234,6 +319,8 @@ int main(int argc, char** argv) {
   bool no_distance_field = false;
   render->add_flag("--no-distance-field", no_distance_field,
                    "Step every cell (plain DDA) instead of jumping over empty space");
+  bool no_blocks = false;
+  render->add_flag("--no-blocks", no_blocks, "Do not skip empty 8x8 blocks (two-level DDA)");
   render->add_option("--max-memory", a.max_memory, "Refuse work needing more working memory")
       ->capture_default_str();
   render->add_option("--exposure", a.exposure, "PNG exposure in EV")->capture_default_str();
@@ -249,6 +336,9 @@ int main(int argc, char** argv) {
     return kUsage;
   }
   a.options.distance_field = !no_distance_field;
+  a.options.blocks = !no_blocks;
+  // --time alone runs until the time is up; with --spp too, whichever comes first.
+  if (time->count() > 0 && spp->count() == 0) a.options.pt.spp = 0;
   if (render->parsed()) {
     try {
       return run_render(a);

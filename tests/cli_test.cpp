@@ -173,6 +173,80 @@ TEST_F(Cli, ThreadCountDoesNotChangeTheResult) {
   EXPECT_TRUE(a == b) << "--threads 1 and --threads 2 give different PFM files";
 }
 
+TEST_F(Cli, PathTracerReportsSamplesAndParameters) {
+  const Result r = render_ok({"--json", "--method", "pt", "--spp", "6", "--nee", "--sampler",
+                              "random", "--seed", "9", "-o", out("pt.pfm")});
+  nlohmann::json j;
+  ASSERT_NO_THROW(j = nlohmann::json::parse(r.out)) << r.out;
+  EXPECT_EQ(j.at("method"), "pt");
+  EXPECT_EQ(j.at("samples"), 6);
+  EXPECT_EQ(j.at("cancelled"), false);
+  EXPECT_GE(j.at("intervals").get<std::uint64_t>(), 6u * 48 * 32);  // one ray per sample or more
+  const nlohmann::json& p = j.at("parameters");
+  EXPECT_EQ(p.at("spp"), 6);
+  EXPECT_EQ(p.at("nee"), true);
+  EXPECT_EQ(p.at("sampler"), "random");
+  EXPECT_EQ(p.at("seed"), 9);
+  EXPECT_TRUE(r.err.empty()) << r.err;  // no progress bar when stderr is not a terminal
+}
+
+TEST_F(Cli, PathTracerSkippingEmptySpaceDoesNotChangeTheResult) {
+  const std::vector<std::string> pt = {"-q", "--method", "pt", "--spp", "4", "--bounces", "2"};
+  std::vector<std::vector<std::string>> variants = {
+      {}, {"--no-blocks"}, {"--no-distance-field"}, {"--no-blocks", "--no-distance-field"}};
+  std::string first;
+  for (std::size_t k = 0; k < variants.size(); ++k) {
+    std::vector<std::string> args = pt;
+    args.insert(args.end(), variants[k].begin(), variants[k].end());
+    std::string name = "v";
+    name += std::to_string(k);
+    name += ".pfm";
+    const std::string file = out(name);
+    args.insert(args.end(), {"-o", file});
+    render_ok(args);
+    const std::string data = slurp(file);
+    if (k == 0) first = data;
+    EXPECT_TRUE(!data.empty() && data == first) << ::testing::PrintToString(variants[k]);
+  }
+}
+
+TEST_F(Cli, PathTracerTimeLimitStops) {
+  const Result r = render_ok({"--json", "--method", "pt", "--time", "0.5", "-o", out("t.pfm")});
+  nlohmann::json j;
+  ASSERT_NO_THROW(j = nlohmann::json::parse(r.out)) << r.out;
+  EXPECT_GE(j.at("samples").get<int>(), 1);
+  EXPECT_EQ(j.at("parameters").at("spp"), 0);  // --time alone: no sample limit
+}
+
+// Ctrl-C: the render stops after its current pass, writes the image of the samples so far, says
+// how many, and exits 130.
+TEST_F(Cli, InterruptWritesWhatItHas) {
+  std::string cmd = quote(PENUMBRA_CLI);
+  for (const std::string& piece :
+       {std::string(" render "), quote(scene_), std::string(" --method pt --spp 100000000 -q -o "),
+        quote(out("i.pfm")), std::string(" 2>"), quote((dir_ / "int_err.txt").string()),
+        std::string(" & pid=$!; sleep 1; kill -INT $pid; wait $pid; exit $?")})
+    cmd += piece;
+  std::string shell = "bash -c ";
+  shell += quote(cmd);
+  const int raw = std::system(shell.c_str());
+  ASSERT_TRUE(WIFEXITED(raw));
+  EXPECT_EQ(WEXITSTATUS(raw), 130);
+  EXPECT_TRUE(fs::is_regular_file(out("i.pfm")));
+  EXPECT_EQ(out_files().size(), 1u);
+  const std::string err = slurp(dir_ / "int_err.txt");
+  EXPECT_NE(err.find("interrupted; wrote the image of"), std::string::npos) << err;
+}
+
+TEST_F(Cli, PathTracerBadOptionsAreUsageErrors) {
+  expect_failure(run({"render", scene_, "--method", "pt", "--spp", "0", "-o", out("x.pfm")}), 2);
+  expect_failure(run({"render", scene_, "--method", "pt", "--spp", "-3", "-o", out("x.pfm")}), 2);
+  expect_failure(run({"render", scene_, "--method", "pt", "--time", "-1", "-o", out("x.pfm")}), 2);
+  expect_failure(
+      run({"render", scene_, "--method", "pt", "--sampler", "sobol", "-o", out("x.pfm")}), 2);
+  expect_failure(run({"render", scene_, "--method", "mc", "-o", out("x.pfm")}), 2);
+}
+
 TEST_F(Cli, HelpMentionsTheOptions) {
   const Result top = run({"--help"});
   EXPECT_EQ(top.status, 0) << top.err;

@@ -2,37 +2,15 @@
 // claim (seed 001, section 4.1: 2, 102 and 1002 lights take the same time).
 #include <benchmark/benchmark.h>
 
+#include "bench_run.hpp"
 #include "bench_scenes.hpp"
 #include "penumbra/render.hpp"
 
 namespace {
 
 using namespace penumbra;
-
-void run(benchmark::State& state, const Scene& scene, const RenderOptions& options) {
-  double ms = 0;
-  std::uint64_t memory = 0, intervals = 0;
-  for (auto _ : state) {
-    Expected<RenderResult> r = render(scene, options);
-    if (!r) {
-      state.SkipWithError(r.error().message.c_str());
-      return;
-    }
-    ms += r->time_ms;
-    memory = r->memory_bytes;
-    intervals = r->intervals;
-    benchmark::DoNotOptimize(r->fluence.data());
-  }
-  state.counters["cells/s"] =
-      benchmark::Counter(double(scene.cells()) * state.iterations(), benchmark::Counter::kIsRate);
-  state.counters["memory_MiB"] = double(memory) / (1 << 20);
-  state.counters["Mintervals/s"] = double(intervals) / (ms / double(state.iterations())) / 1e3;
-  state.counters["compute_ms"] = ms / double(state.iterations());
-}
-
-Scene build(const SceneDesc& d) {
-  return *build_scene(d);
-}
+using bench::build;
+using bench::run;
 
 // Grid size: a fixed layout of walls and 102 lights scaled to the grid.
 void BM_RcGrid(benchmark::State& state) {

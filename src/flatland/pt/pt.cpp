@@ -58,21 +58,22 @@ void make_arcs(const std::vector<EmitterBox>& boxes, double px, double py, Arcs&
       a.start = 0;
       a.width = kTwoPi;
     } else {
-      // The point is outside the convex box, so the corners span less than half a turn around
-      // the direction of the first one.
-      const double xs[4] = {double(b.x0), double(b.x1), double(b.x0), double(b.x1)};
-      const double ys[4] = {double(b.y0), double(b.y0), double(b.y1), double(b.y1)};
-      const double ref = std::atan2(ys[0] - py, xs[0] - px);
-      double lo = 0, hi = 0;
-      for (int k = 1; k < 4; ++k) {
-        double d = std::atan2(ys[k] - py, xs[k] - px) - ref;
-        if (d > kTwoPi / 2) d -= kTwoPi;
-        if (d < -kTwoPi / 2) d += kTwoPi;
-        lo = std::min(lo, d);
-        hi = std::max(hi, d);
-      }
-      a.start = ref + lo;
-      a.width = hi - lo;
+      // From outside, the box's silhouette is spanned by two corners that depend only on which
+      // side of each slab the point lies: two atan2 instead of four.
+      const int sx = px < b.x0 ? 0 : px > b.x1 ? 2 : 1, sy = py < b.y0 ? 0 : py > b.y1 ? 2 : 1;
+      // Corner pairs as (x index, y index) into {x0, x1} x {y0, y1}, per (sy, sx).
+      static constexpr int kCorners[3][3][4] = {{{0, 1, 1, 0}, {0, 0, 1, 0}, {0, 0, 1, 1}},
+                                                {{0, 0, 0, 1}, {0, 0, 0, 0}, {1, 0, 1, 1}},
+                                                {{0, 0, 1, 1}, {0, 1, 1, 1}, {0, 1, 1, 0}}};
+      const int* k = kCorners[sy][sx];
+      const double xs[2] = {double(b.x0), double(b.x1)}, ys[2] = {double(b.y0), double(b.y1)};
+      const double a1 = std::atan2(ys[k[1]] - py, xs[k[0]] - px);
+      const double a2 = std::atan2(ys[k[3]] - py, xs[k[2]] - px);
+      double d = a2 - a1;
+      if (d > kTwoPi / 2) d -= kTwoPi;
+      if (d < -kTwoPi / 2) d += kTwoPi;
+      a.start = d >= 0 ? a1 : a2;
+      a.width = std::abs(d);
     }
     a.prob = double(b.radiance) * a.width;
     if (!(a.prob > 0) || !(a.width > 0)) continue;

@@ -5,7 +5,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <limits>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -17,6 +19,7 @@
 
 namespace {
 
+namespace fs = std::filesystem;
 using penumbra::ErrorMetrics;
 using penumbra::ImageRgb;
 using penumbra::ImageRgb8;
@@ -292,6 +295,196 @@ TEST_F(ComparePictures, ShrunkMontageIsStillMadeAndWritten) {
   EXPECT_GT(l.zoom.shrink, 1);
   EXPECT_EQ(p->width, l.width);
   round_trip(*p, "wide.png");
+}
+
+// ---- the command line ----------------------------------------------------------------------
+
+class CompareCli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    fs::create_directories(tmp_.root() / "out");
+    // 6x4 images: the reference a ramp, the test the ramp plus a pattern of signed errors.
+    ImageRgb ref(6, 4), test(6, 4);
+    for (int y = 0; y < 4; ++y)
+      for (int x = 0; x < 6; ++x) {
+        const float v = 0.5f + 0.25f * x + 0.1f * y;
+        const float e = ((x + y) % 3 - 1) * 0.05f * (1 + x);
+        ref.set(x, y, {v, 2 * v, 0.5f * v});
+        test.set(x, y, {v + e, 2 * v - e, 0.5f * v + 2 * e});
+      }
+    ref_img_ = ref;
+    test_img_ = test;
+    ASSERT_TRUE(penumbra::io::write_pfm(test_pfm_, test).ok());
+    ASSERT_TRUE(penumbra::io::write_exr(ref_exr_, ref).ok());
+    // An opaque 2x2 box in the 6x4 grid's left half.
+    scene_ = tmp_.write("scene.json", R"({"penumbra": 1, "width": 6, "height": 4,
+      "shapes": [{"type": "box", "center": [2, 2], "size": [2, 2]}]})");
+  }
+
+  penumbra::testing::CliResult run(const std::vector<std::string>& args) const {
+    std::vector<std::string> all = {"compare"};
+    all.insert(all.end(), args.begin(), args.end());
+    return penumbra::testing::run_cli(all, tmp_.root());
+  }
+  std::string out(const std::string& name) const { return tmp_.file("out/" + name); }
+
+  // A failure: the exit code, a message naming `names`, and nothing written to out/.
+  void expect_failure(const penumbra::testing::CliResult& r, int status,
+                      const std::vector<std::string>& names) const {
+    EXPECT_EQ(r.status, status) << "stdout: " << r.out << "\nstderr: " << r.err;
+    EXPECT_FALSE(r.err.empty());
+    // Our own messages (not CLI11's parse errors) start with the command's name.
+    if (!names.empty()) {
+      EXPECT_EQ(r.err.rfind("penumbra compare: ", 0), 0u) << r.err;
+    }
+    for (const std::string& n : names) EXPECT_NE(r.err.find(n), std::string::npos) << r.err;
+    EXPECT_TRUE(tmp_.entries("out").empty())
+        << "left behind: " << ::testing::PrintToString(tmp_.entries("out"));
+  }
+
+  penumbra::testing::TestDir tmp_{"compare_cli"};
+  std::string test_pfm_ = tmp_.file("test.pfm"), ref_exr_ = tmp_.file("ref.exr"), scene_;
+  ImageRgb test_img_, ref_img_;
+};
+
+TEST_F(CompareCli, JsonMatchesTheLibrary) {
+  const auto r = run({test_pfm_, ref_exr_, "--scene", scene_, "--json"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  nlohmann::json j;
+  ASSERT_NO_THROW(j = nlohmann::json::parse(r.out)) << r.out;
+
+  auto scene = penumbra::build_scene(*penumbra::load_scene(scene_));
+  ASSERT_TRUE(scene.ok());
+  const std::vector<std::uint8_t> mask = penumbra::non_opaque_cells(*scene);
+  const auto m = penumbra::compare_images(test_img_, ref_img_, &mask);
+  ASSERT_TRUE(m.ok());
+  EXPECT_EQ(m->cells, 20u);  // 24 cells less the 2x2 box
+  EXPECT_EQ(j.at("test"), test_pfm_);
+  EXPECT_EQ(j.at("reference"), ref_exr_);
+  EXPECT_EQ(j.at("scene"), scene_);
+  EXPECT_EQ(j.at("cells").get<std::uint64_t>(), m->cells);
+  // JSON numbers round-trip doubles exactly.
+  EXPECT_EQ(j.at("rmse").get<double>(), m->rmse);
+  EXPECT_EQ(j.at("relative_rmse").get<double>(), m->relative_rmse);
+  EXPECT_EQ(j.at("mean_abs").get<double>(), m->mean_abs);
+  EXPECT_EQ(j.at("max_abs").get<double>(), m->max_abs);
+  EXPECT_EQ(j.at("psnr").get<double>(), m->psnr);
+  EXPECT_EQ(j.at("bias").get<double>(), m->bias);
+  EXPECT_EQ(j.at("reference_mean").get<double>(), m->reference_mean);
+  EXPECT_GT(m->rmse, 0.01);  // the inputs do differ
+}
+
+TEST_F(CompareCli, WithoutASceneEveryCellCounts) {
+  const auto r = run({test_pfm_, ref_exr_, "--json"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j.at("cells"), 24);
+  EXPECT_TRUE(j.at("scene").is_null());
+}
+
+TEST_F(CompareCli, IdenticalImagesReportNullPsnr) {
+  const auto r = run({test_pfm_, test_pfm_, "--json"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j.at("rmse").get<double>(), 0.0);
+  EXPECT_TRUE(j.at("psnr").is_null());  // infinite: JSON has no infinity
+  EXPECT_EQ(j.at("relative_rmse").get<double>(), 0.0);
+}
+
+TEST_F(CompareCli, TableByDefaultAndNothingWhenQuiet) {
+  const auto r = run({test_pfm_, ref_exr_});
+  ASSERT_EQ(r.status, 0) << r.err;
+  for (const char* word : {"RMSE", "relative RMSE", "PSNR", "bias", "max |error|", "24"})
+    EXPECT_NE(r.out.find(word), std::string::npos) << word << " missing from:\n" << r.out;
+  const auto q = run({test_pfm_, ref_exr_, "-q"});
+  EXPECT_EQ(q.status, 0) << q.err;
+  EXPECT_TRUE(q.out.empty()) << q.out;
+}
+
+TEST_F(CompareCli, WritesHeatmapAndMontage) {
+  const auto r = run({test_pfm_, ref_exr_, "--scene", scene_, "--heatmap", out("h.png"),
+                      "--montage", out("m.png"), "--exposure", "-1", "-q"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(tmp_.entries("out").size(), 2u);  // no temporary files beside them
+  const auto h = penumbra::io::read_image(out("h.png"));
+  ASSERT_TRUE(h.ok()) << h.error().message;
+  EXPECT_EQ(h->width, penumbra::analysis::heatmap_layout(6, 4).width);
+  EXPECT_EQ(h->height, penumbra::analysis::heatmap_layout(6, 4).height);
+  const auto m = penumbra::io::read_image(out("m.png"));
+  ASSERT_TRUE(m.ok()) << m.error().message;
+  EXPECT_EQ(m->width, penumbra::analysis::montage_layout(6, 4).width);
+  EXPECT_EQ(m->height, penumbra::analysis::montage_layout(6, 4).height);
+}
+
+TEST_F(CompareCli, HelpListsTheOptions) {
+  const auto r = run({"--help"});
+  EXPECT_EQ(r.status, 0) << r.err;
+  for (const char* opt : {"--scene", "--json", "--heatmap", "--montage", "--exposure", "--quiet"})
+    EXPECT_NE(r.out.find(opt), std::string::npos) << opt << " missing from:\n" << r.out;
+}
+
+// ---- failures: nothing written -------------------------------------------------------------
+
+TEST_F(CompareCli, MismatchedSizesNameBothFilesAndWriteNothing) {
+  const std::string small = tmp_.file("small.pfm");
+  ASSERT_TRUE(penumbra::io::write_pfm(small, image(2, 1, {1, 1, 1, 1, 1, 1})).ok());
+  const auto r =
+      run({small, ref_exr_, "--heatmap", out("h.png"), "--montage", out("m.png"), "--json"});
+  expect_failure(r, 1, {"small.pfm", "ref.exr", "2x1", "6x4"});
+  EXPECT_TRUE(r.out.empty()) << r.out;
+}
+
+TEST_F(CompareCli, PngInputIsRefused) {
+  const std::string png = tmp_.file("render.png");
+  ASSERT_TRUE(penumbra::io::write_png8(png, 6, 4, std::vector<unsigned char>(72, 100)).ok());
+  expect_failure(run({png, ref_exr_, "--montage", out("m.png")}), 1, {"render.png", ".pfm"});
+  expect_failure(run({test_pfm_, png}), 1, {"render.png", ".exr"});
+}
+
+TEST_F(CompareCli, MissingAndCorruptFilesAreNamed) {
+  expect_failure(run({tmp_.file("nope.pfm"), ref_exr_, "--heatmap", out("h.png")}), 1,
+                 {"nope.pfm"});
+  const std::string corrupt = tmp_.write("corrupt.pfm", "PF\n6 4\n-1.0\nshort");
+  expect_failure(run({test_pfm_, corrupt, "--heatmap", out("h.png")}), 1,
+                 {"corrupt.pfm", "truncated"});
+  const std::string junk = tmp_.write("junk.exr", "not an exr file at all");
+  expect_failure(run({junk, ref_exr_}), 1, {"junk.exr"});
+}
+
+TEST_F(CompareCli, NonFiniteValueIsNamed) {
+  ImageRgb bad = test_img_;
+  bad.set(4, 2, {1, std::numeric_limits<float>::infinity(), 1});
+  const std::string path = tmp_.file("inf.pfm");
+  ASSERT_TRUE(penumbra::io::write_pfm(path, bad).ok());
+  expect_failure(run({path, ref_exr_, "--heatmap", out("h.png")}), 1, {"inf.pfm", "(4, 2)"});
+}
+
+TEST_F(CompareCli, SceneOfAnotherSizeNamesItAndBothSizes) {
+  const std::string big = tmp_.write("big.json", R"({"penumbra": 1, "width": 8, "height": 8})");
+  expect_failure(run({test_pfm_, ref_exr_, "--scene", big, "--montage", out("m.png")}), 1,
+                 {"big.json", "8x8", "6x4"});
+}
+
+TEST_F(CompareCli, BadSceneIsNamed) {
+  const std::string bad = tmp_.write("bad.json", R"({"penumbra": 1, "width": 6})");
+  expect_failure(run({test_pfm_, ref_exr_, "--scene", bad}), 1, {"bad.json"});
+}
+
+TEST_F(CompareCli, UsageErrorsExitTwo) {
+  expect_failure(run({test_pfm_}), 2, {});  // no reference
+  expect_failure(run({test_pfm_, ref_exr_, "--heatmap", out("h.exr")}), 2, {"h.exr", ".png"});
+  expect_failure(run({test_pfm_, ref_exr_, "--montage", out("m.jpg"), "--heatmap", out("h.png")}),
+                 2, {"m.jpg"});
+  expect_failure(run({test_pfm_, ref_exr_, "--heatmap", out("x.png"), "--montage", out("x.png")}),
+                 2, {"x.png"});
+  expect_failure(run({test_pfm_, ref_exr_, "--exposure", "inf", "--montage", out("m.png")}), 2,
+                 {"exposure"});
+}
+
+TEST_F(CompareCli, UnwritableOutputFailsBeforeWritingTheOther) {
+  expect_failure(run({test_pfm_, ref_exr_, "--heatmap", out("h.png"), "--montage",
+                      tmp_.file("out/no_such_dir/m.png")}),
+                 1, {"m.png"});
 }
 
 }  // namespace

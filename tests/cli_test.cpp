@@ -27,6 +27,7 @@ constexpr const char* kScene = R"({
 })";
 
 using Result = penumbra::testing::CliResult;
+using penumbra::testing::quote;
 using penumbra::testing::slurp;
 
 class Cli : public ::testing::Test {

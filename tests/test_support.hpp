@@ -63,7 +63,7 @@ inline std::string slurp(const std::filesystem::path& p) {
 }
 
 // Single-quoted for /bin/sh, so temporary paths with odd characters stay one word.
-inline std::string shell_quote(const std::string& s) {
+inline std::string quote(const std::string& s) {
   std::string q = "'";
   for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
   return q + "'";
@@ -77,17 +77,17 @@ struct CliResult {
 // Runs the command line (PENUMBRA_CLI) with `args`, each quoted, capturing stdout and stderr in
 // files under `dir` and the exit code.
 inline CliResult run_cli(const std::vector<std::string>& args, const std::filesystem::path& dir) {
-  std::string cmd = shell_quote(PENUMBRA_CLI);
+  std::string cmd = quote(PENUMBRA_CLI);
   // Appended piece by piece: GCC 12 warns falsely (-Wrestrict) on "literal" + std::string&&.
   for (const std::string& a : args) {
     cmd += ' ';
-    cmd += shell_quote(a);
+    cmd += quote(a);
   }
   const std::filesystem::path o = dir / "stdout.txt", e = dir / "stderr.txt";
   cmd += " >";
-  cmd += shell_quote(o.string());
+  cmd += quote(o.string());
   cmd += " 2>";
-  cmd += shell_quote(e.string());
+  cmd += quote(e.string());
   cmd += " </dev/null";
   const int raw = std::system(cmd.c_str());
   CliResult r;

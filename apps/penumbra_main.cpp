@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "compare_cmd.hpp"
 #include "core/timer.hpp"
 #include "penumbra/penumbra.hpp"
 
@@ -326,6 +327,7 @@ int main(int argc, char** argv) {
   render->add_option("--exposure", a.exposure, "PNG exposure in EV")->capture_default_str();
   render->add_flag("--json", a.json, "Print one JSON object with timings, memory and parameters");
   render->add_flag("-q,--quiet", a.quiet, "Print nothing on success");
+  const std::unique_ptr<CompareCommand> compare = add_compare_command(app);
 
   try {
     app.parse(argc, argv);
@@ -347,5 +349,6 @@ int main(int argc, char** argv) {
       return kFailure;
     }
   }
+  if (compare->parsed()) return run_compare(compare->args);
   return kUsage;
 }

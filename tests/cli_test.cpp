@@ -1,13 +1,9 @@
 // The command line, run as a user runs it: exit codes, messages, outputs and the JSON report.
 #include <gtest/gtest.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -30,24 +26,9 @@ constexpr const char* kScene = R"({
   ]
 })";
 
-struct Result {
-  int status = -1;  // the exit code, or -1 when the process did not exit normally
-  std::string out, err;
-};
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-// Single-quoted for /bin/sh, so temporary paths with odd characters stay one word.
-std::string quote(const std::string& s) {
-  std::string q = "'";
-  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return q + "'";
-}
+using Result = penumbra::testing::CliResult;
+using penumbra::testing::quote;
+using penumbra::testing::slurp;
 
 class Cli : public ::testing::Test {
  protected:
@@ -64,24 +45,7 @@ class Cli : public ::testing::Test {
 
   // Runs the CLI with `args` (each quoted), capturing stdout, stderr and the exit code.
   Result run(const std::vector<std::string>& args) const {
-    std::string cmd = quote(PENUMBRA_CLI);
-    // Appended piece by piece: GCC 12 warns falsely (-Wrestrict) on "literal" + std::string&&.
-    for (const std::string& a : args) {
-      cmd += ' ';
-      cmd += quote(a);
-    }
-    const fs::path o = dir_ / "stdout.txt", e = dir_ / "stderr.txt";
-    cmd += " >";
-    cmd += quote(o.string());
-    cmd += " 2>";
-    cmd += quote(e.string());
-    cmd += " </dev/null";
-    const int raw = std::system(cmd.c_str());
-    Result r;
-    r.status = raw != -1 && WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
-    r.out = slurp(o);
-    r.err = slurp(e);
-    return r;
+    return penumbra::testing::run_cli(args, dir_);
   }
 
   // Renders the test scene to out/ with `extra` options; anything but success fails the test.

@@ -2,11 +2,14 @@
 #pragma once
 
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <atomic>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 #include <system_error>
 #include <vector>
@@ -50,5 +53,48 @@ class TestDir {
  private:
   std::filesystem::path root_;
 };
+
+// The whole content of a file ("" when it cannot be read).
+inline std::string slurp(const std::filesystem::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// Single-quoted for /bin/sh, so temporary paths with odd characters stay one word.
+inline std::string quote(const std::string& s) {
+  std::string q = "'";
+  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
+struct CliResult {
+  int status = -1;  // the exit code, or -1 when the process did not exit normally
+  std::string out, err;
+};
+
+// Runs the command line (PENUMBRA_CLI) with `args`, each quoted, capturing stdout and stderr in
+// files under `dir` and the exit code.
+inline CliResult run_cli(const std::vector<std::string>& args, const std::filesystem::path& dir) {
+  std::string cmd = quote(PENUMBRA_CLI);
+  // Appended piece by piece: GCC 12 warns falsely (-Wrestrict) on "literal" + std::string&&.
+  for (const std::string& a : args) {
+    cmd += ' ';
+    cmd += quote(a);
+  }
+  const std::filesystem::path o = dir / "stdout.txt", e = dir / "stderr.txt";
+  cmd += " >";
+  cmd += quote(o.string());
+  cmd += " 2>";
+  cmd += quote(e.string());
+  cmd += " </dev/null";
+  const int raw = std::system(cmd.c_str());
+  CliResult r;
+  r.status = raw != -1 && WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+  r.out = slurp(o);
+  r.err = slurp(e);
+  return r;
+}
 
 }  // namespace penumbra::testing

@@ -1,4 +1,5 @@
-// Linear RGB float images: the fluence a method returns and the layers a scene reads.
+// Linear RGB float images (the fluence a method returns, the layers a scene reads) and 8-bit
+// pictures.
 #pragma once
 
 #include <cstddef>
@@ -42,6 +43,13 @@ class ImageRgb {
  private:
   int w_ = 0, h_ = 0;
   std::vector<float> px_;
+};
+
+// An 8-bit sRGB picture for people (a heatmap, a montage): row-major, row 0 at the top, 3 bytes
+// per pixel.
+struct ImageRgb8 {
+  int width = 0, height = 0;
+  std::vector<unsigned char> rgb;  // width * height * 3
 };
 
 }  // namespace penumbra

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "penumbra/error.hpp"
@@ -26,6 +27,10 @@ Status write_image(const std::string& path, const ImageRgb& fluence, const Scene
 // place only when all of them succeeded.
 Status write_images(const std::vector<std::string>& paths, const ImageRgb& fluence,
                     const Scene& scene, const DisplayOptions& display = {});
+
+// Writes 8-bit pictures (heatmaps, montages) as PNG files (.png names only), all or nothing as
+// write_images does.
+Status write_pictures(const std::vector<std::pair<std::string, ImageRgb8>>& files);
 
 // Whether `path` can be written at all: its folder exists and it is not a folder itself. Lets a
 // program refuse before it spends time computing.

@@ -30,6 +30,7 @@
 #include <vector>
 
 #include "io/path_util.hpp"
+#include "penumbra/io.hpp"
 #include "penumbra/scene.hpp"
 
 namespace penumbra::io {
@@ -394,6 +395,32 @@ Status publish(const StagedFile& file) {
 
 void discard(const StagedFile& file) {
   std::remove(file.temp.c_str());
+}
+
+Status write_all(const std::vector<std::string>& paths,
+                 const std::function<Expected<StagedFile>(std::size_t)>& stage) {
+  // Targets that cannot be renamed onto are refused before anything is written.
+  for (const std::string& path : paths)
+    if (Status s = check_output(path); !s) return s;
+  std::vector<StagedFile> staged;
+  auto discard_from = [&](std::size_t first) {
+    for (std::size_t i = first; i < staged.size(); ++i) discard(staged[i]);
+  };
+  for (std::size_t i = 0; i < paths.size(); ++i) {
+    Expected<StagedFile> f = stage(i);
+    if (!f) {
+      discard_from(0);
+      return f.error();
+    }
+    staged.push_back(*f);
+  }
+  for (std::size_t i = 0; i < staged.size(); ++i) {
+    if (Status s = publish(staged[i]); !s) {
+      discard_from(i + 1);
+      return s;
+    }
+  }
+  return {};
 }
 
 Expected<RawImage> read_image(const std::string& path, int expect_width, int expect_height) {

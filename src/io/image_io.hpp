@@ -1,6 +1,8 @@
 // Internal image reading and writing (PNG through stb, EXR through OpenEXR, PFM by hand).
 #pragma once
 
+#include <cstddef>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -36,6 +38,11 @@ Expected<StagedFile> stage_png8(const std::string& path, int width, int height,
 // Renames a staged file into place (removing it if that fails); discard removes it.
 Status publish(const StagedFile& file);
 void discard(const StagedFile& file);
+
+// Writes several files all or nothing: every target is checked first (check_output), each is
+// staged by `stage(i)`, and they are renamed into place only when all of them were staged.
+Status write_all(const std::vector<std::string>& paths,
+                 const std::function<Expected<StagedFile>(std::size_t)>& stage);
 
 // Writers that stage and publish at once, so the target appears whole or not at all.
 Status write_pfm(const std::string& path, const ImageRgb& image);

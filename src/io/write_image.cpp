@@ -5,8 +5,10 @@
 #include <numbers>
 #include <string>
 #include <system_error>
+#include <utility>
 #include <vector>
 
+#include "io/display.hpp"
 #include "io/image_io.hpp"
 #include "io/path_util.hpp"
 #include "penumbra/io.hpp"
@@ -40,21 +42,7 @@ Expected<io::StagedFile> stage_display_png(const std::string& path, const ImageR
     return Error{path + ": scene layers do not match its " + std::to_string(w) + " x " +
                  std::to_string(h) + " grid"};
   }
-  const float gain = std::exp2(display.exposure);
-  const float inv_two_pi = 1.0f / (2.0f * std::numbers::pi_v<float>);
-  std::vector<unsigned char> rgb(cells * 3);
-  const float* f = fluence.data();
-  for (std::size_t i = 0; i < cells; ++i) {
-    const float a = scene.opacity[i];
-    for (std::size_t c = 0; c < 3; ++c) {
-      const std::size_t k = i * 3 + c;
-      const float m = f[k] * inv_two_pi;  // mean radiance over directions
-      // Opaque cells show what they emit and reflect; clear cells show the light passing.
-      const float shown = a * (scene.emission[k] + scene.albedo[k] * m) + (1 - a) * m;
-      rgb[k] = to_byte(io::linear_to_srgb(aces_fit(shown * gain)));
-    }
-  }
-  return io::stage_png8(path, w, h, rgb);
+  return io::stage_png8(path, w, h, io::display_rgb8(fluence, &scene, display));
 }
 
 Expected<io::StagedFile> stage_image(const std::string& path, const ImageRgb& fluence,
@@ -69,6 +57,26 @@ Expected<io::StagedFile> stage_image(const std::string& path, const ImageRgb& fl
 }
 
 }  // namespace
+
+std::vector<unsigned char> io::display_rgb8(const ImageRgb& fluence, const Scene* scene,
+                                            const DisplayOptions& display) {
+  const float gain = std::exp2(display.exposure);
+  const float inv_two_pi = 1.0f / (2.0f * std::numbers::pi_v<float>);
+  const std::size_t cells = std::size_t(fluence.width()) * fluence.height();
+  std::vector<unsigned char> rgb(cells * 3);
+  const float* f = fluence.data();
+  for (std::size_t i = 0; i < cells; ++i) {
+    const float a = scene ? scene->opacity[i] : 0.0f;
+    for (std::size_t c = 0; c < 3; ++c) {
+      const std::size_t k = i * 3 + c;
+      const float m = f[k] * inv_two_pi;  // mean radiance over directions
+      // Opaque cells show what they emit and reflect; clear cells show the light passing.
+      const float shown = scene ? a * (scene->emission[k] + scene->albedo[k] * m) + (1 - a) * m : m;
+      rgb[k] = to_byte(io::linear_to_srgb(aces_fit(shown * gain)));
+    }
+  }
+  return rgb;
+}
 
 bool is_supported_output(const std::string& path) {
   const std::string ext = io::lowercase_extension(path);
@@ -94,28 +102,21 @@ Status write_image(const std::string& path, const ImageRgb& fluence, const Scene
 
 Status write_images(const std::vector<std::string>& paths, const ImageRgb& fluence,
                     const Scene& scene, const DisplayOptions& display) {
-  // Targets that cannot be renamed onto are refused before anything is written.
-  for (const std::string& path : paths)
-    if (Status s = check_output(path); !s) return s;
-  std::vector<io::StagedFile> staged;
-  auto discard_from = [&](std::size_t first) {
-    for (std::size_t i = first; i < staged.size(); ++i) io::discard(staged[i]);
-  };
-  for (const std::string& path : paths) {
-    Expected<io::StagedFile> f = stage_image(path, fluence, scene, display);
-    if (!f) {
-      discard_from(0);
-      return f.error();
-    }
-    staged.push_back(*f);
+  return io::write_all(
+      paths, [&](std::size_t i) { return stage_image(paths[i], fluence, scene, display); });
+}
+
+Status write_pictures(const std::vector<std::pair<std::string, ImageRgb8>>& files) {
+  std::vector<std::string> paths;
+  for (const auto& [path, picture] : files) {
+    if (io::lowercase_extension(path) != ".png")
+      return Error{path + ": pictures are written as PNG (use a .png file name)"};
+    paths.push_back(path);
   }
-  for (std::size_t i = 0; i < staged.size(); ++i) {
-    if (Status s = io::publish(staged[i]); !s) {
-      discard_from(i + 1);
-      return s;
-    }
-  }
-  return {};
+  return io::write_all(paths, [&](std::size_t i) {
+    const ImageRgb8& p = files[i].second;
+    return io::stage_png8(paths[i], p.width, p.height, p.rgb);
+  });
 }
 
 Expected<ImageRgb> read_rgb_image(const std::string& path) {

@@ -1,0 +1,197 @@
+// `penumbra compare TEST REF [--scene SCENE] [--json] [--heatmap OUT.png] [--montage OUT.png]`
+#include "compare_cmd.hpp"
+
+#include <CLI/CLI.hpp>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "io/path_util.hpp"
+#include "penumbra/penumbra.hpp"
+
+namespace {
+
+constexpr int kUsage = 2;
+constexpr int kFailure = 1;
+
+int fail(int code, const std::string& message) {
+  std::cerr << "penumbra compare: " << message << "\n";
+  return code;
+}
+
+std::string size_text(int w, int h) {
+  return std::to_string(w) + "x" + std::to_string(h);
+}
+
+// A linear image: PNG holds display values (tone-mapped, sRGB), so it is refused.
+penumbra::Expected<penumbra::ImageRgb> read_linear(const std::string& path) {
+  if (penumbra::io::lowercase_extension(path) == ".png")
+    return penumbra::Error{path +
+                           ": PNG holds display-encoded values, not linear ones; compare the "
+                           ".pfm or .exr files (penumbra render -o out.pfm)"};
+  penumbra::Expected<penumbra::ImageRgb> image = penumbra::read_rgb_image(path);
+  if (!image) return image;
+  if (penumbra::Status s = penumbra::check_finite(*image, path); !s) return s.error();
+  return image;
+}
+
+// JSON has no infinity or NaN.
+nlohmann::json number_or_null(double v) {
+  return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr);
+}
+
+std::string file_name(const std::string& path) {
+  return std::filesystem::path(path).filename().string();
+}
+
+void print_table(const CompareArgs& a, const penumbra::ImageRgb& ref,
+                 const penumbra::ErrorMetrics& m) {
+  const std::uint64_t all = std::uint64_t(ref.width()) * ref.height();
+  std::printf("penumbra compare: %s against %s, %s\n", a.test.c_str(), a.reference.c_str(),
+              size_text(ref.width(), ref.height()).c_str());
+  if (a.scene.empty())
+    std::printf("  %-16s %llu (all)\n", "cells", (unsigned long long)m.cells);
+  else
+    std::printf("  %-16s %llu of %llu (not opaque in %s)\n", "cells", (unsigned long long)m.cells,
+                (unsigned long long)all, a.scene.c_str());
+  std::printf("  %-16s %.6g\n", "RMSE", m.rmse);
+  if (std::isfinite(m.relative_rmse))
+    std::printf("  %-16s %.6g (%.3g%%)\n", "relative RMSE", m.relative_rmse, 100 * m.relative_rmse);
+  else
+    std::printf("  %-16s inf (the reference mean is not positive)\n", "relative RMSE");
+  std::printf("  %-16s %.6g\n", "mean |error|", m.mean_abs);
+  std::printf("  %-16s %.6g\n", "max |error|", m.max_abs);
+  if (std::isnan(m.psnr))
+    std::printf("  %-16s n/a (the reference has no positive value)\n", "PSNR");
+  else
+    std::printf("  %-16s %.6g dB\n", "PSNR", m.psnr);  // prints "inf dB" for identical images
+  std::printf("  %-16s %+.6g (test - reference)\n", "bias", m.bias);
+  std::printf("  %-16s %.6g\n", "reference mean", m.reference_mean);
+  if (!a.heatmap.empty()) std::printf("  wrote %s\n", a.heatmap.c_str());
+  if (!a.montage.empty()) std::printf("  wrote %s\n", a.montage.c_str());
+}
+
+int compare(const CompareArgs& a) {
+  std::vector<std::string> outputs;
+  for (const std::string* out : {&a.heatmap, &a.montage}) {
+    if (out->empty()) continue;
+    if (penumbra::io::lowercase_extension(*out) != ".png")
+      return fail(kUsage, *out + ": pictures are written as PNG (use a .png file name)");
+    outputs.push_back(*out);
+  }
+  if (outputs.size() == 2 && std::filesystem::path(a.heatmap).lexically_normal() ==
+                                 std::filesystem::path(a.montage).lexically_normal())
+    return fail(kUsage, a.heatmap + ": --heatmap and --montage name the same file");
+  if (!std::isfinite(a.exposure)) return fail(kUsage, "--exposure: expected a finite number of EV");
+  // Refuse unwritable outputs before reading anything.
+  for (const std::string& out : outputs)
+    if (penumbra::Status s = penumbra::check_output(out); !s)
+      return fail(kFailure, s.error().message);
+
+  penumbra::Expected<penumbra::ImageRgb> test = read_linear(a.test);
+  if (!test) return fail(kFailure, test.error().message);
+  penumbra::Expected<penumbra::ImageRgb> ref = read_linear(a.reference);
+  if (!ref) return fail(kFailure, ref.error().message);
+  const int w = ref->width(), h = ref->height();
+  if (test->width() != w || test->height() != h)
+    return fail(kFailure, a.test + ": the image is " + size_text(test->width(), test->height()) +
+                              " but " + a.reference + " is " + size_text(w, h));
+
+  std::optional<penumbra::Scene> scene;
+  std::vector<std::uint8_t> mask;
+  if (!a.scene.empty()) {
+    penumbra::Expected<penumbra::SceneDesc> desc = penumbra::load_scene(a.scene);
+    if (!desc) return fail(kFailure, desc.error().message);
+    // Checked before rasterising, which for a large scene takes a while.
+    if (desc->width != w || desc->height != h)
+      return fail(kFailure, a.scene + ": the scene is " + size_text(desc->width, desc->height) +
+                                " but the images are " + size_text(w, h));
+    penumbra::Expected<penumbra::Scene> built = penumbra::build_scene(*desc);
+    if (!built) return fail(kFailure, built.error().message);
+    scene = std::move(*built);
+    mask = penumbra::non_opaque_cells(*scene);
+  }
+  const std::vector<std::uint8_t>* counted = scene ? &mask : nullptr;
+
+  penumbra::Expected<penumbra::ErrorMetrics> m = penumbra::compare_images(*test, *ref, counted);
+  if (!m) return fail(kFailure, (scene ? a.scene + ": " : "") + m.error().message);
+
+  std::vector<std::pair<std::string, penumbra::ImageRgb8>> pictures;
+  if (!a.heatmap.empty()) {
+    penumbra::Expected<penumbra::ImageRgb8> p = penumbra::error_heatmap(*test, *ref, counted);
+    if (!p) return fail(kFailure, a.heatmap + ": " + p.error().message);
+    pictures.emplace_back(a.heatmap, std::move(*p));
+  }
+  if (!a.montage.empty()) {
+    penumbra::MontageOptions o;
+    o.test_label = "test: " + file_name(a.test);
+    o.reference_label = "reference: " + file_name(a.reference);
+    o.display.exposure = a.exposure;
+    o.scene = scene ? &*scene : nullptr;
+    penumbra::Expected<penumbra::ImageRgb8> p =
+        penumbra::comparison_montage(*test, *ref, counted, o);
+    if (!p) return fail(kFailure, a.montage + ": " + p.error().message);
+    pictures.emplace_back(a.montage, std::move(*p));
+  }
+  // Both pictures or neither.
+  if (penumbra::Status s = penumbra::write_pictures(pictures); !s)
+    return fail(kFailure, s.error().message);
+
+  if (a.json) {
+    nlohmann::json j = {
+        {"test", a.test},
+        {"reference", a.reference},
+        {"scene", a.scene.empty() ? nlohmann::json(nullptr) : nlohmann::json(a.scene)},
+        {"width", w},
+        {"height", h},
+        {"cells", m->cells},
+        {"rmse", m->rmse},
+        {"relative_rmse", number_or_null(m->relative_rmse)},
+        {"mean_abs", m->mean_abs},
+        {"max_abs", m->max_abs},
+        {"psnr", number_or_null(m->psnr)},
+        {"bias", m->bias},
+        {"reference_mean", m->reference_mean}};
+    std::cout << j.dump(2) << "\n";
+  } else if (!a.quiet) {
+    print_table(a, *ref, *m);
+  }
+  return 0;
+}
+
+}  // namespace
+
+bool CompareCommand::parsed() const {
+  return app->parsed();
+}
+
+std::unique_ptr<CompareCommand> add_compare_command(CLI::App& app) {
+  auto cmd = std::make_unique<CompareCommand>();
+  CompareArgs& a = cmd->args;
+  CLI::App* c = app.add_subcommand(
+      "compare", "Error metrics of a linear image (PFM/EXR) against a reference, with pictures");
+  c->add_option("test", a.test, "The image to judge (.pfm or .exr)")->required();
+  c->add_option("reference", a.reference, "The reference image, of the same size")->required();
+  c->add_option("--scene", a.scene, "Count only the cells this scene leaves not opaque");
+  c->add_flag("--json", a.json, "Print one JSON object with the metrics");
+  c->add_option("--heatmap", a.heatmap, "Write the signed error with a colour bar (.png)");
+  c->add_option("--montage", a.montage, "Write test, reference and error side by side (.png)");
+  c->add_option("--exposure", a.exposure, "Montage exposure in EV")->capture_default_str();
+  c->add_flag("-q,--quiet", a.quiet, "Print nothing on success");
+  cmd->app = c;
+  return cmd;
+}
+
+int run_compare(const CompareArgs& args) {
+  try {
+    return compare(args);
+  } catch (const std::exception& e) {  // the library reports errors as values; this is a bug
+    return fail(kFailure, std::string("internal error: ") + e.what());
+  }
+}

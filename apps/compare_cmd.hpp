@@ -1,0 +1,29 @@
+// `penumbra compare`: error metrics of one linear image against another, with pictures.
+#pragma once
+
+#include <memory>
+#include <string>
+
+namespace CLI {
+class App;
+}
+
+struct CompareArgs {
+  std::string test, reference, scene;
+  std::string heatmap, montage;  // empty: not written
+  float exposure = 0;            // EV, for the montage's test and reference panels
+  bool json = false;
+  bool quiet = false;
+};
+
+struct CompareCommand {
+  CLI::App* app = nullptr;
+  CompareArgs args;
+  bool parsed() const;
+};
+
+// Registers the subcommand on `app`; its options write into the returned command's args.
+std::unique_ptr<CompareCommand> add_compare_command(CLI::App& app);
+
+// Exit code: 0 success, 1 bad input or failure, 2 usage error.
+int run_compare(const CompareArgs& args);

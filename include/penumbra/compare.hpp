@@ -1,0 +1,76 @@
+// Comparing two linear images (a result against a reference): error metrics, an error heatmap
+// and a side-by-side montage. See docs/QUALITY.md, "Comparing two images".
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "penumbra/error.hpp"
+#include "penumbra/image.hpp"
+#include "penumbra/io.hpp"
+#include "penumbra/scene.hpp"
+
+namespace penumbra {
+
+// Errors of TEST against REF. Every value is taken over the 3 channels of every counted cell,
+// so n = 3 * cells values, with e = TEST - REF per value.
+struct ErrorMetrics {
+  std::uint64_t cells = 0;    // cells counted
+  double rmse = 0;            // sqrt(sum e^2 / n)
+  double relative_rmse = 0;   // rmse / reference_mean; 0 when rmse is 0, +infinity when rmse > 0
+                              // and reference_mean <= 0
+  double mean_abs = 0;        // sum |e| / n
+  double max_abs = 0;         // max |e|
+  double psnr = 0;            // 20 log10(peak / rmse) dB, peak = the largest REF value counted;
+                              // +infinity when rmse is 0, NaN when rmse > 0 and peak <= 0
+  double bias = 0;            // sum e / n: > 0 when TEST is brighter on average
+  double reference_mean = 0;  // sum REF / n
+};
+
+// A mask of the cells of `scene` that are not opaque (opacity < 1): 1 counted, 0 not. Cells
+// inside walls hold no meaningful fluence, so comparisons usually leave them out.
+std::vector<std::uint8_t> non_opaque_cells(const Scene& scene);
+
+// Refuses an image holding NaN or infinity; the message starts with `name` and gives the first
+// such cell.
+Status check_finite(const ImageRgb& image, const std::string& name);
+
+// Metrics of `test` against `ref` over the cells where `mask` is non-zero (all cells when null).
+// Refused (Error): images of different sizes, a mask of another size, non-finite values, no cell
+// counted. Sums are in double, in row order: the same inputs give the same bits.
+Expected<ErrorMetrics> compare_images(const ImageRgb& test, const ImageRgb& ref,
+                                      const std::vector<std::uint8_t>* mask = nullptr);
+
+// Layout shared by the pictures: each cell is drawn as a `zoom` x `zoom` block, zoom =
+// ceil(256 / width) for images narrower than 256 cells (so the labels stay legible), else 1;
+// an image that would make a picture wider or taller than kMaxGridSide pixels is instead shrunk
+// by an integer factor (box average of the displayed colours). Text (stb_easy_font) is drawn
+// at 2 pixels per font unit, and larger with wider panels, so a big picture stays legible when
+// viewed fitted to a screen.
+//
+// error_heatmap: the signed error of each counted cell, the mean of its 3 channels' TEST - REF,
+// on a diverging scale (blue below, white at 0, red above) from -S to +S, S = the largest
+// |signed error| of a counted cell (so not max_abs, which is per channel); cells not counted are
+// mid grey. A label above the map; to its right a vertical colour bar, titled "S = max abs",
+// with ticks at +S, 0 and -S (values printed with %+.3g). Refused as compare_images refuses.
+Expected<ImageRgb8> error_heatmap(const ImageRgb& test, const ImageRgb& ref,
+                                  const std::vector<std::uint8_t>* mask = nullptr);
+
+struct MontageOptions {
+  std::string test_label = "test";            // above the test panel (a file name, say)
+  std::string reference_label = "reference";  // above the reference panel
+  DisplayOptions display;                     // exposure of the test and reference panels
+  const Scene* scene = nullptr;  // optional, of the images' size: its opaque cells show what they
+                                 // emit and reflect, as in write_image's PNG
+};
+
+// Three panels side by side: TEST and REF tone-mapped alike (as write_image's PNG), then the
+// error heatmap with its colour bar; a label above each panel and the metrics (RMSE, relative
+// RMSE, PSNR, bias, ...) below. Refused as compare_images refuses, and when the scene's size
+// differs from the images'.
+Expected<ImageRgb8> comparison_montage(const ImageRgb& test, const ImageRgb& ref,
+                                       const std::vector<std::uint8_t>* mask = nullptr,
+                                       const MontageOptions& options = {});
+
+}  // namespace penumbra

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "compare_cmd.hpp"
+#include "quality_cmd.hpp"
 #include "core/timer.hpp"
 #include "penumbra/penumbra.hpp"
 
@@ -328,6 +329,7 @@ int main(int argc, char** argv) {
   render->add_flag("--json", a.json, "Print one JSON object with timings, memory and parameters");
   render->add_flag("-q,--quiet", a.quiet, "Print nothing on success");
   const std::unique_ptr<CompareCommand> compare = add_compare_command(app);
+  const std::unique_ptr<QualityCommand> quality = add_quality_command(app);
 
   try {
     app.parse(argc, argv);
@@ -350,5 +352,6 @@ int main(int argc, char** argv) {
     }
   }
   if (compare->parsed()) return run_compare(compare->args);
+  if (quality->parsed()) return run_quality(quality->args);
   return kUsage;
 }

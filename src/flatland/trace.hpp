@@ -100,7 +100,9 @@ inline void walk_cells(const Medium& m, float ox, float oy, float dx, float dy, 
       // Empty cell: skip to the exit of an empty 8x8 block or by the distance-field jump
       // (see Medium::step), whichever goes further.
       float skip_to = step < 0 ? t - step : t;
-      if (blocks) {
+      // A block skip never exceeds the block's diagonal (8 sqrt 2 cells): skip the lookup when
+      // the jump already goes further.
+      if (blocks && step > -11.4f) {
         const int bx = ix >> kBlockShift, by = iy >> kBlockShift;
         if (m.block_empty[std::size_t(by) * m.blocks_x + bx]) {
           const int last_x = dx > 0 ? std::min(((bx + 1) << kBlockShift) - 1, m.width - 1)

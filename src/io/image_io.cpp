@@ -528,4 +528,16 @@ Status write_png8(const std::string& path, int width, int height,
   return publish_staged(stage_png8(path, width, height, rgb));
 }
 
+Expected<StagedFile> stage_text(const std::string& path, const std::string& text) {
+  return stage(path, [&](std::FILE* f) {
+    return std::fwrite(text.data(), 1, text.size(), f) == text.size();
+  });
+}
+
+Status write_text_files(const std::vector<std::pair<std::string, std::string>>& files) {
+  std::vector<std::string> paths;
+  for (const auto& [path, text] : files) paths.push_back(path);
+  return write_all(paths, [&](std::size_t i) { return stage_text(files[i].first, files[i].second); });
+}
+
 }  // namespace penumbra::io

@@ -4,6 +4,7 @@
 #include <cstddef>
 #include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "penumbra/error.hpp"
@@ -43,6 +44,10 @@ void discard(const StagedFile& file);
 // staged by `stage(i)`, and they are renamed into place only when all of them were staged.
 Status write_all(const std::vector<std::string>& paths,
                  const std::function<Expected<StagedFile>(std::size_t)>& stage);
+
+// Text files (CSV, markdown, SVG), staged like the images; several at once, all or nothing.
+Expected<StagedFile> stage_text(const std::string& path, const std::string& text);
+Status write_text_files(const std::vector<std::pair<std::string, std::string>>& files);
 
 // Writers that stage and publish at once, so the target appears whole or not at all.
 Status write_pfm(const std::string& path, const ImageRgb& image);

@@ -1,0 +1,158 @@
+#include "quality_cmd.hpp"
+
+#include <unistd.h>
+
+#include <CLI/CLI.hpp>
+#include <cinttypes>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+
+#include "analysis/study.hpp"
+#include "io/image_io.hpp"
+#include "penumbra/penumbra.hpp"
+
+namespace fs = std::filesystem;
+using namespace penumbra;
+
+bool QualityCommand::parsed() const { return app->parsed(); }
+
+std::unique_ptr<QualityCommand> add_quality_command(CLI::App& app) {
+  auto cmd = std::make_unique<QualityCommand>();
+  QualityArgs& a = cmd->args;
+  cmd->app = app.add_subcommand(
+      "bench-quality",
+      "Error against time of every method on a scene, against a converged path-traced reference");
+  CLI::App* c = cmd->app;
+  c->add_option("scene", a.scene, "Scene file (JSON, format 1)")->required();
+  c->add_option("-o,--out", a.out, "Folder for quality.csv/.md/.svg/.png and rc_vs_reference.png")
+      ->capture_default_str();
+  c->add_option("--cache", a.cache, "Folder for cached references (default: <out>/cache)");
+  c->add_option("--bounces", a.bounces, "Diffuse bounces for every method")
+      ->check(CLI::Range(1, 64))
+      ->capture_default_str();
+  c->add_option("--reference-spp", a.reference_spp, "Samples per cell of the reference")
+      ->check(CLI::Range(16, 1 << 24))
+      ->capture_default_str();
+  c->add_option("--max-spp", a.max_spp, "Largest sample count on the path-tracer curves")
+      ->check(CLI::Range(4, 1 << 20))
+      ->capture_default_str();
+  c->add_option("--threads", a.threads, "Worker threads (0: all cores)")
+      ->check(CLI::Range(0, 1024))
+      ->capture_default_str();
+  c->add_flag("--quick", a.quick, "Fewer configurations (curves up to 16 spp, two cascade runs)");
+  return cmd;
+}
+
+namespace {
+
+int fail(const std::string& what) {
+  std::cerr << "penumbra bench-quality: " << what << "\n";
+  return 1;
+}
+
+}  // namespace
+
+int run_quality(const QualityArgs& a) {
+  Expected<SceneDesc> desc = load_scene(a.scene);
+  if (!desc) return fail(desc.error().message);
+  RenderOptions probe;
+  probe.threads = a.threads;
+  if (Status s = check_memory(desc->width, desc->height, probe, true); !s)
+    return fail(a.scene + ": " + s.error().message);
+  Expected<Scene> scene = build_scene(*desc);
+  if (!scene) return fail(scene.error().message);
+  std::error_code ec;
+  const std::string cache = a.cache.empty() ? (fs::path(a.out) / "cache").string() : a.cache;
+  for (const std::string& dir : {a.out, cache})
+    if (fs::create_directories(dir, ec); ec)
+      return fail(dir + ": cannot create the folder: " + ec.message());
+
+  // The reference: the path tracer with NEE, cached under a name that holds everything it
+  // depends on. Its seed differs from the curves' so their errors are independent of its own.
+  study::Reference ref;
+  ref.spp = a.reference_spp;
+  char name[128];
+  std::snprintf(name, sizeof name, "pt-nee-%016" PRIx64 "-b%d-%dspp.pfm", study::scene_hash(*scene),
+                a.bounces, a.reference_spp);
+  ref.path = (fs::path(cache) / name).string();
+  ImageRgb reference;
+  if (fs::exists(ref.path)) {
+    Expected<io::RawImage> raw = io::read_image(ref.path, scene->width, scene->height);
+    if (!raw || raw->channels != 3) return fail(ref.path + ": unreadable cached reference; delete it");
+    reference = ImageRgb(scene->width, scene->height, std::move(raw->pixels));
+    std::printf("reference: %s (cached)\n", ref.path.c_str());
+  } else {
+    RenderOptions o;
+    o.method = Method::pt;
+    o.pt.nee = true;
+    o.pt.spp = a.reference_spp;
+    o.pt.seed = 0x5eed;
+    o.bounces = a.bounces;
+    o.threads = a.threads;
+    if (isatty(STDERR_FILENO))
+      o.progress = [](const RenderProgress& p) {
+        std::fprintf(stderr, "\rreference: %llu/%llu spp, %.0f s", (unsigned long long)p.samples,
+                     (unsigned long long)p.target, p.elapsed_s);
+      };
+    std::printf("reference: rendering %d spp with NEE...\n", a.reference_spp);
+    std::fflush(stdout);
+    Expected<RenderResult> r = render(*scene, o);
+    if (isatty(STDERR_FILENO)) std::fprintf(stderr, "\n");
+    if (!r) return fail(a.scene + ": " + r.error().message);
+    if (Status s = io::write_pfm(ref.path, r->fluence); !s) return fail(s.error().message);
+    ref.time_ms = r->time_ms;
+    reference = std::move(r->fluence);
+    std::printf("reference: %s (%.1f s)\n", ref.path.c_str(), ref.time_ms / 1e3);
+  }
+
+  const std::vector<std::uint8_t> mask = non_opaque_cells(*scene);
+  std::vector<study::Row> rows;
+  RenderResult rc_default;
+  for (const study::Run& run : study::default_runs(a.bounces, a.max_spp, a.quick)) {
+    RenderOptions o = run.options;
+    o.threads = a.threads;
+    Expected<RenderResult> r = render(*scene, o);
+    if (!r) return fail(a.scene + ": " + run.label + ": " + r.error().message);
+    Expected<ErrorMetrics> m = compare_images(r->fluence, reference, &mask);
+    if (!m) return fail(run.label + ": " + m.error().message);
+    study::Row row{run, r->time_ms, r->samples, *m};
+    if (run.label == "rc (defaults)") rc_default = std::move(*r);
+    std::printf("  %-24s %9.0f ms  rel. RMSE %8.4f%%  PSNR %5.1f dB\n", run.label.c_str(),
+                row.time_ms, 100 * m->relative_rmse, m->psnr);
+    std::fflush(stdout);
+    rows.push_back(row);
+  }
+  study::add_equal_error_times(rows);
+  // The reference's own error, extrapolated along the NEE curve from its last point.
+  const double k = study::convergence_order(rows, "pt nee");
+  for (const study::Row& r : rows)
+    if (r.run.curve == "pt nee" && std::isfinite(k))
+      ref.estimated_rel =
+          r.error.relative_rmse * std::pow(double(r.samples) / a.reference_spp, k);
+
+  const fs::path out(a.out);
+  const std::string title = fs::path(a.scene).filename().string() + ": error against time";
+  const std::vector<std::pair<std::string, std::string>> files = {
+      {(out / "quality.csv").string(), study::to_csv(rows)},
+      {(out / "quality.md").string(), study::to_markdown(rows, a.scene, ref)},
+      {(out / "quality.svg").string(), study::to_svg(rows, title)}};
+  if (Status s = io::write_text_files(files); !s) return fail(s.error().message);
+  for (const auto& [path, text] : files) std::printf("wrote %s\n", path.c_str());
+  // Pictures to look at: the plot, and the default cascades against the reference.
+  std::vector<std::pair<std::string, ImageRgb8>> pictures = {
+      {(out / "quality.png").string(), study::to_png_plot(rows, title)}};
+  if (rc_default.fluence.size() > 0) {
+    MontageOptions mo;
+    mo.test_label = "rc (defaults)";
+    mo.reference_label = "path tracer + NEE, " + std::to_string(a.reference_spp) + " spp";
+    mo.scene = &*scene;
+    Expected<ImageRgb8> montage = comparison_montage(rc_default.fluence, reference, &mask, mo);
+    if (!montage) return fail(montage.error().message);
+    pictures.push_back({(out / "rc_vs_reference.png").string(), std::move(*montage)});
+  }
+  if (Status s = write_pictures(pictures); !s) return fail(s.error().message);
+  for (const auto& [path, picture] : pictures) std::printf("wrote %s\n", path.c_str());
+  return 0;
+}

@@ -1,0 +1,326 @@
+#include "analysis/study.hpp"
+
+#include "analysis/text.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <limits>
+#include <sstream>
+
+namespace penumbra::study {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+std::string format(const char* fmt, double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, fmt, v);
+  return buf;
+}
+
+std::string percent(double v) {
+  if (!std::isfinite(v)) return "n/a";
+  return format(v < 0.001 ? "%.3f%%" : v < 0.1 ? "%.2f%%" : "%.1f%%", 100 * v);
+}
+
+std::vector<Row> curve_rows(const std::vector<Row>& rows, const std::string& curve) {
+  std::vector<Row> out;
+  for (const Row& r : rows)
+    if (r.run.curve == curve) out.push_back(r);
+  std::sort(out.begin(), out.end(), [](const Row& a, const Row& b) { return a.samples < b.samples; });
+  return out;
+}
+
+}  // namespace
+
+std::vector<Run> default_runs(int bounces, int max_spp, bool quick) {
+  std::vector<Run> runs;
+  RenderOptions base;
+  base.bounces = bounces;
+  for (bool nee : {false, true})
+    for (int spp = 1; spp <= max_spp; spp *= 4) {
+      if (quick && spp > 16) break;
+      RenderOptions o = base;
+      o.method = Method::pt;
+      o.pt.spp = spp;
+      o.pt.nee = nee;
+      std::string label = nee ? "pt --nee " : "pt ";
+      label += std::to_string(spp);
+      label += " spp";
+      runs.push_back({label, nee ? "pt nee" : "pt", o});
+    }
+  auto rc = [&](const std::string& label, auto&& set) {
+    RenderOptions o = base;
+    set(o.rc);
+    runs.push_back({label, "", o});
+  };
+  rc("rc (defaults)", [](RcOptions&) {});
+  rc("rc --fix none", [](RcOptions& r) { r.fix = MergeFix::none; });
+  if (quick) return runs;
+  rc("rc --fix nearest", [](RcOptions& r) { r.fix = MergeFix::nearest; });
+  rc("rc --interval 2", [](RcOptions& r) { r.interval = 2; });
+  rc("rc --directions 8", [](RcOptions& r) { r.directions = 8; });
+  rc("rc --probe-spacing 2", [](RcOptions& r) { r.probe_spacing = 2; });
+  rc("rc --preaverage", [](RcOptions& r) { r.preaverage = true; });
+  return runs;
+}
+
+double equal_error_time(const std::vector<Row>& curve, double e, bool& extrapolated) {
+  extrapolated = false;
+  if (curve.size() < 2 || !(e > 0)) return kNaN;
+  // The segment whose error range holds e; else the end segment on e's side (the curve runs
+  // from fast and noisy to slow and accurate).
+  std::size_t k = 0;
+  bool found = false;
+  for (std::size_t i = 0; i + 1 < curve.size() && !found; ++i) {
+    const double a = curve[i].error.relative_rmse, b = curve[i + 1].error.relative_rmse;
+    if (e <= std::max(a, b) && e >= std::min(a, b)) k = i, found = true;
+  }
+  if (!found) {
+    extrapolated = true;
+    k = e < curve.back().error.relative_rmse ? curve.size() - 2 : 0;
+  }
+  const double x0 = std::log(curve[k].time_ms), x1 = std::log(curve[k + 1].time_ms);
+  const double y0 = std::log(curve[k].error.relative_rmse),
+               y1 = std::log(curve[k + 1].error.relative_rmse);
+  if (y1 == y0) return curve[k].time_ms;
+  return std::exp(x0 + (std::log(e) - y0) * (x1 - x0) / (y1 - y0));
+}
+
+void add_equal_error_times(std::vector<Row>& rows) {
+  const std::vector<Row> curve = curve_rows(rows, "pt nee");
+  for (Row& r : rows) r.pt_equal_time_ms = equal_error_time(curve, r.error.relative_rmse, r.extrapolated);
+}
+
+double convergence_order(const std::vector<Row>& rows, const std::string& curve) {
+  double sx = 0, sy = 0, sxx = 0, sxy = 0;
+  int n = 0;
+  for (const Row& r : rows) {
+    if (r.run.curve != curve || r.samples == 0 || !(r.error.relative_rmse > 0)) continue;
+    const double x = std::log(double(r.samples)), y = std::log(r.error.relative_rmse);
+    sx += x, sy += y, sxx += x * x, sxy += x * y, ++n;
+  }
+  if (n < 2 || n * sxx == sx * sx) return kNaN;
+  return -(n * sxy - sx * sy) / (n * sxx - sx * sx);
+}
+
+std::string to_csv(const std::vector<Row>& rows) {
+  std::ostringstream s;
+  s << "label,curve,method,spp,time_ms,rmse,relative_rmse,mean_abs,max_abs,psnr,bias,"
+       "pt_equal_time_ms,extrapolated\n";
+  for (const Row& r : rows) {
+    char buf[512];
+    std::snprintf(buf, sizeof buf, "\"%s\",%s,%s,%llu,%.3f,%.6g,%.6g,%.6g,%.6g,%.4f,%.6g,%.3f,%d\n",
+                  r.run.label.c_str(), r.run.curve.c_str(), to_string(r.run.options.method),
+                  (unsigned long long)r.samples, r.time_ms, r.error.rmse, r.error.relative_rmse,
+                  r.error.mean_abs, r.error.max_abs, r.error.psnr, r.error.bias,
+                  r.pt_equal_time_ms, r.extrapolated ? 1 : 0);
+    s << buf;
+  }
+  return s.str();
+}
+
+std::string to_markdown(const std::vector<Row>& rows, const std::string& scene,
+                        const Reference& ref) {
+  std::ostringstream s;
+  s << "Scene `" << scene << "`; reference: path tracer with NEE, " << ref.spp
+    << " samples per cell (`" << ref.path << "`), its own relative RMSE estimated at "
+    << percent(ref.estimated_rel) << " by extrapolating the NEE curve.\n\n";
+  s << "| configuration | time (ms) | rel. RMSE | PSNR (dB) | bias | max abs. error "
+       "| PT+NEE time at equal error (ms) | speed-up |\n";
+  s << "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n";
+  for (const Row& r : rows) {
+    const bool has = std::isfinite(r.pt_equal_time_ms);
+    std::string equal = "n/a";
+    if (has) {
+      equal = r.extrapolated ? "~" : "";
+      equal += format("%.0f", r.pt_equal_time_ms);
+    }
+    s << "| " << r.run.label << " | " << format("%.0f", r.time_ms) << " | "
+      << percent(r.error.relative_rmse) << " | " << format("%.1f", r.error.psnr) << " | "
+      << format("%+.3g", r.error.bias) << " | " << format("%.3g", r.error.max_abs) << " | "
+      << equal
+      << " | " << (has ? format("%.2gx", r.pt_equal_time_ms / r.time_ms) : "n/a") << " |\n";
+  }
+  const double k = convergence_order(rows, "pt"), kn = convergence_order(rows, "pt nee");
+  s << "\nPath tracer convergence (fitted error ~ spp^-k): k = " << format("%.2f", k)
+    << " plain, " << format("%.2f", kn) << " with NEE (k = 0.5 is the Monte Carlo rate).\n";
+  return s.str();
+}
+
+namespace {
+
+// Where a plot puts things: log-log axes over whole decades that hold every row, the curves and
+// the single points with a legend column on the right. Shared by the SVG and the PNG.
+struct Plot {
+  static constexpr double W = 760, H = 480, left = 70, right = 230, top = 40, bottom = 50;
+  double x0 = 0, x1 = 1, y0 = -2, y1 = 0;
+  double px(double t) const { return left + (std::log10(t) - x0) / (x1 - x0) * (W - left - right); }
+  double py(double e) const { return top + (y1 - std::log10(e)) / (y1 - y0) * (H - top - bottom); }
+  struct Series {
+    std::string name, colour;
+    bool line;
+    std::vector<std::pair<double, double>> points;  // pixel positions
+  };
+  std::vector<Series> series;
+};
+
+bool plottable(const Row& r) { return r.time_ms > 0 && r.error.relative_rmse > 0; }
+
+Plot layout(const std::vector<Row>& rows) {
+  Plot p;
+  double tmin = INFINITY, tmax = 0, emin = INFINITY, emax = 0;
+  for (const Row& r : rows) {
+    if (!plottable(r)) continue;
+    tmin = std::min(tmin, r.time_ms), tmax = std::max(tmax, r.time_ms);
+    emin = std::min(emin, r.error.relative_rmse), emax = std::max(emax, r.error.relative_rmse);
+  }
+  if (!(tmax > 0)) tmin = 1, tmax = 10, emin = 0.01, emax = 1;
+  p.x0 = std::floor(std::log10(tmin)), p.x1 = std::max(p.x0 + 1, std::ceil(std::log10(tmax)));
+  p.y0 = std::floor(std::log10(emin)), p.y1 = std::max(p.y0 + 1, std::ceil(std::log10(emax)));
+  const std::pair<const char*, const char*> curves[] = {{"pt", "#1f77b4"}, {"pt nee", "#ff7f0e"}};
+  const char* names[] = {"path tracer", "path tracer + NEE"};
+  for (int c = 0; c < 2; ++c) {
+    Plot::Series s{names[c], curves[c].second, true, {}};
+    for (const Row& r : curve_rows(rows, curves[c].first))
+      if (plottable(r)) s.points.push_back({p.px(r.time_ms), p.py(r.error.relative_rmse)});
+    if (!s.points.empty()) p.series.push_back(s);
+  }
+  static const char* palette[] = {"#2ca02c", "#d62728", "#9467bd", "#8c564b",
+                                  "#e377c2", "#7f7f7f", "#bcbd22", "#17becf"};
+  int k = 0;
+  for (const Row& r : rows)
+    if (r.run.curve.empty() && plottable(r))
+      p.series.push_back({r.run.label, palette[k++ % 8], false,
+                          {{p.px(r.time_ms), p.py(r.error.relative_rmse)}}});
+  return p;
+}
+
+analysis::Colour parse_colour(const std::string& hex) {
+  const unsigned v = unsigned(std::stoul(hex.substr(1), nullptr, 16));
+  return {static_cast<unsigned char>(v >> 16), static_cast<unsigned char>(v >> 8),
+          static_cast<unsigned char>(v)};
+}
+
+}  // namespace
+
+std::string to_svg(const std::vector<Row>& rows, const std::string& title) {
+  const Plot p = layout(rows);
+  std::ostringstream s;
+  s << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << p.W << "\" height=\"" << p.H
+    << "\" font-family=\"sans-serif\" font-size=\"12\">\n"
+    << "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n"
+    << "<text x=\"" << p.left << "\" y=\"24\" font-size=\"15\">" << title << "</text>\n";
+  for (double d = p.x0; d <= p.x1; ++d) {
+    const double x = p.px(std::pow(10, d));
+    s << "<line x1=\"" << x << "\" y1=\"" << p.top << "\" x2=\"" << x << "\" y2=\""
+      << p.H - p.bottom << "\" stroke=\"#ddd\"/>\n<text x=\"" << x << "\" y=\""
+      << p.H - p.bottom + 16 << "\" text-anchor=\"middle\">" << format("%g", std::pow(10, d))
+      << "</text>\n";
+  }
+  for (double d = p.y0; d <= p.y1; ++d) {
+    const double y = p.py(std::pow(10, d));
+    s << "<line x1=\"" << p.left << "\" y1=\"" << y << "\" x2=\"" << p.W - p.right << "\" y2=\""
+      << y << "\" stroke=\"#ddd\"/>\n<text x=\"" << p.left - 6 << "\" y=\"" << y + 4
+      << "\" text-anchor=\"end\">" << format("%g%%", 100 * std::pow(10, d)) << "</text>\n";
+  }
+  s << "<rect x=\"" << p.left << "\" y=\"" << p.top << "\" width=\"" << p.W - p.left - p.right
+    << "\" height=\"" << p.H - p.top - p.bottom << "\" fill=\"none\" stroke=\"#333\"/>\n"
+    << "<text x=\"" << (p.left + p.W - p.right) / 2 << "\" y=\"" << p.H - 12
+    << "\" text-anchor=\"middle\">computation time (ms)</text>\n"
+    << "<text transform=\"translate(18," << (p.top + p.H - p.bottom) / 2
+    << ") rotate(-90)\" text-anchor=\"middle\">relative RMSE against the reference</text>\n";
+  double legend_y = p.top + 10;
+  for (const Plot::Series& c : p.series) {
+    if (c.line) {
+      s << "<polyline fill=\"none\" stroke=\"" << c.colour << "\" stroke-width=\"2\" points=\"";
+      for (auto [x, y] : c.points) s << x << "," << y << " ";
+      s << "\"/>\n";
+      for (auto [x, y] : c.points)
+        s << "<circle cx=\"" << x << "\" cy=\"" << y << "\" r=\"3\" fill=\"" << c.colour
+          << "\"/>\n";
+    } else {
+      s << "<rect x=\"" << c.points[0].first - 4 << "\" y=\"" << c.points[0].second - 4
+        << "\" width=\"8\" height=\"8\" fill=\"" << c.colour << "\"/>\n";
+    }
+    s << "<rect x=\"" << p.W - p.right + 14 << "\" y=\"" << legend_y - 8
+      << "\" width=\"14\" height=\"8\" fill=\"" << c.colour << "\"/><text x=\""
+      << p.W - p.right + 34 << "\" y=\"" << legend_y << "\">" << c.name << "</text>\n";
+    legend_y += 18;
+  }
+  s << "</svg>\n";
+  return s.str();
+}
+
+ImageRgb8 to_png_plot(const std::vector<Row>& rows, const std::string& title) {
+  const Plot p = layout(rows);
+  ImageRgb8 img{int(p.W), int(p.H), std::vector<unsigned char>(std::size_t(p.W * p.H * 3), 255)};
+  const analysis::Colour grid{221, 221, 221}, ink{40, 40, 40};
+  auto line = [&](double ax, double ay, double bx, double by, analysis::Colour c, int thick) {
+    const int n = int(std::max(std::abs(bx - ax), std::abs(by - ay))) + 1;
+    for (int i = 0; i <= n; ++i) {
+      const double f = double(i) / n;
+      analysis::fill_rect(img, int(ax + f * (bx - ax)) - thick / 2, int(ay + f * (by - ay)) - thick / 2,
+                          thick, thick, c);
+    }
+  };
+  const int scale = 2, half = analysis::line_height(scale) / 2;
+  analysis::draw_text(img, int(p.left), 10, title, ink, scale);
+  for (double d = p.x0; d <= p.x1; ++d) {
+    const double x = p.px(std::pow(10, d));
+    line(x, p.top, x, p.H - p.bottom, grid, 1);
+    const std::string label = format("%g", std::pow(10, d));
+    analysis::draw_text(img, int(x) - analysis::text_width(label, scale) / 2,
+                        int(p.H - p.bottom) + 6, label, ink, scale);
+  }
+  for (double d = p.y0; d <= p.y1; ++d) {
+    const double y = p.py(std::pow(10, d));
+    line(p.left, y, p.W - p.right, y, grid, 1);
+    const std::string label = format("%g%%", 100 * std::pow(10, d));
+    analysis::draw_text(img, int(p.left) - 6 - analysis::text_width(label, scale), int(y) - half,
+                        label, ink, scale);
+  }
+  line(p.left, p.top, p.W - p.right, p.top, ink, 1);
+  line(p.left, p.H - p.bottom, p.W - p.right, p.H - p.bottom, ink, 1);
+  line(p.left, p.top, p.left, p.H - p.bottom, ink, 1);
+  line(p.W - p.right, p.top, p.W - p.right, p.H - p.bottom, ink, 1);
+  const std::string xlabel = "computation time (ms); y: relative RMSE";
+  analysis::draw_text(img, int((p.left + p.W - p.right) / 2) - analysis::text_width(xlabel, scale) / 2,
+                      int(p.H) - 22, xlabel, ink, scale);
+  int legend_y = int(p.top) + 4;
+  for (const Plot::Series& c : p.series) {
+    const analysis::Colour colour = parse_colour(c.colour);
+    if (c.line) {
+      for (std::size_t i = 0; i + 1 < c.points.size(); ++i)
+        line(c.points[i].first, c.points[i].second, c.points[i + 1].first, c.points[i + 1].second,
+             colour, 2);
+      for (auto [x, y] : c.points) analysis::fill_rect(img, int(x) - 3, int(y) - 3, 7, 7, colour);
+    } else {
+      analysis::fill_rect(img, int(c.points[0].first) - 4, int(c.points[0].second) - 4, 9, 9, colour);
+    }
+    analysis::fill_rect(img, int(p.W - p.right) + 12, legend_y + 2, 14, 8, colour);
+    analysis::draw_text(img, int(p.W - p.right) + 32, legend_y, c.name, ink, scale);
+    legend_y += analysis::line_height(scale) + 4;
+  }
+  return img;
+}
+
+std::uint64_t scene_hash(const Scene& scene) {
+  std::uint64_t h = 1469598103934665603ull;  // FNV-1a
+  auto bytes = [&](const void* p, std::size_t n) {
+    const unsigned char* c = static_cast<const unsigned char*>(p);
+    for (std::size_t i = 0; i < n; ++i) h = (h ^ c[i]) * 1099511628211ull;
+  };
+  bytes(&scene.width, sizeof scene.width);
+  bytes(&scene.height, sizeof scene.height);
+  bytes(&scene.environment, sizeof scene.environment);
+  bytes(scene.emission.data(), scene.emission.size() * sizeof(float));
+  bytes(scene.opacity.data(), scene.opacity.size() * sizeof(float));
+  bytes(scene.albedo.data(), scene.albedo.size() * sizeof(float));
+  return h;
+}
+
+}  // namespace penumbra::study

@@ -38,8 +38,10 @@ inline bool clip_to_grid(float ox, float oy, float dx, float dy, float w, float 
 // the interval o + t*d, t in [ta, tb], passes through, in order, until visit returns false.
 // With skip_start, an opaque cell the interval starts strictly inside is not visited (a ray
 // starting on a cell boundary enters the cell it moves into).
+// Always inlined, so the visitor's state stays in registers; callers are few (trace_interval,
+// the path tracer's scattering walk).
 template <class Visit>
-inline void walk_cells(const Medium& m, float ox, float oy, float dx, float dy, float ta, float tb,
+[[gnu::always_inline]] inline void walk_cells(const Medium& m, float ox, float oy, float dx, float dy, float ta, float tb,
                        bool skip_start, Visit&& visit) {
   constexpr float kInf = std::numeric_limits<float>::infinity();
   // Fast exit: an interval that starts in an empty cell and ends within the jump allowed from
@@ -62,25 +64,31 @@ inline void walk_cells(const Medium& m, float ox, float oy, float dx, float dy, 
 
   int ix = 0, iy = 0;
   float tmax_x = kInf, tmax_y = kInf;
-  // Locates the cell the DDA occupies just after parameter tt: the one whose exits lie beyond tt
-  // and whose entries do not (fixing up the rounding of floor, so that a skip landing exactly on
-  // a block boundary continues where stepping would).
-  auto locate = [&](float tt) {
+  // Locates the cell holding the point at parameter tt. After a block skip, tt is exactly a
+  // boundary parameter and floor may round to either side, so `exact` moves to the cell whose
+  // exits lie beyond tt and whose entries do not: where stepping would be.
+  auto locate = [&](float tt, bool exact) {
     const float px = ox + dx * tt, py = oy + dy * tt;
-    ix = std::clamp(int(std::floor(px)), 0, m.width - 1);
-    iy = std::clamp(int(std::floor(py)), 0, m.height - 1);
-    if (dx != 0) {
-      if (exit_x(ix) <= tt && ix + step_x >= 0 && ix + step_x < m.width) ix += step_x;
-      if (exit_x(ix - step_x) > tt && ix - step_x >= 0 && ix - step_x < m.width) ix -= step_x;
-    }
-    if (dy != 0) {
-      if (exit_y(iy) <= tt && iy + step_y >= 0 && iy + step_y < m.height) iy += step_y;
-      if (exit_y(iy - step_y) > tt && iy - step_y >= 0 && iy - step_y < m.height) iy -= step_y;
+    ix = int(std::floor(px));
+    iy = int(std::floor(py));
+    if (dx < 0 && float(ix) == px) --ix;
+    if (dy < 0 && float(iy) == py) --iy;
+    ix = std::clamp(ix, 0, m.width - 1);
+    iy = std::clamp(iy, 0, m.height - 1);
+    if (exact) {
+      if (dx != 0) {
+        if (exit_x(ix) <= tt && ix + step_x >= 0 && ix + step_x < m.width) ix += step_x;
+        if (exit_x(ix - step_x) > tt && ix - step_x >= 0 && ix - step_x < m.width) ix -= step_x;
+      }
+      if (dy != 0) {
+        if (exit_y(iy) <= tt && iy + step_y >= 0 && iy + step_y < m.height) iy += step_y;
+        if (exit_y(iy - step_y) > tt && iy - step_y >= 0 && iy - step_y < m.height) iy -= step_y;
+      }
     }
     tmax_x = exit_x(ix);
     tmax_y = exit_y(iy);
   };
-  locate(t);
+  locate(t, false);
 
   // Only a start strictly inside a cell (not on its boundary) may skip an opaque start cell.
   bool skip = false;
@@ -100,6 +108,7 @@ inline void walk_cells(const Medium& m, float ox, float oy, float dx, float dy, 
       // Empty cell: skip to the exit of an empty 8x8 block or by the distance-field jump
       // (see Medium::step), whichever goes further.
       float skip_to = step < 0 ? t - step : t;
+      bool block_skip = false;
       // A block skip never exceeds the block's diagonal (8 sqrt 2 cells): skip the lookup when
       // the jump already goes further.
       if (blocks && step > -11.4f) {
@@ -109,13 +118,14 @@ inline void walk_cells(const Medium& m, float ox, float oy, float dx, float dy, 
                                     : bx << kBlockShift;
           const int last_y = dy > 0 ? std::min(((by + 1) << kBlockShift) - 1, m.height - 1)
                                     : by << kBlockShift;
-          skip_to = std::max(skip_to, std::min(exit_x(last_x), exit_y(last_y)));
+          const float block_exit = std::min(exit_x(last_x), exit_y(last_y));
+          if (block_exit > skip_to) skip_to = block_exit, block_skip = true;
         }
       }
       if (skip_to > t_exit) {
         t = skip_to;
         if (t >= tend) break;
-        locate(t);
+        locate(t, block_skip);
         skip = false;
         continue;
       }
@@ -150,37 +160,11 @@ inline void walk_cells(const Medium& m, float ox, float oy, float dx, float dy, 
 // transmittance e^-sigma s; an opaque cell returns Le and transmittance 0 to a ray entering it.
 // With skip_start, a ray that starts strictly inside an opaque cell leaves it without
 // interacting (the fluence of a wall cell is the light arriving at it).
-inline Interval trace_interval(const Medium& m, float ox, float oy, float dx, float dy, float ta,
-                               float tb, bool skip_start = false) {
-  Interval out = Interval::empty();
-  walk_cells(m, ox, oy, dx, dy, ta, tb, skip_start,
-             [&](std::size_t idx, float step, float t0, float t1) {
-               const Cell& c = m.cells[idx];
-               if (step == kOpaque) {
-                 out.r += out.t * c.r;
-                 out.g += out.t * c.g;
-                 out.b += out.t * c.b;
-                 out.t = 0;
-                 return false;
-               }
-               const float tr = std::exp(-step * (t1 - t0));
-               const float a = out.t * (1.0f - tr);
-               out.r += a * c.r;
-               out.g += a * c.g;
-               out.b += a * c.b;
-               out.t *= tr;
-               return true;
-             });
-  return out;
-}
+Interval trace_interval(const Medium& m, float ox, float oy, float dx, float dy, float ta, float tb,
+                        bool skip_start = false);
 
 // The segment from point a to point b.
-inline Interval trace_segment(const Medium& m, float ax, float ay, float bx, float by,
-                              bool skip_start = false) {
-  const float vx = bx - ax, vy = by - ay;
-  const float len = std::sqrt(vx * vx + vy * vy);
-  if (len == 0.0f) return Interval::empty();
-  return trace_interval(m, ax, ay, vx / len, vy / len, 0.0f, len, skip_start);
-}
+Interval trace_segment(const Medium& m, float ax, float ay, float bx, float by,
+                       bool skip_start = false);
 
 }  // namespace penumbra

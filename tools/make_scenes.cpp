@@ -11,15 +11,17 @@
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <initializer_list>
 #include <string>
 #include <string_view>
+#include <system_error>
+#include <utility>
 #include <variant>
 #include <vector>
 
 #include "bench_scenes.hpp"
 #include "io/image_io.hpp"
+#include "penumbra/io.hpp"
 #include "penumbra/scene.hpp"
 
 namespace penumbra {
@@ -200,15 +202,15 @@ unsigned char to_byte(float v) {
   return (unsigned char)std::lround(std::clamp(v, 0.0f, 1.0f) * 255);
 }
 
-// Writes three planes as an 8-bit RGB PNG (values in [0, 1], stored as they are).
-Status write_png(const std::string& path, const Plane& r, const Plane& g, const Plane& b) {
-  std::vector<unsigned char> bytes(r.v.size() * 3);
+// Three planes as an 8-bit RGB picture (values in [0, 1], stored as they are).
+ImageRgb8 picture(const Plane& r, const Plane& g, const Plane& b) {
+  ImageRgb8 p{r.width, r.height, std::vector<unsigned char>(r.v.size() * 3)};
   for (std::size_t i = 0; i < r.v.size(); ++i) {
-    bytes[3 * i] = to_byte(r.v[i]);
-    bytes[3 * i + 1] = to_byte(g.v[i]);
-    bytes[3 * i + 2] = to_byte(b.v[i]);
+    p.rgb[3 * i] = to_byte(r.v[i]);
+    p.rgb[3 * i + 1] = to_byte(g.v[i]);
+    p.rgb[3 * i + 2] = to_byte(b.v[i]);
   }
-  return io::write_png8(path, r.width, r.height, bytes);
+  return p;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -445,53 +447,46 @@ SceneFile painted() {
 
 // ---------------------------------------------------------------------------------------------
 
-bool write_text(const std::filesystem::path& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary);
-  out << text;
-  out.close();
-  return bool(out);
-}
-
 int run(const std::filesystem::path& dir) {
-  std::filesystem::create_directories(dir / "layers");
-  bool ok = true;
-  auto check = [&](const std::filesystem::path& path, bool written, const std::string& why = "") {
-    if (written) {
-      std::printf("wrote %s\n", path.string().c_str());
-    } else {
-      std::fprintf(stderr, "penumbra_make_scenes: %s\n",
-                   why.empty() ? ("cannot write " + path.string()).c_str() : why.c_str());
-      ok = false;
-    }
+  std::vector<std::pair<std::string, std::string>> texts;
+  std::vector<std::pair<std::string, ImageRgb8>> pictures;
+  auto scene = [&](const SceneFile& f) {
+    texts.emplace_back((dir / (f.name + ".json")).string(), scene_json(f));
   };
-  auto write_scene = [&](const SceneFile& f) {
-    const std::filesystem::path path = dir / (f.name + ".json");
-    check(path, write_text(path, scene_json(f)));
-  };
-  auto write_layer = [&](const std::string& name, const Plane& r, const Plane& g, const Plane& b) {
-    const std::filesystem::path path = dir / name;
-    const Status s = write_png(path.string(), r, g, b);
-    check(path, bool(s), s ? "" : s.error().message);
+  auto layer = [&](const std::string& name, const Plane& r, const Plane& g, const Plane& b) {
+    pictures.emplace_back((dir / name).string(), picture(r, g, b));
   };
 
-  for (int n : {2, 102, 1002}) write_scene(lights(n));
+  for (int n : {2, 102, 1002}) scene(lights(n));
 
   const SceneFile fog_scene = fog();
   const Plane opacity = dither_to_bytes(fog_opacity(), 3);
-  write_layer(fog_scene.files.opacity, opacity, opacity, opacity);
+  layer(fog_scene.files.opacity, opacity, opacity, opacity);
   // A bright, slightly blue fog (sRGB values, as in a paint program; linear about 0.8-0.9).
   const Plane ar(kFogSize, kFogSize, 0.906f), ag(kFogSize, kFogSize, 0.925f),
       ab(kFogSize, kFogSize, 0.955f);
-  write_layer(fog_scene.files.albedo, ar, ag, ab);
-  write_scene(fog_scene);
+  layer(fog_scene.files.albedo, ar, ag, ab);
+  scene(fog_scene);
 
   const SceneFile painted_scene = painted();
   const Canvas c = paint();
-  write_layer(painted_scene.files.emission, c.er, c.eg, c.eb);
-  write_layer(painted_scene.files.opacity, c.opacity, c.opacity, c.opacity);
-  write_layer(painted_scene.files.albedo, c.ar, c.ag, c.ab);
-  write_scene(painted_scene);
-  return ok ? 0 : 1;
+  layer(painted_scene.files.emission, c.er, c.eg, c.eb);
+  layer(painted_scene.files.opacity, c.opacity, c.opacity, c.opacity);
+  layer(painted_scene.files.albedo, c.ar, c.ag, c.ab);
+  scene(painted_scene);
+
+  std::error_code ec;
+  std::filesystem::create_directories(dir / "layers", ec);
+  // Pictures, then scene files, each set all or nothing: a scene never names a missing layer.
+  Status s = write_pictures(pictures);
+  if (s) s = io::write_text_files(texts);
+  if (!s) {
+    std::fprintf(stderr, "penumbra_make_scenes: %s\n", s.error().message.c_str());
+    return 1;
+  }
+  for (const auto& [path, picture] : pictures) std::printf("wrote %s\n", path.c_str());
+  for (const auto& [path, text] : texts) std::printf("wrote %s\n", path.c_str());
+  return 0;
 }
 
 }  // namespace

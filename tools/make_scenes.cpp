@@ -135,6 +135,16 @@ std::string scene_json(const SceneFile& f) {
   return s + "\n}\n";
 }
 
+// A size x size scene file without layers or shapes yet.
+SceneFile square_scene(std::string name, int size, Rgb environment, std::string description) {
+  SceneFile f;
+  f.name = std::move(name);
+  f.description = std::move(description);
+  f.desc.width = f.desc.height = size;
+  f.desc.environment = environment;
+  return f;
+}
+
 // ---------------------------------------------------------------------------------------------
 // Deterministic noise
 
@@ -279,14 +289,11 @@ Material solid(Rgb albedo) {
 }
 
 SceneFile fog() {
-  SceneFile f;
-  f.name = "fog";
-  f.description =
+  SceneFile f = square_scene(
+      "fog", kFogSize, {0, 0, 0},
       "Volumetric fog of varying density (an opacity layer) lit through a slatted screen and by "
-      "a cold lamp; a pillar casts a volumetric shadow. Try --bounces 3.";
+      "a cold lamp; a pillar casts a volumetric shadow. Try --bounces 3.");
   SceneDesc& d = f.desc;
-  d.width = d.height = kFogSize;
-  d.environment = {0, 0, 0};
   f.files.opacity = "layers/fog_opacity.png";
   f.files.albedo = "layers/fog_albedo.png";
   // A warm light in the top-left corner behind a diagonal screen of slats: shafts fan out.
@@ -432,14 +439,10 @@ Canvas paint() {
 }
 
 SceneFile painted() {
-  SceneFile f;
-  f.name = "painted";
-  f.description =
+  SceneFile f = square_scene(
+      "painted", kPaintSize, {0.004f, 0.004f, 0.008f},
       "Emission, opacity and albedo PNG layers painted with a soft brush: strokes of coloured "
-      "light among painted walls and a translucent glaze. Try --bounces 3.";
-  SceneDesc& d = f.desc;
-  d.width = d.height = kPaintSize;
-  d.environment = {0.004f, 0.004f, 0.008f};
+      "light among painted walls and a translucent glaze. Try --bounces 3.");
   f.files = {"layers/painted_emission.png", "layers/painted_opacity.png",
              "layers/painted_albedo.png", 8};
   return f;

@@ -5,7 +5,7 @@ JOBS     ?= $(shell nproc)
 PREFIX   ?= /usr/local
 CMAKE_FLAGS = -DCMAKE_BUILD_TYPE=Release -DPENUMBRA_WERROR=$(WERROR) -DCMAKE_INSTALL_PREFIX=$(PREFIX)
 
-.PHONY: all deps configure build demo test bench install format clean
+.PHONY: all deps configure build demo test bench quality install format clean
 
 all: build
 
@@ -26,6 +26,11 @@ test: build
 
 bench: build
 	@$(BUILD)/bin/penumbra_bench --benchmark_counters_tabular=true
+
+# The quality studies in docs/QUALITY.md (minutes: the path-traced references are cached).
+quality: build
+	@$(BUILD)/bin/penumbra bench-quality scenes/occluder.json -o docs/quality/occluder --cache $(BUILD)/quality-cache
+	@$(BUILD)/bin/penumbra bench-quality scenes/cornell.json --bounces 2 --reference-spp 512 --max-spp 64 -o docs/quality/cornell --cache $(BUILD)/quality-cache
 
 install: build
 	@cmake --install $(BUILD)

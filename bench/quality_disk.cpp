@@ -1,6 +1,7 @@
-// Quality of radiance cascades against the closed form of a disk light, F = 2 L asin(r / d), and
-// against an exact reference on the same cell grid (many exact DDA rays per cell). Writes a
-// markdown table on stdout and pictures (render, signed error) into the folder given.
+// Quality of radiance cascades and of the path tracer against the closed form of a disk light, F =
+// 2 L asin(r / d), and against an exact reference on the same cell grid (many exact DDA rays per
+// cell). Writes a markdown table on stdout and pictures (render, signed error) into the folder
+// given.
 //
 //   build/bin/penumbra_quality docs/images > table.md
 #include <cmath>
@@ -111,6 +112,21 @@ int main(int argc, char** argv) {
   add("t0 4, fix none, extend 8",
       [](RenderOptions& o) { o.rc.fix = MergeFix::none, o.rc.extend = true; });
 
+  // The reference path tracer: its error falls towards the exact grid's as samples grow.
+  for (int spp : {16, 64, 256})
+    for (Sampler sampler : {Sampler::random, Sampler::r1})
+      add(std::string("pt, ") + to_string(sampler) + ", " + std::to_string(spp) + " spp",
+          [&](RenderOptions& o) {
+            o.method = Method::pt;
+            o.pt.sampler = sampler;
+            o.pt.spp = spp;
+          });
+  for (int spp : {16, 64, 256, 1024})
+    add("pt, r1, nee, " + std::to_string(spp) + " spp", [&](RenderOptions& o) {
+      o.method = Method::pt;
+      o.pt.nee = true;
+      o.pt.spp = spp;
+    });
   std::printf(
       "| options | mean rel. error vs closed form | max | mean rel. error vs exact grid | max | "
       "time (ms) |\n");

@@ -7,7 +7,9 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
+#include <sstream>
 
 #include "analysis/study.hpp"
 #include "io/image_io.hpp"
@@ -16,7 +18,9 @@
 namespace fs = std::filesystem;
 using namespace penumbra;
 
-bool QualityCommand::parsed() const { return app->parsed(); }
+bool QualityCommand::parsed() const {
+  return app->parsed();
+}
 
 std::unique_ptr<QualityCommand> add_quality_command(CLI::App& app) {
   auto cmd = std::make_unique<QualityCommand>();
@@ -29,6 +33,10 @@ std::unique_ptr<QualityCommand> add_quality_command(CLI::App& app) {
   c->add_option("-o,--out", a.out, "Folder for quality.csv/.md/.svg/.png and rc_vs_reference.png")
       ->capture_default_str();
   c->add_option("--cache", a.cache, "Folder for cached references (default: <out>/cache)");
+  c->add_option("--doc", a.doc,
+                "Markdown file (docs/QUALITY.md) whose lines <!-- bench-quality NAME --> and "
+                "<!-- /bench-quality NAME --> enclose the table and plot to replace; NAME is the "
+                "scene file's name without .json");
   c->add_option("--bounces", a.bounces, "Diffuse bounces for every method")
       ->check(CLI::Range(1, 64))
       ->capture_default_str();
@@ -52,6 +60,23 @@ int fail(const std::string& what) {
   return 1;
 }
 
+Expected<std::string> read_text(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream s;
+  if (!(in && s << in.rdbuf())) return Error{path + ": cannot read the file"};
+  return s.str();
+}
+
+// The study's section for a document: the table, then the plot and the montage linked by paths
+// relative to the document.
+std::string doc_section(const std::string& table, const fs::path& doc, const fs::path& out,
+                        const std::string& name) {
+  const fs::path dir = fs::relative(out, fs::absolute(doc).parent_path());
+  return table + "\n![" + name + ": error against time](" + (dir / "quality.png").generic_string() +
+         ")\n\n![" + name + ": the default cascades against the reference](" +
+         (dir / "rc_vs_reference.png").generic_string() + ")\n";
+}
+
 }  // namespace
 
 int run_quality(const QualityArgs& a) {
@@ -63,6 +88,18 @@ int run_quality(const QualityArgs& a) {
     return fail(a.scene + ": " + s.error().message);
   Expected<Scene> scene = build_scene(*desc);
   if (!scene) return fail(scene.error().message);
+  // The document is checked before the minutes of rendering, and read again at the end so that
+  // edits made meanwhile are kept.
+  const std::string section = fs::path(a.scene).stem().string();
+  auto spliced_doc = [&](const std::string& body) -> Expected<std::string> {
+    Expected<std::string> text = read_text(a.doc);
+    if (!text) return text;
+    Expected<std::string> spliced = study::splice_section(*text, section, body);
+    if (!spliced) return Error{a.doc + ": " + spliced.error().message};
+    return spliced;
+  };
+  if (!a.doc.empty())
+    if (Expected<std::string> d = spliced_doc(""); !d) return fail(d.error().message);
   std::error_code ec;
   const std::string cache = a.cache.empty() ? (fs::path(a.out) / "cache").string() : a.cache;
   for (const std::string& dir : {a.out, cache})
@@ -80,7 +117,8 @@ int run_quality(const QualityArgs& a) {
   ImageRgb reference;
   if (fs::exists(ref.path)) {
     Expected<io::RawImage> raw = io::read_image(ref.path, scene->width, scene->height);
-    if (!raw || raw->channels != 3) return fail(ref.path + ": unreadable cached reference; delete it");
+    if (!raw || raw->channels != 3)
+      return fail(ref.path + ": unreadable cached reference; delete it");
     reference = ImageRgb(scene->width, scene->height, std::move(raw->pixels));
     std::printf("reference: %s (cached)\n", ref.path.c_str());
   } else {
@@ -129,14 +167,14 @@ int run_quality(const QualityArgs& a) {
   const double k = study::convergence_order(rows, "pt nee");
   for (const study::Row& r : rows)
     if (r.run.curve == "pt nee" && std::isfinite(k))
-      ref.estimated_rel =
-          r.error.relative_rmse * std::pow(double(r.samples) / a.reference_spp, k);
+      ref.estimated_rel = r.error.relative_rmse * std::pow(double(r.samples) / a.reference_spp, k);
 
   const fs::path out(a.out);
   const std::string title = fs::path(a.scene).filename().string() + ": error against time";
-  const std::vector<std::pair<std::string, std::string>> files = {
+  const std::string table = study::to_markdown(rows, a.scene, ref);
+  std::vector<std::pair<std::string, std::string>> files = {
       {(out / "quality.csv").string(), study::to_csv(rows)},
-      {(out / "quality.md").string(), study::to_markdown(rows, a.scene, ref)},
+      {(out / "quality.md").string(), table},
       {(out / "quality.svg").string(), study::to_svg(rows, title)}};
   if (Status s = io::write_text_files(files); !s) return fail(s.error().message);
   for (const auto& [path, text] : files) std::printf("wrote %s\n", path.c_str());
@@ -154,5 +192,12 @@ int run_quality(const QualityArgs& a) {
   }
   if (Status s = write_pictures(pictures); !s) return fail(s.error().message);
   for (const auto& [path, picture] : pictures) std::printf("wrote %s\n", path.c_str());
+  // The document last, once everything it links to is there.
+  if (!a.doc.empty()) {
+    Expected<std::string> text = spliced_doc(doc_section(table, a.doc, out, section));
+    if (!text) return fail(text.error().message);
+    if (Status s = io::write_text_files({{a.doc, *text}}); !s) return fail(s.error().message);
+    std::printf("updated %s\n", a.doc.c_str());
+  }
   return 0;
 }

@@ -13,6 +13,7 @@ struct QualityArgs {
   std::string scene;
   std::string out = "out/quality";
   std::string cache;  // empty: <out>/cache
+  std::string doc;    // a markdown file whose bench-quality section receives the table
   int bounces = 1;
   int reference_spp = 1024;
   int max_spp = 256;

@@ -1,10 +1,11 @@
 // The quality study: its arithmetic on made-up rows, and the command end to end on a small scene.
+#include "analysis/study.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <filesystem>
 
-#include "analysis/study.hpp"
 #include "io/image_io.hpp"
 #include "test_support.hpp"
 
@@ -67,6 +68,26 @@ TEST(Study, ConvergenceOrderAndEqualTimes) {
   EXPECT_EQ(png.rgb.size(), std::size_t(png.width) * png.height * 3);
 }
 
+TEST(Study, SpliceSectionReplacesOnlyBetweenItsMarkers) {
+  const std::string doc =
+      "# Q\n<!-- bench-quality a -->\nold a\n<!-- /bench-quality a -->\n"
+      "<!-- bench-quality b -->\nold b\n<!-- /bench-quality b -->\ntail\n";
+  Expected<std::string> s = study::splice_section(doc, "a", "new a");
+  ASSERT_TRUE(s) << s.error().message;
+  EXPECT_EQ(*s,
+            "# Q\n<!-- bench-quality a -->\nnew a\n<!-- /bench-quality a -->\n"
+            "<!-- bench-quality b -->\nold b\n<!-- /bench-quality b -->\ntail\n");
+  // Splicing the same body again changes nothing.
+  EXPECT_EQ(*study::splice_section(*s, "a", "new a\n"), *s);
+  Expected<std::string> missing = study::splice_section(doc, "c", "x");
+  ASSERT_FALSE(missing);
+  EXPECT_NE(missing.error().message.find("<!-- bench-quality c -->"), std::string::npos);
+  Expected<std::string> unclosed = study::splice_section("<!-- bench-quality a -->\n", "a", "x");
+  ASSERT_FALSE(unclosed);
+  EXPECT_NE(unclosed.error().message.find("<!-- /bench-quality a -->"), std::string::npos);
+  EXPECT_FALSE(study::splice_section(doc + doc, "a", "x"));  // ambiguous: two sections
+}
+
 TEST(Study, SceneHashSeesEveryLayer) {
   SceneDesc d;
   d.width = 8;
@@ -89,12 +110,12 @@ TEST(Study, CommandWritesEverythingAndReusesTheReference) {
     "shapes": [ { "type": "circle", "center": [10, 15], "radius": 3, "emission": [4, 3, 2] },
                 { "type": "box", "center": [22, 15], "size": [2, 12] } ] })");
   const std::string out = dir.file("q");
-  const std::vector<std::string> args = {"bench-quality", scene,  "-o", out, "--quick",
+  const std::vector<std::string> args = {"bench-quality",   scene, "-o", out, "--quick",
                                          "--reference-spp", "64"};
   testing::CliResult r = testing::run_cli(args, dir.root());
   ASSERT_EQ(r.status, 0) << r.err;
-  for (const char* f : {"quality.csv", "quality.md", "quality.svg", "quality.png",
-                        "rc_vs_reference.png"})
+  for (const char* f :
+       {"quality.csv", "quality.md", "quality.svg", "quality.png", "rc_vs_reference.png"})
     EXPECT_TRUE(fs::is_regular_file(fs::path(out) / f)) << f;
   EXPECT_NE(r.out.find("rendering 64 spp"), std::string::npos) << r.out;
   const std::string md = testing::slurp(fs::path(out) / "quality.md");
@@ -103,6 +124,32 @@ TEST(Study, CommandWritesEverythingAndReusesTheReference) {
   r = testing::run_cli(args, dir.root());
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_NE(r.out.find("(cached)"), std::string::npos) << r.out;
+  // --doc: the table and the pictures' links go between the scene's markers, relative to the
+  // document; the rest of the document is kept.
+  fs::create_directories(dir.file("docs"));
+  const std::string doc = dir.write("docs/Q.md",
+                                    "head\n<!-- bench-quality s -->\nold\n"
+                                    "<!-- /bench-quality s -->\nfoot\n");
+  std::vector<std::string> with_doc = args;
+  with_doc.insert(with_doc.end(), {"--doc", doc});
+  r = testing::run_cli(with_doc, dir.root());
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::string updated = testing::slurp(doc);
+  EXPECT_EQ(updated.rfind("head\n<!-- bench-quality s -->\nScene `", 0), 0u) << updated;
+  EXPECT_NE(updated.find("| rc (defaults) |"), std::string::npos) << updated;
+  EXPECT_NE(updated.find("](../q/quality.png)"), std::string::npos) << updated;
+  EXPECT_NE(updated.find("](../q/rc_vs_reference.png)"), std::string::npos) << updated;
+  EXPECT_EQ(updated.find("old"), std::string::npos) << updated;
+  EXPECT_NE(updated.find("<!-- /bench-quality s -->\nfoot\n"), std::string::npos) << updated;
+  // A document without the scene's markers is refused before any rendering, and kept as it is.
+  const std::string other = dir.write("other.md", "no markers\n");
+  with_doc.back() = other;
+  r = testing::run_cli(with_doc, dir.root());
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("other.md"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("<!-- bench-quality s -->"), std::string::npos) << r.err;
+  EXPECT_EQ(r.out.find("spp"), std::string::npos) << r.out;
+  EXPECT_EQ(testing::slurp(other), "no markers\n");
   // A bad scene: exit 1, the file named, nothing new written.
   const std::string bad = dir.write("bad.json", R"({"penumbra": 1, "width": -4})");
   r = testing::run_cli({"bench-quality", bad, "-o", dir.file("none")}, dir.root());

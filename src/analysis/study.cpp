@@ -1,13 +1,13 @@
 #include "analysis/study.hpp"
 
-#include "analysis/text.hpp"
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <limits>
 #include <sstream>
+
+#include "analysis/text.hpp"
 
 namespace penumbra::study {
 
@@ -30,7 +30,8 @@ std::vector<Row> curve_rows(const std::vector<Row>& rows, const std::string& cur
   std::vector<Row> out;
   for (const Row& r : rows)
     if (r.run.curve == curve) out.push_back(r);
-  std::sort(out.begin(), out.end(), [](const Row& a, const Row& b) { return a.samples < b.samples; });
+  std::sort(out.begin(), out.end(),
+            [](const Row& a, const Row& b) { return a.samples < b.samples; });
   return out;
 }
 
@@ -92,7 +93,8 @@ double equal_error_time(const std::vector<Row>& curve, double e, bool& extrapola
 
 void add_equal_error_times(std::vector<Row>& rows) {
   const std::vector<Row> curve = curve_rows(rows, "pt nee");
-  for (Row& r : rows) r.pt_equal_time_ms = equal_error_time(curve, r.error.relative_rmse, r.extrapolated);
+  for (Row& r : rows)
+    r.pt_equal_time_ms = equal_error_time(curve, r.error.relative_rmse, r.extrapolated);
 }
 
 double convergence_order(const std::vector<Row>& rows, const std::string& curve) {
@@ -116,8 +118,8 @@ std::string to_csv(const std::vector<Row>& rows) {
     std::snprintf(buf, sizeof buf, "\"%s\",%s,%s,%llu,%.3f,%.6g,%.6g,%.6g,%.6g,%.4f,%.6g,%.3f,%d\n",
                   r.run.label.c_str(), r.run.curve.c_str(), to_string(r.run.options.method),
                   (unsigned long long)r.samples, r.time_ms, r.error.rmse, r.error.relative_rmse,
-                  r.error.mean_abs, r.error.max_abs, r.error.psnr, r.error.bias,
-                  r.pt_equal_time_ms, r.extrapolated ? 1 : 0);
+                  r.error.mean_abs, r.error.max_abs, r.error.psnr, r.error.bias, r.pt_equal_time_ms,
+                  r.extrapolated ? 1 : 0);
     s << buf;
   }
   return s.str();
@@ -141,14 +143,30 @@ std::string to_markdown(const std::vector<Row>& rows, const std::string& scene,
     }
     s << "| " << r.run.label << " | " << format("%.0f", r.time_ms) << " | "
       << percent(r.error.relative_rmse) << " | " << format("%.1f", r.error.psnr) << " | "
-      << format("%+.3g", r.error.bias) << " | " << format("%.3g", r.error.max_abs) << " | "
-      << equal
+      << format("%+.3g", r.error.bias) << " | " << format("%.3g", r.error.max_abs) << " | " << equal
       << " | " << (has ? format("%.2gx", r.pt_equal_time_ms / r.time_ms) : "n/a") << " |\n";
   }
   const double k = convergence_order(rows, "pt"), kn = convergence_order(rows, "pt nee");
-  s << "\nPath tracer convergence (fitted error ~ spp^-k): k = " << format("%.2f", k)
-    << " plain, " << format("%.2f", kn) << " with NEE (k = 0.5 is the Monte Carlo rate).\n";
+  s << "\nPath tracer convergence (fitted error ~ spp^-k): k = " << format("%.2f", k) << " plain, "
+    << format("%.2f", kn) << " with NEE (k = 0.5 is the Monte Carlo rate).\n";
   return s.str();
+}
+
+Expected<std::string> splice_section(const std::string& doc, const std::string& name,
+                                     const std::string& body) {
+  const std::string open = "<!-- bench-quality " + name + " -->",
+                    close = "<!-- /bench-quality " + name + " -->";
+  const std::size_t a = doc.find(open);
+  if (a == std::string::npos)
+    return Error{"no line `" + open + "` marks where the study of " + name + " goes"};
+  if (doc.find(open, a + open.size()) != std::string::npos)
+    return Error{"the marker `" + open + "` appears twice"};
+  const std::size_t b = doc.find(close, a);
+  if (b == std::string::npos) return Error{"no line `" + close + "` after `" + open + "`"};
+  std::string out = doc.substr(0, a + open.size()) + "\n";
+  out += body;
+  if (!body.empty() && body.back() != '\n') out += '\n';
+  return out + doc.substr(b);
 }
 
 namespace {
@@ -156,7 +174,8 @@ namespace {
 // Where a plot puts things: log-log axes over whole decades that hold every row, the curves and
 // the single points with a legend column on the right. Shared by the SVG and the PNG.
 struct Plot {
-  static constexpr double W = 760, H = 480, left = 70, right = 230, top = 40, bottom = 50;
+  static constexpr double H = 480, left = 70, top = 40, bottom = 50, frame = 480;
+  double right = 230, W = left + frame + right;  // the legend column widens to its longest name
   double x0 = 0, x1 = 1, y0 = -2, y1 = 0;
   double px(double t) const { return left + (std::log10(t) - x0) / (x1 - x0) * (W - left - right); }
   double py(double e) const { return top + (y1 - std::log10(e)) / (y1 - y0) * (H - top - bottom); }
@@ -168,7 +187,9 @@ struct Plot {
   std::vector<Series> series;
 };
 
-bool plottable(const Row& r) { return r.time_ms > 0 && r.error.relative_rmse > 0; }
+bool plottable(const Row& r) {
+  return r.time_ms > 0 && r.error.relative_rmse > 0;
+}
 
 Plot layout(const std::vector<Row>& rows) {
   Plot p;
@@ -179,10 +200,15 @@ Plot layout(const std::vector<Row>& rows) {
     emin = std::min(emin, r.error.relative_rmse), emax = std::max(emax, r.error.relative_rmse);
   }
   if (!(tmax > 0)) tmin = 1, tmax = 10, emin = 0.01, emax = 1;
+  const char* names[] = {"path tracer", "path tracer + NEE"};
+  int longest = analysis::text_width(names[1], 2);
+  for (const Row& r : rows)
+    if (r.run.curve.empty() && plottable(r))
+      longest = std::max(longest, analysis::text_width(r.run.label, 2));
+  p.right = 44 + longest, p.W = p.left + p.frame + p.right;
   p.x0 = std::floor(std::log10(tmin)), p.x1 = std::max(p.x0 + 1, std::ceil(std::log10(tmax)));
   p.y0 = std::floor(std::log10(emin)), p.y1 = std::max(p.y0 + 1, std::ceil(std::log10(emax)));
   const std::pair<const char*, const char*> curves[] = {{"pt", "#1f77b4"}, {"pt nee", "#ff7f0e"}};
-  const char* names[] = {"path tracer", "path tracer + NEE"};
   for (int c = 0; c < 2; ++c) {
     Plot::Series s{names[c], curves[c].second, true, {}};
     for (const Row& r : curve_rows(rows, curves[c].first))
@@ -194,8 +220,8 @@ Plot layout(const std::vector<Row>& rows) {
   int k = 0;
   for (const Row& r : rows)
     if (r.run.curve.empty() && plottable(r))
-      p.series.push_back({r.run.label, palette[k++ % 8], false,
-                          {{p.px(r.time_ms), p.py(r.error.relative_rmse)}}});
+      p.series.push_back(
+          {r.run.label, palette[k++ % 8], false, {{p.px(r.time_ms), p.py(r.error.relative_rmse)}}});
   return p;
 }
 
@@ -263,8 +289,8 @@ ImageRgb8 to_png_plot(const std::vector<Row>& rows, const std::string& title) {
     const int n = int(std::max(std::abs(bx - ax), std::abs(by - ay))) + 1;
     for (int i = 0; i <= n; ++i) {
       const double f = double(i) / n;
-      analysis::fill_rect(img, int(ax + f * (bx - ax)) - thick / 2, int(ay + f * (by - ay)) - thick / 2,
-                          thick, thick, c);
+      analysis::fill_rect(img, int(ax + f * (bx - ax)) - thick / 2,
+                          int(ay + f * (by - ay)) - thick / 2, thick, thick, c);
     }
   };
   const int scale = 2, half = analysis::line_height(scale) / 2;
@@ -288,7 +314,8 @@ ImageRgb8 to_png_plot(const std::vector<Row>& rows, const std::string& title) {
   line(p.left, p.top, p.left, p.H - p.bottom, ink, 1);
   line(p.W - p.right, p.top, p.W - p.right, p.H - p.bottom, ink, 1);
   const std::string xlabel = "computation time (ms); y: relative RMSE";
-  analysis::draw_text(img, int((p.left + p.W - p.right) / 2) - analysis::text_width(xlabel, scale) / 2,
+  analysis::draw_text(img,
+                      int((p.left + p.W - p.right) / 2) - analysis::text_width(xlabel, scale) / 2,
                       int(p.H) - 22, xlabel, ink, scale);
   int legend_y = int(p.top) + 4;
   for (const Plot::Series& c : p.series) {
@@ -299,7 +326,8 @@ ImageRgb8 to_png_plot(const std::vector<Row>& rows, const std::string& title) {
              colour, 2);
       for (auto [x, y] : c.points) analysis::fill_rect(img, int(x) - 3, int(y) - 3, 7, 7, colour);
     } else {
-      analysis::fill_rect(img, int(c.points[0].first) - 4, int(c.points[0].second) - 4, 9, 9, colour);
+      analysis::fill_rect(img, int(c.points[0].first) - 4, int(c.points[0].second) - 4, 9, 9,
+                          colour);
     }
     analysis::fill_rect(img, int(p.W - p.right) + 12, legend_y + 2, 14, 8, colour);
     analysis::draw_text(img, int(p.W - p.right) + 32, legend_y, c.name, ink, scale);

@@ -47,8 +47,8 @@ double convergence_order(const std::vector<Row>& rows, const std::string& curve)
 struct Reference {
   std::string path;  // where the reference image is cached
   int spp = 0;
-  double time_ms = 0;         // how long rendering it took (0 when it came from the cache)
-  double estimated_rel = 0;   // its own relative RMSE, extrapolated along the NEE curve
+  double time_ms = 0;        // how long rendering it took (0 when it came from the cache)
+  double estimated_rel = 0;  // its own relative RMSE, extrapolated along the NEE curve
 };
 
 std::string to_csv(const std::vector<Row>& rows);
@@ -59,6 +59,12 @@ std::string to_markdown(const std::vector<Row>& rows, const std::string& scene,
 std::string to_svg(const std::vector<Row>& rows, const std::string& title);
 // The same plot as a picture.
 ImageRgb8 to_png_plot(const std::vector<Row>& rows, const std::string& title);
+
+// A study's section in a markdown document (docs/QUALITY.md) lies between the lines
+// `<!-- bench-quality NAME -->` and `<!-- /bench-quality NAME -->`. Returns `doc` with what lies
+// between them replaced by `body`, or an Error saying which marker is missing.
+Expected<std::string> splice_section(const std::string& doc, const std::string& name,
+                                     const std::string& body);
 
 // A 64-bit hash of everything that determines a scene's fluence (size, environment, every
 // layer), to name cached references.

@@ -160,12 +160,22 @@ TEST(FlatlandTrace, SkippingEmptySpaceGivesTheSameAnswerAsPlainDda) {
   ASSERT_GT(empty_blocks, 20);  // the test exercises block skips
   std::mt19937 rng(5);
   std::uniform_real_distribution<float> u(0, 1);
-  for (int i = 0; i < 8000; ++i) {
+  for (int i = 0; i < 20000; ++i) {
     float ox = 96 * u(rng), oy = 80 * u(rng), a = 6.2831853f * u(rng);
-    if (i % 4 == 0) a = 1.5707963f * float(i % 16 / 4);  // axis-aligned rays
+    if (i % 4 == 0) a = 1.5707963f * float(i % 16 / 4);               // axis-aligned rays
     if (i % 8 == 1) ox = std::floor(ox), oy = std::floor(oy) + 0.5f;  // starts on boundaries
-    const float dx = i % 4 == 0 ? std::round(std::cos(a)) : std::cos(a);
-    const float dy = i % 4 == 0 ? std::round(std::sin(a)) : std::sin(a);
+    float dx = i % 4 == 0 ? std::round(std::cos(a)) : std::cos(a);
+    float dy = i % 4 == 0 ? std::round(std::sin(a)) : std::sin(a);
+    if (i % 8 == 3) {  // diagonal rays from cell centres or corners: through cell and block corners
+      ox = std::floor(ox) + (i % 16 == 3 ? 0.5f : 0.0f),
+      oy = std::floor(oy) + (i % 16 == 3 ? 0.5f : 0.0f);
+      dx = (i / 8 % 2 ? 1 : -1) * 0.70710678f, dy = (i / 16 % 2 ? 1 : -1) * 0.70710678f;
+    }
+    if (i % 8 == 5) {  // aimed at a block corner: the block and cell exits tie up to rounding
+      const float cx = 8.0f * float(i / 8 % 13), cy = 8.0f * float(i / 104 % 11);
+      const float len = std::hypot(cx - ox, cy - oy);
+      if (len > 0) dx = (cx - ox) / len, dy = (cy - oy) / len;
+    }
     const float t1 = i % 3 == 0 ? INFINITY : 150 * u(rng);
     const Interval p = trace_interval(exact, ox, oy, dx, dy, 0, t1, true);
     for (const Medium* m : {&jumps, &blocks, &both}) {

@@ -41,8 +41,9 @@ inline bool clip_to_grid(float ox, float oy, float dx, float dy, float w, float 
 // Always inlined, so the visitor's state stays in registers; callers are few (trace_interval,
 // the path tracer's scattering walk).
 template <class Visit>
-[[gnu::always_inline]] inline void walk_cells(const Medium& m, float ox, float oy, float dx, float dy, float ta, float tb,
-                       bool skip_start, Visit&& visit) {
+[[gnu::always_inline]] inline void walk_cells(const Medium& m, float ox, float oy, float dx,
+                                              float dy, float ta, float tb, bool skip_start,
+                                              Visit&& visit) {
   constexpr float kInf = std::numeric_limits<float>::infinity();
   // Fast exit: an interval that starts in an empty cell and ends within the jump allowed from
   // there meets nothing (most short intervals away from walls).
@@ -64,10 +65,9 @@ template <class Visit>
 
   int ix = 0, iy = 0;
   float tmax_x = kInf, tmax_y = kInf;
-  // Locates the cell holding the point at parameter tt. After a block skip, tt is exactly a
-  // boundary parameter and floor may round to either side, so `exact` moves to the cell whose
-  // exits lie beyond tt and whose entries do not: where stepping would be.
-  auto locate = [&](float tt, bool exact) {
+  // Locates the cell holding the point at parameter tt (the start, or where a distance-field
+  // jump lands: inside empty space, so either cell of a boundary is right).
+  auto locate = [&](float tt) {
     const float px = ox + dx * tt, py = oy + dy * tt;
     ix = int(std::floor(px));
     iy = int(std::floor(py));
@@ -75,20 +75,10 @@ template <class Visit>
     if (dy < 0 && float(iy) == py) --iy;
     ix = std::clamp(ix, 0, m.width - 1);
     iy = std::clamp(iy, 0, m.height - 1);
-    if (exact) {
-      if (dx != 0) {
-        if (exit_x(ix) <= tt && ix + step_x >= 0 && ix + step_x < m.width) ix += step_x;
-        if (exit_x(ix - step_x) > tt && ix - step_x >= 0 && ix - step_x < m.width) ix -= step_x;
-      }
-      if (dy != 0) {
-        if (exit_y(iy) <= tt && iy + step_y >= 0 && iy + step_y < m.height) iy += step_y;
-        if (exit_y(iy - step_y) > tt && iy - step_y >= 0 && iy - step_y < m.height) iy -= step_y;
-      }
-    }
     tmax_x = exit_x(ix);
     tmax_y = exit_y(iy);
   };
-  locate(t, false);
+  locate(t);
 
   // Only a start strictly inside a cell (not on its boundary) may skip an opaque start cell.
   bool skip = false;
@@ -97,6 +87,56 @@ template <class Visit>
     skip = px != std::floor(px) && py != std::floor(py);
   }
   const bool blocks = !m.block_empty.empty();
+  // The block level: the parameter at which the ray leaves block column bx / row by, from the
+  // exit of the block's last cell along the ray (the same formula, so the same bits).
+  auto block_exit_x = [&](int bx) {
+    return exit_x(dx > 0 ? std::min(((bx + 1) << kBlockShift) - 1, m.width - 1)
+                         : bx << kBlockShift);
+  };
+  auto block_exit_y = [&](int by) {
+    return exit_y(dy > 0 ? std::min(((by + 1) << kBlockShift) - 1, m.height - 1)
+                         : by << kBlockShift);
+  };
+  // Walks whole empty blocks from the empty block holding cell (ix, iy), one block per step.
+  // Returns false when the ray leaves the grid or the interval on the way; otherwise t is where
+  // it enters a block that holds something, and (ix, iy) is the cell the plain DDA would be in
+  // there.
+  auto walk_blocks = [&]() {
+    int bx = ix >> kBlockShift, by = iy >> kBlockShift;
+    float tbx = dx != 0 ? block_exit_x(bx) : kInf, tby = dy != 0 ? block_exit_y(by) : kInf;
+    bool moved_x, moved_y;
+    do {
+      t = std::min(tbx, tby);
+      if (t >= tend) return false;
+      moved_x = tbx <= tby, moved_y = tby <= tbx;  // both: exactly through a block corner
+      if (moved_x && ((bx += step_x) < 0 || bx >= m.blocks_x)) return false;
+      if (moved_y && ((by += step_y) < 0 || by >= m.blocks_y)) return false;
+      if (moved_x) tbx = block_exit_x(bx);
+      if (moved_y) tby = block_exit_y(by);
+    } while (m.block_empty[std::size_t(by) * m.blocks_x + bx]);
+    // Along an axis the ray moved on, the first cell of the new block; along the other, the
+    // cell whose entry lies at or before t and whose exit beyond it (floor may round to either
+    // side of a boundary).
+    if (moved_x) {
+      ix = step_x > 0 ? bx << kBlockShift : std::min(((bx + 1) << kBlockShift) - 1, m.width - 1);
+    } else {
+      ix = std::clamp(int(std::floor(ox + dx * t)), 0, m.width - 1);
+      while (dx != 0 && exit_x(ix) <= t && ix + step_x >= 0 && ix + step_x < m.width) ix += step_x;
+      while (dx != 0 && exit_x(ix - step_x) > t && ix - step_x >= 0 && ix - step_x < m.width)
+        ix -= step_x;
+    }
+    if (moved_y) {
+      iy = step_y > 0 ? by << kBlockShift : std::min(((by + 1) << kBlockShift) - 1, m.height - 1);
+    } else {
+      iy = std::clamp(int(std::floor(oy + dy * t)), 0, m.height - 1);
+      while (dy != 0 && exit_y(iy) <= t && iy + step_y >= 0 && iy + step_y < m.height) iy += step_y;
+      while (dy != 0 && exit_y(iy - step_y) > t && iy - step_y >= 0 && iy - step_y < m.height)
+        iy -= step_y;
+    }
+    tmax_x = exit_x(ix);
+    tmax_y = exit_y(iy);
+    return true;
+  };
 
   while (t < tend) {
     const std::size_t idx = std::size_t(iy) * m.width + ix;
@@ -105,27 +145,20 @@ template <class Visit>
     if (step > 0) {
       if (!(skip && step == kOpaque) && !visit(idx, step, t, t_exit)) return;
     } else {
-      // Empty cell: skip to the exit of an empty 8x8 block or by the distance-field jump
-      // (see Medium::step), whichever goes further.
-      float skip_to = step < 0 ? t - step : t;
-      bool block_skip = false;
-      // A block skip never exceeds the block's diagonal (8 sqrt 2 cells): skip the lookup when
-      // the jump already goes further.
-      if (blocks && step > -11.4f) {
-        const int bx = ix >> kBlockShift, by = iy >> kBlockShift;
-        if (m.block_empty[std::size_t(by) * m.blocks_x + bx]) {
-          const int last_x = dx > 0 ? std::min(((bx + 1) << kBlockShift) - 1, m.width - 1)
-                                    : bx << kBlockShift;
-          const int last_y = dy > 0 ? std::min(((by + 1) << kBlockShift) - 1, m.height - 1)
-                                    : by << kBlockShift;
-          const float block_exit = std::min(exit_x(last_x), exit_y(last_y));
-          if (block_exit > skip_to) skip_to = block_exit, block_skip = true;
-        }
+      // Empty cell. In an empty block, walk the block level unless the distance-field jump
+      // (see Medium::step) is long: a jump costs a re-location, a block step a cell step's work
+      // for up to 8 sqrt 2 cells, and past about two block diagonals the jump measured faster
+      // (docs/PERFORMANCE.md). Otherwise jump when the jump leaves the cell.
+      if (blocks && step > -24.0f &&
+          m.block_empty[std::size_t(iy >> kBlockShift) * m.blocks_x + (ix >> kBlockShift)]) {
+        if (!walk_blocks()) return;
+        skip = false;
+        continue;
       }
-      if (skip_to > t_exit) {
-        t = skip_to;
+      if (t - step > t_exit) {
+        t -= step;
         if (t >= tend) break;
-        locate(t, block_skip);
+        locate(t);
         skip = false;
         continue;
       }

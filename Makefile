@@ -29,8 +29,8 @@ bench: build
 
 # The quality studies in docs/QUALITY.md (minutes: the path-traced references are cached).
 quality: build
-	@$(BUILD)/bin/penumbra bench-quality scenes/occluder.json -o docs/quality/occluder --cache $(BUILD)/quality-cache
-	@$(BUILD)/bin/penumbra bench-quality scenes/cornell.json --bounces 2 --reference-spp 512 --max-spp 64 -o docs/quality/cornell --cache $(BUILD)/quality-cache
+	@$(BUILD)/bin/penumbra bench-quality scenes/occluder.json -o docs/quality/occluder --doc docs/QUALITY.md --cache $(BUILD)/quality-cache
+	@$(BUILD)/bin/penumbra bench-quality scenes/cornell.json --bounces 2 --reference-spp 2048 --max-spp 64 -o docs/quality/cornell --doc docs/QUALITY.md --cache $(BUILD)/quality-cache
 
 install: build
 	@cmake --install $(BUILD)

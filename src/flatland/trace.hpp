@@ -117,22 +117,16 @@ template <class Visit>
     // Along an axis the ray moved on, the first cell of the new block; along the other, the
     // cell whose entry lies at or before t and whose exit beyond it (floor may round to either
     // side of a boundary).
-    if (moved_x) {
-      ix = step_x > 0 ? bx << kBlockShift : std::min(((bx + 1) << kBlockShift) - 1, m.width - 1);
-    } else {
-      ix = std::clamp(int(std::floor(ox + dx * t)), 0, m.width - 1);
-      while (dx != 0 && exit_x(ix) <= t && ix + step_x >= 0 && ix + step_x < m.width) ix += step_x;
-      while (dx != 0 && exit_x(ix - step_x) > t && ix - step_x >= 0 && ix - step_x < m.width)
-        ix -= step_x;
-    }
-    if (moved_y) {
-      iy = step_y > 0 ? by << kBlockShift : std::min(((by + 1) << kBlockShift) - 1, m.height - 1);
-    } else {
-      iy = std::clamp(int(std::floor(oy + dy * t)), 0, m.height - 1);
-      while (dy != 0 && exit_y(iy) <= t && iy + step_y >= 0 && iy + step_y < m.height) iy += step_y;
-      while (dy != 0 && exit_y(iy - step_y) > t && iy - step_y >= 0 && iy - step_y < m.height)
-        iy -= step_y;
-    }
+    auto descend = [&](bool moved, int b, int step, int n, float o, float d, auto exit) {
+      if (moved) return step > 0 ? b << kBlockShift : std::min(((b + 1) << kBlockShift) - 1, n - 1);
+      int i = std::clamp(int(std::floor(o + d * t)), 0, n - 1);
+      if (d == 0) return i;
+      while (exit(i) <= t && i + step >= 0 && i + step < n) i += step;
+      while (exit(i - step) > t && i - step >= 0 && i - step < n) i -= step;
+      return i;
+    };
+    ix = descend(moved_x, bx, step_x, m.width, ox, dx, exit_x);
+    iy = descend(moved_y, by, step_y, m.height, oy, dy, exit_y);
     tmax_x = exit_x(ix);
     tmax_y = exit_y(iy);
     return true;

@@ -1,7 +1,6 @@
 // penumbra: the command line. A thin front end over libpenumbra.
 // Exit codes: 0 success, 1 bad input or runtime failure, 2 usage error.
 #include <tbb/task_arena.h>
-
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
@@ -16,9 +15,9 @@
 #include <vector>
 
 #include "compare_cmd.hpp"
-#include "quality_cmd.hpp"
 #include "core/timer.hpp"
 #include "penumbra/penumbra.hpp"
+#include "quality_cmd.hpp"
 
 namespace {
 
@@ -272,15 +271,15 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"rc", "pt"}))
       ->capture_default_str();
   penumbra::PtOptions& pt = a.options.pt;
-  CLI::Option* spp = render
-                         ->add_option("--spp", pt.spp,
-                                      "pt: samples per cell (with --time: the most; 0: no limit)")
-                         ->check(CLI::Range(0, 1 << 30))
-                         ->capture_default_str();
-  CLI::Option* time = render
-                          ->add_option("--time", pt.seconds,
-                                       "pt: add samples until this many seconds have passed")
-                          ->check(CLI::NonNegativeNumber);
+  CLI::Option* spp =
+      render
+          ->add_option("--spp", pt.spp, "pt: samples per cell (with --time: the most; 0: no limit)")
+          ->check(CLI::Range(0, 1 << 30))
+          ->capture_default_str();
+  CLI::Option* time =
+      render
+          ->add_option("--time", pt.seconds, "pt: add samples until this many seconds have passed")
+          ->check(CLI::NonNegativeNumber);
   render->add_flag("--nee", pt.nee,
                    "pt: next event estimation (aim at emitting regions, combined by MIS)");
   render->add_option("--sampler", a.sampler, "pt: direction sequence: r1 (low discrepancy), random")

@@ -30,6 +30,8 @@ inline void run(benchmark::State& state, const Scene& scene, const RenderOptions
   state.counters["compute_ms"] = ms / double(state.iterations());
 }
 
-inline Scene build(const SceneDesc& d) { return *build_scene(d); }
+inline Scene build(const SceneDesc& d) {
+  return *build_scene(d);
+}
 
 }  // namespace penumbra::bench

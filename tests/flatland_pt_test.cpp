@@ -162,7 +162,8 @@ TEST(FlatlandPt, NeeAgreesWithPlainSamplingAndHasLessVariance) {
   d.shapes.push_back({Circle{{disk.cx, disk.cy}, disk.r}, Material{{1, 1, 1}, 1, {}}});
   d.shapes.push_back({Box{{70, 30}, {4, 20}, 0.3f}, Material{}});  // something to shadow
   const Scene s = build(d);
-  RenderOptions plain = pt_options(16, Sampler::random), nee = pt_options(16, Sampler::random, true);
+  RenderOptions plain = pt_options(16, Sampler::random),
+                nee = pt_options(16, Sampler::random, true);
   nee.pt.seed = 7;  // independent of the plain run's numbers
   const ImageRgb a = run(s, plain), b = run(s, nee);
   double sum = 0, sum2 = 0;

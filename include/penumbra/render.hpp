@@ -46,10 +46,10 @@ enum class Sampler {
 
 // The reference path tracer (seed 004 section 5). See docs/METHODS.md.
 struct PtOptions {
-  int spp = 64;            // samples (directions) per cell; with `seconds`, the most to take
-                           // (0: no limit)
-  double seconds = 0;      // > 0: add samples until this much time has passed
-  bool nee = false;        // next event estimation: also aim at emitting regions, combined by MIS
+  int spp = 64;        // samples (directions) per cell; with `seconds`, the most to take
+                       // (0: no limit)
+  double seconds = 0;  // > 0: add samples until this much time has passed
+  bool nee = false;    // next event estimation: also aim at emitting regions, combined by MIS
   Sampler sampler = Sampler::r1;
   std::uint64_t seed = 0;  // changes every random number; same seed, same result
 };

@@ -33,7 +33,6 @@ struct Medium {
 
 inline constexpr int kBlockShift = 3;  // blocks of 8x8 cells
 
-
 // sigma = -ln(1 - opacity) per cell length; opacity 1 is opaque.
 float extinction(float opacity);
 

@@ -28,8 +28,7 @@ Status check_options(int width, int height, const RenderOptions& o) {
     if (pt.spp < 0) return bad("spp: expected >= 0, found " + std::to_string(pt.spp));
     if (!(pt.seconds >= 0) || !std::isfinite(pt.seconds))
       return bad("time: expected a number of seconds >= 0, found " + std::to_string(pt.seconds));
-    if (pt.spp == 0 && pt.seconds == 0)
-      return bad("spp: 0 (no limit) needs a time limit (--time)");
+    if (pt.spp == 0 && pt.seconds == 0) return bad("spp: 0 (no limit) needs a time limit (--time)");
     return {};
   }
   const RcOptions& rc = o.rc;

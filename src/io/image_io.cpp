@@ -537,7 +537,8 @@ Expected<StagedFile> stage_text(const std::string& path, const std::string& text
 Status write_text_files(const std::vector<std::pair<std::string, std::string>>& files) {
   std::vector<std::string> paths;
   for (const auto& [path, text] : files) paths.push_back(path);
-  return write_all(paths, [&](std::size_t i) { return stage_text(files[i].first, files[i].second); });
+  return write_all(paths,
+                   [&](std::size_t i) { return stage_text(files[i].first, files[i].second); });
 }
 
 }  // namespace penumbra::io

@@ -34,7 +34,9 @@ double uniform(std::uint64_t seed, std::uint64_t cell, std::uint64_t sample, std
   return double(h >> 11) * 0x1.0p-53;
 }
 
-double fract(double v) { return v - std::floor(v); }
+double fract(double v) {
+  return v - std::floor(v);
+}
 
 // The angular interval an emitter box covers seen from a point, and the probability of picking
 // it among the boxes.
@@ -116,7 +118,9 @@ double sample_direction(double u, const Arcs& arcs, double& theta) {
   return pdf;
 }
 
-float luminance(const Cell& c) { return (c.r + c.g + c.b) / 3.0f; }
+float luminance(const Cell& c) {
+  return (c.r + c.g + c.b) / 3.0f;
+}
 
 struct Context {
   const Medium& medium;
@@ -292,15 +296,15 @@ std::vector<EmitterBox> find_emitters(const Medium& m) {
   }
   std::vector<EmitterBox> boxes;
   for (const Group& g : merged)
-    boxes.push_back({g.x0, g.y0, g.x1, g.y1,
-                     float(g.power / (double(g.x1 - g.x0) * double(g.y1 - g.y0)))});
+    boxes.push_back(
+        {g.x0, g.y0, g.x1, g.y1, float(g.power / (double(g.x1 - g.x0) * double(g.y1 - g.y0)))});
   return boxes;
 }
 
 std::uint64_t working_bytes(int width, int height, const PtOptions& options) {
   const std::uint64_t cells = std::uint64_t(width) * std::uint64_t(height);
   std::uint64_t bytes = cells * 3 * (sizeof(double) + sizeof(float));  // sums and fluence
-  if (options.nee) bytes += cells * sizeof(std::int32_t);               // emitter labels
+  if (options.nee) bytes += cells * sizeof(std::int32_t);              // emitter labels
   return bytes;
 }
 
@@ -353,8 +357,8 @@ std::vector<float> solve(const Medium& medium, const std::vector<float>& albedo,
   std::vector<float> fluence(3 * cells);
   const double inv = 1.0 / double(done);
   parallel_for(medium.height, [&](int y) {
-    for (std::size_t i = std::size_t(y) * medium.width * 3; i < std::size_t(y + 1) * medium.width * 3;
-         ++i)
+    for (std::size_t i = std::size_t(y) * medium.width * 3;
+         i < std::size_t(y + 1) * medium.width * 3; ++i)
       fluence[i] = float(sum[i] * inv);
   });
   return fluence;

@@ -32,6 +32,11 @@ struct Medium {
 };
 
 inline constexpr int kBlockShift = 3;  // blocks of 8x8 cells
+// In an empty block the tracer takes a distance-field jump longer than this (in cells) instead of
+// walking blocks: a jump costs a re-location, a block step about a cell step's work for up to
+// 8 sqrt 2 cells, and past about two block diagonals the jump measured faster
+// (docs/PERFORMANCE.md).
+inline constexpr float kJumpOverBlocks = 24.0f;
 
 // sigma = -ln(1 - opacity) per cell length; opacity 1 is opaque.
 float extinction(float opacity);

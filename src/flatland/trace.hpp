@@ -87,23 +87,22 @@ template <class Visit>
     skip = px != std::floor(px) && py != std::floor(py);
   }
   const bool blocks = !m.block_empty.empty();
-  // The block level: the parameter at which the ray leaves block column bx / row by, from the
-  // exit of the block's last cell along the ray (the same formula, so the same bits).
-  auto block_exit_x = [&](int bx) {
-    return exit_x(dx > 0 ? std::min(((bx + 1) << kBlockShift) - 1, m.width - 1)
-                         : bx << kBlockShift);
+  // The first cell of block b (of a row or column of n cells) that a ray moving by `step`
+  // meets; its last is the first of the opposite direction.
+  auto first_cell = [](int b, int step, int n) {
+    return step > 0 ? b << kBlockShift : std::min(((b + 1) << kBlockShift) - 1, n - 1);
   };
-  auto block_exit_y = [&](int by) {
-    return exit_y(dy > 0 ? std::min(((by + 1) << kBlockShift) - 1, m.height - 1)
-                         : by << kBlockShift);
-  };
+  // The block level: the parameter at which the ray leaves block column bx / row by, the exit of
+  // the block's last cell along the ray (the same formula, so the same bits).
+  auto block_exit_x = [&](int bx) { return exit_x(first_cell(bx, -step_x, m.width)); };
+  auto block_exit_y = [&](int by) { return exit_y(first_cell(by, -step_y, m.height)); };
   // Walks whole empty blocks from the empty block holding cell (ix, iy), one block per step.
   // Returns false when the ray leaves the grid or the interval on the way; otherwise t is where
   // it enters a block that holds something, and (ix, iy) is the cell the plain DDA would be in
   // there.
   auto walk_blocks = [&]() {
     int bx = ix >> kBlockShift, by = iy >> kBlockShift;
-    float tbx = dx != 0 ? block_exit_x(bx) : kInf, tby = dy != 0 ? block_exit_y(by) : kInf;
+    float tbx = block_exit_x(bx), tby = block_exit_y(by);  // infinite along an axis not moved on
     bool moved_x, moved_y;
     do {
       t = std::min(tbx, tby);
@@ -118,7 +117,7 @@ template <class Visit>
     // cell whose entry lies at or before t and whose exit beyond it (floor may round to either
     // side of a boundary).
     auto descend = [&](bool moved, int b, int step, int n, float o, float d, auto exit) {
-      if (moved) return step > 0 ? b << kBlockShift : std::min(((b + 1) << kBlockShift) - 1, n - 1);
+      if (moved) return first_cell(b, step, n);
       int i = std::clamp(int(std::floor(o + d * t)), 0, n - 1);
       if (d == 0) return i;
       while (exit(i) <= t && i + step >= 0 && i + step < n) i += step;
@@ -140,10 +139,9 @@ template <class Visit>
       if (!(skip && step == kOpaque) && !visit(idx, step, t, t_exit)) return;
     } else {
       // Empty cell. In an empty block, walk the block level unless the distance-field jump
-      // (see Medium::step) is long: a jump costs a re-location, a block step a cell step's work
-      // for up to 8 sqrt 2 cells, and past about two block diagonals the jump measured faster
-      // (docs/PERFORMANCE.md). Otherwise jump when the jump leaves the cell.
-      if (blocks && step > -24.0f &&
+      // (see Medium::step) is longer than kJumpOverBlocks; otherwise jump when the jump leaves
+      // the cell.
+      if (blocks && step > -kJumpOverBlocks &&
           m.block_empty[std::size_t(iy >> kBlockShift) * m.blocks_x + (ix >> kBlockShift)]) {
         if (!walk_blocks()) return;
         skip = false;

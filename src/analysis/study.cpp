@@ -175,9 +175,11 @@ namespace {
 // the single points with a legend column on the right. Shared by the SVG and the PNG.
 struct Plot {
   static constexpr double H = 480, left = 70, top = 40, bottom = 50, frame = 480;
-  double right = 230, W = left + frame + right;  // the legend column widens to its longest name
+  double right = 230;  // the legend column, as wide as its longest name needs
   double x0 = 0, x1 = 1, y0 = -2, y1 = 0;
-  double px(double t) const { return left + (std::log10(t) - x0) / (x1 - x0) * (W - left - right); }
+  double W() const { return left + frame + right; }
+  double frame_right() const { return left + frame; }
+  double px(double t) const { return left + (std::log10(t) - x0) / (x1 - x0) * frame; }
   double py(double e) const { return top + (y1 - std::log10(e)) / (y1 - y0) * (H - top - bottom); }
   struct Series {
     std::string name, colour;
@@ -200,15 +202,10 @@ Plot layout(const std::vector<Row>& rows) {
     emin = std::min(emin, r.error.relative_rmse), emax = std::max(emax, r.error.relative_rmse);
   }
   if (!(tmax > 0)) tmin = 1, tmax = 10, emin = 0.01, emax = 1;
-  const char* names[] = {"path tracer", "path tracer + NEE"};
-  int longest = analysis::text_width(names[1], 2);
-  for (const Row& r : rows)
-    if (r.run.curve.empty() && plottable(r))
-      longest = std::max(longest, analysis::text_width(r.run.label, 2));
-  p.right = 44 + longest, p.W = p.left + p.frame + p.right;
   p.x0 = std::floor(std::log10(tmin)), p.x1 = std::max(p.x0 + 1, std::ceil(std::log10(tmax)));
   p.y0 = std::floor(std::log10(emin)), p.y1 = std::max(p.y0 + 1, std::ceil(std::log10(emax)));
   const std::pair<const char*, const char*> curves[] = {{"pt", "#1f77b4"}, {"pt nee", "#ff7f0e"}};
+  const char* names[] = {"path tracer", "path tracer + NEE"};
   for (int c = 0; c < 2; ++c) {
     Plot::Series s{names[c], curves[c].second, true, {}};
     for (const Row& r : curve_rows(rows, curves[c].first))
@@ -222,6 +219,11 @@ Plot layout(const std::vector<Row>& rows) {
     if (r.run.curve.empty() && plottable(r))
       p.series.push_back(
           {r.run.label, palette[k++ % 8], false, {{p.px(r.time_ms), p.py(r.error.relative_rmse)}}});
+  // The legend column widens to its longest name (at least the NEE curve's).
+  int longest = analysis::text_width(names[1], 2);
+  for (const Plot::Series& c : p.series)
+    longest = std::max(longest, analysis::text_width(c.name, 2));
+  p.right = 44 + longest;
   return p;
 }
 
@@ -236,7 +238,7 @@ analysis::Colour parse_colour(const std::string& hex) {
 std::string to_svg(const std::vector<Row>& rows, const std::string& title) {
   const Plot p = layout(rows);
   std::ostringstream s;
-  s << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << p.W << "\" height=\"" << p.H
+  s << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << p.W() << "\" height=\"" << p.H
     << "\" font-family=\"sans-serif\" font-size=\"12\">\n"
     << "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n"
     << "<text x=\"" << p.left << "\" y=\"24\" font-size=\"15\">" << title << "</text>\n";
@@ -249,13 +251,13 @@ std::string to_svg(const std::vector<Row>& rows, const std::string& title) {
   }
   for (double d = p.y0; d <= p.y1; ++d) {
     const double y = p.py(std::pow(10, d));
-    s << "<line x1=\"" << p.left << "\" y1=\"" << y << "\" x2=\"" << p.W - p.right << "\" y2=\""
+    s << "<line x1=\"" << p.left << "\" y1=\"" << y << "\" x2=\"" << p.frame_right() << "\" y2=\""
       << y << "\" stroke=\"#ddd\"/>\n<text x=\"" << p.left - 6 << "\" y=\"" << y + 4
       << "\" text-anchor=\"end\">" << format("%g%%", 100 * std::pow(10, d)) << "</text>\n";
   }
-  s << "<rect x=\"" << p.left << "\" y=\"" << p.top << "\" width=\"" << p.W - p.left - p.right
-    << "\" height=\"" << p.H - p.top - p.bottom << "\" fill=\"none\" stroke=\"#333\"/>\n"
-    << "<text x=\"" << (p.left + p.W - p.right) / 2 << "\" y=\"" << p.H - 12
+  s << "<rect x=\"" << p.left << "\" y=\"" << p.top << "\" width=\"" << p.frame << "\" height=\""
+    << p.H - p.top - p.bottom << "\" fill=\"none\" stroke=\"#333\"/>\n"
+    << "<text x=\"" << (p.left + p.frame_right()) / 2 << "\" y=\"" << p.H - 12
     << "\" text-anchor=\"middle\">computation time (ms)</text>\n"
     << "<text transform=\"translate(18," << (p.top + p.H - p.bottom) / 2
     << ") rotate(-90)\" text-anchor=\"middle\">relative RMSE against the reference</text>\n";
@@ -272,9 +274,9 @@ std::string to_svg(const std::vector<Row>& rows, const std::string& title) {
       s << "<rect x=\"" << c.points[0].first - 4 << "\" y=\"" << c.points[0].second - 4
         << "\" width=\"8\" height=\"8\" fill=\"" << c.colour << "\"/>\n";
     }
-    s << "<rect x=\"" << p.W - p.right + 14 << "\" y=\"" << legend_y - 8
+    s << "<rect x=\"" << p.frame_right() + 14 << "\" y=\"" << legend_y - 8
       << "\" width=\"14\" height=\"8\" fill=\"" << c.colour << "\"/><text x=\""
-      << p.W - p.right + 34 << "\" y=\"" << legend_y << "\">" << c.name << "</text>\n";
+      << p.frame_right() + 34 << "\" y=\"" << legend_y << "\">" << c.name << "</text>\n";
     legend_y += 18;
   }
   s << "</svg>\n";
@@ -283,7 +285,8 @@ std::string to_svg(const std::vector<Row>& rows, const std::string& title) {
 
 ImageRgb8 to_png_plot(const std::vector<Row>& rows, const std::string& title) {
   const Plot p = layout(rows);
-  ImageRgb8 img{int(p.W), int(p.H), std::vector<unsigned char>(std::size_t(p.W * p.H * 3), 255)};
+  ImageRgb8 img{int(p.W()), int(p.H),
+                std::vector<unsigned char>(std::size_t(p.W() * p.H * 3), 255)};
   const analysis::Colour grid{221, 221, 221}, ink{40, 40, 40};
   auto line = [&](double ax, double ay, double bx, double by, analysis::Colour c, int thick) {
     const int n = int(std::max(std::abs(bx - ax), std::abs(by - ay))) + 1;
@@ -304,18 +307,18 @@ ImageRgb8 to_png_plot(const std::vector<Row>& rows, const std::string& title) {
   }
   for (double d = p.y0; d <= p.y1; ++d) {
     const double y = p.py(std::pow(10, d));
-    line(p.left, y, p.W - p.right, y, grid, 1);
+    line(p.left, y, p.frame_right(), y, grid, 1);
     const std::string label = format("%g%%", 100 * std::pow(10, d));
     analysis::draw_text(img, int(p.left) - 6 - analysis::text_width(label, scale), int(y) - half,
                         label, ink, scale);
   }
-  line(p.left, p.top, p.W - p.right, p.top, ink, 1);
-  line(p.left, p.H - p.bottom, p.W - p.right, p.H - p.bottom, ink, 1);
+  line(p.left, p.top, p.frame_right(), p.top, ink, 1);
+  line(p.left, p.H - p.bottom, p.frame_right(), p.H - p.bottom, ink, 1);
   line(p.left, p.top, p.left, p.H - p.bottom, ink, 1);
-  line(p.W - p.right, p.top, p.W - p.right, p.H - p.bottom, ink, 1);
+  line(p.frame_right(), p.top, p.frame_right(), p.H - p.bottom, ink, 1);
   const std::string xlabel = "computation time (ms); y: relative RMSE";
   analysis::draw_text(img,
-                      int((p.left + p.W - p.right) / 2) - analysis::text_width(xlabel, scale) / 2,
+                      int((p.left + p.frame_right()) / 2) - analysis::text_width(xlabel, scale) / 2,
                       int(p.H) - 22, xlabel, ink, scale);
   int legend_y = int(p.top) + 4;
   for (const Plot::Series& c : p.series) {
@@ -329,8 +332,8 @@ ImageRgb8 to_png_plot(const std::vector<Row>& rows, const std::string& title) {
       analysis::fill_rect(img, int(c.points[0].first) - 4, int(c.points[0].second) - 4, 9, 9,
                           colour);
     }
-    analysis::fill_rect(img, int(p.W - p.right) + 12, legend_y + 2, 14, 8, colour);
-    analysis::draw_text(img, int(p.W - p.right) + 32, legend_y, c.name, ink, scale);
+    analysis::fill_rect(img, int(p.frame_right()) + 12, legend_y + 2, 14, 8, colour);
+    analysis::draw_text(img, int(p.frame_right()) + 32, legend_y, c.name, ink, scale);
     legend_y += analysis::line_height(scale) + 4;
   }
   return img;

@@ -7,9 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
-#include <sstream>
 
 #include "analysis/study.hpp"
 #include "io/image_io.hpp"
@@ -60,13 +58,6 @@ int fail(const std::string& what) {
   return 1;
 }
 
-Expected<std::string> read_text(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream s;
-  if (!(in && s << in.rdbuf())) return Error{path + ": cannot read the file"};
-  return s.str();
-}
-
 // The study's section for a document: the table, then the plot and the montage linked by paths
 // relative to the document.
 std::string doc_section(const std::string& table, const fs::path& doc, const fs::path& out,
@@ -92,7 +83,7 @@ int run_quality(const QualityArgs& a) {
   // edits made meanwhile are kept.
   const std::string section = fs::path(a.scene).stem().string();
   auto spliced_doc = [&](const std::string& body) -> Expected<std::string> {
-    Expected<std::string> text = read_text(a.doc);
+    Expected<std::string> text = io::read_text(a.doc);
     if (!text) return text;
     Expected<std::string> spliced = study::splice_section(*text, section, body);
     if (!spliced) return Error{a.doc + ": " + spliced.error().message};

@@ -23,6 +23,9 @@
 #include <cstdio>
 #include <cstring>
 #include <exception>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <limits>
 #include <memory>
 #include <string>
@@ -532,6 +535,18 @@ Expected<StagedFile> stage_text(const std::string& path, const std::string& text
   return stage(path, [&](std::FILE* f) {
     return std::fwrite(text.data(), 1, text.size(), f) == text.size();
   });
+}
+
+Expected<std::string> read_text(const std::string& path, const std::string& what) {
+  const std::string fail = path + ": cannot read " + what + ": ";
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) return Error{fail + "no such file"};
+  if (std::filesystem::is_directory(path, ec)) return Error{fail + "it is a directory"};
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return Error{fail + "cannot open it"};
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (in.bad()) return Error{fail + "read error"};
+  return text;
 }
 
 Status write_text_files(const std::vector<std::pair<std::string, std::string>>& files) {

@@ -48,6 +48,9 @@ Status write_all(const std::vector<std::string>& paths,
 // Text files (CSV, markdown, SVG), staged like the images; several at once, all or nothing.
 Expected<StagedFile> stage_text(const std::string& path, const std::string& text);
 Status write_text_files(const std::vector<std::pair<std::string, std::string>>& files);
+// The whole content of a text file; `what` names it in the errors ("path: cannot read the scene
+// file: no such file").
+Expected<std::string> read_text(const std::string& path, const std::string& what = "the file");
 
 // Writers that stage and publish at once, so the target appears whole or not at all.
 Status write_pfm(const std::string& path, const ImageRgb& image);

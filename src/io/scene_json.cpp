@@ -9,9 +9,7 @@
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
-#include <fstream>
 #include <initializer_list>
-#include <iterator>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
@@ -569,16 +567,9 @@ Expected<SceneDesc> parse_scene(std::string_view json_text, const std::string& p
 }
 
 Expected<SceneDesc> load_scene(const std::string& path) {
-  std::error_code ec;
-  if (!std::filesystem::exists(path, ec))
-    return Error{path + ": cannot read the scene file: no such file"};
-  if (std::filesystem::is_directory(path, ec))
-    return Error{path + ": cannot read the scene file: it is a directory"};
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return Error{path + ": cannot read the scene file: cannot open it"};
-  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (in.bad()) return Error{path + ": cannot read the scene file: read error"};
-  return parse_scene(text, path);
+  Expected<std::string> text = io::read_text(path, "the scene file");
+  if (!text) return text.error();
+  return parse_scene(*text, path);
 }
 
 Status validate(const SceneDesc& desc) {

@@ -68,6 +68,14 @@ nlohmann::json parameters_json(const penumbra::RenderOptions& o) {
               {"seed", pt.seed}});
     return p;
   }
+  if (o.method == penumbra::Method::hrc) {
+    p.erase("distance_field");
+    p.erase("blocks");
+    p.update({{"storage", penumbra::to_string(o.hrc.storage)},
+              {"cross_blur", o.hrc.cross_blur},
+              {"near_segment", o.hrc.near_segment}});
+    return p;
+  }
   const penumbra::RcOptions& rc = o.rc;
   p.update({{"probe_spacing", rc.probe_spacing},
             {"directions", rc.directions},
@@ -115,6 +123,7 @@ struct RenderArgs {
   std::string method = "rc";
   std::string fix = "bilinear";
   std::string sampler = "r1";
+  std::string storage = "f32";
   std::string max_memory = "8G";
   float exposure = 0;
   bool json = false;
@@ -143,7 +152,10 @@ int run_render(const RenderArgs& a) {
   static const std::map<std::string, MergeFix> fixes = {
       {"bilinear", MergeFix::bilinear}, {"none", MergeFix::none}, {"nearest", MergeFix::nearest}};
   options.rc.fix = fixes.at(a.fix);
-  options.method = a.method == "pt" ? penumbra::Method::pt : penumbra::Method::rc;
+  options.method = a.method == "pt"    ? penumbra::Method::pt
+                   : a.method == "hrc" ? penumbra::Method::hrc
+                                       : penumbra::Method::rc;
+  options.hrc.storage = a.storage == "f16" ? penumbra::Storage::f16 : penumbra::Storage::f32;
   options.pt.sampler = a.sampler == "random" ? penumbra::Sampler::random : penumbra::Sampler::r1;
   if (!std::isfinite(a.exposure)) {
     std::cerr << "penumbra render: --exposure: expected a finite number of EV\n";
@@ -229,6 +241,9 @@ int run_render(const RenderArgs& a) {
     if (options.method == penumbra::Method::pt)
       std::printf("%llu samples per cell, sampler %s%s\n", (unsigned long long)result->samples,
                   penumbra::to_string(options.pt.sampler), options.pt.nee ? ", nee" : "");
+    else if (options.method == penumbra::Method::hrc)
+      std::printf("storage %s, cross blur %s\n", penumbra::to_string(options.hrc.storage),
+                  options.hrc.cross_blur ? "on" : "off");
     else
       std::printf("%d cascades, fix %s\n", result->options.rc.cascades,
                   penumbra::to_string(options.rc.fix));
@@ -268,7 +283,7 @@ int main(int argc, char** argv) {
                    "Output file: .png (display), .exr or .pfm (fluence); repeatable")
       ->required();
   render->add_option("--method", a.method, "Method")
-      ->check(CLI::IsMember({"rc", "pt"}))
+      ->check(CLI::IsMember({"rc", "pt", "hrc"}))
       ->capture_default_str();
   penumbra::PtOptions& pt = a.options.pt;
   CLI::Option* spp =
@@ -311,6 +326,14 @@ int main(int argc, char** argv) {
   render->add_option("--extend-length", rc.extend_length, "Traced length before extension, cells")
       ->check(CLI::Range(1.0f, 1.0e6f))
       ->capture_default_str();
+  render->add_option("--storage", a.storage, "hrc: precision of T and R: f32, f16")
+      ->check(CLI::IsMember({"f32", "f16"}))
+      ->capture_default_str();
+  bool no_cross_blur = false;
+  render->add_flag("--no-cross-blur", no_cross_blur, "hrc: skip the final 1-cell cross blur");
+  bool no_near_segment = false;
+  render->add_flag("--no-near-segment", no_near_segment,
+                   "hrc: read R_0([x+1, y]) alone, as the paper (a cell's own medium left out)");
   render->add_option("--bounces", a.options.bounces, "Diffuse bounces (1: direct light only)")
       ->check(CLI::Range(1, 64))
       ->capture_default_str();
@@ -340,6 +363,8 @@ int main(int argc, char** argv) {
   }
   a.options.distance_field = !no_distance_field;
   a.options.blocks = !no_blocks;
+  a.options.hrc.cross_blur = !no_cross_blur;
+  a.options.hrc.near_segment = !no_near_segment;
   // --time alone runs until the time is up; with --spp too, whichever comes first.
   if (time->count() > 0 && spp->count() == 0) a.options.pt.spp = 0;
   if (render->parsed()) {

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <tuple>
 
 #include "analysis/study.hpp"
 #include "io/image_io.hpp"
@@ -28,7 +29,8 @@ std::unique_ptr<QualityCommand> add_quality_command(CLI::App& app) {
       "Error against time of every method on a scene, against a converged path-traced reference");
   CLI::App* c = cmd->app;
   c->add_option("scene", a.scene, "Scene file (JSON, format 1)")->required();
-  c->add_option("-o,--out", a.out, "Folder for quality.csv/.md/.svg/.png and rc_vs_reference.png")
+  c->add_option("-o,--out", a.out,
+                "Folder for quality.csv/.md/.svg/.png and {rc,hrc}_vs_reference.png")
       ->capture_default_str();
   c->add_option("--cache", a.cache, "Folder for cached references (default: <out>/cache)");
   c->add_option("--doc", a.doc,
@@ -65,7 +67,9 @@ std::string doc_section(const std::string& table, const fs::path& doc, const fs:
   const fs::path dir = fs::relative(out, fs::absolute(doc).parent_path());
   return table + "\n![" + name + ": error against time](" + (dir / "quality.png").generic_string() +
          ")\n\n![" + name + ": the default cascades against the reference](" +
-         (dir / "rc_vs_reference.png").generic_string() + ")\n";
+         (dir / "rc_vs_reference.png").generic_string() + ")\n\n![" + name +
+         ": holographic cascades against the reference](" +
+         (dir / "hrc_vs_reference.png").generic_string() + ")\n";
 }
 
 }  // namespace
@@ -138,7 +142,7 @@ int run_quality(const QualityArgs& a) {
 
   const std::vector<std::uint8_t> mask = non_opaque_cells(*scene);
   std::vector<study::Row> rows;
-  RenderResult rc_default;
+  RenderResult rc_default, hrc_default;
   for (const study::Run& run : study::default_runs(a.bounces, a.max_spp, a.quick)) {
     RenderOptions o = run.options;
     o.threads = a.threads;
@@ -148,6 +152,7 @@ int run_quality(const QualityArgs& a) {
     if (!m) return fail(run.label + ": " + m.error().message);
     study::Row row{run, r->time_ms, r->samples, *m};
     if (run.label == "rc (defaults)") rc_default = std::move(*r);
+    if (run.label == "hrc (defaults)") hrc_default = std::move(*r);
     std::printf("  %-24s %9.0f ms  rel. RMSE %8.4f%%  PSNR %5.1f dB\n", run.label.c_str(),
                 row.time_ms, 100 * m->relative_rmse, m->psnr);
     std::fflush(stdout);
@@ -172,14 +177,17 @@ int run_quality(const QualityArgs& a) {
   // Pictures to look at: the plot, and the default cascades against the reference.
   std::vector<std::pair<std::string, ImageRgb8>> pictures = {
       {(out / "quality.png").string(), study::to_png_plot(rows, title)}};
-  if (rc_default.fluence.size() > 0) {
+  for (const auto& [label, result, file] :
+       {std::tuple{"rc (defaults)", &rc_default, "rc_vs_reference.png"},
+        std::tuple{"hrc (defaults)", &hrc_default, "hrc_vs_reference.png"}}) {
+    if (result->fluence.size() == 0) continue;
     MontageOptions mo;
-    mo.test_label = "rc (defaults)";
+    mo.test_label = label;
     mo.reference_label = "path tracer + NEE, " + std::to_string(a.reference_spp) + " spp";
     mo.scene = &*scene;
-    Expected<ImageRgb8> montage = comparison_montage(rc_default.fluence, reference, &mask, mo);
+    Expected<ImageRgb8> montage = comparison_montage(result->fluence, reference, &mask, mo);
     if (!montage) return fail(montage.error().message);
-    pictures.push_back({(out / "rc_vs_reference.png").string(), std::move(*montage)});
+    pictures.push_back({(out / file).string(), std::move(*montage)});
   }
   if (Status s = write_pictures(pictures); !s) return fail(s.error().message);
   for (const auto& [path, picture] : pictures) std::printf("wrote %s\n", path.c_str());

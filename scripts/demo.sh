@@ -21,4 +21,6 @@ stage "build" bash -c "cmake --build '$BUILD' -j '$JOBS' --target penumbra_cli >
 mkdir -p out
 echo "demo: rendering the built-in scene with radiance cascades:"
 stage "render" "$BUILD/bin/penumbra" render -o out/demo.png -o out/demo.exr
-echo "demo: open out/demo.png (display) or out/demo.exr (linear fluence)"
+echo "demo: the same scene with holographic radiance cascades:"
+stage "render (hrc)" "$BUILD/bin/penumbra" render --method hrc -o out/demo_hrc.png -o out/demo_hrc.exr
+echo "demo: open out/demo.png (display) or out/demo.exr (linear fluence); out/demo_hrc.* for HRC"

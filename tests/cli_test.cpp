@@ -154,6 +154,27 @@ TEST_F(Cli, PathTracerReportsSamplesAndParameters) {
   EXPECT_TRUE(r.err.empty()) << r.err;  // no progress bar when stderr is not a terminal
 }
 
+TEST_F(Cli, HolographicCascadesReportStagesAndParameters) {
+  const Result r = render_ok({"--json", "--method", "hrc", "--storage", "f16", "--no-cross-blur",
+                              "--no-near-segment", "-o", out("h.pfm")});
+  nlohmann::json j;
+  ASSERT_NO_THROW(j = nlohmann::json::parse(r.out)) << r.out;
+  EXPECT_EQ(j.at("method"), "hrc");
+  for (const char* stage : {"trace T0-T2", "merge up T3-TN", "merge down R", "views"})
+    EXPECT_TRUE(j.at("stages").contains(stage)) << stage;
+  EXPECT_FALSE(j.at("stages").contains("cross blur"));
+  EXPECT_GT(j.at("intervals").get<std::uint64_t>(), 4u * 48 * 32);  // T_0 alone: 2 per cell
+  const nlohmann::json& p = j.at("parameters");
+  EXPECT_EQ(p.at("storage"), "f16");
+  EXPECT_EQ(p.at("cross_blur"), false);
+  EXPECT_EQ(p.at("near_segment"), false);
+  EXPECT_FALSE(p.contains("distance_field"));  // HRC builds no acceleration for long rays
+  EXPECT_TRUE(fs::exists(out("h.pfm")));
+  fs::remove(out("h.pfm"));
+  expect_failure(run({"render", scene_, "--method", "hrc", "--storage", "f8", "-o", out("x.pfm")}),
+                 2);
+}
+
 TEST_F(Cli, PathTracerSkippingEmptySpaceDoesNotChangeTheResult) {
   const std::vector<std::string> pt = {"-q", "--method", "pt", "--spp", "4", "--bounces", "2"};
   std::vector<std::vector<std::string>> variants = {
@@ -219,8 +240,9 @@ TEST_F(Cli, HelpMentionsTheOptions) {
 
   const Result r = run({"render", "--help"});
   EXPECT_EQ(r.status, 0) << r.err;
-  for (const char* opt : {"--output", "--probe-spacing", "--branching", "--fix", "--threads",
-                          "--max-memory", "--json", "--extend"})
+  for (const char* opt :
+       {"--output", "--probe-spacing", "--branching", "--fix", "--threads", "--max-memory",
+        "--json", "--extend", "--storage", "--no-cross-blur", "--no-near-segment"})
     EXPECT_NE(r.out.find(opt), std::string::npos) << opt << " missing from:\n" << r.out;
 }
 

@@ -114,12 +114,13 @@ TEST(Study, CommandWritesEverythingAndReusesTheReference) {
                                          "--reference-spp", "64"};
   testing::CliResult r = testing::run_cli(args, dir.root());
   ASSERT_EQ(r.status, 0) << r.err;
-  for (const char* f :
-       {"quality.csv", "quality.md", "quality.svg", "quality.png", "rc_vs_reference.png"})
+  for (const char* f : {"quality.csv", "quality.md", "quality.svg", "quality.png",
+                        "rc_vs_reference.png", "hrc_vs_reference.png"})
     EXPECT_TRUE(fs::is_regular_file(fs::path(out) / f)) << f;
   EXPECT_NE(r.out.find("rendering 64 spp"), std::string::npos) << r.out;
   const std::string md = testing::slurp(fs::path(out) / "quality.md");
   EXPECT_NE(md.find("| rc (defaults) |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| hrc (defaults) |"), std::string::npos) << md;
   // The cached reference is reused and gives the same table.
   r = testing::run_cli(args, dir.root());
   ASSERT_EQ(r.status, 0) << r.err;
@@ -139,6 +140,7 @@ TEST(Study, CommandWritesEverythingAndReusesTheReference) {
   EXPECT_NE(updated.find("| rc (defaults) |"), std::string::npos) << updated;
   EXPECT_NE(updated.find("](../q/quality.png)"), std::string::npos) << updated;
   EXPECT_NE(updated.find("](../q/rc_vs_reference.png)"), std::string::npos) << updated;
+  EXPECT_NE(updated.find("](../q/hrc_vs_reference.png)"), std::string::npos) << updated;
   EXPECT_EQ(updated.find("old"), std::string::npos) << updated;
   EXPECT_NE(updated.find("<!-- /bench-quality s -->\nfoot\n"), std::string::npos) << updated;
   // A document without the scene's markers is refused before any rendering, and kept as it is.

@@ -14,8 +14,9 @@
 namespace penumbra {
 
 enum class Method {
-  rc,  // radiance cascades (seed 001, seed 002)
-  pt,  // the reference path tracer: converges to the exact fluence of the cell grid
+  rc,   // radiance cascades (seed 001, seed 002)
+  pt,   // the reference path tracer: converges to the exact fluence of the cell grid
+  hrc,  // holographic radiance cascades (seed 004)
 };
 
 // How a ray of cascade n continues into cascade n+1 when merging.
@@ -36,6 +37,21 @@ struct RcOptions {
   bool preaverage = false;  // trace a 2x2 sub-probe neighbourhood and store the average
   bool extend = false;      // build long intervals by extending a short traced one (eq. 16)
   float extend_length = 8;  // length traced before extension doubles it, in cells
+};
+
+// Precision of stored intervals.
+enum class Storage {
+  f32,  // 32-bit floats
+  f16,  // 16-bit floats (half the memory; radiance above kHalfMaxRadiance is refused)
+};
+
+// Holographic radiance cascades (seed 004 section 4). See docs/METHODS.md.
+struct HrcOptions {
+  Storage storage = Storage::f32;  // of the acceleration structure T and the cascades R
+  bool cross_blur = true;          // the final 1-cell cross blur (eq. 21)
+  // Merge the transport from a cell's centre to the probe the paper reads, R_0([x+1, y]), in
+  // front of it (off: the paper's formula, which leaves a cell's own medium out of its fluence).
+  bool near_segment = true;
 };
 
 // Where the path tracer's directions come from.
@@ -66,8 +82,10 @@ struct RenderOptions {
   Method method = Method::rc;
   RcOptions rc;
   PtOptions pt;
-  int bounces = 1;             // 1: direct light only; N: N-1 more diffuse bounces
-  int threads = 0;             // 0: all hardware threads
+  HrcOptions hrc;
+  int bounces = 1;  // 1: direct light only; N: N-1 more diffuse bounces
+  int threads = 0;  // 0: all hardware threads
+  // rc and pt (hrc traces only rays a few cells long and builds neither):
   bool distance_field = true;  // jump over empty space (same answer, faster); off: plain DDA
   bool blocks = true;          // skip empty 8x8 blocks (two-level DDA; same answer, faster)
   std::uint64_t max_memory = std::uint64_t(8) << 30;  // refuse work whose memory need is larger
@@ -117,5 +135,6 @@ Expected<RenderResult> render(const Scene& scene, const RenderOptions& options);
 const char* to_string(Method m);
 const char* to_string(MergeFix f);
 const char* to_string(Sampler s);
+const char* to_string(Storage s);
 
 }  // namespace penumbra

@@ -58,9 +58,19 @@ std::vector<Run> default_runs(int bounces, int max_spp, bool quick) {
     set(o.rc);
     runs.push_back({label, "", o});
   };
+  auto hrc = [&](const std::string& label, auto&& set) {
+    RenderOptions o = base;
+    o.method = Method::hrc;
+    set(o.hrc);
+    runs.push_back({label, "", o});
+  };
   rc("rc (defaults)", [](RcOptions&) {});
   rc("rc --fix none", [](RcOptions& r) { r.fix = MergeFix::none; });
+  hrc("hrc (defaults)", [](HrcOptions&) {});
   if (quick) return runs;
+  hrc("hrc --no-cross-blur", [](HrcOptions& h) { h.cross_blur = false; });
+  hrc("hrc --no-near-segment", [](HrcOptions& h) { h.near_segment = false; });
+  hrc("hrc --storage f16", [](HrcOptions& h) { h.storage = Storage::f16; });
   rc("rc --fix nearest", [](RcOptions& r) { r.fix = MergeFix::nearest; });
   rc("rc --interval 2", [](RcOptions& r) { r.interval = 2; });
   rc("rc --directions 8", [](RcOptions& r) { r.directions = 8; });

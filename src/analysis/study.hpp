@@ -19,7 +19,8 @@ struct Run {
 };
 
 // The path tracer at 1, 4, 16, ... samples per cell up to `max_spp`, plain and with NEE; the
-// cascades at their defaults and the variants docs/METHODS.md lists. All use `bounces`.
+// cascades (RC and HRC) at their defaults and the variants docs/METHODS.md lists. All use
+// `bounces`.
 std::vector<Run> default_runs(int bounces, int max_spp, bool quick);
 
 struct Row {

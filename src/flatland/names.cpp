@@ -9,6 +9,8 @@ const char* to_string(Method m) {
       return "rc";
     case Method::pt:
       return "pt";
+    case Method::hrc:
+      return "hrc";
   }
   return "?";
 }
@@ -31,6 +33,16 @@ const char* to_string(Sampler s) {
       return "r1";
     case Sampler::random:
       return "random";
+  }
+  return "?";
+}
+
+const char* to_string(Storage s) {
+  switch (s) {
+    case Storage::f32:
+      return "f32";
+    case Storage::f16:
+      return "f16";
   }
   return "?";
 }

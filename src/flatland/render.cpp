@@ -9,6 +9,7 @@
 
 #include "core/parallel.hpp"
 #include "core/timer.hpp"
+#include "flatland/hrc/hrc.hpp"
 #include "flatland/medium.hpp"
 #include "flatland/pt/pt.hpp"
 #include "flatland/rc/rc.hpp"
@@ -31,6 +32,7 @@ Status check_options(int width, int height, const RenderOptions& o) {
     if (pt.spp == 0 && pt.seconds == 0) return bad("spp: 0 (no limit) needs a time limit (--time)");
     return {};
   }
+  if (o.method == Method::hrc) return {};
   const RcOptions& rc = o.rc;
   if (rc.probe_spacing < 1 || rc.probe_spacing > 64)
     return bad("probe spacing: expected 1..64 cells, found " + std::to_string(rc.probe_spacing));
@@ -78,6 +80,11 @@ std::uint64_t estimate(int width, int height, const RenderOptions& o,
                        const std::vector<rc::Cascade>& plan) {
   const std::uint64_t cells = std::uint64_t(width) * height;
   std::uint64_t bytes = cells * (sizeof(Cell) + sizeof(float));  // medium: emission and step
+  if (o.method == Method::hrc) {
+    bytes += hrc::working_bytes(width, height, o.hrc);
+    if (o.bounces > 1) bytes += cells * 3 * sizeof(float);  // the previous bounce's fluence
+    return bytes;
+  }
   if (o.distance_field) bytes += distance_field_bytes(width, height);
   if (o.blocks) bytes += blocks_bytes(width, height);
   if (o.method == Method::pt) return bytes + pt::working_bytes(width, height, o.pt);
@@ -101,7 +108,7 @@ std::string human_bytes(std::uint64_t b) {
 
 std::uint64_t estimate_memory(int width, int height, const RenderOptions& options) {
   if (!check_options(width, height, options)) return ~std::uint64_t(0);
-  if (options.method == Method::pt) return estimate(width, height, options, {});
+  if (options.method != Method::rc) return estimate(width, height, options, {});
   return estimate(width, height, options, rc::plan_cascades(width, height, options.rc));
 }
 
@@ -139,6 +146,16 @@ Expected<RenderResult> render_unchecked(const Scene& scene, const RenderOptions&
     result.options.rc.cascades = int(plan.size());
   }
   if (Status s = check_memory(scene.width, scene.height, options, false); !s) return s.error();
+  if (options.method == Method::hrc && options.hrc.storage == Storage::f16) {
+    // Every stored value is at most the brightest radiance times pi/2 (a bounce re-emits no
+    // more than the light it received); half precision ends at 65504.
+    float brightest = 0;
+    for (float e : scene.emission) brightest = std::max(brightest, e);
+    if (brightest > hrc::kHalfMaxRadiance)
+      return Error{"storage f16: the brightest emission, " + std::to_string(brightest) +
+                   ", is more than half precision holds (" + std::to_string(hrc::kHalfMaxRadiance) +
+                   "); use --storage f32"};
+  }
   result.memory_bytes = estimate(scene.width, scene.height, options, plan);
 
   rc::fill_directions(plan);
@@ -147,10 +164,14 @@ Expected<RenderResult> render_unchecked(const Scene& scene, const RenderOptions&
     Stopwatch watch;
     Medium medium = make_medium(scene);
     result.stages.push_back({"medium", watch.ms()});
-    watch.restart();
-    if (options.distance_field) build_distance_field(medium);
-    result.stages.push_back({"distance field", watch.ms()});
-    if (options.blocks) {
+    // HRC traces only rays a few cells long: empty-space skipping would not pay for itself.
+    const bool skipping = options.method != Method::hrc;
+    if (skipping && options.distance_field) {
+      watch.restart();
+      build_distance_field(medium);
+      result.stages.push_back({"distance field", watch.ms()});
+    }
+    if (skipping && options.blocks) {
       watch.restart();
       build_blocks(medium);
       result.stages.push_back({"blocks", watch.ms()});
@@ -161,7 +182,15 @@ Expected<RenderResult> render_unchecked(const Scene& scene, const RenderOptions&
       return;
     }
 
-    std::vector<float> f = rc::solve(medium, scene.environment, plan, options.rc, result.stages);
+    hrc::Workspace workspace;
+    auto solve = [&](std::vector<StageTime>& stages) {
+      if (options.method == Method::rc)
+        return rc::solve(medium, scene.environment, plan, options.rc, stages);
+      std::vector<float> f;
+      hrc::solve(medium, scene.environment, options.hrc, workspace, f, stages);
+      return f;
+    };
+    std::vector<float> f = solve(result.stages);
     // More bounces: diffuse re-emission albedo * F / 2pi added to the scene's own emission.
     for (int bounce = 2; bounce <= options.bounces; ++bounce) {
       watch.restart();
@@ -179,7 +208,7 @@ Expected<RenderResult> render_unchecked(const Scene& scene, const RenderOptions&
       });
       result.stages.push_back({"bounce " + std::to_string(bounce) + " emission", watch.ms()});
       std::vector<StageTime> inner;
-      f = rc::solve(medium, scene.environment, plan, options.rc, inner);
+      f = solve(inner);
       for (StageTime& s : inner)
         result.stages.push_back({"bounce " + std::to_string(bounce) + " " + s.name, s.ms});
     }
@@ -188,6 +217,9 @@ Expected<RenderResult> render_unchecked(const Scene& scene, const RenderOptions&
   for (const StageTime& s : result.stages) result.time_ms += s.ms;
   if (options.method == Method::rc)
     result.intervals = rc::traced_intervals(plan, options.rc) * std::uint64_t(options.bounces);
+  if (options.method == Method::hrc)
+    result.intervals =
+        hrc::traced_intervals(scene.width, scene.height) * std::uint64_t(options.bounces);
   return result;
 }
 

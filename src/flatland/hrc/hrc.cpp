@@ -13,9 +13,11 @@
 #include "flatland/hrc/hrc.hpp"
 
 #include <Imath/half.h>
+#include <immintrin.h>
 #include <sys/mman.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdlib>
 #include <initializer_list>
@@ -42,17 +44,6 @@ inline float load(float v) {
 inline float load(Half v) {
   return float(v);
 }
-
-// An interval of T (radiance and transmittance) and a cone of R (angular fluence), in the
-// storage precision.
-template <class S>
-struct TVal {
-  S r, g, b, t;
-};
-template <class S>
-struct RVal {
-  S r, g, b;
-};
 
 struct Rad {
   float r, g, b;
@@ -132,8 +123,8 @@ Sizes plan(int width, int height) {
 template <class S>
 std::uint64_t bytes_of(const Sizes& s, int width, int height, bool blur) {
   std::uint64_t b = 0;
-  for (std::size_t t : s.t) b += t * sizeof(TVal<S>);
-  b += 2 * s.r * sizeof(RVal<S>);
+  for (std::size_t t : s.t) b += t * 4 * sizeof(S);  // radiance and transmittance
+  b += 2 * s.r * 3 * sizeof(S);                      // angular fluence
   const std::uint64_t cells = std::uint64_t(width) * height;
   b += (s.pad + cells) * kPlanes * sizeof(float);  // a rotated view and the world planes
   b += cells * 3 * sizeof(float);                  // the summed fluence
@@ -171,8 +162,8 @@ struct Array {
 
 template <class S>
 struct Buffers {
-  std::vector<Array<TVal<S>>> t;
-  Array<RVal<S>> r[2];
+  std::vector<Array<S>> t;
+  Array<S> r[2];
   void release() {
     t.clear();
     r[0].release(), r[1].release();
@@ -296,49 +287,108 @@ std::vector<Segment> ray_pattern(int n, int k) {
   return segs;
 }
 
-// Runs f<checked>(y) for every row y in [0, h): unchecked where every (column, row shift) read
-// in `reads` stays inside its column, checked elsewhere (a null column is all outside).
-template <class F>
-inline void for_rows(int h, std::initializer_list<std::pair<const void*, int>> reads, F&& f) {
-  int lo = 0, hi = h;
-  for (const auto& [col, dy] : reads) {
-    if (!col) lo = hi = h;
-    lo = std::max(lo, -dy);
-    hi = std::min(hi, h - dy);
-  }
-  lo = std::min(lo, h);
-  hi = std::max(hi, lo);
-  for (int y = 0; y < lo; ++y) f.template operator()<true>(y);
-  for (int y = lo; y < hi; ++y) f.template operator()<false>(y);
-  for (int y = hi; y < h; ++y) f.template operator()<true>(y);
-}
+// T and R as columns: column c of a level (one direction and probe x) holds the h rows of its
+// first channel, then of the next (structure of arrays: radiance r, g, b and, for T, the
+// transmittance), so every loop below streams unit-stride arrays.
+constexpr int kTChannels = 4, kRChannels = 3;
 
 // T outside the grid: nothing there (the ray has left and does not come back).
 template <bool Checked, class S>
-inline Interval get_t(const TVal<S>* col, int y, int h) {
+inline Interval get_t(const S* col, int y, int h) {
   if constexpr (Checked)
     if (!col || y < 0 || y >= h) return Interval::empty();
-  const TVal<S>& v = col[y];
-  return {load(v.r), load(v.g), load(v.b), load(v.t)};
+  return {load(col[y]), load(col[h + y]), load(col[2 * h + y]), load(col[3 * h + y])};
 }
 
 // R outside the grid, or at level N: the environment over the cone (footnote 1).
 template <bool Checked, class S>
-inline Rad get_r(const RVal<S>* col, int y, int h, const Rad& outside) {
+inline Rad get_r(const S* col, int y, int h, const Rad& outside) {
   if constexpr (Checked)
     if (!col || y < 0 || y >= h) return outside;
-  const RVal<S>& v = col[y];
-  return {load(v.r), load(v.g), load(v.b)};
+  return {load(col[y]), load(col[h + y]), load(col[2 * h + y])};
 }
 
 template <class S>
-inline void put(TVal<S>& o, const Interval& v) {
-  o = {S(v.r), S(v.g), S(v.b), S(v.t)};
+inline void put_t(S* col, int y, int h, const Interval& v) {
+  col[y] = S(v.r), col[h + y] = S(v.g), col[2 * h + y] = S(v.b), col[3 * h + y] = S(v.t);
 }
 
 template <class S>
-inline void put(RVal<S>& o, float r, float g, float b) {
-  o = {S(r), S(g), S(b)};
+inline void put_r(S* col, int y, int h, float r, float g, float b) {
+  col[y] = S(r), col[h + y] = S(g), col[2 * h + y] = S(b);
+}
+
+// Half precision: conversions of runs of values, 8 at a time with F16C where the CPU has it
+// (every x86-64 CPU since 2012; the build targets the baseline, so it is chosen at run time),
+// otherwise through Imath's tables. Both round to nearest even: the same bits.
+[[gnu::target("f16c,avx")]] void to_float_f16c(const Half* s, float* d, int n) {
+  int i = 0;
+  for (; i + 8 <= n; i += 8)
+    _mm256_storeu_ps(d + i,
+                     _mm256_cvtph_ps(_mm_loadu_si128(reinterpret_cast<const __m128i*>(s + i))));
+  for (; i < n; ++i) d[i] = float(s[i]);
+}
+
+[[gnu::target("f16c,avx")]] void to_half_f16c(const float* s, Half* d, int n) {
+  int i = 0;
+  for (; i + 8 <= n; i += 8)
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(d + i),
+                     _mm256_cvtps_ph(_mm256_loadu_ps(s + i), _MM_FROUND_TO_NEAREST_INT));
+  for (; i < n; ++i) d[i] = Half(s[i]);
+}
+
+const bool kHasF16c = __builtin_cpu_supports("f16c") && __builtin_cpu_supports("avx");
+
+void to_float(const Half* s, float* d, int n) {
+  if (kHasF16c) return to_float_f16c(s, d, n);
+  for (int i = 0; i < n; ++i) d[i] = float(s[i]);
+}
+
+void to_half(const float* s, Half* d, int n) {
+  if (kHasF16c) return to_half_f16c(s, d, n);
+  for (int i = 0; i < n; ++i) d[i] = Half(s[i]);
+}
+
+// A read of a merge: column `col` (null: outside the grid) at row shift dy, and the column to
+// read instead where the shifted row leaves the grid: a column holding the value beyond the
+// grid in every row (T: an empty interval; R: the environment over the cone).
+template <class S>
+struct Read {
+  const S* col;
+  int dy;
+  const S* outside;
+};
+
+// Splits the rows [0, h) at every row where a read enters or leaves its column and calls
+// fast(lo, hi, cols, dys) for each piece, with each read either inside its column throughout
+// or redirected to its outside column (shift 0). So every row runs the same vectorised loops:
+// no per-row bounds checks.
+template <class S, std::size_t K, class Fast>
+inline void for_segments(int h, const std::array<Read<S>, K>& reads, Fast&& fast) {
+  std::array<int, 2 * K + 2> cut;
+  std::array<int, K> lo, hi;
+  std::size_t m = 0;
+  cut[m++] = 0;
+  cut[m++] = h;
+  for (std::size_t i = 0; i < K; ++i) {
+    lo[i] = reads[i].col ? std::clamp(-reads[i].dy, 0, h) : h;
+    hi[i] = reads[i].col ? std::clamp(h - reads[i].dy, 0, h) : h;
+    cut[m++] = lo[i];
+    cut[m++] = hi[i];
+  }
+  std::sort(cut.begin(), cut.begin() + m);
+  for (std::size_t c = 0; c + 1 < m; ++c) {
+    const int y0 = cut[c], y1 = cut[c + 1];
+    if (y0 == y1) continue;
+    std::array<const S*, K> cols;
+    std::array<int, K> dys;
+    for (std::size_t i = 0; i < K; ++i) {
+      const bool inside = y0 >= lo[i] && y1 <= hi[i] && lo[i] < hi[i];
+      cols[i] = inside ? reads[i].col : reads[i].outside;
+      dys[i] = inside ? reads[i].dy : 0;
+    }
+    fast(y0, y1, cols, dys);
+  }
 }
 
 // One crossed cell for a column of h probes, front to back: a streaming loop over restrict
@@ -355,15 +405,15 @@ void cross_cells(int h, const float* __restrict tau, const float* __restrict er,
 }
 
 // T_n(p, k) = Trace(p, p + v_n(k)) for n <= 2, by the rays' cell patterns: one pass over a
-// column of probes per crossed cell, accumulating front to back.
+// column of probes per crossed cell, accumulating front to back in single precision.
 template <class S>
 void trace_level(const View& view, int n, const ViewPlanes& vp,
-                 const std::vector<Segment>* patterns, TVal<S>* out) {
+                 const std::vector<Segment>* patterns, S* out) {
   const int P = view.probes(n), h = view.h;
   parallel_for(((1 << n) + 1) * P, [&](int row) {
     const int k = row / P, u = (row % P) << n;
     thread_local std::vector<float> acc;
-    acc.resize(4 * std::size_t(h));
+    acc.resize(kTChannels * std::size_t(h));
     float *ar = acc.data(), *ag = ar + h, *ab = ag + h, *at = ab + h;
     std::fill(ar, ar + 3 * std::size_t(h), 0.0f);
     std::fill(at, at + h, 1.0f);
@@ -373,86 +423,242 @@ void trace_level(const View& view, int n, const ViewPlanes& vp,
       const float* tau = vp.plane(g.plane) + off;
       (g.squared ? cross_cells<true> : cross_cells<false>)(h, tau, er, eg, eb, ar, ag, ab, at);
     }
-    TVal<S>* o = out + std::size_t(row) * h;
-    for (int v = 0; v < h; ++v) put(o[v], Interval{ar[v], ag[v], ab[v], at[v]});
+    S* o = out + std::size_t(row) * kTChannels * h;
+    if constexpr (std::is_same_v<S, Half>)
+      to_half(acc.data(), o, kTChannels * h);
+    else
+      std::copy(acc.begin(), acc.end(), o);
   });
 }
 
-// T_{n+1} from T_n: eq. 18 for even directions 2k, eqs. 19-20 for odd ones.
+// The merges over rows [lo, hi) whose reads all lie inside their columns: plain loops over
+// restrict pointers (a row shift is an index offset), so the compiler vectorises them.
 template <class S>
-void merge_up(const View& view, int n, const TVal<S>* tn, TVal<S>* tn1) {
+[[gnu::noinline]] void up_even_rows(int lo, int hi, int h, const S* __restrict near,
+                                    const S* __restrict far, int dy, S* __restrict o) {
+  for (int y = lo; y < hi; ++y)
+    put_t(o, y, h, merge_intervals(get_t<false>(near, y, h), get_t<false>(far, y + dy, h)));
+}
+
+template <class S>
+[[gnu::noinline]] void up_odd_rows(int lo, int hi, int h, const S* __restrict a1,
+                                   const S* __restrict b1, int dy1, const S* __restrict a0,
+                                   const S* __restrict b0, int dy0, S* __restrict o) {
+  for (int y = lo; y < hi; ++y) {
+    const Interval p = merge_intervals(get_t<false>(a1, y, h), get_t<false>(b1, y + dy1, h));
+    const Interval m = merge_intervals(get_t<false>(a0, y, h), get_t<false>(b0, y + dy0, h));
+    put_t(o, y, h,
+          Interval{0.5f * (p.r + m.r), 0.5f * (p.g + m.g), 0.5f * (p.b + m.b), 0.5f * (p.t + m.t)});
+  }
+}
+
+// Eq. 14 for one row: both halves of the cone.
+inline void odd_cone(float ap, float am, const Interval& ep, const Interval& em, const Rad& fp,
+                     const Rad& fm, float& r, float& g, float& b) {
+  r = ap * ep.r + ep.t * fp.r + am * em.r + em.t * fm.r;
+  g = ap * ep.g + ep.t * fp.g + am * em.g + em.t * fm.g;
+  b = ap * ep.b + ep.t * fp.b + am * em.b + em.t * fm.b;
+}
+
+// Eqs. 15-17 for one row: the mean of the cones at p and the merges along the doubled edges.
+inline void even_cone(float ap, float am, const Interval& ep, const Interval& em, const Rad& f0p,
+                      const Rad& f0m, const Rad& f1p, const Rad& f1m, float& r, float& g,
+                      float& b) {
+  r = 0.5f * (f0p.r + ap * ep.r + ep.t * f1p.r + f0m.r + am * em.r + em.t * f1m.r);
+  g = 0.5f * (f0p.g + ap * ep.g + ep.t * f1p.g + f0m.g + am * em.g + em.t * f1m.g);
+  b = 0.5f * (f0p.b + ap * ep.b + ep.t * f1p.b + f0m.b + am * em.b + em.t * f1m.b);
+}
+
+template <class S>
+[[gnu::noinline]] void down_odd_rows(int lo, int hi, int h, float ap, float am,
+                                     const S* __restrict tp, const S* __restrict tm,
+                                     const S* __restrict rp, int dyp, const S* __restrict rm,
+                                     int dym, S* __restrict o) {
+  for (int y = lo; y < hi; ++y) {
+    float r, g, b;
+    odd_cone(ap, am, get_t<false>(tp, y, h), get_t<false>(tm, y, h),
+             get_r<false>(rp, y + dyp, h, {}), get_r<false>(rm, y + dym, h, {}), r, g, b);
+    put_r(o, y, h, r, g, b);
+  }
+}
+
+template <class S>
+[[gnu::noinline]] void down_even_rows(int lo, int hi, int h, float ap, float am,
+                                      const S* __restrict up, const S* __restrict um,
+                                      const S* __restrict r0p, int d0p, const S* __restrict r0m,
+                                      int d0m, const S* __restrict r1p, int dyp,
+                                      const S* __restrict r1m, int dym, S* __restrict o) {
+  for (int y = lo; y < hi; ++y) {
+    float r, g, b;
+    even_cone(ap, am, get_t<false>(up, y, h), get_t<false>(um, y, h),
+              get_r<false>(r0p, y + d0p, h, {}), get_r<false>(r0m, y + d0m, h, {}),
+              get_r<false>(r1p, y + dyp, h, {}), get_r<false>(r1m, y + dym, h, {}), r, g, b);
+    put_r(o, y, h, r, g, b);
+  }
+}
+
+// The half-precision row merges: blocks of kBlock rows are converted to single precision, run
+// through the single-precision loops, and the result converted back, so the merges still
+// vectorise and memory carries half the bytes.
+constexpr int kBlock = 256;
+
+struct HalfBlocks {
+  // Rows [y, y + n) of `channels` channels of a column (channel c at c * h), into dst with
+  // channel c at c * kBlock.
+  static void load(const Half* col, int h, int channels, int y, int n, float* dst) {
+    for (int c = 0; c < channels; ++c)
+      to_float(col + std::ptrdiff_t(c) * h + y, dst + c * kBlock, n);
+  }
+  static void store(const float* src, int channels, Half* col, int h, int y, int n) {
+    for (int c = 0; c < channels; ++c)
+      to_half(src + c * kBlock, col + std::ptrdiff_t(c) * h + y, n);
+  }
+};
+
+template <>
+void up_even_rows<Half>(int lo, int hi, int h, const Half* near, const Half* far, int dy, Half* o) {
+  float a[kTChannels * kBlock], b[kTChannels * kBlock], out[kTChannels * kBlock];
+  for (int y = lo; y < hi; y += kBlock) {
+    const int n = std::min(kBlock, hi - y);
+    HalfBlocks::load(near, h, kTChannels, y, n, a);
+    HalfBlocks::load(far, h, kTChannels, y + dy, n, b);
+    up_even_rows<float>(0, n, kBlock, a, b, 0, out);
+    HalfBlocks::store(out, kTChannels, o, h, y, n);
+  }
+}
+
+template <>
+void up_odd_rows<Half>(int lo, int hi, int h, const Half* a1, const Half* b1, int dy1,
+                       const Half* a0, const Half* b0, int dy0, Half* o) {
+  float fa1[kTChannels * kBlock], fb1[kTChannels * kBlock], fa0[kTChannels * kBlock],
+      fb0[kTChannels * kBlock], out[kTChannels * kBlock];
+  for (int y = lo; y < hi; y += kBlock) {
+    const int n = std::min(kBlock, hi - y);
+    HalfBlocks::load(a1, h, kTChannels, y, n, fa1);
+    HalfBlocks::load(b1, h, kTChannels, y + dy1, n, fb1);
+    HalfBlocks::load(a0, h, kTChannels, y, n, fa0);
+    HalfBlocks::load(b0, h, kTChannels, y + dy0, n, fb0);
+    up_odd_rows<float>(0, n, kBlock, fa1, fb1, 0, fa0, fb0, 0, out);
+    HalfBlocks::store(out, kTChannels, o, h, y, n);
+  }
+}
+
+template <>
+void down_odd_rows<Half>(int lo, int hi, int h, float ap, float am, const Half* tp, const Half* tm,
+                         const Half* rp, int dyp, const Half* rm, int dym, Half* o) {
+  float ftp[kTChannels * kBlock], ftm[kTChannels * kBlock], frp[kRChannels * kBlock],
+      frm[kRChannels * kBlock], out[kRChannels * kBlock];
+  for (int y = lo; y < hi; y += kBlock) {
+    const int n = std::min(kBlock, hi - y);
+    HalfBlocks::load(tp, h, kTChannels, y, n, ftp);
+    HalfBlocks::load(tm, h, kTChannels, y, n, ftm);
+    HalfBlocks::load(rp, h, kRChannels, y + dyp, n, frp);
+    HalfBlocks::load(rm, h, kRChannels, y + dym, n, frm);
+    down_odd_rows<float>(0, n, kBlock, ap, am, ftp, ftm, frp, 0, frm, 0, out);
+    HalfBlocks::store(out, kRChannels, o, h, y, n);
+  }
+}
+
+template <>
+void down_even_rows<Half>(int lo, int hi, int h, float ap, float am, const Half* up, const Half* um,
+                          const Half* r0p, int d0p, const Half* r0m, int d0m, const Half* r1p,
+                          int dyp, const Half* r1m, int dym, Half* o) {
+  float fup[kTChannels * kBlock], fum[kTChannels * kBlock], f0p[kRChannels * kBlock],
+      f0m[kRChannels * kBlock], f1p[kRChannels * kBlock], f1m[kRChannels * kBlock],
+      out[kRChannels * kBlock];
+  for (int y = lo; y < hi; y += kBlock) {
+    const int n = std::min(kBlock, hi - y);
+    HalfBlocks::load(up, h, kTChannels, y, n, fup);
+    HalfBlocks::load(um, h, kTChannels, y, n, fum);
+    HalfBlocks::load(r0p, h, kRChannels, y + d0p, n, f0p);
+    HalfBlocks::load(r0m, h, kRChannels, y + d0m, n, f0m);
+    HalfBlocks::load(r1p, h, kRChannels, y + dyp, n, f1p);
+    HalfBlocks::load(r1m, h, kRChannels, y + dym, n, f1m);
+    down_even_rows<float>(0, n, kBlock, ap, am, fup, fum, f0p, 0, f0m, 0, f1p, 0, f1m, 0, out);
+    HalfBlocks::store(out, kRChannels, o, h, y, n);
+  }
+}
+
+// T_{n+1} from T_n: eq. 18 for even directions 2k, eqs. 19-20 for odd ones. `empty` is a column
+// of empty intervals (what lies beyond the grid).
+template <class S>
+void merge_up(const View& view, int n, const S* tn, S* tn1, const S* empty) {
   const int P = view.probes(n), P1 = view.probes(n + 1), h = view.h;
-  auto col = [&](int k, int x) -> const TVal<S>* {
-    return x < P ? tn + (std::size_t(k) * P + x) * h : nullptr;
+  auto col = [&](int k, int x) -> const S* {
+    return x < P ? tn + (std::size_t(k) * P + x) * kTChannels * h : nullptr;
   };
   parallel_for(((1 << (n + 1)) + 1) * P1, [&](int row) {
     const int k2 = row / P1, x = row % P1;
-    TVal<S>* o = tn1 + std::size_t(row) * h;
+    S* o = tn1 + std::size_t(row) * kTChannels * h;
     if (k2 % 2 == 0) {
-      const int k = k2 / 2, dy = vy(n, k);
-      const TVal<S>*near = col(k, 2 * x), *far = col(k, 2 * x + 1);
-      for_rows(h, {{far, dy}}, [&]<bool C>(int y) {
-        put(o[y], merge_intervals(get_t<false>(near, y, h), get_t<C>(far, y + dy, h)));
-      });
+      const int k = k2 / 2;
+      const S* near = col(k, 2 * x);
+      for_segments<S, 1>(h, {{{col(k, 2 * x + 1), vy(n, k), empty}}},
+                         [&](int lo, int hi, const auto& c, const auto& d) {
+                           up_even_rows(lo, hi, h, near, c[0], d[0], o);
+                         });
     } else {
       // Direction k + 1/2 is between two integer ones: average the two bent paths.
-      const int k = k2 / 2, dy1 = vy(n, k + 1), dy0 = vy(n, k);
-      const TVal<S>*a1 = col(k + 1, 2 * x), *b1 = col(k, 2 * x + 1);
-      const TVal<S>*a0 = col(k, 2 * x), *b0 = col(k + 1, 2 * x + 1);
-      for_rows(h, {{b1, dy1}, {b0, dy0}}, [&]<bool C>(int y) {
-        const Interval p = merge_intervals(get_t<false>(a1, y, h), get_t<C>(b1, y + dy1, h));
-        const Interval m = merge_intervals(get_t<false>(a0, y, h), get_t<C>(b0, y + dy0, h));
-        put(o[y], Interval{0.5f * (p.r + m.r), 0.5f * (p.g + m.g), 0.5f * (p.b + m.b),
-                           0.5f * (p.t + m.t)});
-      });
+      const int k = k2 / 2;
+      const S *a1 = col(k + 1, 2 * x), *a0 = col(k, 2 * x);
+      for_segments<S, 2>(
+          h, {{{col(k, 2 * x + 1), vy(n, k + 1), empty}, {col(k + 1, 2 * x + 1), vy(n, k), empty}}},
+          [&](int lo, int hi, const auto& c, const auto& d) {
+            up_odd_rows(lo, hi, h, a1, c[0], d[0], a0, c[1], d[1], o);
+          });
     }
   });
 }
 
+// Fills a column with one value per channel.
+template <class S, std::size_t C>
+void fill_column(S* col, int h, const std::array<float, C>& v) {
+  for (std::size_t c = 0; c < C; ++c) std::fill(col + c * h, col + (c + 1) * h, S(v[c]));
+}
+
 // R_n from R_{n+1} (null at n + 1 = N: the environment), T_n and T_{n+1}.
 template <class S>
-void merge_down(const View& view, int n, const TVal<S>* tn, const TVal<S>* tn1, const RVal<S>* rn1,
-                RVal<S>* rn, const Rgb& env) {
+void merge_down(const View& view, int n, const S* tn, const S* tn1, const S* rn1, S* rn,
+                const Rgb& env) {
   const int P = view.probes(n), P1 = view.probes(n + 1), h = view.h;
-  auto rcol = [&](int j, int x) -> const RVal<S>* {
-    return rn1 && x < P1 ? rn1 + (std::size_t(j) * P1 + x) * h : nullptr;
+  auto rcol = [&](int j, int x) -> const S* {
+    return rn1 && x < P1 ? rn1 + (std::size_t(j) * P1 + x) * kRChannels * h : nullptr;
   };
   parallel_for((1 << n) * P, [&](int row) {
     const int a = row / P, x = row % P;
-    // The upper and lower halves of cone a are cones 2a + 1 and 2a of cascade n + 1.
+    // The upper and lower halves of cone a are cones 2a + 1 and 2a of cascade n + 1; beyond
+    // the grid they hold the environment over their angle.
     const float ap = cone_angle(n + 1, 2 * a + 1), am = cone_angle(n + 1, 2 * a);
-    const Rad outp{env.r * ap, env.g * ap, env.b * ap}, outm{env.r * am, env.g * am, env.b * am};
-    RVal<S>* o = rn + std::size_t(row) * h;
+    thread_local std::vector<S> outside;
+    outside.resize(2 * kRChannels * std::size_t(h));
+    S *outp = outside.data(), *outm = outp + kRChannels * h;
+    fill_column<S, 3>(outp, h, {env.r * ap, env.g * ap, env.b * ap});
+    fill_column<S, 3>(outm, h, {env.r * am, env.g * am, env.b * am});
+    S* o = rn + std::size_t(row) * kRChannels * h;
     if (x % 2 == 1) {
       // Eq. 14: trace each edge to the cascade-(n+1) probe it ends on, merge with its cone.
-      const TVal<S>* tp = tn + (std::size_t(a + 1) * P + x) * h;
-      const TVal<S>* tm = tn + (std::size_t(a) * P + x) * h;
-      const int xq = (x + 1) / 2, dyp = vy(n, a + 1), dym = vy(n, a);
-      const RVal<S>*rp = rcol(2 * a + 1, xq), *rm = rcol(2 * a, xq);
-      for_rows(h, {{rp, dyp}, {rm, dym}}, [&]<bool C>(int y) {
-        const Interval ep = get_t<false>(tp, y, h), em = get_t<false>(tm, y, h);
-        const Rad fp = get_r<C>(rp, y + dyp, h, outp), fm = get_r<C>(rm, y + dym, h, outm);
-        put(o[y], ap * ep.r + ep.t * fp.r + am * em.r + em.t * fm.r,
-            ap * ep.g + ep.t * fp.g + am * em.g + em.t * fm.g,
-            ap * ep.b + ep.t * fp.b + am * em.b + em.t * fm.b);
-      });
+      const S* tp = tn + (std::size_t(a + 1) * P + x) * kTChannels * h;
+      const S* tm = tn + (std::size_t(a) * P + x) * kTChannels * h;
+      const int xq = (x + 1) / 2;
+      for_segments<S, 2>(
+          h, {{{rcol(2 * a + 1, xq), vy(n, a + 1), outp}, {rcol(2 * a, xq), vy(n, a), outm}}},
+          [&](int lo, int hi, const auto& c, const auto& d) {
+            down_odd_rows(lo, hi, h, ap, am, tp, tm, c[0], d[0], c[1], d[1], o);
+          });
     } else {
-      // Eqs. 15-17: the mean of the cone at p itself and the merge along the doubled edge.
+      // Eqs. 15-17: T_{n+1} has the same probe columns as R_{n+1}.
       const int xp = x / 2, xq = xp + 1;
-      const int P1t = P1;  // T_{n+1} has the same probe columns as R_{n+1}
-      const TVal<S>* up = tn1 + (std::size_t(2 * a + 2) * P1t + xp) * h;
-      const TVal<S>* um = tn1 + (std::size_t(2 * a) * P1t + xp) * h;
-      const RVal<S>*r0p = rcol(2 * a + 1, xp), *r0m = rcol(2 * a, xp);
-      const int dyp = vy(n + 1, 2 * a + 2), dym = vy(n + 1, 2 * a);
-      const RVal<S>*r1p = rcol(2 * a + 1, xq), *r1m = rcol(2 * a, xq);
-      for_rows(h, {{r0p, 0}, {r0m, 0}, {r1p, dyp}, {r1m, dym}}, [&]<bool C>(int y) {
-        const Interval ep = get_t<false>(up, y, h), em = get_t<false>(um, y, h);
-        const Rad f0p = get_r<C>(r0p, y, h, outp), f0m = get_r<C>(r0m, y, h, outm);
-        const Rad f1p = get_r<C>(r1p, y + dyp, h, outp), f1m = get_r<C>(r1m, y + dym, h, outm);
-        put(o[y], 0.5f * (f0p.r + ap * ep.r + ep.t * f1p.r + f0m.r + am * em.r + em.t * f1m.r),
-            0.5f * (f0p.g + ap * ep.g + ep.t * f1p.g + f0m.g + am * em.g + em.t * f1m.g),
-            0.5f * (f0p.b + ap * ep.b + ep.t * f1p.b + f0m.b + am * em.b + em.t * f1m.b));
-      });
+      const S* up = tn1 + (std::size_t(2 * a + 2) * P1 + xp) * kTChannels * h;
+      const S* um = tn1 + (std::size_t(2 * a) * P1 + xp) * kTChannels * h;
+      for_segments<S, 4>(h,
+                         {{{rcol(2 * a + 1, xp), 0, outp},
+                           {rcol(2 * a, xp), 0, outm},
+                           {rcol(2 * a + 1, xq), vy(n + 1, 2 * a + 2), outp},
+                           {rcol(2 * a, xq), vy(n + 1, 2 * a), outm}}},
+                         [&](int lo, int hi, const auto& c, const auto& d) {
+                           down_even_rows(lo, hi, h, ap, am, up, um, c[0], d[0], c[1], d[1], c[2],
+                                          d[2], c[3], d[3], o);
+                         });
     }
   });
 }
@@ -505,9 +711,9 @@ void solve_with(const Medium& m, const Rgb& env, const HrcOptions& o, Buffers<S>
   const std::size_t cells = std::size_t(W) * H;
   const Sizes sz = plan(W, H);
   buf.t.resize(sz.t.size());
-  std::vector<TVal<S>*> t(sz.t.size());
-  for (std::size_t n = 0; n < t.size(); ++n) t[n] = buf.t[n].ensure(sz.t[n]);
-  RVal<S>* r[2] = {buf.r[0].ensure(sz.r), buf.r[1].ensure(sz.r)};
+  std::vector<S*> t(sz.t.size());
+  for (std::size_t n = 0; n < t.size(); ++n) t[n] = buf.t[n].ensure(sz.t[n] * kTChannels);
+  S* r[2] = {buf.r[0].ensure(sz.r * kRChannels), buf.r[1].ensure(sz.r * kRChannels)};
   float* world = planes.ensure((cells + sz.pad) * kPlanes);
   ViewPlanes vp;
   vp.data = world + cells * kPlanes;
@@ -516,6 +722,7 @@ void solve_with(const Medium& m, const Rgb& env, const HrcOptions& o, Buffers<S>
   for (int n = 0; n < 3; ++n)
     for (int k = 0; k <= (1 << n); ++k) patterns[n][k] = ray_pattern(n, k);
   f.resize(cells * 3);
+  std::vector<S> empty;  // a column of empty intervals: what T reads beyond the grid
 
   Stopwatch watch;
   build_world(m, world);
@@ -525,19 +732,21 @@ void solve_with(const Medium& m, const Rgb& env, const HrcOptions& o, Buffers<S>
     const View& view = sz.views[d & 1];
     watch.restart();
     build_view(world, W, H, d, view, vp);
+    empty.resize(std::size_t(kTChannels) * view.h);
+    fill_column<S, 4>(empty.data(), view.h, {0.0f, 0.0f, 0.0f, 1.0f});
     ms_view += watch.ms();
 
     watch.restart();
     for (int n = 0; n <= std::min(2, view.levels); ++n) trace_level(view, n, vp, patterns[n], t[n]);
     ms_trace += watch.ms();
     watch.restart();
-    for (int n = 3; n <= view.levels; ++n) merge_up(view, n - 1, t[n - 1], t[n]);
+    for (int n = 3; n <= view.levels; ++n) merge_up(view, n - 1, t[n - 1], t[n], empty.data());
     ms_up += watch.ms();
 
     watch.restart();
-    const RVal<S>* upper = nullptr;  // R_N: the environment
+    const S* upper = nullptr;  // R_N: the environment
     for (int n = view.levels - 1; n >= 0; --n) {
-      RVal<S>* out = upper == r[0] ? r[1] : r[0];
+      S* out = upper == r[0] ? r[1] : r[0];
       merge_down(view, n, t[n], t[n + 1], upper, out, env);
       upper = out;
     }
@@ -547,12 +756,13 @@ void solve_with(const Medium& m, const Rgb& env, const HrcOptions& o, Buffers<S>
     // of neighbouring quadrants apart (seed 004, Fig. 12). With the near segment, the transport
     // from the cell's centre to that probe comes first, so a cell's own medium counts.
     watch.restart();
-    const RVal<S>* r0 = upper;
+    const S* r0 = upper;
     const Rad edge{env.r * quarter, env.g * quarter, env.b * quarter};
     const Rotation rot = rotation(d, W, H);
     for_view_cells(rot, view.w, view.h, [&](int u, int v) {
-      Rad q =
-          u + 1 < view.w ? get_r<false>(r0 + std::size_t(u + 1) * view.h, v, view.h, edge) : edge;
+      Rad q = u + 1 < view.w
+                  ? get_r<false>(r0 + std::size_t(u + 1) * kRChannels * view.h, v, view.h, edge)
+                  : edge;
       if (o.near_segment) {
         const Interval n = near_segment(vp, vp.at(u, v));
         q = {quarter * n.r + n.t * q.r, quarter * n.g + n.t * q.g, quarter * n.b + n.t * q.b};
@@ -594,8 +804,8 @@ std::uint64_t working_bytes(int width, int height, const HrcOptions& o) {
 
 std::uint64_t structure_bytes(int width, int height, Storage storage) {
   const Sizes s = plan(width, height);
-  const std::uint64_t vt = storage == Storage::f16 ? sizeof(TVal<Half>) : sizeof(TVal<float>);
-  const std::uint64_t vr = storage == Storage::f16 ? sizeof(RVal<Half>) : sizeof(RVal<float>);
+  const std::uint64_t size = storage == Storage::f16 ? sizeof(Half) : sizeof(float);
+  const std::uint64_t vt = kTChannels * size, vr = kRChannels * size;
   std::uint64_t b = 2 * s.r * vr;
   for (std::size_t t : s.t) b += t * vt;
   return b;

@@ -41,6 +41,35 @@ penumbra::Expected<penumbra::ImageRgb> read_linear(const std::string& path) {
   return image;
 }
 
+// The rectangle [x, x + w) x [y, y + h) of an image, or of a scene's cells.
+penumbra::ImageRgb crop_image(const penumbra::ImageRgb& in, int x0, int y0, int w, int h) {
+  penumbra::ImageRgb out(w, h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const float* s = in.data() + (std::size_t(y0 + y) * in.width() + x0 + x) * 3;
+      float* d = out.data() + (std::size_t(y) * w + x) * 3;
+      d[0] = s[0], d[1] = s[1], d[2] = s[2];
+    }
+  return out;
+}
+
+penumbra::Scene crop_scene(const penumbra::Scene& in, int x0, int y0, int w, int h) {
+  penumbra::Scene out;
+  out.width = w;
+  out.height = h;
+  out.environment = in.environment;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const std::size_t i = in.index(x0 + x, y0 + y);
+      out.opacity.push_back(in.opacity[i]);
+      for (int c = 0; c < 3; ++c) {
+        out.emission.push_back(in.emission[3 * i + c]);
+        out.albedo.push_back(in.albedo[3 * i + c]);
+      }
+    }
+  return out;
+}
+
 // JSON has no infinity or NaN.
 nlohmann::json number_or_null(double v) {
   return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr);
@@ -53,8 +82,12 @@ std::string file_name(const std::string& path) {
 void print_table(const CompareArgs& a, const penumbra::ImageRgb& ref,
                  const penumbra::ErrorMetrics& m) {
   const std::uint64_t all = std::uint64_t(ref.width()) * ref.height();
-  std::printf("penumbra compare: %s against %s, %s\n", a.test.c_str(), a.reference.c_str(),
+  std::printf("penumbra compare: %s against %s, %s", a.test.c_str(), a.reference.c_str(),
               size_text(ref.width(), ref.height()).c_str());
+  if (!a.crop.empty())
+    std::printf(" (cells %d..%d x %d..%d)", a.crop[0], a.crop[0] + a.crop[2] - 1, a.crop[1],
+                a.crop[1] + a.crop[3] - 1);
+  std::printf("\n");
   if (a.scene.empty())
     std::printf("  %-16s %llu (all)\n", "cells", (unsigned long long)m.cells);
   else
@@ -103,6 +136,17 @@ int compare(const CompareArgs& a) {
     return fail(kFailure, a.test + ": the image is " + size_text(test->width(), test->height()) +
                               " but " + a.reference + " is " + size_text(w, h));
 
+  // The crop is checked against the images before the scene is rasterised.
+  const bool cropped = !a.crop.empty();
+  if (cropped) {
+    const int x0 = a.crop[0], y0 = a.crop[1], cw = a.crop[2], ch = a.crop[3];
+    if (x0 < 0 || y0 < 0 || cw < 1 || ch < 1 || std::int64_t(x0) + cw > w ||
+        std::int64_t(y0) + ch > h)
+      return fail(kFailure, "--crop " + std::to_string(x0) + " " + std::to_string(y0) + " " +
+                                std::to_string(cw) + " " + std::to_string(ch) +
+                                ": expected X Y W H with W, H >= 1 inside the " + size_text(w, h) +
+                                " images");
+  }
   std::optional<penumbra::Scene> scene;
   std::vector<std::uint8_t> mask;
   if (!a.scene.empty()) {
@@ -115,8 +159,14 @@ int compare(const CompareArgs& a) {
     penumbra::Expected<penumbra::Scene> built = penumbra::build_scene(*desc);
     if (!built) return fail(kFailure, built.error().message);
     scene = std::move(*built);
-    mask = penumbra::non_opaque_cells(*scene);
   }
+  if (cropped) {
+    const int x0 = a.crop[0], y0 = a.crop[1], cw = a.crop[2], ch = a.crop[3];
+    *test = crop_image(*test, x0, y0, cw, ch);
+    *ref = crop_image(*ref, x0, y0, cw, ch);
+    if (scene) scene = crop_scene(*scene, x0, y0, cw, ch);
+  }
+  if (scene) mask = penumbra::non_opaque_cells(*scene);
   const std::vector<std::uint8_t>* counted = scene ? &mask : nullptr;
 
   penumbra::Expected<penumbra::ErrorMetrics> m = penumbra::compare_images(*test, *ref, counted);
@@ -150,6 +200,7 @@ int compare(const CompareArgs& a) {
         {"scene", a.scene.empty() ? nlohmann::json(nullptr) : nlohmann::json(a.scene)},
         {"width", w},
         {"height", h},
+        {"crop", cropped ? nlohmann::json(a.crop) : nlohmann::json(nullptr)},
         {"cells", m->cells},
         {"rmse", m->rmse},
         {"relative_rmse", number_or_null(m->relative_rmse)},
@@ -183,6 +234,8 @@ std::unique_ptr<CompareCommand> add_compare_command(CLI::App& app) {
   c->add_option("--heatmap", a.heatmap, "Write the signed error with a colour bar (.png)");
   c->add_option("--montage", a.montage, "Write test, reference and error side by side (.png)");
   c->add_option("--exposure", a.exposure, "Montage exposure in EV")->capture_default_str();
+  c->add_option("--crop", a.crop, "Compare only the cells X Y W H (metrics and pictures)")
+      ->expected(4);
   c->add_flag("-q,--quiet", a.quiet, "Print nothing on success");
   cmd->app = c;
   return cmd;

@@ -3,6 +3,7 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace CLI {
 class App;
@@ -12,6 +13,7 @@ struct CompareArgs {
   std::string test, reference, scene;
   std::string heatmap, montage;  // empty: not written
   float exposure = 0;            // EV, for the montage's test and reference panels
+  std::vector<int> crop;         // empty, or X Y W H: compare only this rectangle of cells
   bool json = false;
   bool quiet = false;
 };

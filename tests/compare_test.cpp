@@ -416,6 +416,39 @@ TEST_F(CompareCli, WritesHeatmapAndMontage) {
   EXPECT_EQ(m->height, penumbra::analysis::montage_layout(6, 4).height);
 }
 
+// --crop X Y W H judges only that rectangle: the metrics are those of the cropped images (and
+// the cropped scene's mask), the pictures have the crop's size, and a crop outside the images
+// is refused with nothing written.
+TEST_F(CompareCli, CropComparesOnlyTheRectangle) {
+  const auto r = run({test_pfm_, ref_exr_, "--scene", scene_, "--crop", "1", "1", "4", "2",
+                      "--json", "--heatmap", out("h.png")});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  ImageRgb t(4, 2), f(4, 2);
+  std::vector<std::uint8_t> mask;
+  for (int y = 0; y < 2; ++y)
+    for (int x = 0; x < 4; ++x) {
+      t.set(x, y, test_img_.at(x + 1, y + 1));
+      f.set(x, y, ref_img_.at(x + 1, y + 1));
+      // The box covers cells 1..2 x 1..2 of the full grid.
+      mask.push_back(x + 1 >= 1 && x + 1 <= 2 && y + 1 >= 1 && y + 1 <= 2 ? 0 : 1);
+    }
+  const auto m = penumbra::compare_images(t, f, &mask);
+  ASSERT_TRUE(m.ok());
+  EXPECT_EQ(j.at("cells").get<std::uint64_t>(), 4u);
+  EXPECT_EQ(j.at("rmse").get<double>(), m->rmse);
+  EXPECT_EQ(j.at("crop"), nlohmann::json({1, 1, 4, 2}));
+  const auto h = penumbra::io::read_image(out("h.png"));
+  ASSERT_TRUE(h.ok());
+  EXPECT_EQ(h->width, penumbra::analysis::heatmap_layout(4, 2).width);
+  fs::remove(out("h.png"));
+  expect_failure(
+      run({test_pfm_, ref_exr_, "--crop", "3", "0", "4", "2", "--heatmap", out("h.png")}), 1,
+      {"--crop", "6x4"});
+  expect_failure(run({test_pfm_, ref_exr_, "--crop", "0", "0", "0", "2"}), 1, {"--crop"});
+  expect_failure(run({test_pfm_, ref_exr_, "--crop", "1", "2", "3"}), 2, {});
+}
+
 TEST_F(CompareCli, HelpListsTheOptions) {
   const auto r = run({"--help"});
   EXPECT_EQ(r.status, 0) << r.err;

@@ -361,10 +361,12 @@ struct Read {
 
 // Splits the rows [0, h) at every row where a read enters or leaves its column and calls
 // fast(lo, hi, cols, dys) for each piece, with each read either inside its column throughout
-// or redirected to its outside column (shift 0). So every row runs the same vectorised loops:
-// no per-row bounds checks.
-template <class S, std::size_t K, class Fast>
-inline void for_segments(int h, const std::array<Read<S>, K>& reads, Fast&& fast) {
+// or redirected to its outside column (shift 0), after prepare(i, lo, hi) has had the chance
+// to fill rows [lo, hi) of read i's outside column. So every row runs the same vectorised
+// loops: no per-row bounds checks.
+template <class S, std::size_t K, class Fast, class Prepare>
+inline void for_segments(int h, const std::array<Read<S>, K>& reads, Fast&& fast,
+                         Prepare&& prepare) {
   std::array<int, 2 * K + 2> cut;
   std::array<int, K> lo, hi;
   std::size_t m = 0;
@@ -386,6 +388,7 @@ inline void for_segments(int h, const std::array<Read<S>, K>& reads, Fast&& fast
       const bool inside = y0 >= lo[i] && y1 <= hi[i] && lo[i] < hi[i];
       cols[i] = inside ? reads[i].col : reads[i].outside;
       dys[i] = inside ? reads[i].dy : 0;
+      if (!inside) prepare(i, y0, y1);
     }
     fast(y0, y1, cols, dys);
   }
@@ -593,10 +596,12 @@ void merge_up(const View& view, int n, const S* tn, S* tn1, const S* empty) {
     if (k2 % 2 == 0) {
       const int k = k2 / 2;
       const S* near = col(k, 2 * x);
-      for_segments<S, 1>(h, {{{col(k, 2 * x + 1), vy(n, k), empty}}},
-                         [&](int lo, int hi, const auto& c, const auto& d) {
-                           up_even_rows(lo, hi, h, near, c[0], d[0], o);
-                         });
+      for_segments<S, 1>(
+          h, {{{col(k, 2 * x + 1), vy(n, k), empty}}},
+          [&](int lo, int hi, const auto& c, const auto& d) {
+            up_even_rows(lo, hi, h, near, c[0], d[0], o);
+          },
+          [](std::size_t, int, int) {});
     } else {
       // Direction k + 1/2 is between two integer ones: average the two bent paths.
       const int k = k2 / 2;
@@ -605,15 +610,16 @@ void merge_up(const View& view, int n, const S* tn, S* tn1, const S* empty) {
           h, {{{col(k, 2 * x + 1), vy(n, k + 1), empty}, {col(k + 1, 2 * x + 1), vy(n, k), empty}}},
           [&](int lo, int hi, const auto& c, const auto& d) {
             up_odd_rows(lo, hi, h, a1, c[0], d[0], a0, c[1], d[1], o);
-          });
+          },
+          [](std::size_t, int, int) {});
     }
   });
 }
 
-// Fills a column with one value per channel.
+// Fills rows [lo, hi) of a column with one value per channel.
 template <class S, std::size_t C>
-void fill_column(S* col, int h, const std::array<float, C>& v) {
-  for (std::size_t c = 0; c < C; ++c) std::fill(col + c * h, col + (c + 1) * h, S(v[c]));
+void fill_column(S* col, int h, int lo, int hi, const std::array<float, C>& v) {
+  for (std::size_t c = 0; c < C; ++c) std::fill(col + c * h + lo, col + c * h + hi, S(v[c]));
 }
 
 // R_n from R_{n+1} (null at n + 1 = N: the environment), T_n and T_{n+1}.
@@ -632,8 +638,14 @@ void merge_down(const View& view, int n, const S* tn, const S* tn1, const S* rn1
     thread_local std::vector<S> outside;
     outside.resize(2 * kRChannels * std::size_t(h));
     S *outp = outside.data(), *outm = outp + kRChannels * h;
-    fill_column<S, 3>(outp, h, {env.r * ap, env.g * ap, env.b * ap});
-    fill_column<S, 3>(outm, h, {env.r * am, env.g * am, env.b * am});
+    // Reads 0 and 2 use the upper half's outside column, 1 and 3 the lower half's (filled only
+    // over the rows that read them).
+    auto prepare = [&](std::size_t i, int lo, int hi) {
+      if (i % 2 == 0)
+        fill_column<S, 3>(outp, h, lo, hi, {env.r * ap, env.g * ap, env.b * ap});
+      else
+        fill_column<S, 3>(outm, h, lo, hi, {env.r * am, env.g * am, env.b * am});
+    };
     S* o = rn + std::size_t(row) * kRChannels * h;
     if (x % 2 == 1) {
       // Eq. 14: trace each edge to the cascade-(n+1) probe it ends on, merge with its cone.
@@ -644,21 +656,24 @@ void merge_down(const View& view, int n, const S* tn, const S* tn1, const S* rn1
           h, {{{rcol(2 * a + 1, xq), vy(n, a + 1), outp}, {rcol(2 * a, xq), vy(n, a), outm}}},
           [&](int lo, int hi, const auto& c, const auto& d) {
             down_odd_rows(lo, hi, h, ap, am, tp, tm, c[0], d[0], c[1], d[1], o);
-          });
+          },
+          prepare);
     } else {
       // Eqs. 15-17: T_{n+1} has the same probe columns as R_{n+1}.
       const int xp = x / 2, xq = xp + 1;
       const S* up = tn1 + (std::size_t(2 * a + 2) * P1 + xp) * kTChannels * h;
       const S* um = tn1 + (std::size_t(2 * a) * P1 + xp) * kTChannels * h;
-      for_segments<S, 4>(h,
-                         {{{rcol(2 * a + 1, xp), 0, outp},
-                           {rcol(2 * a, xp), 0, outm},
-                           {rcol(2 * a + 1, xq), vy(n + 1, 2 * a + 2), outp},
-                           {rcol(2 * a, xq), vy(n + 1, 2 * a), outm}}},
-                         [&](int lo, int hi, const auto& c, const auto& d) {
-                           down_even_rows(lo, hi, h, ap, am, up, um, c[0], d[0], c[1], d[1], c[2],
-                                          d[2], c[3], d[3], o);
-                         });
+      for_segments<S, 4>(
+          h,
+          {{{rcol(2 * a + 1, xp), 0, outp},
+            {rcol(2 * a, xp), 0, outm},
+            {rcol(2 * a + 1, xq), vy(n + 1, 2 * a + 2), outp},
+            {rcol(2 * a, xq), vy(n + 1, 2 * a), outm}}},
+          [&](int lo, int hi, const auto& c, const auto& d) {
+            down_even_rows(lo, hi, h, ap, am, up, um, c[0], d[0], c[1], d[1], c[2], d[2], c[3],
+                           d[3], o);
+          },
+          prepare);
     }
   });
 }
@@ -733,7 +748,7 @@ void solve_with(const Medium& m, const Rgb& env, const HrcOptions& o, Buffers<S>
     watch.restart();
     build_view(world, W, H, d, view, vp);
     empty.resize(std::size_t(kTChannels) * view.h);
-    fill_column<S, 4>(empty.data(), view.h, {0.0f, 0.0f, 0.0f, 1.0f});
+    fill_column<S, 4>(empty.data(), view.h, 0, view.h, {0.0f, 0.0f, 0.0f, 1.0f});
     ms_view += watch.ms();
 
     watch.restart();

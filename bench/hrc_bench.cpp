@@ -42,6 +42,10 @@ void run_warm(benchmark::State& state, const Scene& scene, const HrcOptions& o) 
   state.counters["views_blur_ms"] = other / n;
   state.counters["memory_MiB"] =
       double(hrc::working_bytes(scene.width, scene.height, o)) / (1 << 20);
+  // T and two layers of R alone, and the seed's formula for them at the next power of two.
+  state.counters["structure_MiB"] =
+      double(hrc::structure_bytes(scene.width, scene.height, o.storage)) / (1 << 20);
+  state.counters["paper_MiB"] = double(hrc::paper_bytes(scene.width, scene.height, o)) / (1 << 20);
   state.counters["cells/s"] =
       benchmark::Counter(double(scene.cells()) * n, benchmark::Counter::kIsRate);
 }

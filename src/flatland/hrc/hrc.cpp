@@ -694,7 +694,10 @@ inline Interval near_segment(const ViewPlanes& vp, std::size_t own) {
 
 // Eq. 21: the 1-cell cross blur (4 at the centre, 1 at each side, over 8), leaving out
 // neighbours whose opacity differs from the cell's by more than kBlurOpacityStep (and those
-// beyond the grid), renormalised. Opacity over a cell length is 1 - tau(1/2)^2.
+// beyond the grid), renormalised. Opacity over a cell length is 1 - tau(1/2)^2. Opaque cells
+// neither blur nor are blurred into others: their fluence is the light arriving at their faces,
+// and inside a wall it is zero, so averaging a wall's surface with its inside would darken the
+// light it re-emits.
 constexpr float kBlurOpacityStep = 0.5f;
 
 void cross_blur(int W, int H, const float* tau_half, const float* f, float* out) {
@@ -704,8 +707,9 @@ void cross_blur(int W, int H, const float* tau_half, const float* f, float* out)
       const float op = 1.0f - tau_half[i] * tau_half[i];
       float r = 4 * f[3 * i], g = 4 * f[3 * i + 1], b = 4 * f[3 * i + 2], w = 4;
       auto add = [&](int nx, int ny) {
-        if (nx < 0 || ny < 0 || nx >= W || ny >= H) return;
+        if (nx < 0 || ny < 0 || nx >= W || ny >= H || tau_half[i] == 0.0f) return;
         const std::size_t j = std::size_t(ny) * W + nx;
+        if (tau_half[j] == 0.0f) return;  // opaque
         if (std::abs(1.0f - tau_half[j] * tau_half[j] - op) > kBlurOpacityStep) return;
         r += f[3 * j], g += f[3 * j + 1], b += f[3 * j + 2], w += 1;
       };

@@ -1,0 +1,58 @@
+#!/usr/bin/env bash
+# The artifacts of holographic radiance cascades (seed 004, section 5.0.3), measured: the
+# checkerboard with and without the cross blur, and the error against light size (moire of
+# small lights). Writes the pictures next to this script and prints the tables of
+# docs/QUALITY.md. Run from the repository root after `make build` (a few minutes: the
+# path-traced references are rendered here, not cached).
+set -euo pipefail
+cd "$(dirname "$0")/../../.."
+P=build/bin/penumbra
+D=docs/quality/artifacts
+T=$(mktemp -d)
+trap 'rm -rf "$T"' EXIT
+
+rmse() {  # rmse TEST REF [compare options...]: relative RMSE in percent
+  local t=$1 r=$2
+  shift 2
+  "$P" compare "$t" "$r" "$@" --json | sed -n 's/.*"relative_rmse": \([^,]*\),*/\1/p' |
+    awk '{ printf "%.2f%%", 100 * $1 }'
+}
+
+# The checkerboard: the occluder's penumbra near the occluder, with and without eq. 21.
+S=scenes/occluder.json
+"$P" render "$S" --method pt --nee --spp 1024 -q -o "$T/ref.pfm"
+"$P" render "$S" --method hrc -q -o "$T/hrc.pfm"
+"$P" render "$S" --method hrc --no-cross-blur -q -o "$T/noblur.pfm"
+"$P" render "$S" -q -o "$T/rc.pfm"
+CROP=(--crop 212 222 96 68)
+echo "| occluder, cells 212..307 x 222..289 | rel. RMSE |"
+echo "| --- | ---: |"
+for m in hrc noblur rc; do
+  echo "| $m | $(rmse "$T/$m.pfm" "$T/ref.pfm" --scene "$S" "${CROP[@]}") |"
+done
+"$P" compare "$T/noblur.pfm" "$T/ref.pfm" --scene "$S" "${CROP[@]}" --exposure 1 -q \
+  --montage "$D/checker_noblur.png"
+"$P" compare "$T/hrc.pfm" "$T/ref.pfm" --scene "$S" "${CROP[@]}" --exposure 1 -q \
+  --montage "$D/checker_blur.png"
+
+# Light size: a square light of side s cells, 96 cells left of a 14-cell occluder, 256^2.
+echo
+echo "| light side (cells) | HRC | HRC, no blur | RC (defaults) |"
+echo "| ---: | ---: | ---: | ---: |"
+for s in 2 4 8 16 32; do
+  cat > "$T/light$s.json" <<JSON
+{ "penumbra": 1, "width": 256, "height": 256,
+  "shapes": [ { "type": "box", "center": [40, 128], "size": [$s, $s],
+                "emission": [$((1024 / (s * s) + 1)), $((1024 / (s * s) + 1)), $((1024 / (s * s) + 1))] },
+              { "type": "box", "center": [136, 128], "size": [14, 14] } ] }
+JSON
+  "$P" render "$T/light$s.json" --method pt --nee --spp 2048 -q -o "$T/ref$s.pfm"
+  "$P" render "$T/light$s.json" --method hrc -q -o "$T/hrc$s.pfm"
+  "$P" render "$T/light$s.json" --method hrc --no-cross-blur -q -o "$T/noblur$s.pfm"
+  "$P" render "$T/light$s.json" -q -o "$T/rc$s.pfm"
+  echo "| $s | $(rmse "$T/hrc$s.pfm" "$T/ref$s.pfm" --scene "$T/light$s.json")" \
+    "| $(rmse "$T/noblur$s.pfm" "$T/ref$s.pfm" --scene "$T/light$s.json")" \
+    "| $(rmse "$T/rc$s.pfm" "$T/ref$s.pfm" --scene "$T/light$s.json") |"
+done
+"$P" compare "$T/hrc2.pfm" "$T/ref2.pfm" --scene "$T/light2.json" --exposure 2 -q \
+  --montage "$D/small_light.png"

@@ -11,6 +11,7 @@
 #include "flatland/hrc/hrc.hpp"
 #include "penumbra/render.hpp"
 #include "penumbra/scene.hpp"
+#include "test_support.hpp"
 
 namespace penumbra {
 namespace {
@@ -18,9 +19,7 @@ namespace {
 constexpr double kPi = std::numbers::pi;
 
 Scene build(const SceneDesc& d) {
-  Expected<Scene> s = build_scene(d);
-  EXPECT_TRUE(s.ok()) << (s.ok() ? "" : s.error().message);
-  return s.ok() ? *s : Scene{};
+  return testing::build_valid(d);
 }
 
 RenderOptions hrc(Storage storage = Storage::f32) {
@@ -39,9 +38,7 @@ RenderOptions pt(int spp) {
 }
 
 ImageRgb run(const Scene& s, const RenderOptions& o) {
-  Expected<RenderResult> r = render(s, o);
-  EXPECT_TRUE(r.ok()) << (r.ok() ? "" : r.error().message);
-  return r.ok() ? r->fluence : ImageRgb{};
+  return testing::render_valid(s, o).fluence;
 }
 
 // Relative error of the disk light against F = 2 L asin(r / d), at cells at least 4 cells from

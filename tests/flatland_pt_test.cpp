@@ -11,6 +11,7 @@
 #include "flatland/pt/pt.hpp"
 #include "penumbra/render.hpp"
 #include "penumbra/scene.hpp"
+#include "test_support.hpp"
 
 namespace penumbra {
 namespace {
@@ -18,9 +19,7 @@ namespace {
 constexpr double kPi = std::numbers::pi;
 
 Scene build(const SceneDesc& d) {
-  Expected<Scene> s = build_scene(d);
-  EXPECT_TRUE(s.ok()) << (s.ok() ? "" : s.error().message);
-  return s.ok() ? *s : Scene{};
+  return testing::build_valid(d);
 }
 
 RenderOptions pt_options(int spp, Sampler sampler = Sampler::r1, bool nee = false) {
@@ -33,9 +32,7 @@ RenderOptions pt_options(int spp, Sampler sampler = Sampler::r1, bool nee = fals
 }
 
 ImageRgb run(const Scene& s, const RenderOptions& o) {
-  Expected<RenderResult> r = render(s, o);
-  EXPECT_TRUE(r.ok()) << (r.ok() ? "" : r.error().message);
-  return r.ok() ? r->fluence : ImageRgb{};
+  return testing::render_valid(s, o).fluence;
 }
 
 // An opaque disk light of radiance L in the middle of an n x n grid, black environment.

@@ -9,6 +9,7 @@
 
 #include "penumbra/render.hpp"
 #include "penumbra/scene.hpp"
+#include "test_support.hpp"
 
 namespace penumbra {
 namespace {
@@ -16,15 +17,11 @@ namespace {
 constexpr double kPi = std::numbers::pi;
 
 Scene build(const SceneDesc& d) {
-  Expected<Scene> s = build_scene(d);
-  EXPECT_TRUE(s.ok()) << (s.ok() ? "" : s.error().message);
-  return s.ok() ? *s : Scene{};
+  return testing::build_valid(d);
 }
 
 RenderResult run(const Scene& s, const RenderOptions& o = {}) {
-  Expected<RenderResult> r = render(s, o);
-  EXPECT_TRUE(r.ok()) << (r.ok() ? "" : r.error().message);
-  return r.ok() ? *r : RenderResult{};
+  return testing::render_valid(s, o);
 }
 
 // An opaque disk of radiance L and radius r in the middle of an n x n grid.

@@ -14,7 +14,25 @@
 #include <system_error>
 #include <vector>
 
+#include "penumbra/render.hpp"
+#include "penumbra/scene.hpp"
+
 namespace penumbra::testing {
+
+// A scene from a description the test expects to be valid (a failure is reported, and an empty
+// scene returned).
+inline Scene build_valid(const SceneDesc& d) {
+  Expected<Scene> s = build_scene(d);
+  EXPECT_TRUE(s.ok()) << (s.ok() ? "" : s.error().message);
+  return s.ok() ? *s : Scene{};
+}
+
+// render() where the test expects it to succeed.
+inline RenderResult render_valid(const Scene& s, const RenderOptions& o = {}) {
+  Expected<RenderResult> r = render(s, o);
+  EXPECT_TRUE(r.ok()) << (r.ok() ? "" : r.error().message);
+  return r.ok() ? *r : RenderResult{};
+}
 
 // A directory of the running test's own under the test temporary directory, removed at the end.
 class TestDir {

@@ -123,8 +123,11 @@ Status check_memory(int width, int height, const RenderOptions& options, bool wi
   return Error{"a " + std::to_string(width) + "x" + std::to_string(height) + " grid needs " +
                human_bytes(need) + " of " +
                (with_scene ? "scene and working memory" : "working memory") + ", more than the " +
-               human_bytes(options.max_memory) +
-               " limit (raise it with --max-memory, or use a larger --probe-spacing)"};
+               human_bytes(options.max_memory) + " limit (raise it with --max-memory" +
+               (options.method == Method::rc ? ", or use a larger --probe-spacing)"
+                : options.method == Method::hrc && options.hrc.storage == Storage::f32
+                    ? ", or use --storage f16)"
+                    : ")")};
 }
 
 std::uint64_t scene_bytes(int width, int height) {

@@ -35,10 +35,13 @@ done
 "$P" compare "$T/hrc.pfm" "$T/ref.pfm" --scene "$S" "${CROP[@]}" --exposure 1 -q \
   --montage "$D/checker_blur.png"
 
-# Light size: a square light of side s cells, 96 cells left of a 14-cell occluder, 256^2.
+# Light size: a square light of side s cells, 96 cells left of a 14-cell occluder, 256^2; the
+# relative RMSE over every open cell, and behind the occluder (cells 150..255 x 88..167, the
+# shadow and its penumbrae).
+BEHIND=(--crop 150 88 106 80)
 echo
-echo "| light side (cells) | HRC | HRC, no blur | RC (defaults) |"
-echo "| ---: | ---: | ---: | ---: |"
+echo "| light side (cells) | HRC | HRC, no blur | RC (defaults) | HRC behind the occluder | HRC, no blur, behind | RC behind |"
+echo "| ---: | ---: | ---: | ---: | ---: | ---: | ---: |"
 for s in 2 4 8 16 32; do
   cat > "$T/light$s.json" <<JSON
 { "penumbra": 1, "width": 256, "height": 256,
@@ -50,9 +53,14 @@ JSON
   "$P" render "$T/light$s.json" --method hrc -q -o "$T/hrc$s.pfm"
   "$P" render "$T/light$s.json" --method hrc --no-cross-blur -q -o "$T/noblur$s.pfm"
   "$P" render "$T/light$s.json" -q -o "$T/rc$s.pfm"
-  echo "| $s | $(rmse "$T/hrc$s.pfm" "$T/ref$s.pfm" --scene "$T/light$s.json")" \
-    "| $(rmse "$T/noblur$s.pfm" "$T/ref$s.pfm" --scene "$T/light$s.json")" \
-    "| $(rmse "$T/rc$s.pfm" "$T/ref$s.pfm" --scene "$T/light$s.json") |"
+  row="| $s"
+  for crop in "" "${BEHIND[*]}"; do
+    for m in hrc noblur rc; do
+      # shellcheck disable=SC2086 # the crop is four words
+      row="$row | $(rmse "$T/$m$s.pfm" "$T/ref$s.pfm" --scene "$T/light$s.json" $crop)"
+    done
+  done
+  echo "$row |"
 done
 "$P" compare "$T/hrc2.pfm" "$T/ref2.pfm" --scene "$T/light2.json" --exposure 2 -q \
   --montage "$D/small_light.png"

@@ -292,19 +292,14 @@ std::vector<Segment> ray_pattern(int n, int k) {
 // transmittance), so every loop below streams unit-stride arrays.
 constexpr int kTChannels = 4, kRChannels = 3;
 
-// T outside the grid: nothing there (the ray has left and does not come back).
-template <bool Checked, class S>
+// Channel values of row y of a column.
+template <class S>
 inline Interval get_t(const S* col, int y, int h) {
-  if constexpr (Checked)
-    if (!col || y < 0 || y >= h) return Interval::empty();
   return {load(col[y]), load(col[h + y]), load(col[2 * h + y]), load(col[3 * h + y])};
 }
 
-// R outside the grid, or at level N: the environment over the cone (footnote 1).
-template <bool Checked, class S>
-inline Rad get_r(const S* col, int y, int h, const Rad& outside) {
-  if constexpr (Checked)
-    if (!col || y < 0 || y >= h) return outside;
+template <class S>
+inline Rad get_r(const S* col, int y, int h) {
   return {load(col[y]), load(col[h + y]), load(col[2 * h + y])};
 }
 
@@ -440,7 +435,7 @@ template <class S>
 [[gnu::noinline]] void up_even_rows(int lo, int hi, int h, const S* __restrict near,
                                     const S* __restrict far, int dy, S* __restrict o) {
   for (int y = lo; y < hi; ++y)
-    put_t(o, y, h, merge_intervals(get_t<false>(near, y, h), get_t<false>(far, y + dy, h)));
+    put_t(o, y, h, merge_intervals(get_t(near, y, h), get_t(far, y + dy, h)));
 }
 
 template <class S>
@@ -448,8 +443,8 @@ template <class S>
                                    const S* __restrict b1, int dy1, const S* __restrict a0,
                                    const S* __restrict b0, int dy0, S* __restrict o) {
   for (int y = lo; y < hi; ++y) {
-    const Interval p = merge_intervals(get_t<false>(a1, y, h), get_t<false>(b1, y + dy1, h));
-    const Interval m = merge_intervals(get_t<false>(a0, y, h), get_t<false>(b0, y + dy0, h));
+    const Interval p = merge_intervals(get_t(a1, y, h), get_t(b1, y + dy1, h));
+    const Interval m = merge_intervals(get_t(a0, y, h), get_t(b0, y + dy0, h));
     put_t(o, y, h,
           Interval{0.5f * (p.r + m.r), 0.5f * (p.g + m.g), 0.5f * (p.b + m.b), 0.5f * (p.t + m.t)});
   }
@@ -479,8 +474,8 @@ template <class S>
                                      int dym, S* __restrict o) {
   for (int y = lo; y < hi; ++y) {
     float r, g, b;
-    odd_cone(ap, am, get_t<false>(tp, y, h), get_t<false>(tm, y, h),
-             get_r<false>(rp, y + dyp, h, {}), get_r<false>(rm, y + dym, h, {}), r, g, b);
+    odd_cone(ap, am, get_t(tp, y, h), get_t(tm, y, h), get_r(rp, y + dyp, h), get_r(rm, y + dym, h),
+             r, g, b);
     put_r(o, y, h, r, g, b);
   }
 }
@@ -493,9 +488,8 @@ template <class S>
                                       const S* __restrict r1m, int dym, S* __restrict o) {
   for (int y = lo; y < hi; ++y) {
     float r, g, b;
-    even_cone(ap, am, get_t<false>(up, y, h), get_t<false>(um, y, h),
-              get_r<false>(r0p, y + d0p, h, {}), get_r<false>(r0m, y + d0m, h, {}),
-              get_r<false>(r1p, y + dyp, h, {}), get_r<false>(r1m, y + dym, h, {}), r, g, b);
+    even_cone(ap, am, get_t(up, y, h), get_t(um, y, h), get_r(r0p, y + d0p, h),
+              get_r(r0m, y + d0m, h), get_r(r1p, y + dyp, h), get_r(r1m, y + dym, h), r, g, b);
     put_r(o, y, h, r, g, b);
   }
 }
@@ -779,9 +773,8 @@ void solve_with(const Medium& m, const Rgb& env, const HrcOptions& o, Buffers<S>
     const Rad edge{env.r * quarter, env.g * quarter, env.b * quarter};
     const Rotation rot = rotation(d, W, H);
     for_view_cells(rot, view.w, view.h, [&](int u, int v) {
-      Rad q = u + 1 < view.w
-                  ? get_r<false>(r0 + std::size_t(u + 1) * kRChannels * view.h, v, view.h, edge)
-                  : edge;
+      Rad q =
+          u + 1 < view.w ? get_r(r0 + std::size_t(u + 1) * kRChannels * view.h, v, view.h) : edge;
       if (o.near_segment) {
         const Interval n = near_segment(vp, vp.at(u, v));
         q = {quarter * n.r + n.t * q.r, quarter * n.g + n.t * q.g, quarter * n.b + n.t * q.b};

@@ -31,7 +31,7 @@ bench: build
 quality: build
 	@$(BUILD)/bin/penumbra bench-quality scenes/occluder.json -o docs/quality/occluder --doc docs/QUALITY.md --cache $(BUILD)/quality-cache
 	@$(BUILD)/bin/penumbra bench-quality scenes/cornell.json --bounces 2 --reference-spp 2048 --max-spp 64 -o docs/quality/cornell --doc docs/QUALITY.md --cache $(BUILD)/quality-cache
-	@$(BUILD)/bin/penumbra bench-quality scenes/pinhole.json --max-spp 64 -o docs/quality/pinhole --doc docs/QUALITY.md --cache $(BUILD)/quality-cache
+	@$(BUILD)/bin/penumbra bench-quality scenes/pinhole.json --reference-spp 4096 --max-spp 64 -o docs/quality/pinhole --doc docs/QUALITY.md --cache $(BUILD)/quality-cache
 	@$(BUILD)/bin/penumbra bench-quality scenes/fog.json --max-spp 64 -o docs/quality/fog --doc docs/QUALITY.md --cache $(BUILD)/quality-cache
 
 install: build

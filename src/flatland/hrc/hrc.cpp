@@ -7,9 +7,10 @@
 // grid, then cross-blurred (eq. 21).
 //
 // Layout: level n of T (and of R) is a set of columns, one per (direction, probe x), each the
-// grid's h rows long. Every read of a merge is then a column at a fixed row shift, so the inner
-// loops stream contiguous memory; only rows whose shifted read leaves the grid take the checked
-// path, where T is empty and R is the environment.
+// grid's h rows long, channel after channel. Every read of a merge is then a column at a fixed
+// row shift, so the inner loops stream contiguous memory; rows whose shifted read leaves the
+// grid read a column of what lies beyond instead (T empty, R the environment), through the same
+// loops.
 #include "flatland/hrc/hrc.hpp"
 
 #include <Imath/half.h>
@@ -20,9 +21,9 @@
 #include <array>
 #include <cmath>
 #include <cstdlib>
-#include <initializer_list>
 #include <memory>
 #include <new>
+#include <stdexcept>
 #include <string>
 #include <type_traits>
 #include <utility>
@@ -283,6 +284,8 @@ std::vector<Segment> ray_pattern(int n, int k) {
         const float e = std::abs(g.len - kLengths[l] * float(1 + sq));
         if (e < best) best = e, g.plane = kTau0 + l, g.squared = sq;
       }
+    // Rays between cell centres with these offsets cross cells only along the six lengths.
+    if (best > 1e-4f) throw std::logic_error("hrc: a traced segment of unexpected length");
   }
   return segs;
 }

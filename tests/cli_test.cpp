@@ -175,6 +175,22 @@ TEST_F(Cli, HolographicCascadesReportStagesAndParameters) {
                  2);
 }
 
+// Half precision converts with F16C where the CPU has it and through tables otherwise
+// (PENUMBRA_NO_F16C=1): both round to nearest even, so the files are the same bytes.
+TEST_F(Cli, HalfPrecisionIsTheSameWithAndWithoutF16c) {
+  const std::string cli = penumbra::testing::quote(PENUMBRA_CLI);
+  for (const char* env : {"PENUMBRA_NO_F16C=1", "PENUMBRA_NO_F16C=0"}) {
+    const std::string out_file = out(std::string(env).back() == '1' ? "tables.pfm" : "f16c.pfm");
+    const std::string cmd = std::string(env) + " " + cli +
+                            " render --method hrc --storage f16 -q -o " +
+                            penumbra::testing::quote(out_file);
+    ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  }
+  const std::string a = slurp(out("tables.pfm")), b = slurp(out("f16c.pfm"));
+  ASSERT_FALSE(a.empty());
+  EXPECT_TRUE(a == b) << "f16 storage differs between F16C and the conversion tables";
+}
+
 TEST_F(Cli, PathTracerSkippingEmptySpaceDoesNotChangeTheResult) {
   const std::vector<std::string> pt = {"-q", "--method", "pt", "--spp", "4", "--bounces", "2"};
   std::vector<std::vector<std::string>> variants = {

@@ -64,3 +64,9 @@ JSON
 done
 "$P" compare "$T/hrc2.pfm" "$T/ref2.pfm" --scene "$T/light2.json" --exposure 2 -q \
   --montage "$D/small_light.png"
+
+# A diagonal wall edge of the built-in scene, lit from above: HRC against the path tracer.
+"$P" render --method pt --nee --spp 256 -q -o "$T/default_ref.pfm"
+"$P" render --method hrc -q -o "$T/default_hrc.pfm"
+"$P" compare "$T/default_hrc.pfm" "$T/default_ref.pfm" --crop 280 120 80 80 --exposure 1 -q \
+  --montage "$D/diagonal_edge.png"

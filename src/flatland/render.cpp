@@ -149,16 +149,8 @@ Expected<RenderResult> render_unchecked(const Scene& scene, const RenderOptions&
     result.options.rc.cascades = int(plan.size());
   }
   if (Status s = check_memory(scene.width, scene.height, options, false); !s) return s.error();
-  if (options.method == Method::hrc && options.hrc.storage == Storage::f16) {
-    // Every stored value is at most the brightest radiance times pi/2 (a bounce re-emits no
-    // more than the light it received); half precision ends at 65504.
-    float brightest = 0;
-    for (float e : scene.emission) brightest = std::max(brightest, e);
-    if (brightest > hrc::kHalfMaxRadiance)
-      return Error{"storage f16: the brightest emission, " + std::to_string(brightest) +
-                   ", is more than half precision holds (" + std::to_string(hrc::kHalfMaxRadiance) +
-                   "); use --storage f32"};
-  }
+  if (options.method == Method::hrc)
+    if (Status s = hrc::check_scene(scene, options.hrc); !s) return s.error();
   result.memory_bytes = estimate(scene.width, scene.height, options, plan);
 
   rc::fill_directions(plan);

@@ -262,6 +262,20 @@ struct Segment {
   bool squared = false;  // twice that length
 };
 
+std::vector<Segment> ray_pattern(int n, int k);
+
+// The patterns of T_0..T_2 (n = 0..2, k = 0..2^n), found once.
+using Patterns = std::array<std::array<std::vector<Segment>, 5>, 3>;
+const Patterns& ray_patterns() {
+  static const Patterns patterns = [] {
+    Patterns p;
+    for (int n = 0; n < 3; ++n)
+      for (int k = 0; k <= (1 << n); ++k) p[n][k] = ray_pattern(n, k);
+    return p;
+  }();
+  return patterns;
+}
+
 std::vector<Segment> ray_pattern(int n, int k) {
   constexpr int kSide = 2 * kPad + 1;
   Medium m;
@@ -416,7 +430,7 @@ void cross_cells(int h, const float* __restrict tau, const float* __restrict er,
 // column of probes per crossed cell, accumulating front to back in single precision.
 template <class S>
 void trace_level(const View& view, int n, const ViewPlanes& vp,
-                 const std::vector<Segment>* patterns, S* out) {
+                 const std::array<std::vector<Segment>, 5>& patterns, S* out) {
   const int P = view.probes(n), h = view.h;
   parallel_for(((1 << n) + 1) * P, [&](int row) {
     const int k = row / P, u = (row % P) << n;
@@ -504,86 +518,79 @@ template <class S>
   }
 }
 
-// The half-precision row merges: blocks of kBlock rows are converted to single precision, run
-// through the single-precision loops, and the result converted back, so the merges still
-// vectorise and memory carries half the bytes.
+// The half-precision row merges: blocks of kBlock rows of every input (a column, its channel
+// count and row shift) are converted to single precision, run through the single-precision loop
+// (`rows(n, inputs, out)`, each input then a block with channel stride kBlock), and the result is
+// converted back, so the merges still vectorise and memory carries half the bytes.
 constexpr int kBlock = 256;
 
-struct HalfBlocks {
-  // Rows [y, y + n) of `channels` channels of a column (channel c at c * h), into dst with
-  // channel c at c * kBlock.
-  static void load(const Half* col, int h, int channels, int y, int n, float* dst) {
-    for (int c = 0; c < channels; ++c)
-      to_float(col + std::ptrdiff_t(c) * h + y, dst + c * kBlock, n);
-  }
-  static void store(const float* src, int channels, Half* col, int h, int y, int n) {
-    for (int c = 0; c < channels; ++c)
-      to_half(src + c * kBlock, col + std::ptrdiff_t(c) * h + y, n);
-  }
+struct HalfInput {
+  const Half* col;
+  int channels, dy;
 };
+
+template <std::size_t K, class Rows>
+void half_rows(int lo, int hi, int h, const std::array<HalfInput, K>& in, Half* o, int out_channels,
+               Rows&& rows) {
+  float blocks[K][kTChannels * kBlock], out[kTChannels * kBlock];
+  std::array<const float*, K> f;
+  for (std::size_t i = 0; i < K; ++i) f[i] = blocks[i];
+  for (int y = lo; y < hi; y += kBlock) {
+    const int n = std::min(kBlock, hi - y);
+    for (std::size_t i = 0; i < K; ++i)
+      for (int c = 0; c < in[i].channels; ++c)
+        to_float(in[i].col + std::ptrdiff_t(c) * h + y + in[i].dy, blocks[i] + c * kBlock, n);
+    rows(n, f, out);
+    for (int c = 0; c < out_channels; ++c)
+      to_half(out + c * kBlock, o + std::ptrdiff_t(c) * h + y, n);
+  }
+}
 
 template <>
 void up_even_rows<Half>(int lo, int hi, int h, const Half* near, const Half* far, int dy, Half* o) {
-  float a[kTChannels * kBlock], b[kTChannels * kBlock], out[kTChannels * kBlock];
-  for (int y = lo; y < hi; y += kBlock) {
-    const int n = std::min(kBlock, hi - y);
-    HalfBlocks::load(near, h, kTChannels, y, n, a);
-    HalfBlocks::load(far, h, kTChannels, y + dy, n, b);
-    up_even_rows<float>(0, n, kBlock, a, b, 0, out);
-    HalfBlocks::store(out, kTChannels, o, h, y, n);
-  }
+  half_rows<2>(lo, hi, h, {{{near, kTChannels, 0}, {far, kTChannels, dy}}}, o, kTChannels,
+               [](int n, const auto& f, float* out) {
+                 up_even_rows<float>(0, n, kBlock, f[0], f[1], 0, out);
+               });
 }
 
 template <>
 void up_odd_rows<Half>(int lo, int hi, int h, const Half* a1, const Half* b1, int dy1,
                        const Half* a0, const Half* b0, int dy0, Half* o) {
-  float fa1[kTChannels * kBlock], fb1[kTChannels * kBlock], fa0[kTChannels * kBlock],
-      fb0[kTChannels * kBlock], out[kTChannels * kBlock];
-  for (int y = lo; y < hi; y += kBlock) {
-    const int n = std::min(kBlock, hi - y);
-    HalfBlocks::load(a1, h, kTChannels, y, n, fa1);
-    HalfBlocks::load(b1, h, kTChannels, y + dy1, n, fb1);
-    HalfBlocks::load(a0, h, kTChannels, y, n, fa0);
-    HalfBlocks::load(b0, h, kTChannels, y + dy0, n, fb0);
-    up_odd_rows<float>(0, n, kBlock, fa1, fb1, 0, fa0, fb0, 0, out);
-    HalfBlocks::store(out, kTChannels, o, h, y, n);
-  }
+  half_rows<4>(
+      lo, hi, h,
+      {{{a1, kTChannels, 0}, {b1, kTChannels, dy1}, {a0, kTChannels, 0}, {b0, kTChannels, dy0}}}, o,
+      kTChannels, [](int n, const auto& f, float* out) {
+        up_odd_rows<float>(0, n, kBlock, f[0], f[1], 0, f[2], f[3], 0, out);
+      });
 }
 
 template <>
 void down_odd_rows<Half>(int lo, int hi, int h, float ap, float am, const Half* tp, const Half* tm,
                          const Half* rp, int dyp, const Half* rm, int dym, Half* o) {
-  float ftp[kTChannels * kBlock], ftm[kTChannels * kBlock], frp[kRChannels * kBlock],
-      frm[kRChannels * kBlock], out[kRChannels * kBlock];
-  for (int y = lo; y < hi; y += kBlock) {
-    const int n = std::min(kBlock, hi - y);
-    HalfBlocks::load(tp, h, kTChannels, y, n, ftp);
-    HalfBlocks::load(tm, h, kTChannels, y, n, ftm);
-    HalfBlocks::load(rp, h, kRChannels, y + dyp, n, frp);
-    HalfBlocks::load(rm, h, kRChannels, y + dym, n, frm);
-    down_odd_rows<float>(0, n, kBlock, ap, am, ftp, ftm, frp, 0, frm, 0, out);
-    HalfBlocks::store(out, kRChannels, o, h, y, n);
-  }
+  half_rows<4>(
+      lo, hi, h,
+      {{{tp, kTChannels, 0}, {tm, kTChannels, 0}, {rp, kRChannels, dyp}, {rm, kRChannels, dym}}}, o,
+      kRChannels, [&](int n, const auto& f, float* out) {
+        down_odd_rows<float>(0, n, kBlock, ap, am, f[0], f[1], f[2], 0, f[3], 0, out);
+      });
 }
 
 template <>
 void down_even_rows<Half>(int lo, int hi, int h, float ap, float am, const Half* up, const Half* um,
                           const Half* r0p, int d0p, const Half* r0m, int d0m, const Half* r1p,
                           int dyp, const Half* r1m, int dym, Half* o) {
-  float fup[kTChannels * kBlock], fum[kTChannels * kBlock], f0p[kRChannels * kBlock],
-      f0m[kRChannels * kBlock], f1p[kRChannels * kBlock], f1m[kRChannels * kBlock],
-      out[kRChannels * kBlock];
-  for (int y = lo; y < hi; y += kBlock) {
-    const int n = std::min(kBlock, hi - y);
-    HalfBlocks::load(up, h, kTChannels, y, n, fup);
-    HalfBlocks::load(um, h, kTChannels, y, n, fum);
-    HalfBlocks::load(r0p, h, kRChannels, y + d0p, n, f0p);
-    HalfBlocks::load(r0m, h, kRChannels, y + d0m, n, f0m);
-    HalfBlocks::load(r1p, h, kRChannels, y + dyp, n, f1p);
-    HalfBlocks::load(r1m, h, kRChannels, y + dym, n, f1m);
-    down_even_rows<float>(0, n, kBlock, ap, am, fup, fum, f0p, 0, f0m, 0, f1p, 0, f1m, 0, out);
-    HalfBlocks::store(out, kRChannels, o, h, y, n);
-  }
+  half_rows<6>(lo, hi, h,
+               {{{up, kTChannels, 0},
+                 {um, kTChannels, 0},
+                 {r0p, kRChannels, d0p},
+                 {r0m, kRChannels, d0m},
+                 {r1p, kRChannels, dyp},
+                 {r1m, kRChannels, dym}}},
+               o, kRChannels, [&](int n, const auto& f, float* out) {
+                 down_even_rows<float>(0, n, kBlock, ap, am, f[0], f[1], f[2], 0, f[3], 0, f[4], 0,
+                                       f[5], 0, out);
+               });
 }
 
 // T_{n+1} from T_n: eq. 18 for even directions 2k, eqs. 19-20 for odd ones. `empty` is a column
@@ -708,10 +715,14 @@ void cross_blur(int W, int H, const float* tau_half, const float* f, float* out)
   parallel_for(H, [&](int y) {
     for (int x = 0; x < W; ++x) {
       const std::size_t i = std::size_t(y) * W + x;
+      if (tau_half[i] == 0.0f) {  // opaque: kept as it is
+        std::copy(f + 3 * i, f + 3 * i + 3, out + 3 * i);
+        continue;
+      }
       const float op = 1.0f - tau_half[i] * tau_half[i];
       float r = 4 * f[3 * i], g = 4 * f[3 * i + 1], b = 4 * f[3 * i + 2], w = 4;
       auto add = [&](int nx, int ny) {
-        if (nx < 0 || ny < 0 || nx >= W || ny >= H || tau_half[i] == 0.0f) return;
+        if (nx < 0 || ny < 0 || nx >= W || ny >= H) return;
         const std::size_t j = std::size_t(ny) * W + nx;
         if (tau_half[j] == 0.0f) return;  // opaque
         if (std::abs(1.0f - tau_half[j] * tau_half[j] - op) > kBlurOpacityStep) return;
@@ -741,9 +752,7 @@ void solve_with(const Medium& m, const Rgb& env, const HrcOptions& o, Buffers<S>
   ViewPlanes vp;
   vp.data = world + cells * kPlanes;
   vp.cells = sz.pad;
-  std::vector<Segment> patterns[3][5];
-  for (int n = 0; n < 3; ++n)
-    for (int k = 0; k <= (1 << n); ++k) patterns[n][k] = ray_pattern(n, k);
+  const Patterns& patterns = ray_patterns();
   f.resize(cells * 3);
   std::vector<S> empty;  // a column of empty intervals: what T reads beyond the grid
 
@@ -838,6 +847,16 @@ std::uint64_t paper_bytes(int width, int height, const HrcOptions& o) {
   const double vr = 3.0 * (o.storage == Storage::f16 ? 2 : 4), vt = vr / 3;
   const double four_n = std::ldexp(1.0, 2 * n);
   return std::uint64_t((n + 3 + std::ldexp(1.0, -n)) * four_n * (vr + vt) + 2 * four_n * vr);
+}
+
+Status check_scene(const Scene& scene, const HrcOptions& options) {
+  if (options.storage != Storage::f16) return {};
+  float brightest = 0;
+  for (float e : scene.emission) brightest = std::max(brightest, e);
+  if (brightest <= kHalfMaxRadiance) return {};
+  return Error{"storage f16: the brightest emission, " + std::to_string(brightest) +
+               ", is more than half precision holds (" + std::to_string(kHalfMaxRadiance) +
+               "); use --storage f32"};
 }
 
 std::uint64_t traced_intervals(int width, int height) {

@@ -34,6 +34,11 @@ std::uint64_t traced_intervals(int width, int height);
 // of a quadrant is at most pi/2 times the brightest radiance).
 inline constexpr float kHalfMaxRadiance = 65504.0f / 1.5707964f;
 
+// Refuses a scene the storage cannot hold: in f16, emission above kHalfMaxRadiance (every stored
+// value is at most the brightest radiance times pi/2, and a bounce re-emits no more than the
+// light it received).
+Status check_scene(const Scene& scene, const HrcOptions& options);
+
 // The buffers of a solve, kept from one solve to the next of the same grid (bounces, the
 // benchmarks, interactive use), so that the steady state allocates nothing. Buffers are not
 // initialised when allocated: every kernel writes each element before it is read.

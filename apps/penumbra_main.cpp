@@ -16,6 +16,7 @@
 
 #include "compare_cmd.hpp"
 #include "core/timer.hpp"
+#include "paint_cmd.hpp"
 #include "penumbra/penumbra.hpp"
 #include "quality_cmd.hpp"
 
@@ -352,6 +353,7 @@ int main(int argc, char** argv) {
   render->add_flag("-q,--quiet", a.quiet, "Print nothing on success");
   const std::unique_ptr<CompareCommand> compare = add_compare_command(app);
   const std::unique_ptr<QualityCommand> quality = add_quality_command(app);
+  const std::unique_ptr<PaintCommand> paint = add_paint_command(app);
 
   try {
     app.parse(argc, argv);
@@ -377,5 +379,6 @@ int main(int argc, char** argv) {
   }
   if (compare->parsed()) return run_compare(compare->args);
   if (quality->parsed()) return run_quality(quality->args);
+  if (paint->parsed()) return run_paint(paint->args);
   return kUsage;
 }

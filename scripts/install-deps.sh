@@ -7,6 +7,8 @@ packages=(
   build-essential cmake pkg-config
   libtbb-dev libstb-dev libopenexr-dev nlohmann-json3-dev libcli11-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  libpng-dev
+  libglfw3-dev libgl-dev libgl1-mesa-dri libimgui-dev xvfb xauth
 )
 
 missing=()

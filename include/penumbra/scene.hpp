@@ -49,6 +49,7 @@ struct Layers {
   std::optional<ImageRgb> emission;           // linear radiance, emission_scale applied
   std::optional<std::vector<float>> opacity;  // width * height values in [0, 1]
   std::optional<ImageRgb> albedo;             // in [0, 1]
+  float emission_scale = 1;  // the file's `emission_scale`, for programs that write it back
 };
 
 // The scene as written: what a file holds, or what a program builds in code.

@@ -4,6 +4,8 @@
 // classified by the signed distance from its centre to the shape boundary: a cell lies within
 // sqrt(2)/2 of its centre, so beyond that distance it is fully inside or outside, and only
 // boundary cells are supersampled (16x16 points, exact inside tests).
+#include "flatland/rasterize.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -136,6 +138,8 @@ float coverage(const Geom& g, int i, int j) {
   return float(hits) / float(kSamples * kSamples);
 }
 
+}  // namespace
+
 // A ray grazing the edge of an opaque shape crosses several partly covered cells in a row and
 // their opacities compound, so blending opaque coverage linearly makes a disk look up to half a
 // cell wider than it is. Sharpening the coverage to c^4 keeps the silhouette of disks of radius 4
@@ -171,6 +175,8 @@ void blend(Scene& s, std::size_t idx, float c, const Material& m) {
   }
 }
 
+namespace {
+
 // Cell index range [lo, hi) touched by the interval [a, b], clipped to [0, n).
 void cell_range(double a, double b, int n, int& lo, int& hi) {
   lo = int(std::clamp(std::floor(a), 0.0, double(n)));
@@ -189,7 +195,7 @@ void draw(Scene& s, const Geom& g, const Material& m) {
     const int j = j0 + r;
     for (int i = i0; i < i1; ++i) {
       const float c = coverage(g, i, j);
-      if (c > 0) blend(s, s.index(i, j), m.opacity >= 1 ? opaque_edge(c) : c, m);
+      if (c > 0) blend(s, s.index(i, j), blend_fraction(c, m), m);
     }
   });
 }

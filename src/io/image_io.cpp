@@ -8,6 +8,7 @@
 #include <ImfIO.h>
 #include <ImfInputFile.h>
 #include <ImfOutputFile.h>
+#include <png.h>
 #include <stb_image.h>
 #include <stb_image_write.h>
 #include <unistd.h>
@@ -515,6 +516,55 @@ Expected<StagedFile> stage_png8(const std::string& path, int width, int height,
   if (!stbi_write_png_to_func(sink, &encoded, width, height, 3, rgb.data(), width * 3)) {
     return fail(path, "cannot encode PNG");
   }
+  return stage(path, [&](std::FILE* f) { return write_bytes(f, encoded.data(), encoded.size()); });
+}
+
+namespace {
+
+// libpng reports errors by longjmp; this frame holds nothing with a destructor.
+bool encode_png16(std::vector<unsigned char>& out, int width, int height, int channels,
+                  const std::uint16_t* codes) {
+  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
+  if (!png) return false;
+  png_infop info = png_create_info_struct(png);
+  if (!info || setjmp(png_jmpbuf(png))) {
+    png_destroy_write_struct(&png, info ? &info : nullptr);
+    return false;
+  }
+  png_set_write_fn(
+      png, &out,
+      [](png_structp p, png_bytep data, png_size_t size) {
+        auto* v = static_cast<std::vector<unsigned char>*>(png_get_io_ptr(p));
+        v->insert(v->end(), data, data + size);
+      },
+      nullptr);
+  png_set_IHDR(png, info, png_uint_32(width), png_uint_32(height), 16,
+               channels == 1 ? PNG_COLOR_TYPE_GRAY : PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
+               PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+  png_write_info(png, info);
+  png_set_swap(png);  // PNG stores 16-bit samples big-endian
+  const std::size_t row = std::size_t(width) * channels;
+  for (int y = 0; y < height; ++y)
+    png_write_row(png, reinterpret_cast<png_const_bytep>(codes + row * std::size_t(y)));
+  png_write_end(png, nullptr);
+  png_destroy_write_struct(&png, &info);
+  return true;
+}
+
+}  // namespace
+
+Expected<StagedFile> stage_png16(const std::string& path, int width, int height, int channels,
+                                 const std::vector<std::uint16_t>& codes) {
+  if (Status s = check_writable_size(path, width, height); !s) return s.error();
+  if ((channels != 1 && channels != 3) ||
+      codes.size() != std::size_t(width) * height * std::size_t(channels)) {
+    return fail(path, "16-bit pixel buffer holds " + std::to_string(codes.size()) + " values for " +
+                          std::to_string(channels) + " channels of " + std::to_string(width) +
+                          " x " + std::to_string(height));
+  }
+  std::vector<unsigned char> encoded;
+  if (!encode_png16(encoded, width, height, channels, codes.data()))
+    return fail(path, "cannot encode PNG");
   return stage(path, [&](std::FILE* f) { return write_bytes(f, encoded.data(), encoded.size()); });
 }
 

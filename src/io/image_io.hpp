@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <functional>
 #include <string>
 #include <utility>
@@ -36,6 +37,10 @@ Expected<StagedFile> stage_pfm(const std::string& path, const ImageRgb& image);
 Expected<StagedFile> stage_exr(const std::string& path, const ImageRgb& image);
 Expected<StagedFile> stage_png8(const std::string& path, int width, int height,
                                 const std::vector<unsigned char>& rgb);
+// A 16-bit PNG (through libpng) of 1 (grey) or 3 (RGB) channels: the codes are written as given,
+// so read_image gives back code / 65535 exactly.
+Expected<StagedFile> stage_png16(const std::string& path, int width, int height, int channels,
+                                 const std::vector<std::uint16_t>& codes);
 // Renames a staged file into place (removing it if that fails); discard removes it.
 Status publish(const StagedFile& file);
 void discard(const StagedFile& file);

@@ -542,6 +542,7 @@ SceneDesc parse_or_throw(std::string_view text, const std::string& path) {
     check_layer_size(path, name, raw->width, raw->height, desc);
     if (k == 0) {
       desc.layers.emission = load_rgb_layer(*raw, raw->integer_png, emission_scale);
+      desc.layers.emission_scale = emission_scale;
     } else if (k == 1) {
       // Opacity is a linear fraction, never sRGB-decoded.
       desc.layers.opacity = load_first_channel(*raw);

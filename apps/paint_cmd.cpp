@@ -1,0 +1,719 @@
+// `penumbra paint`: draw lights, walls and fog with a brush and watch the global illumination.
+//
+// Two threads: the UI thread owns the window, the canvas and Dear ImGui; the solver thread
+// renders the latest canvas from scratch (no temporal reuse, as in the papers) and tone-maps it.
+// The UI never waits for the solver, so the window stays responsive when a frame is slow.
+#include "paint_cmd.hpp"
+
+#define GLFW_INCLUDE_NONE
+#include <GL/gl.h>
+#include <GLFW/glfw3.h>
+#include <backends/imgui_impl_glfw.h>
+#include <backends/imgui_impl_opengl3.h>
+#include <imgui.h>
+#include <imgui_stdlib.h>
+
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <condition_variable>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "core/timer.hpp"
+#include "io/display.hpp"
+#include "io/image_io.hpp"
+#include "io/path_util.hpp"
+#include "paint/canvas.hpp"
+#include "penumbra/penumbra.hpp"
+
+using namespace penumbra;
+
+namespace {
+
+constexpr int kUsage = 2;
+constexpr int kFailure = 1;
+constexpr float kPanelWidth = 340;
+constexpr float kMinHeight = 800;  // the panel's height with every section open
+
+// ---- the solver thread ----------------------------------------------------------------------
+
+// What the solver shows: the display picture of one render, and how long it took.
+struct Frame {
+  int width = 0, height = 0;
+  std::vector<unsigned char> rgb;  // 8-bit sRGB, row 0 at the top
+  std::vector<StageTime> stages;
+  double solve_ms = 0, display_ms = 0;
+  std::uint64_t scene_version = 0, options_version = 0;
+  std::uint64_t serial = 0;  // counts solved frames
+  std::string error;         // the render was refused (the picture is the previous one)
+};
+
+class Solver {
+ public:
+  Solver() : thread_([this] { loop(); }) {}
+  ~Solver() {
+    {
+      std::lock_guard lock(mutex_);
+      quit_ = true;
+    }
+    wake_.notify_all();
+    thread_.join();
+  }
+
+  // Hands the solver a new canvas state; it is rendered once the current frame is done.
+  void submit(std::shared_ptr<const Scene> scene, std::uint64_t scene_version,
+              const RenderOptions& options, std::uint64_t options_version, float exposure,
+              bool continuous) {
+    {
+      std::lock_guard lock(mutex_);
+      scene_ = std::move(scene);
+      scene_version_ = scene_version;
+      options_ = options;
+      options_version_ = options_version;
+      exposure_ = exposure;
+      continuous_ = continuous;
+    }
+    wake_.notify_all();
+  }
+
+  // The latest frame if it is newer than `serial`.
+  bool latest(std::uint64_t serial, Frame& out) {
+    std::lock_guard lock(mutex_);
+    if (frame_.serial == serial) return false;
+    out = frame_;
+    return true;
+  }
+
+ private:
+  void loop() {
+    std::uint64_t done_scene = 0, done_options = 0, serial = 0;
+    for (;;) {
+      std::shared_ptr<const Scene> scene;
+      RenderOptions options;
+      std::uint64_t scene_version = 0, options_version = 0;
+      float exposure = 0;
+      {
+        std::unique_lock lock(mutex_);
+        wake_.wait(lock, [&] {
+          return quit_ || (scene_ && (continuous_ || scene_version_ != done_scene ||
+                                      options_version_ != done_options));
+        });
+        if (quit_) return;
+        scene = scene_;
+        options = options_;
+        scene_version = scene_version_;
+        options_version = options_version_;
+        exposure = exposure_;
+      }
+      Frame f;
+      f.width = scene->width;
+      f.height = scene->height;
+      f.scene_version = scene_version;
+      f.options_version = options_version;
+      f.serial = ++serial;
+      Stopwatch watch;
+      Expected<RenderResult> r = render(*scene, options);
+      f.solve_ms = watch.ms();
+      if (r) {
+        f.stages = std::move(r->stages);
+        watch.restart();
+        f.rgb = io::display_rgb8(r->fluence, scene.get(), {exposure});
+        f.display_ms = watch.ms();
+      } else {
+        f.error = r.error().message;
+      }
+      done_scene = scene_version;
+      done_options = options_version;
+      std::lock_guard lock(mutex_);
+      if (f.rgb.empty()) {  // refused: keep showing the last picture
+        f.rgb = std::move(frame_.rgb);
+        f.width = frame_.width;
+        f.height = frame_.height;
+      }
+      frame_ = std::move(f);
+    }
+  }
+
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  std::shared_ptr<const Scene> scene_;
+  std::uint64_t scene_version_ = 0, options_version_ = 0;
+  RenderOptions options_;
+  float exposure_ = 0;
+  bool continuous_ = false, quit_ = false;
+  Frame frame_;
+  std::thread thread_;  // last: starts once the members above exist
+};
+
+// ---- the window -----------------------------------------------------------------------------
+
+bool parse_size(const std::string& text, int& w, int& h) {
+  int n = 0;
+  return std::sscanf(text.c_str(), "%dx%d%n", &w, &h, &n) == 2 && n == int(text.size()) && w > 0 &&
+         h > 0;
+}
+
+Method method_of(const std::string& name) {
+  return name == "rc" ? Method::rc : name == "pt" ? Method::pt : Method::hrc;
+}
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+std::string glfw_error;
+
+extern "C" void on_glfw_error(int, const char* text) {
+  glfw_error = text ? text : "unknown error";
+}
+
+class Painter {
+ public:
+  Painter(const PaintArgs& args, paint::Canvas canvas, std::vector<paint::Stroke> replay)
+      : args_(args), canvas_(std::move(canvas)), replay_(std::move(replay)) {
+    options_.method = method_of(args.method);
+    options_.bounces = args.bounces;
+    options_.threads = args.threads;
+    options_.pt.spp = 4;
+    exposure_ = args.exposure;
+    environment_ = canvas_.scene().environment;
+    brush_.intensity = std::min(4.0f, canvas_.emission_scale());
+  }
+
+  int run();
+
+ private:
+  float zoom() const;
+  void resize_window();
+  void handle_input();
+  void draw_panel();
+  void submit();
+  void upload(const Frame& f);
+  bool write_screenshot();
+  void replace_canvas(paint::Canvas c);
+
+  const PaintArgs& args_;
+  paint::Canvas canvas_;
+  std::vector<paint::Stroke> replay_;
+  std::size_t replayed_ = 0;
+  std::vector<paint::Stroke> recorded_;
+
+  GLFWwindow* window_ = nullptr;
+  GLuint texture_ = 0;
+  int tex_w_ = 0, tex_h_ = 0;
+  std::unique_ptr<Solver> solver_;
+  Frame shown_;
+
+  RenderOptions options_;
+  std::uint64_t options_version_ = 1;
+  std::uint64_t submitted_scene_ = 0, submitted_options_ = 0;
+  float exposure_ = 0;
+  bool continuous_ = false;
+  Rgb environment_{};
+  float environment_intensity_ = 1;
+
+  paint::Brush brush_;
+  bool painting_ = false;
+  bool undo_down_ = false, save_down_ = false;
+  std::string file_ = "painting.json";
+  std::string message_;
+  std::vector<double> solve_ms_, ui_ms_;
+};
+
+float Painter::zoom() const {
+  if (args_.zoom > 0) return args_.zoom;
+  const int side = std::max(canvas_.width(), canvas_.height());
+  return side <= 800 ? float(std::max(1, 800 / side)) : 800.0f / float(side);
+}
+
+void Painter::resize_window() {
+  const float z = zoom();
+  glfwSetWindowSize(window_, int(std::ceil(canvas_.width() * z + kPanelWidth)),
+                    int(std::max(std::ceil(canvas_.height() * z), kMinHeight)));
+}
+
+void Painter::replace_canvas(paint::Canvas c) {
+  canvas_ = std::move(c);
+  environment_ = canvas_.scene().environment;
+  environment_intensity_ = 1;
+  recorded_.clear();
+  brush_.intensity = std::min(brush_.intensity, canvas_.emission_scale());
+  resize_window();
+}
+
+void Painter::submit() {
+  if (canvas_.version() == submitted_scene_ && options_version_ == submitted_options_ &&
+      !continuous_)
+    return;
+  submitted_scene_ = canvas_.version();
+  submitted_options_ = options_version_;
+  solver_->submit(std::make_shared<const Scene>(canvas_.scene()), submitted_scene_, options_,
+                  options_version_, exposure_, continuous_);
+}
+
+void Painter::upload(const Frame& f) {
+  if (f.rgb.empty()) return;
+  glBindTexture(GL_TEXTURE_2D, texture_);
+  glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+  if (f.width != tex_w_ || f.height != tex_h_) {
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB8, f.width, f.height, 0, GL_RGB, GL_UNSIGNED_BYTE,
+                 f.rgb.data());
+    tex_w_ = f.width;
+    tex_h_ = f.height;
+  } else {
+    glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, f.width, f.height, GL_RGB, GL_UNSIGNED_BYTE,
+                    f.rgb.data());
+  }
+}
+
+// Mouse and keys on the canvas (ImGui gets them first when the pointer is over the panel).
+void Painter::handle_input() {
+  ImGuiIO& io = ImGui::GetIO();
+  const float z = zoom();
+  const float cx = io.MousePos.x / z, cy = io.MousePos.y / z;
+  const bool over_canvas = !io.WantCaptureMouse && io.MousePos.x >= 0 && io.MousePos.y >= 0 &&
+                           cx < canvas_.width() + brush_.radius &&
+                           cy < canvas_.height() + brush_.radius;
+  if (over_canvas && io.MouseWheel != 0)
+    brush_.radius =
+        std::clamp(brush_.radius * std::pow(1.15f, io.MouseWheel), 0.5f, paint::kMaxBrushRadius);
+  if (!painting_ && over_canvas && ImGui::IsMouseClicked(ImGuiMouseButton_Left)) {
+    if (Status s = canvas_.begin_stroke(brush_, cx, cy); s) {
+      painting_ = true;
+      recorded_.push_back({brush_, {{cx, cy}}});
+    } else {
+      message_ = s.error().message;
+    }
+  } else if (painting_ && ImGui::IsMouseDown(ImGuiMouseButton_Left)) {
+    auto& last = recorded_.back().points.back();
+    if (cx != last[0] || cy != last[1]) {
+      canvas_.extend_stroke(cx, cy);
+      recorded_.back().points.push_back({cx, cy});
+    }
+  } else if (painting_) {
+    canvas_.end_stroke();
+    painting_ = false;
+  }
+  // Ctrl-Z and Ctrl-S, on the key going down.
+  const bool ctrl = glfwGetKey(window_, GLFW_KEY_LEFT_CONTROL) == GLFW_PRESS ||
+                    glfwGetKey(window_, GLFW_KEY_RIGHT_CONTROL) == GLFW_PRESS;
+  const bool z_down = ctrl && glfwGetKey(window_, GLFW_KEY_Z) == GLFW_PRESS;
+  if (z_down && !undo_down_ && !painting_ && canvas_.undo() && !recorded_.empty())
+    recorded_.pop_back();
+  undo_down_ = z_down;
+  const bool s_down = ctrl && glfwGetKey(window_, GLFW_KEY_S) == GLFW_PRESS;
+  if (s_down && !save_down_) {
+    Status s = canvas_.save(file_);
+    message_ = s ? "saved " + file_ : s.error().message;
+  }
+  save_down_ = s_down;
+}
+
+void Painter::draw_panel() {
+  const float z = zoom();
+  ImGui::SetNextWindowPos(ImVec2(canvas_.width() * z, 0));
+  ImGui::SetNextWindowSize(ImVec2(kPanelWidth, ImGui::GetIO().DisplaySize.y));
+  ImGui::Begin("Penumbra painter", nullptr,
+               ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse);
+  ImGui::Text("grid %d x %d cells, zoom %.2f", canvas_.width(), canvas_.height(), z);
+
+  // The frame: per stage, as the solver measured it.
+  if (ImGui::CollapsingHeader("Frame", ImGuiTreeNodeFlags_DefaultOpen)) {
+    ImGui::Text("method %s, frame %llu", to_string(options_.method),
+                (unsigned long long)shown_.serial);
+    ImGui::Text("solve %.1f ms (%.0f fps), display %.1f ms", shown_.solve_ms,
+                shown_.solve_ms > 0 ? 1000.0 / shown_.solve_ms : 0.0, shown_.display_ms);
+    for (const StageTime& s : shown_.stages) ImGui::Text("  %-22s %7.2f ms", s.name.c_str(), s.ms);
+    ImGui::Text("window %.1f ms per frame", 1000.0f / std::max(ImGui::GetIO().Framerate, 1e-3f));
+    if (!shown_.error.empty()) ImGui::TextWrapped("render refused: %s", shown_.error.c_str());
+  }
+
+  if (ImGui::CollapsingHeader("Brush", ImGuiTreeNodeFlags_DefaultOpen)) {
+    int tool = int(brush_.tool);
+    ImGui::RadioButton("light", &tool, int(paint::Tool::light));
+    ImGui::SameLine();
+    ImGui::RadioButton("wall", &tool, int(paint::Tool::wall));
+    ImGui::SameLine();
+    ImGui::RadioButton("fog", &tool, int(paint::Tool::fog));
+    ImGui::SameLine();
+    ImGui::RadioButton("eraser", &tool, int(paint::Tool::erase));
+    brush_.tool = paint::Tool(tool);
+    if (brush_.tool != paint::Tool::erase)
+      ImGui::ColorEdit3(brush_.tool == paint::Tool::light ? "colour" : "albedo", &brush_.color.r);
+    if (brush_.tool == paint::Tool::light)
+      ImGui::SliderFloat("intensity", &brush_.intensity, 0.01f, canvas_.emission_scale(), "%.2f",
+                         ImGuiSliderFlags_Logarithmic);
+    if (brush_.tool == paint::Tool::fog)
+      ImGui::SliderFloat("opacity", &brush_.opacity, 0.001f, 0.99f, "%.3f",
+                         ImGuiSliderFlags_Logarithmic);
+    ImGui::SliderFloat("radius", &brush_.radius, 0.5f, paint::kMaxBrushRadius, "%.1f cells",
+                       ImGuiSliderFlags_Logarithmic);
+    ImGui::TextDisabled("mouse wheel: radius; Ctrl-Z: undo");
+    if (ImGui::Button("Undo") && canvas_.undo() && !recorded_.empty()) recorded_.pop_back();
+    ImGui::SameLine();
+    if (ImGui::Button("Clear")) {
+      canvas_.clear();
+      // A stroke file has no "clear": record an eraser covering every cell.
+      const float w = float(canvas_.width()), h = float(canvas_.height());
+      paint::Brush e;
+      e.tool = paint::Tool::erase;
+      e.radius = std::min(std::hypot(w, h), paint::kMaxBrushRadius);
+      paint::Stroke s{e, {}};
+      for (float y = 0; y < h + e.radius; y += e.radius)
+        for (float x = 0; x < w + e.radius; x += e.radius) s.points.push_back({x, y});
+      recorded_.push_back(std::move(s));
+    }
+    ImGui::SameLine();
+    ImGui::Text("%zu undo steps", canvas_.undo_steps());
+  }
+
+  if (ImGui::CollapsingHeader("Environment", ImGuiTreeNodeFlags_DefaultOpen)) {
+    bool changed = ImGui::ColorEdit3("colour##env", &environment_.r);
+    changed |= ImGui::SliderFloat("radiance", &environment_intensity_, 0.0f, 4.0f, "%.3f",
+                                  ImGuiSliderFlags_Logarithmic);
+    if (changed)
+      canvas_.set_environment({environment_.r * environment_intensity_,
+                               environment_.g * environment_intensity_,
+                               environment_.b * environment_intensity_});
+  }
+
+  if (ImGui::CollapsingHeader("Method", ImGuiTreeNodeFlags_DefaultOpen)) {
+    bool changed = false;
+    int m = int(options_.method);
+    const char* names[] = {"rc", "pt", "hrc"};  // in the order of penumbra::Method
+    if (ImGui::Combo("method", &m, names, 3)) options_.method = Method(m), changed = true;
+    changed |= ImGui::SliderInt("bounces", &options_.bounces, 1, 8);
+    changed |= ImGui::SliderInt("threads", &options_.threads, 0,
+                                int(std::max(1u, std::thread::hardware_concurrency())),
+                                options_.threads == 0 ? "all" : "%d");
+    if (options_.method == Method::hrc) {
+      bool f16 = options_.hrc.storage == Storage::f16;
+      if (ImGui::Checkbox("f16 storage", &f16))
+        options_.hrc.storage = f16 ? Storage::f16 : Storage::f32, changed = true;
+      changed |= ImGui::Checkbox("cross blur", &options_.hrc.cross_blur);
+      changed |= ImGui::Checkbox("near segment", &options_.hrc.near_segment);
+    } else if (options_.method == Method::rc) {
+      RcOptions& rc = options_.rc;
+      changed |= ImGui::SliderInt("probe spacing", &rc.probe_spacing, 1, 16);
+      changed |= ImGui::SliderInt("directions Q0", &rc.directions, 1, 16);
+      changed |= ImGui::SliderFloat("interval t0", &rc.interval, 0.5f, 64.0f, "%.1f",
+                                    ImGuiSliderFlags_Logarithmic);
+      int fix = int(rc.fix);
+      const char* fixes[] = {"bilinear fix", "vanilla", "nearest"};
+      if (ImGui::Combo("merge", &fix, fixes, 3)) rc.fix = MergeFix(fix), changed = true;
+    } else {
+      changed |= ImGui::SliderInt("spp", &options_.pt.spp, 1, 256);
+      changed |= ImGui::Checkbox("next event estimation", &options_.pt.nee);
+    }
+    changed |= ImGui::SliderFloat("exposure (EV)", &exposure_, -8.0f, 8.0f, "%.1f");
+    ImGui::Checkbox("solve every frame", &continuous_);
+    if (changed) ++options_version_;
+  }
+
+  if (ImGui::CollapsingHeader("File", ImGuiTreeNodeFlags_DefaultOpen)) {
+    ImGui::InputText("scene file", &file_);
+    if (ImGui::Button("Save")) {
+      Status s = canvas_.save(file_);
+      message_ = s ? "saved " + file_ : s.error().message;
+    }
+    ImGui::SameLine();
+    if (ImGui::Button("Load")) {
+      Expected<SceneDesc> desc = load_scene(file_);
+      Expected<paint::Canvas> c =
+          desc ? paint::Canvas::from_scene(*desc) : Expected<paint::Canvas>(desc.error());
+      if (c) {
+        replace_canvas(std::move(*c));
+        message_ = "loaded " + file_;
+      } else {
+        message_ = c.error().message;
+      }
+    }
+    ImGui::TextDisabled("emission scale %g", canvas_.emission_scale());
+    if (!message_.empty()) ImGui::TextWrapped("%s", message_.c_str());
+  }
+  ImGui::End();
+}
+
+bool Painter::write_screenshot() {
+  int w = 0, h = 0;
+  glfwGetFramebufferSize(window_, &w, &h);
+  std::vector<unsigned char> rgb(std::size_t(w) * h * 3), flipped(rgb.size());
+  glFinish();
+  glPixelStorei(GL_PACK_ALIGNMENT, 1);
+  glReadBuffer(GL_BACK);
+  glReadPixels(0, 0, w, h, GL_RGB, GL_UNSIGNED_BYTE, rgb.data());
+  const std::size_t row = std::size_t(w) * 3;
+  for (int y = 0; y < h; ++y)  // OpenGL's rows start at the bottom
+    std::copy_n(&rgb[std::size_t(h - 1 - y) * row], row, &flipped[std::size_t(y) * row]);
+  if (Status s = io::write_png8(args_.screenshot, w, h, flipped); !s) {
+    std::cerr << "penumbra paint: " << s.error().message << "\n";
+    return false;
+  }
+  return true;
+}
+
+int Painter::run() {
+  glfwSetErrorCallback(on_glfw_error);
+  if (!glfwInit()) {
+    std::cerr << "penumbra paint: no display: cannot open a window (" << glfw_error
+              << "); set DISPLAY, or run under Xvfb for scripted use\n";
+    return kFailure;
+  }
+  glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
+  glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 0);
+  glfwWindowHint(GLFW_RESIZABLE, GLFW_FALSE);
+  const float z = zoom();
+  window_ = glfwCreateWindow(int(std::ceil(canvas_.width() * z + kPanelWidth)),
+                             int(std::max(std::ceil(canvas_.height() * z), kMinHeight)),
+                             "Penumbra painter", nullptr, nullptr);
+  if (!window_) {
+    std::cerr << "penumbra paint: cannot create an OpenGL 3.0 window: " << glfw_error << "\n";
+    glfwTerminate();
+    return kFailure;
+  }
+  glfwMakeContextCurrent(window_);
+  // Replays and measurements run as fast as they can; a person gets vsync.
+  glfwSwapInterval(args_.replay.empty() && args_.frames == 0 ? 1 : 0);
+  IMGUI_CHECKVERSION();
+  ImGui::CreateContext();
+  ImGui::GetIO().IniFilename = nullptr;  // no imgui.ini in the working directory
+  ImGui::StyleColorsDark();
+  ImGui_ImplGlfw_InitForOpenGL(window_, true);
+  ImGui_ImplOpenGL3_Init("#version 130");
+  glGenTextures(1, &texture_);
+  glBindTexture(GL_TEXTURE_2D, texture_);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+
+  continuous_ = args_.frames > 0;
+  solver_ = std::make_unique<Solver>();
+  int status = 0;
+  bool done = false;
+  std::uint64_t first_serial = 0;
+  Stopwatch frame_watch;
+  while (!done && !glfwWindowShouldClose(window_)) {
+    const bool busy = replayed_ < replay_.size() || !args_.screenshot.empty() || args_.frames > 0;
+    if (busy)
+      glfwPollEvents();
+    else
+      glfwWaitEventsTimeout(1.0 / 120);  // wakes for input, or to show a new solver frame
+    ImGui_ImplOpenGL3_NewFrame();
+    ImGui_ImplGlfw_NewFrame();
+    ImGui::NewFrame();
+
+    // A replay paints one stroke per window frame, so it can be watched.
+    if (replayed_ < replay_.size()) {
+      const std::string where = args_.replay + ": strokes[" + std::to_string(replayed_) + "]";
+      if (Status s = canvas_.apply(replay_[replayed_], where); !s) {
+        std::cerr << "penumbra paint: " << s.error().message << "\n";
+        status = kFailure;
+        break;
+      }
+      recorded_.push_back(replay_[replayed_++]);
+    } else {
+      handle_input();
+    }
+    draw_panel();
+    submit();
+    Frame f;
+    if (solver_->latest(shown_.serial, f)) {
+      upload(f);
+      if (!f.error.empty() && f.error != shown_.error)
+        std::cerr << "penumbra paint: render refused: " << f.error << "\n";
+      if (f.error.empty()) {
+        if (first_serial == 0) first_serial = f.serial;
+        solve_ms_.push_back(f.solve_ms);
+      }
+      shown_ = std::move(f);
+    }
+
+    // The picture, then the brush outline over it.
+    const float zz = zoom();
+    ImDrawList* bg = ImGui::GetBackgroundDrawList();
+    if (tex_w_ > 0)
+      bg->AddImage((ImTextureID)(std::intptr_t)texture_, ImVec2(0, 0),
+                   ImVec2(tex_w_ * zz, tex_h_ * zz));
+    const ImVec2 mouse = ImGui::GetIO().MousePos;
+    if (replayed_ >= replay_.size() && args_.screenshot.empty() && mouse.x >= 0 &&
+        mouse.x < canvas_.width() * zz)
+      ImGui::GetForegroundDrawList()->AddCircle(mouse, brush_.radius * zz,
+                                                IM_COL32(255, 255, 255, 160), 48);
+    ImGui::Render();
+    int fw = 0, fh = 0;
+    glfwGetFramebufferSize(window_, &fw, &fh);
+    glViewport(0, 0, fw, fh);
+    glClearColor(0.05f, 0.05f, 0.05f, 1);
+    glClear(GL_COLOR_BUFFER_BIT);
+    ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+
+    // Scripted runs end once the solver has shown the final canvas.
+    const bool current = replayed_ >= replay_.size() && shown_.serial > 0 &&
+                         shown_.scene_version == canvas_.version() &&
+                         shown_.options_version == options_version_;
+    if (args_.frames > 0 && current && solve_ms_.size() >= std::size_t(args_.frames)) done = true;
+    if (!args_.screenshot.empty() && current && args_.frames == 0) done = true;
+    if (done && !args_.screenshot.empty() && !write_screenshot()) status = kFailure;
+    glfwSwapBuffers(window_);
+    ui_ms_.push_back(frame_watch.ms());
+    frame_watch.restart();
+  }
+
+  solver_.reset();
+  glDeleteTextures(1, &texture_);
+  ImGui_ImplOpenGL3_Shutdown();
+  ImGui_ImplGlfw_Shutdown();
+  ImGui::DestroyContext();
+  glfwDestroyWindow(window_);
+  glfwTerminate();
+
+  if (status == 0 && !args_.save.empty())
+    if (Status s = canvas_.save(args_.save); !s) {
+      std::cerr << "penumbra paint: " << s.error().message << "\n";
+      status = kFailure;
+    }
+  if (status == 0 && !args_.record.empty())
+    if (Status s = io::write_text_files({{args_.record, paint::strokes_json(recorded_)}}); !s) {
+      std::cerr << "penumbra paint: " << s.error().message << "\n";
+      status = kFailure;
+    }
+  if (args_.stats) {
+    std::printf("penumbra paint: %dx%d cells, method %s, %zu solver frames\n", canvas_.width(),
+                canvas_.height(), to_string(options_.method), solve_ms_.size());
+    std::printf("  solve (render(), tone mapping not included): median %.2f ms\n",
+                median(solve_ms_));
+    std::printf("  window frame: median %.2f ms over %zu frames\n", median(ui_ms_), ui_ms_.size());
+  }
+  return status;
+}
+
+}  // namespace
+
+bool PaintCommand::parsed() const {
+  return app->parsed();
+}
+
+std::unique_ptr<PaintCommand> add_paint_command(CLI::App& app) {
+  auto cmd = std::make_unique<PaintCommand>();
+  PaintArgs& a = cmd->args;
+  cmd->app = app.add_subcommand("paint", "Paint lights, walls and fog; see the light at once");
+  CLI::App* c = cmd->app;
+  c->add_option("scene", a.scene, "Scene file to start from (JSON, format 1)");
+  c->add_option("--size", a.size, "Grid of a blank canvas, WxH cells")->capture_default_str();
+  c->add_option("--method", a.method, "Method (switchable in the window)")
+      ->check(CLI::IsMember({"hrc", "rc", "pt"}))
+      ->capture_default_str();
+  c->add_option("--device", a.device, "Where the solver runs: cpu (gpu: not built yet)")
+      ->check(CLI::IsMember({"cpu", "gpu"}))
+      ->capture_default_str();
+  c->add_option("--replay", a.replay, "Stroke file to paint, one stroke per window frame");
+  c->add_option("--screenshot", a.screenshot,
+                "Save the window as PNG once the solver shows the final canvas, then exit");
+  c->add_option("--record", a.record, "Write the strokes painted to this file at exit");
+  c->add_option("--save", a.save,
+                "Write the painting as a scene file (JSON + 16-bit PNG layers) at exit");
+  c->add_option("--zoom", a.zoom, "Window pixels per cell (0: fit about 800 pixels)")
+      ->check(CLI::Range(0.0f, 64.0f))
+      ->capture_default_str();
+  c->add_option("--emission-scale", a.emission_scale,
+                "Brightest radiance a blank canvas holds (the saved emission_scale)")
+      ->check(CLI::Range(1e-3f, 1e9f))
+      ->capture_default_str();
+  c->add_option("--bounces", a.bounces, "Diffuse bounces")
+      ->check(CLI::Range(1, 8))
+      ->capture_default_str();
+  c->add_option("--threads", a.threads, "Solver threads (0: all cores)")
+      ->check(CLI::Range(0, 1024))
+      ->capture_default_str();
+  c->add_option("--exposure", a.exposure, "Display exposure in EV")->capture_default_str();
+  c->add_option("--frames", a.frames,
+                "Solve continuously and exit after this many solver frames (measurement)")
+      ->check(CLI::Range(0, 1 << 20));
+  c->add_flag("--stats", a.stats, "At exit, print the median solve and window frame times");
+  return cmd;
+}
+
+int run_paint(const PaintArgs& a) {
+  if (a.device == "gpu") {
+    std::cerr << "penumbra paint: --device gpu: this build has no GPU backend yet; use --device "
+                 "cpu\n";
+    return kUsage;
+  }
+  if (!std::isfinite(a.exposure)) {
+    std::cerr << "penumbra paint: --exposure: expected a finite number of EV\n";
+    return kUsage;
+  }
+  // Everything the files say is checked before a window opens.
+  Expected<paint::Canvas> canvas = Error{""};
+  if (a.scene.empty()) {
+    int w = 0, h = 0;
+    if (!parse_size(a.size, w, h)) {
+      std::cerr << "penumbra paint: --size: expected WxH such as 256x256, found '" << a.size
+                << "'\n";
+      return kUsage;
+    }
+    canvas = paint::Canvas::blank(w, h, a.emission_scale);
+  } else {
+    Expected<SceneDesc> desc = load_scene(a.scene);
+    canvas = desc ? paint::Canvas::from_scene(*desc) : Expected<paint::Canvas>(desc.error());
+  }
+  if (!canvas) {
+    std::cerr << "penumbra paint: " << canvas.error().message << "\n";
+    return kFailure;
+  }
+  RenderOptions probe;
+  probe.method = method_of(a.method);
+  probe.bounces = a.bounces;
+  if (Status s = check_memory(canvas->width(), canvas->height(), probe, false); !s) {
+    std::cerr << "penumbra paint: " << s.error().message << "\n";
+    return kFailure;
+  }
+  std::vector<paint::Stroke> strokes;
+  if (!a.replay.empty()) {
+    Expected<std::vector<paint::Stroke>> r = paint::load_strokes(a.replay);
+    if (!r) {
+      std::cerr << "penumbra paint: " << r.error().message << "\n";
+      return kFailure;
+    }
+    for (std::size_t i = 0; i < r->size(); ++i)
+      if (Status s =
+              canvas->check((*r)[i].brush, a.replay + ": strokes[" + std::to_string(i) + "]");
+          !s) {
+        std::cerr << "penumbra paint: " << s.error().message << "\n";
+        return kFailure;
+      }
+    strokes = std::move(*r);
+  }
+  if (!a.save.empty() && io::lowercase_extension(a.save) != ".json") {
+    std::cerr << "penumbra paint: --save: " << a.save << ": expected a .json name\n";
+    return kUsage;
+  }
+  for (const std::string& out : {a.screenshot, a.record, a.save})
+    if (!out.empty())
+      if (Status s = check_output(out); !s) {
+        std::cerr << "penumbra paint: " << s.error().message << "\n";
+        return kFailure;
+      }
+  if (!a.screenshot.empty() && io::lowercase_extension(a.screenshot) != ".png") {
+    std::cerr << "penumbra paint: --screenshot: " << a.screenshot << ": expected a .png name\n";
+    return kUsage;
+  }
+  try {
+    Painter painter(a, std::move(*canvas), std::move(strokes));
+    return painter.run();
+  } catch (const std::exception& e) {
+    std::cerr << "penumbra paint: " << e.what() << "\n";
+    return kFailure;
+  }
+}

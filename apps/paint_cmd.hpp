@@ -1,0 +1,38 @@
+// `penumbra paint`: the interactive light painter (a GLFW window, OpenGL and Dear ImGui).
+#pragma once
+
+#include <memory>
+#include <string>
+
+namespace CLI {
+class App;
+}
+
+struct PaintArgs {
+  std::string scene;             // empty: a blank canvas of `size`
+  std::string size = "256x256";  // cells, for a blank canvas
+  std::string method = "hrc";
+  std::string device = "cpu";
+  std::string replay;      // stroke file to paint at start
+  std::string screenshot;  // PNG of the window after the replay; then exit
+  std::string record;      // stroke file written at exit
+  std::string save;        // scene file (JSON + PNG layers) written at exit
+  float zoom = 0;          // window pixels per cell (0: fit about 800 pixels)
+  float emission_scale = 64;
+  int bounces = 1;
+  int threads = 0;
+  float exposure = 0;
+  int frames = 0;  // > 0: solve continuously, exit after this many solver frames
+  bool stats = false;
+};
+
+struct PaintCommand {
+  CLI::App* app = nullptr;
+  PaintArgs args;
+  bool parsed() const;
+};
+
+std::unique_ptr<PaintCommand> add_paint_command(CLI::App& app);
+
+// Exit code: 0 success, 1 bad input, no display or failure, 2 usage error.
+int run_paint(const PaintArgs& args);

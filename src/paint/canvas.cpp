@@ -1,0 +1,466 @@
+// The painter's canvas: brush strokes, undo, saving, and stroke files.
+#include "paint/canvas.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+
+#include "core/parallel.hpp"
+#include "flatland/rasterize.hpp"
+#include "io/image_io.hpp"
+#include "io/path_util.hpp"
+
+namespace penumbra::paint {
+
+namespace {
+
+using json = nlohmann::json;
+
+// Undo steps share this much memory (a 512^2 canvas keeps about 70 steps).
+constexpr std::size_t kUndoBytes = std::size_t(512) << 20;
+constexpr std::size_t kMaxUndoSteps = 200;
+
+std::size_t cells_bytes(std::size_t cells) {
+  return cells * 7 * sizeof(float);
+}
+
+// The value a layer file holds for `v`: emission and albedo as sRGB codes, opacity linear.
+float snap_srgb(float v, float scale) {
+  return decode_srgb16(encode_srgb16(v / scale)) * scale;
+}
+float snap_linear(float v) {
+  return decode_linear16(encode_linear16(v));
+}
+
+}  // namespace
+
+const char* to_string(Tool t) {
+  switch (t) {
+    case Tool::light:
+      return "light";
+    case Tool::wall:
+      return "wall";
+    case Tool::fog:
+      return "fog";
+    case Tool::erase:
+      return "erase";
+  }
+  return "?";
+}
+
+std::uint16_t encode_srgb16(float linear) {
+  return std::uint16_t(std::lround(io::linear_to_srgb(linear) * 65535.0f));
+}
+float decode_srgb16(std::uint16_t code) {
+  return io::srgb_to_linear(code / 65535.0f);  // as the scene loader decodes a PNG layer
+}
+std::uint16_t encode_linear16(float v) {
+  return std::uint16_t(std::lround(std::clamp(v, 0.0f, 1.0f) * 65535.0f));
+}
+float decode_linear16(std::uint16_t code) {
+  return code / 65535.0f;
+}
+
+Material Brush::material() const {
+  Material m;
+  switch (tool) {
+    case Tool::light:
+      m.emission = {color.r * intensity, color.g * intensity, color.b * intensity};
+      m.opacity = 1;
+      break;
+    case Tool::wall:
+      m.opacity = 1;
+      m.albedo = color;
+      break;
+    case Tool::fog:
+      m.opacity = opacity;
+      m.albedo = color;
+      break;
+    case Tool::erase:
+      m.opacity = 0;
+      break;
+  }
+  return m;
+}
+
+// ---- canvas -------------------------------------------------------------------------------
+
+Expected<Canvas> Canvas::blank(int width, int height, float emission_scale) {
+  if (width < 1 || height < 1 || width > kMaxCanvasSide || height > kMaxCanvasSide)
+    return Error{"canvas: expected 1.." + std::to_string(kMaxCanvasSide) + " cells a side, found " +
+                 std::to_string(width) + "x" + std::to_string(height)};
+  if (!(emission_scale > 0) || !std::isfinite(emission_scale))
+    return Error{"canvas: emission scale must be a finite number > 0"};
+  Canvas c;
+  c.scene_.width = width;
+  c.scene_.height = height;
+  const std::size_t n = c.scene_.cells();
+  c.scene_.emission.assign(3 * n, 0.0f);
+  c.scene_.opacity.assign(n, 0.0f);
+  c.scene_.albedo.assign(3 * n, 0.0f);
+  c.coverage_.assign(n, 0.0f);
+  c.emission_scale_ = emission_scale;
+  c.undo_limit_ = std::clamp<std::size_t>(kUndoBytes / cells_bytes(n), 1, kMaxUndoSteps);
+  return c;
+}
+
+Expected<Canvas> Canvas::from_scene(const SceneDesc& desc) {
+  if (desc.width > kMaxCanvasSide || desc.height > kMaxCanvasSide)
+    return Error{desc.source + ": the painter edits grids up to " + std::to_string(kMaxCanvasSide) +
+                 " cells a side, this one is " + std::to_string(desc.width) + "x" +
+                 std::to_string(desc.height)};
+  Expected<Scene> built = build_scene(desc);
+  if (!built) return built.error();
+  float brightest = 0;
+  for (float e : built->emission) brightest = std::max(brightest, e);
+  // A painting read back keeps its scale, so its cells stay on the same codes.
+  float scale = desc.layers.emission ? desc.layers.emission_scale : kDefaultEmissionScale;
+  if (!(scale >= brightest) || !(scale > 0)) {
+    scale = kDefaultEmissionScale;
+    while (scale < brightest && scale < 1e30f) scale *= 2;
+  }
+  Expected<Canvas> c = blank(desc.width, desc.height, scale);
+  if (!c) return c.error();
+  Scene& s = c->scene_;
+  s.environment = built->environment;
+  parallel_for(s.height, [&](int y) {
+    for (std::size_t i = s.index(0, y), end = i + std::size_t(s.width); i < end; ++i) {
+      s.opacity[i] = snap_linear(built->opacity[i]);
+      for (std::size_t k = 3 * i; k < 3 * i + 3; ++k) {
+        s.emission[k] = snap_srgb(built->emission[k], scale);
+        s.albedo[k] = snap_srgb(built->albedo[k], 1.0f);
+      }
+    }
+  });
+  return c;
+}
+
+Status Canvas::check(const Brush& b, const std::string& where) const {
+  auto bad = [&](const std::string& what) { return Status(Error{where + "." + what}); };
+  if (!(b.radius >= 0.5f) || !(b.radius <= kMaxBrushRadius))
+    return bad("radius: expected 0.5.." + std::to_string(int(kMaxBrushRadius)) + " cells");
+  for (float c : {b.color.r, b.color.g, b.color.b})
+    if (!(c >= 0.0f) || !(c <= 1.0f)) return bad("color: expected components in [0, 1]");
+  if (b.tool == Tool::light) {
+    const float top = std::max({b.color.r, b.color.g, b.color.b}) * b.intensity;
+    if (!(b.intensity >= 0.0f) || !(top <= emission_scale_))
+      return bad("intensity: expected color * intensity in [0, " +
+                 std::to_string(int(emission_scale_)) +
+                 "] (the canvas's emission scale; start the painter with a larger "
+                 "--emission-scale)");
+  }
+  if (b.tool == Tool::fog && (!(b.opacity > 0.0f) || !(b.opacity < 1.0f)))
+    return bad("opacity: expected a fraction in (0, 1) (1 is a wall)");
+  return {};
+}
+
+Status Canvas::begin_stroke(const Brush& brush, float x, float y) {
+  if (Status s = check(brush); !s) return s;
+  if (!std::isfinite(x) || !std::isfinite(y)) return Error{"brush: position is not finite"};
+  if (stroking_) end_stroke();
+  brush_ = brush;
+  material_ = brush.material();
+  const Material& m = material_;
+  const float e[3] = {m.emission.r, m.emission.g, m.emission.b};
+  const float a[3] = {m.albedo.r, m.albedo.g, m.albedo.b};
+  for (int c = 0; c < 3; ++c) {
+    brush_cell_[c] = snap_srgb(e[c], emission_scale_);
+    brush_cell_[4 + c] = snap_srgb(a[c], 1.0f);
+  }
+  brush_cell_[3] = snap_linear(m.opacity);
+  before_ = snapshot();
+  stroking_ = true;
+  last_x_ = x;
+  last_y_ = y;
+  cover_segment(x, y, x, y);
+  return {};
+}
+
+void Canvas::extend_stroke(float x, float y) {
+  if (!stroking_ || !std::isfinite(x) || !std::isfinite(y)) return;
+  cover_segment(last_x_, last_y_, x, y);
+  last_x_ = x;
+  last_y_ = y;
+}
+
+void Canvas::end_stroke() {
+  if (!stroking_) return;
+  stroking_ = false;
+  std::fill(coverage_.begin(), coverage_.end(), 0.0f);
+  push_undo(std::move(before_));
+  before_ = {};
+}
+
+Status Canvas::apply(const Stroke& stroke, const std::string& where) {
+  if (stroke.points.empty()) return Error{where + ".points: expected at least one point"};
+  if (Status s = check(stroke.brush, where); !s) return s;
+  if (Status s = begin_stroke(stroke.brush, stroke.points[0][0], stroke.points[0][1]); !s) return s;
+  for (std::size_t i = 1; i < stroke.points.size(); ++i)
+    extend_stroke(stroke.points[i][0], stroke.points[i][1]);
+  end_stroke();
+  return {};
+}
+
+// Coverage of a cell is 1 within the radius of the segment, falling to 0 over one cell (about
+// its covered area): the stroke's coverage is the largest over its segments, so joints are not
+// covered twice.
+void Canvas::cover_segment(float ax, float ay, float bx, float by) {
+  const float r = brush_.radius;
+  const int x0 = std::max(0, int(std::floor(std::min(ax, bx) - r - 1)));
+  const int x1 = std::min(scene_.width - 1, int(std::ceil(std::max(ax, bx) + r + 1)));
+  const int y0 = std::max(0, int(std::floor(std::min(ay, by) - r - 1)));
+  const int y1 = std::min(scene_.height - 1, int(std::ceil(std::max(ay, by) + r + 1)));
+  if (x0 > x1 || y0 > y1) return;
+  const float dx = bx - ax, dy = by - ay, len2 = dx * dx + dy * dy;
+  for (int y = y0; y <= y1; ++y) {
+    for (int x = x0; x <= x1; ++x) {
+      const float px = x + 0.5f - ax, py = y + 0.5f - ay;
+      const float t = len2 > 0 ? std::clamp((px * dx + py * dy) / len2, 0.0f, 1.0f) : 0.0f;
+      const float d = std::hypot(px - t * dx, py - t * dy);
+      const float cover = std::clamp(r + 0.5f - d, 0.0f, 1.0f);
+      const std::size_t i = scene_.index(x, y);
+      if (cover <= coverage_[i]) continue;
+      coverage_[i] = cover;
+      float* e = &scene_.emission[3 * i];
+      float* a = &scene_.albedo[3 * i];
+      if (cover >= 1.0f) {
+        for (int c = 0; c < 3; ++c) e[c] = brush_cell_[c], a[c] = brush_cell_[4 + c];
+        scene_.opacity[i] = brush_cell_[3];
+        continue;
+      }
+      // Partly covered: the cell as it was before the stroke, under the brush's material by
+      // the rasteriser's rule for edge cells, then moved to the layer codes.
+      for (int c = 0; c < 3; ++c) {
+        e[c] = before_.emission[3 * i + c];
+        a[c] = before_.albedo[3 * i + c];
+      }
+      scene_.opacity[i] = before_.opacity[i];
+      blend(scene_, i, blend_fraction(cover, material_), material_);
+      for (int c = 0; c < 3; ++c) {
+        e[c] = snap_srgb(e[c], emission_scale_);
+        a[c] = snap_srgb(a[c], 1.0f);
+      }
+      scene_.opacity[i] = snap_linear(scene_.opacity[i]);
+    }
+  }
+  ++version_;
+}
+
+Canvas::Cells Canvas::snapshot() const {
+  return {scene_.emission, scene_.opacity, scene_.albedo};
+}
+
+void Canvas::restore(Cells&& cells) {
+  scene_.emission = std::move(cells.emission);
+  scene_.opacity = std::move(cells.opacity);
+  scene_.albedo = std::move(cells.albedo);
+  ++version_;
+}
+
+void Canvas::push_undo(Cells&& cells) {
+  if (undo_.size() >= undo_limit_) undo_.erase(undo_.begin());
+  undo_.push_back(std::move(cells));
+}
+
+bool Canvas::undo() {
+  if (stroking_) end_stroke();
+  if (undo_.empty()) return false;
+  restore(std::move(undo_.back()));
+  undo_.pop_back();
+  return true;
+}
+
+void Canvas::clear() {
+  if (stroking_) end_stroke();
+  push_undo(snapshot());
+  std::fill(scene_.emission.begin(), scene_.emission.end(), 0.0f);
+  std::fill(scene_.opacity.begin(), scene_.opacity.end(), 0.0f);
+  std::fill(scene_.albedo.begin(), scene_.albedo.end(), 0.0f);
+  ++version_;
+}
+
+void Canvas::set_environment(Rgb environment) {
+  scene_.environment = environment;
+  ++version_;
+}
+
+Status Canvas::save(const std::string& path) const {
+  namespace fs = std::filesystem;
+  const fs::path target(path);
+  if (io::lowercase_extension(path) != ".json")
+    return Error{path + ": a painting is saved as a scene file; use a .json name"};
+  const std::string stem = target.stem().string();
+  const std::string names[3] = {stem + ".emission.png", stem + ".opacity.png",
+                                stem + ".albedo.png"};
+  const Rgb& env = scene_.environment;
+  json doc = {{"penumbra", 1},
+              {"width", scene_.width},
+              {"height", scene_.height},
+              {"environment", {env.r, env.g, env.b}},
+              {"layers",
+               {{"emission", names[0]},
+                {"opacity", names[1]},
+                {"albedo", names[2]},
+                {"emission_scale", emission_scale_}}}};
+  const std::string text = doc.dump(2) + "\n";
+
+  const std::size_t n = scene_.cells();
+  std::vector<std::string> paths = {path};
+  for (const std::string& name : names) paths.push_back((target.parent_path() / name).string());
+  return io::write_all(paths, [&](std::size_t k) -> Expected<io::StagedFile> {
+    if (k == 0) return io::stage_text(paths[0], text);
+    const int channels = k == 2 ? 1 : 3;
+    std::vector<std::uint16_t> codes(n * std::size_t(channels));
+    for (std::size_t i = 0; i < codes.size(); ++i) {
+      if (k == 1) codes[i] = encode_srgb16(scene_.emission[i] / emission_scale_);
+      if (k == 2) codes[i] = encode_linear16(scene_.opacity[i]);
+      if (k == 3) codes[i] = encode_srgb16(scene_.albedo[i]);
+    }
+    return io::stage_png16(paths[k], scene_.width, scene_.height, channels, codes);
+  });
+}
+
+// ---- stroke files -------------------------------------------------------------------------
+
+namespace {
+
+struct StrokeError {
+  std::string message;
+};
+
+class StrokeReader {
+ public:
+  explicit StrokeReader(const std::string& file) : file_(file) {}
+
+  [[noreturn]] void fail(const std::string& where, const std::string& what) const {
+    throw StrokeError{file_ + ": " + where + ": " + what};
+  }
+  std::string found(const json& j) const {
+    std::string s = j.dump();
+    return s.size() > 40 ? s.substr(0, 37) + "..." : s;
+  }
+  float number(const json& j, const std::string& where) const {
+    if (!j.is_number()) fail(where, "expected a number, found " + found(j));
+    const double v = j.get<double>();
+    if (!std::isfinite(v) || std::fabs(v) > 1e30) fail(where, "expected a finite number");
+    return float(v);
+  }
+  Rgb color(const json& j, const std::string& where) const {
+    if (!j.is_array() || j.size() != 3) fail(where, "expected [r, g, b], found " + found(j));
+    Rgb c{number(j[0], where + "[0]"), number(j[1], where + "[1]"), number(j[2], where + "[2]")};
+    for (int k = 0; k < 3; ++k) {
+      const float v = k == 0 ? c.r : k == 1 ? c.g : c.b;
+      if (v < 0 || v > 1)
+        fail(where + "[" + std::to_string(k) + "]",
+             "expected a value in [0, 1], found " + found(j[std::size_t(k)]));
+    }
+    return c;
+  }
+  Stroke stroke(const json& j, const std::string& where) const {
+    if (!j.is_object()) fail(where, "expected an object, found " + found(j));
+    for (const auto& [key, value] : j.items()) {
+      static const char* kKeys[] = {"tool", "color", "intensity", "opacity", "radius", "points"};
+      if (std::find_if(std::begin(kKeys), std::end(kKeys),
+                       [&](const char* k) { return key == k; }) == std::end(kKeys))
+        fail(where + "." + key,
+             "unknown field (expected tool, color, intensity, opacity, "
+             "radius, points)");
+    }
+    Stroke s;
+    if (!j.contains("tool")) fail(where + ".tool", "missing (light, wall, fog or erase)");
+    const json& tool = j["tool"];
+    const std::string name = tool.is_string() ? tool.get<std::string>() : "";
+    if (name == "light")
+      s.brush.tool = Tool::light;
+    else if (name == "wall")
+      s.brush.tool = Tool::wall;
+    else if (name == "fog")
+      s.brush.tool = Tool::fog;
+    else if (name == "erase")
+      s.brush.tool = Tool::erase;
+    else
+      fail(where + ".tool",
+           "expected \"light\", \"wall\", \"fog\" or \"erase\", found " + found(tool));
+    if (j.contains("color")) s.brush.color = color(j["color"], where + ".color");
+    if (j.contains("intensity")) {
+      s.brush.intensity = number(j["intensity"], where + ".intensity");
+      if (s.brush.intensity < 0) fail(where + ".intensity", "expected a number >= 0");
+    }
+    if (j.contains("opacity")) {
+      s.brush.opacity = number(j["opacity"], where + ".opacity");
+      if (!(s.brush.opacity > 0 && s.brush.opacity < 1))
+        fail(where + ".opacity", "expected a fraction in (0, 1)");
+    }
+    if (j.contains("radius")) {
+      s.brush.radius = number(j["radius"], where + ".radius");
+      if (!(s.brush.radius >= 0.5f && s.brush.radius <= kMaxBrushRadius))
+        fail(where + ".radius", "expected 0.5.." + std::to_string(int(kMaxBrushRadius)) +
+                                    " cells, found " + found(j["radius"]));
+    }
+    if (!j.contains("points")) fail(where + ".points", "missing (a list of [x, y] cells)");
+    const json& pts = j["points"];
+    if (!pts.is_array() || pts.empty())
+      fail(where + ".points", "expected a non-empty list of [x, y], found " + found(pts));
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      const std::string p = where + ".points[" + std::to_string(i) + "]";
+      if (!pts[i].is_array() || pts[i].size() != 2)
+        fail(p, "expected [x, y], found " + found(pts[i]));
+      s.points.push_back({number(pts[i][0], p + "[0]"), number(pts[i][1], p + "[1]")});
+    }
+    return s;
+  }
+
+ private:
+  std::string file_;
+};
+
+}  // namespace
+
+Expected<std::vector<Stroke>> parse_strokes(std::string_view text, const std::string& path) {
+  json doc;
+  try {
+    doc = json::parse(text);
+  } catch (const json::parse_error& e) {
+    return Error{path + ": not valid JSON: " + e.what()};
+  }
+  try {
+    StrokeReader r(path);
+    if (!doc.is_object()) r.fail("(document)", "expected an object with \"strokes\"");
+    for (const auto& [key, value] : doc.items())
+      if (key != "strokes") r.fail(key, "unknown field (expected strokes)");
+    if (!doc.contains("strokes") || !doc["strokes"].is_array())
+      r.fail("strokes", "expected a list of strokes");
+    std::vector<Stroke> out;
+    const json& list = doc["strokes"];
+    for (std::size_t i = 0; i < list.size(); ++i)
+      out.push_back(r.stroke(list[i], "strokes[" + std::to_string(i) + "]"));
+    return out;
+  } catch (const StrokeError& e) {
+    return Error{e.message};
+  }
+}
+
+Expected<std::vector<Stroke>> load_strokes(const std::string& path) {
+  Expected<std::string> text = io::read_text(path, "the stroke file");
+  if (!text) return text.error();
+  return parse_strokes(*text, path);
+}
+
+std::string strokes_json(const std::vector<Stroke>& strokes) {
+  json list = json::array();
+  for (const Stroke& s : strokes) {
+    const Brush& b = s.brush;
+    json j = {{"tool", to_string(b.tool)}, {"radius", b.radius}};
+    if (b.tool != Tool::erase) j["color"] = {b.color.r, b.color.g, b.color.b};
+    if (b.tool == Tool::light) j["intensity"] = b.intensity;
+    if (b.tool == Tool::fog) j["opacity"] = b.opacity;
+    json pts = json::array();
+    for (const auto& p : s.points) pts.push_back({p[0], p[1]});
+    j["points"] = std::move(pts);
+    list.push_back(std::move(j));
+  }
+  return json{{"strokes", list}}.dump(1) + "\n";
+}
+
+}  // namespace penumbra::paint

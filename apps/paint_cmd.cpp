@@ -19,7 +19,9 @@
 #include <cmath>
 #include <condition_variable>
 #include <cstdio>
+#include <functional>
 #include <iostream>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -44,6 +46,29 @@ constexpr float kMinHeight = 800;  // the panel's height with every section open
 
 // ---- the solver thread ----------------------------------------------------------------------
 
+// How the fluence is shown.
+struct Look {
+  float exposure = 0;     // EV
+  bool materials = true;  // walls and fog stay visible where no light reaches them
+};
+
+// Unlit walls are black like the dark around them, so a wall painted in the dark would be
+// invisible: non-emitting walls and fog get a dim floor of their albedo's colour. Off, the
+// window shows exactly what `penumbra render` writes.
+void show_materials(const Scene& s, std::vector<unsigned char>& rgb) {
+  for (std::size_t i = 0; i < s.cells(); ++i) {
+    const float a = s.opacity[i];
+    const float* le = &s.emission[3 * i];
+    if (a <= 0 || le[0] + le[1] + le[2] > 0) continue;
+    const float k = a >= 1 ? 0.3f : 0.3f * std::min(1.0f, 5 * a);
+    for (int c = 0; c < 3; ++c) {
+      const float floor = 255 * k * (0.25f + 0.75f * s.albedo[3 * i + c]);
+      unsigned char& v = rgb[3 * i + c];
+      v = std::max(v, static_cast<unsigned char>(floor));
+    }
+  }
+}
+
 // What the solver shows: the display picture of one render, and how long it took.
 struct Frame {
   int width = 0, height = 0;
@@ -57,7 +82,9 @@ struct Frame {
 
 class Solver {
  public:
-  Solver() : thread_([this] { loop(); }) {}
+  // `on_frame` runs on the solver thread after each frame is published (to wake the UI).
+  explicit Solver(std::function<void()> on_frame)
+      : on_frame_(std::move(on_frame)), thread_([this] { loop(); }) {}
   ~Solver() {
     {
       std::lock_guard lock(mutex_);
@@ -69,7 +96,7 @@ class Solver {
 
   // Hands the solver a new canvas state; it is rendered once the current frame is done.
   void submit(std::shared_ptr<const Scene> scene, std::uint64_t scene_version,
-              const RenderOptions& options, std::uint64_t options_version, float exposure,
+              const RenderOptions& options, std::uint64_t options_version, const Look& look,
               bool continuous) {
     {
       std::lock_guard lock(mutex_);
@@ -77,7 +104,7 @@ class Solver {
       scene_version_ = scene_version;
       options_ = options;
       options_version_ = options_version;
-      exposure_ = exposure;
+      look_ = look;
       continuous_ = continuous;
     }
     wake_.notify_all();
@@ -98,7 +125,7 @@ class Solver {
       std::shared_ptr<const Scene> scene;
       RenderOptions options;
       std::uint64_t scene_version = 0, options_version = 0;
-      float exposure = 0;
+      Look look;
       {
         std::unique_lock lock(mutex_);
         wake_.wait(lock, [&] {
@@ -110,7 +137,7 @@ class Solver {
         options = options_;
         scene_version = scene_version_;
         options_version = options_version_;
-        exposure = exposure_;
+        look = look_;
       }
       Frame f;
       f.width = scene->width;
@@ -119,36 +146,42 @@ class Solver {
       f.options_version = options_version;
       f.serial = ++serial;
       Stopwatch watch;
-      Expected<RenderResult> r = render(*scene, options);
+      Expected<RenderResult> r = renderer_.render(*scene, options);
       f.solve_ms = watch.ms();
       if (r) {
         f.stages = std::move(r->stages);
         watch.restart();
-        f.rgb = io::display_rgb8(r->fluence, scene.get(), {exposure});
+        f.rgb = io::display_rgb8(r->fluence, scene.get(), {look.exposure});
+        if (look.materials) show_materials(*scene, f.rgb);
         f.display_ms = watch.ms();
       } else {
         f.error = r.error().message;
       }
       done_scene = scene_version;
       done_options = options_version;
-      std::lock_guard lock(mutex_);
-      if (f.rgb.empty()) {  // refused: keep showing the last picture
-        f.rgb = std::move(frame_.rgb);
-        f.width = frame_.width;
-        f.height = frame_.height;
+      {
+        std::lock_guard lock(mutex_);
+        if (f.rgb.empty()) {  // refused: keep showing the last picture
+          f.rgb = std::move(frame_.rgb);
+          f.width = frame_.width;
+          f.height = frame_.height;
+        }
+        frame_ = std::move(f);
       }
-      frame_ = std::move(f);
+      on_frame_();
     }
   }
 
+  std::function<void()> on_frame_;
   std::mutex mutex_;
   std::condition_variable wake_;
   std::shared_ptr<const Scene> scene_;
   std::uint64_t scene_version_ = 0, options_version_ = 0;
   RenderOptions options_;
-  float exposure_ = 0;
+  Look look_;
   bool continuous_ = false, quit_ = false;
   Frame frame_;
+  Renderer renderer_;   // keeps its buffers from frame to frame (used by the solver thread only)
   std::thread thread_;  // last: starts once the members above exist
 };
 
@@ -185,9 +218,10 @@ class Painter {
     options_.bounces = args.bounces;
     options_.threads = args.threads;
     options_.pt.spp = 4;
-    exposure_ = args.exposure;
+    look_.exposure = args.exposure;
+    look_.materials = !args.plain;
     environment_ = canvas_.scene().environment;
-    brush_.intensity = std::min(4.0f, canvas_.emission_scale());
+    brush_.intensity = std::min(1.0f, canvas_.emission_scale());
   }
 
   int run();
@@ -217,7 +251,7 @@ class Painter {
   RenderOptions options_;
   std::uint64_t options_version_ = 1;
   std::uint64_t submitted_scene_ = 0, submitted_options_ = 0;
-  float exposure_ = 0;
+  Look look_;
   bool continuous_ = false;
   Rgb environment_{};
   float environment_intensity_ = 1;
@@ -227,7 +261,8 @@ class Painter {
   bool undo_down_ = false, save_down_ = false;
   std::string file_ = "painting.json";
   std::string message_;
-  std::vector<double> solve_ms_, ui_ms_;
+  std::vector<double> solve_ms_, display_ms_, ui_ms_;
+  std::map<std::string, std::vector<double>> stage_ms_;
 };
 
 float Painter::zoom() const {
@@ -258,7 +293,7 @@ void Painter::submit() {
   submitted_scene_ = canvas_.version();
   submitted_options_ = options_version_;
   solver_->submit(std::make_shared<const Scene>(canvas_.scene()), submitted_scene_, options_,
-                  options_version_, exposure_, continuous_);
+                  options_version_, look_, continuous_);
 }
 
 void Painter::upload(const Frame& f) {
@@ -334,7 +369,7 @@ void Painter::draw_panel() {
     ImGui::Text("solve %.1f ms (%.0f fps), display %.1f ms", shown_.solve_ms,
                 shown_.solve_ms > 0 ? 1000.0 / shown_.solve_ms : 0.0, shown_.display_ms);
     for (const StageTime& s : shown_.stages) ImGui::Text("  %-22s %7.2f ms", s.name.c_str(), s.ms);
-    ImGui::Text("window %.1f ms per frame", 1000.0f / std::max(ImGui::GetIO().Framerate, 1e-3f));
+    ImGui::Text("window: %.1f ms to draw a frame", ui_ms_.empty() ? 0.0 : ui_ms_.back());
     if (!shown_.error.empty()) ImGui::TextWrapped("render refused: %s", shown_.error.c_str());
   }
 
@@ -415,7 +450,8 @@ void Painter::draw_panel() {
       changed |= ImGui::SliderInt("spp", &options_.pt.spp, 1, 256);
       changed |= ImGui::Checkbox("next event estimation", &options_.pt.nee);
     }
-    changed |= ImGui::SliderFloat("exposure (EV)", &exposure_, -8.0f, 8.0f, "%.1f");
+    changed |= ImGui::SliderFloat("exposure (EV)", &look_.exposure, -8.0f, 8.0f, "%.1f");
+    changed |= ImGui::Checkbox("show walls and fog", &look_.materials);
     ImGui::Checkbox("solve every frame", &continuous_);
     if (changed) ++options_version_;
   }
@@ -498,17 +534,17 @@ int Painter::run() {
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
 
   continuous_ = args_.frames > 0;
-  solver_ = std::make_unique<Solver>();
+  solver_ = std::make_unique<Solver>([] { glfwPostEmptyEvent(); });
   int status = 0;
   bool done = false;
-  std::uint64_t first_serial = 0;
-  Stopwatch frame_watch;
   while (!done && !glfwWindowShouldClose(window_)) {
-    const bool busy = replayed_ < replay_.size() || !args_.screenshot.empty() || args_.frames > 0;
-    if (busy)
+    // A replay draws as fast as it can; otherwise the window sleeps until input arrives or the
+    // solver posts a new frame.
+    if (replayed_ < replay_.size())
       glfwPollEvents();
     else
-      glfwWaitEventsTimeout(1.0 / 120);  // wakes for input, or to show a new solver frame
+      glfwWaitEventsTimeout(0.1);
+    Stopwatch frame_watch;  // the window's own work, not the wait
     ImGui_ImplOpenGL3_NewFrame();
     ImGui_ImplGlfw_NewFrame();
     ImGui::NewFrame();
@@ -533,8 +569,9 @@ int Painter::run() {
       if (!f.error.empty() && f.error != shown_.error)
         std::cerr << "penumbra paint: render refused: " << f.error << "\n";
       if (f.error.empty()) {
-        if (first_serial == 0) first_serial = f.serial;
         solve_ms_.push_back(f.solve_ms);
+        display_ms_.push_back(f.display_ms);
+        for (const StageTime& st : f.stages) stage_ms_[st.name].push_back(st.ms);
       }
       shown_ = std::move(f);
     }
@@ -567,7 +604,6 @@ int Painter::run() {
     if (done && !args_.screenshot.empty() && !write_screenshot()) status = kFailure;
     glfwSwapBuffers(window_);
     ui_ms_.push_back(frame_watch.ms());
-    frame_watch.restart();
   }
 
   solver_.reset();
@@ -591,9 +627,12 @@ int Painter::run() {
   if (args_.stats) {
     std::printf("penumbra paint: %dx%d cells, method %s, %zu solver frames\n", canvas_.width(),
                 canvas_.height(), to_string(options_.method), solve_ms_.size());
-    std::printf("  solve (render(), tone mapping not included): median %.2f ms\n",
-                median(solve_ms_));
-    std::printf("  window frame: median %.2f ms over %zu frames\n", median(ui_ms_), ui_ms_.size());
+    std::printf("  solve (render()): median %.2f ms\n", median(solve_ms_));
+    for (const StageTime& st : shown_.stages)
+      std::printf("    %-22s median %7.2f ms\n", st.name.c_str(), median(stage_ms_[st.name]));
+    std::printf("  tone map: median %.2f ms\n", median(display_ms_));
+    std::printf("  window: median %.2f ms to draw a frame, %zu frames\n", median(ui_ms_),
+                ui_ms_.size());
   }
   return status;
 }
@@ -640,6 +679,9 @@ std::unique_ptr<PaintCommand> add_paint_command(CLI::App& app) {
   c->add_option("--frames", a.frames,
                 "Solve continuously and exit after this many solver frames (measurement)")
       ->check(CLI::Range(0, 1 << 20));
+  c->add_flag("--plain", a.plain,
+              "Show the fluence exactly as `penumbra render` writes it (no dim floor for unlit "
+              "walls and fog)");
   c->add_flag("--stats", a.stats, "At exit, print the median solve and window frame times");
   return cmd;
 }

@@ -24,6 +24,7 @@ struct PaintArgs {
   float exposure = 0;
   int frames = 0;  // > 0: solve continuously, exit after this many solver frames
   bool stats = false;
+  bool plain = false;  // no material overlay: the window shows what `penumbra render` writes
 };
 
 struct PaintCommand {

@@ -155,9 +155,9 @@ TEST_F(PaintWindow, BadInputIsReportedBeforeTheWindow) {
 // wall's shadow; the saved painting renders to the same picture; the recording replays it.
 TEST_F(PaintWindow, ReplayShowsLightAndShadowAndSavesWhatItShows) {
   if (!have_display()) GTEST_SKIP() << x_server().why();
-  CliResult r = paint({"--size", "128x128", "--zoom", "1", "--replay", strokes_, "--screenshot",
-                       tmp_.file("shot.png"), "--save", tmp_.file("painting.json"), "--record",
-                       tmp_.file("recorded.json")});
+  CliResult r = paint({"--size", "128x128", "--zoom", "1", "--plain", "--replay", strokes_,
+                       "--screenshot", tmp_.file("shot.png"), "--save", tmp_.file("painting.json"),
+                       "--record", tmp_.file("recorded.json")});
   ASSERT_EQ(r.status, 0) << r.err;
   const penumbra::io::RawImage shot = read_png("shot.png");
   ASSERT_GE(shot.width, 128 + 300);  // the canvas and the panel beside it
@@ -192,10 +192,19 @@ TEST_F(PaintWindow, ReplayShowsLightAndShadowAndSavesWhatItShows) {
   ASSERT_EQ(rec->size(), 3u);
   EXPECT_EQ((*rec)[1].brush.tool, penumbra::paint::Tool::wall);
   EXPECT_EQ((*rec)[1].points.size(), 2u);
-  r = paint({"--size", "128x128", "--zoom", "1", "--replay", tmp_.file("recorded.json"),
+  r = paint({"--size", "128x128", "--zoom", "1", "--plain", "--replay", tmp_.file("recorded.json"),
              "--screenshot", tmp_.file("again.png")});
   ASSERT_EQ(r.status, 0) << r.err;
   const penumbra::io::RawImage again = read_png("again.png");
+  // The window shows walls dimly where no light reaches them, unless --plain.
+  r = paint({"--size", "128x128", "--zoom", "1", "--replay", strokes_, "--screenshot",
+             tmp_.file("overlay.png")});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const penumbra::io::RawImage overlay = read_png("overlay.png");
+  EXPECT_LT(grey(shot, 70, 64), 0.05f);  // the wall, as `penumbra render` shows it
+  EXPECT_GT(grey(overlay, 70, 64), 0.2f);
+  EXPECT_EQ(grey(overlay, 40, 114), open);  // lit cells are left alone
+
   ASSERT_EQ(again.width, shot.width);
   differing = 0;
   for (int y = 0; y < 128; ++y)

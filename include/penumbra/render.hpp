@@ -4,6 +4,7 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -131,6 +132,22 @@ Status check_memory(int width, int height, const RenderOptions& options, bool wi
 // Runs the method. Refuses up front (Error, nothing allocated) when options are invalid or the
 // memory estimate exceeds options.max_memory.
 Expected<RenderResult> render(const Scene& scene, const RenderOptions& options);
+
+// Renders again and again with the same buffers: a program that renders every frame (the
+// painter) keeps one, so that only its first frame allocates and first touches the working
+// memory. Same results as render(); it holds its memory until destroyed. One thread at a time.
+class Renderer {
+ public:
+  Renderer();
+  ~Renderer();
+  Renderer(Renderer&&) noexcept;
+  Renderer& operator=(Renderer&&) noexcept;
+  Expected<RenderResult> render(const Scene& scene, const RenderOptions& options);
+  struct State;
+
+ private:
+  std::unique_ptr<State> state_;
+};
 
 const char* to_string(Method m);
 const char* to_string(MergeFix f);

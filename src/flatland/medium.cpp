@@ -13,12 +13,13 @@ float extinction(float opacity) {
   return -std::log1p(-opacity);
 }
 
-Medium make_medium(const Scene& scene) {
-  Medium m;
+void fill_medium(const Scene& scene, Medium& m) {
   m.width = scene.width;
   m.height = scene.height;
   m.cells.resize(scene.cells());
   m.step.resize(scene.cells());
+  m.blocks_x = m.blocks_y = 0;  // blocks of an earlier scene are void
+  m.block_empty.clear();
   const std::vector<float>& le = scene.emission;
   parallel_for(scene.height, [&](int y) {
     for (int x = 0; x < scene.width; ++x) {
@@ -27,6 +28,11 @@ Medium make_medium(const Scene& scene) {
       m.step[i] = extinction(scene.opacity[i]);
     }
   });
+}
+
+Medium make_medium(const Scene& scene) {
+  Medium m;
+  fill_medium(scene, m);
   return m;
 }
 

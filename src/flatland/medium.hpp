@@ -43,6 +43,8 @@ float extinction(float opacity);
 
 // Packs the scene's cells for the tracer.
 Medium make_medium(const Scene& scene);
+// The same into an existing medium, reusing its memory (no distance field, no blocks).
+void fill_medium(const Scene& scene, Medium& medium);
 
 // Distance from each cell centre to the nearest interacting (step > 0) cell centre, in cells
 // (infinity when there is none): the jump flooding algorithm (seed 000, section 3.4.1) followed

@@ -134,9 +134,16 @@ std::uint64_t scene_bytes(int width, int height) {
   return std::uint64_t(width) * height * 7 * sizeof(float);
 }
 
+// What a Renderer keeps between renders: the packed medium and HRC's buffers.
+struct Renderer::State {
+  Medium medium;
+  hrc::Workspace workspace;
+};
+
 namespace {
 
-Expected<RenderResult> render_unchecked(const Scene& scene, const RenderOptions& options) {
+Expected<RenderResult> render_unchecked(const Scene& scene, const RenderOptions& options,
+                                        Renderer::State& state) {
   if (scene.width < 1 || scene.height < 1 || scene.cells() != scene.opacity.size() ||
       scene.emission.size() != 3 * scene.cells() || scene.albedo.size() != 3 * scene.cells())
     return Error{"scene: inconsistent grid (build it with build_scene)"};
@@ -157,7 +164,8 @@ Expected<RenderResult> render_unchecked(const Scene& scene, const RenderOptions&
   tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
   arena.execute([&] {
     Stopwatch watch;
-    Medium medium = make_medium(scene);
+    Medium& medium = state.medium;
+    fill_medium(scene, medium);
     result.stages.push_back({"medium", watch.ms()});
     // HRC traces only rays a few cells long: empty-space skipping would not pay for itself.
     const bool skipping = options.method != Method::hrc;
@@ -177,7 +185,7 @@ Expected<RenderResult> render_unchecked(const Scene& scene, const RenderOptions&
       return;
     }
 
-    hrc::Workspace workspace;
+    hrc::Workspace& workspace = state.workspace;
     auto solve = [&](std::vector<StageTime>& stages) {
       if (options.method == Method::rc)
         return rc::solve(medium, scene.environment, plan, options.rc, stages);
@@ -220,16 +228,27 @@ Expected<RenderResult> render_unchecked(const Scene& scene, const RenderOptions&
 
 }  // namespace
 
-Expected<RenderResult> render(const Scene& scene, const RenderOptions& options) {
+Renderer::Renderer() : state_(std::make_unique<State>()) {}
+Renderer::~Renderer() = default;
+Renderer::Renderer(Renderer&&) noexcept = default;
+Renderer& Renderer::operator=(Renderer&&) noexcept = default;
+
+Expected<RenderResult> Renderer::render(const Scene& scene, const RenderOptions& options) {
   // Nothing is thrown across the API: an allocation that fails despite the estimate (another
   // process took the memory) becomes an Error.
   try {
-    return render_unchecked(scene, options);
+    return render_unchecked(scene, options, *state_);
   } catch (const std::bad_alloc&) {
+    state_ = std::make_unique<State>();  // give back what the failed render held
     return Error{"out of memory while rendering"};
   } catch (const std::exception& e) {
     return Error{std::string("render failed: ") + e.what()};
   }
+}
+
+Expected<RenderResult> render(const Scene& scene, const RenderOptions& options) {
+  Renderer renderer;
+  return renderer.render(scene, options);
 }
 
 }  // namespace penumbra

@@ -8,6 +8,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/parallel.hpp"
 #include "io/display.hpp"
 #include "io/image_io.hpp"
 #include "io/path_util.hpp"
@@ -65,16 +66,20 @@ std::vector<unsigned char> io::display_rgb8(const ImageRgb& fluence, const Scene
   const std::size_t cells = std::size_t(fluence.width()) * fluence.height();
   std::vector<unsigned char> rgb(cells * 3);
   const float* f = fluence.data();
-  for (std::size_t i = 0; i < cells; ++i) {
-    const float a = scene ? scene->opacity[i] : 0.0f;
-    for (std::size_t c = 0; c < 3; ++c) {
-      const std::size_t k = i * 3 + c;
-      const float m = f[k] * inv_two_pi;  // mean radiance over directions
-      // Opaque cells show what they emit and reflect; clear cells show the light passing.
-      const float shown = scene ? a * (scene->emission[k] + scene->albedo[k] * m) + (1 - a) * m : m;
-      rgb[k] = to_byte(io::linear_to_srgb(aces_fit(shown * gain)));
+  const std::size_t w = std::size_t(fluence.width());
+  parallel_for(fluence.height(), [&](int y) {
+    for (std::size_t i = std::size_t(y) * w, end = i + w; i < end; ++i) {
+      const float a = scene ? scene->opacity[i] : 0.0f;
+      for (std::size_t c = 0; c < 3; ++c) {
+        const std::size_t k = i * 3 + c;
+        const float m = f[k] * inv_two_pi;  // mean radiance over directions
+        // Opaque cells show what they emit and reflect; clear cells show the light passing.
+        const float shown =
+            scene ? a * (scene->emission[k] + scene->albedo[k] * m) + (1 - a) * m : m;
+        rgb[k] = to_byte(io::linear_to_srgb(aces_fit(shown * gain)));
+      }
     }
-  }
+  });
   return rgb;
 }
 

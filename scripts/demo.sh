@@ -24,3 +24,4 @@ stage "render" "$BUILD/bin/penumbra" render -o out/demo.png -o out/demo.exr
 echo "demo: the same scene with holographic radiance cascades:"
 stage "render (hrc)" "$BUILD/bin/penumbra" render --method hrc -o out/demo_hrc.png -o out/demo_hrc.exr
 echo "demo: open out/demo.png (display) or out/demo.exr (linear fluence); out/demo_hrc.* for HRC"
+echo "demo: paint lights and walls in a window: $BUILD/bin/penumbra paint (docs/PAINTER.md)"

@@ -338,4 +338,21 @@ TEST(PaintStrokes, ErrorsNameTheFileAndJsonPath) {
   EXPECT_NE(missing.error().message.find("/nonexistent/strokes.json"), std::string::npos);
 }
 
+// The stroke files shipped in scenes/strokes paint without error on the canvas they are made for.
+TEST(PaintStrokes, ExampleStrokeFilesPaint) {
+  int files = 0;
+  for (const auto& e : fs::directory_iterator(fs::path(PENUMBRA_SOURCE_DIR) / "scenes/strokes")) {
+    Expected<std::vector<Stroke>> s = paint::load_strokes(e.path().string());
+    ASSERT_TRUE(s.ok()) << s.error().message;
+    Canvas c = blank(256, 256);
+    for (std::size_t i = 0; i < s->size(); ++i) {
+      Status st = c.apply((*s)[i], "strokes[" + std::to_string(i) + "]");
+      EXPECT_TRUE(st.ok()) << e.path() << ": " << st.error().message;
+    }
+    EXPECT_EQ(c.undo_steps(), s->size());
+    ++files;
+  }
+  EXPECT_GE(files, 1);
+}
+
 }  // namespace

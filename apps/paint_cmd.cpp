@@ -218,6 +218,7 @@ class Painter {
     options_.bounces = args.bounces;
     options_.threads = args.threads;
     options_.pt.spp = 4;
+    options_.hrc.storage = args.storage == "f16" ? Storage::f16 : Storage::f32;
     look_.exposure = args.exposure;
     look_.materials = !args.plain;
     environment_ = canvas_.scene().environment;
@@ -339,6 +340,14 @@ void Painter::handle_input() {
     canvas_.end_stroke();
     painting_ = false;
   }
+  // Tools on 1-4 (unless a text field has the keyboard).
+  if (!io.WantCaptureKeyboard && !painting_) {
+    const int keys[] = {GLFW_KEY_1, GLFW_KEY_2, GLFW_KEY_3, GLFW_KEY_4};
+    const paint::Tool tools[] = {paint::Tool::light, paint::Tool::wall, paint::Tool::fog,
+                                 paint::Tool::erase};
+    for (int k = 0; k < 4; ++k)
+      if (glfwGetKey(window_, keys[k]) == GLFW_PRESS) brush_.tool = tools[k];
+  }
   // Ctrl-Z and Ctrl-S, on the key going down.
   const bool ctrl = glfwGetKey(window_, GLFW_KEY_LEFT_CONTROL) == GLFW_PRESS ||
                     glfwGetKey(window_, GLFW_KEY_RIGHT_CONTROL) == GLFW_PRESS;
@@ -393,7 +402,7 @@ void Painter::draw_panel() {
                          ImGuiSliderFlags_Logarithmic);
     ImGui::SliderFloat("radius", &brush_.radius, 0.5f, paint::kMaxBrushRadius, "%.1f cells",
                        ImGuiSliderFlags_Logarithmic);
-    ImGui::TextDisabled("mouse wheel: radius; Ctrl-Z: undo");
+    ImGui::TextDisabled("keys 1-4: tool; wheel: radius; Ctrl-Z: undo");
     if (ImGui::Button("Undo") && canvas_.undo() && !recorded_.empty()) recorded_.pop_back();
     ImGui::SameLine();
     if (ImGui::Button("Clear")) {
@@ -466,7 +475,9 @@ void Painter::draw_panel() {
     if (ImGui::Button("Load")) {
       Expected<SceneDesc> desc = load_scene(file_);
       Expected<paint::Canvas> c =
-          desc ? paint::Canvas::from_scene(*desc) : Expected<paint::Canvas>(desc.error());
+          desc ? paint::Canvas::from_scene(*desc,
+                                           args_.emission_scale_given ? args_.emission_scale : 0)
+               : Expected<paint::Canvas>(desc.error());
       if (c) {
         replace_canvas(std::move(*c));
         message_ = "loaded " + file_;
@@ -601,7 +612,12 @@ int Painter::run() {
                          shown_.options_version == options_version_;
     if (args_.frames > 0 && current && solve_ms_.size() >= std::size_t(args_.frames)) done = true;
     if (!args_.screenshot.empty() && current && args_.frames == 0) done = true;
-    if (done && !args_.screenshot.empty() && !write_screenshot()) status = kFailure;
+    if (done && !shown_.error.empty()) {  // scripted: a refused render is a failure
+      std::cerr << "penumbra paint: the final canvas could not be rendered; nothing written\n";
+      status = kFailure;
+    } else if (done && !args_.screenshot.empty() && !write_screenshot()) {
+      status = kFailure;
+    }
     glfwSwapBuffers(window_);
     ui_ms_.push_back(frame_watch.ms());
   }
@@ -666,8 +682,13 @@ std::unique_ptr<PaintCommand> add_paint_command(CLI::App& app) {
       ->check(CLI::Range(0.0f, 64.0f))
       ->capture_default_str();
   c->add_option("--emission-scale", a.emission_scale,
-                "Brightest radiance a blank canvas holds (the saved emission_scale)")
+                "Brightest radiance the canvas holds (the saved emission_scale); a scene's "
+                "brightest cell raises it")
       ->check(CLI::Range(1e-3f, 1e9f))
+      ->each([&a](const std::string&) { a.emission_scale_given = true; })
+      ->capture_default_str();
+  c->add_option("--storage", a.storage, "hrc: precision of T and R: f32, f16")
+      ->check(CLI::IsMember({"f32", "f16"}))
       ->capture_default_str();
   c->add_option("--bounces", a.bounces, "Diffuse bounces")
       ->check(CLI::Range(1, 8))
@@ -708,7 +729,8 @@ int run_paint(const PaintArgs& a) {
     canvas = paint::Canvas::blank(w, h, a.emission_scale);
   } else {
     Expected<SceneDesc> desc = load_scene(a.scene);
-    canvas = desc ? paint::Canvas::from_scene(*desc) : Expected<paint::Canvas>(desc.error());
+    canvas = desc ? paint::Canvas::from_scene(*desc, a.emission_scale_given ? a.emission_scale : 0)
+                  : Expected<paint::Canvas>(desc.error());
   }
   if (!canvas) {
     std::cerr << "penumbra paint: " << canvas.error().message << "\n";
@@ -717,6 +739,7 @@ int run_paint(const PaintArgs& a) {
   RenderOptions probe;
   probe.method = method_of(a.method);
   probe.bounces = a.bounces;
+  probe.hrc.storage = a.storage == "f16" ? Storage::f16 : Storage::f32;
   if (Status s = check_memory(canvas->width(), canvas->height(), probe, false); !s) {
     std::cerr << "penumbra paint: " << s.error().message << "\n";
     return kFailure;

@@ -89,6 +89,16 @@ TEST(PaintCanvas, StrokesInterpolateBetweenFarPoints) {
   EXPECT_EQ(s.opacity[s.index(60, 20)], 0.0f);
 }
 
+// Points far off the grid paint what they reach and nothing else.
+TEST(PaintCanvas, PointsFarOffTheGridAreSafe) {
+  Canvas c = blank(16, 16);
+  paint_ok(c, {brush(Tool::wall, 2), {{1e30f, 1e30f}, {-1e30f, 8}, {-1e30f, -1e30f}}});
+  paint_ok(c, {brush(Tool::wall, 2), {{-100, 8.5f}, {100, 8.5f}}});
+  const Scene& s = c.scene();
+  for (int x = 0; x < 16; ++x) EXPECT_EQ(s.opacity[s.index(x, 8)], 1.0f) << x;
+  EXPECT_EQ(s.opacity[s.index(8, 0)], 0.0f);
+}
+
 // Fog laid twice over the same cells by one stroke keeps the brush's opacity: a stroke covers a
 // cell once (its largest coverage), so joints and back-and-forth motion do not thicken it.
 TEST(PaintCanvas, OneStrokeCoversACellOnce) {
@@ -224,6 +234,10 @@ TEST(PaintCanvas, SavedPaintingReadsBackBitForBit) {
   ASSERT_TRUE(again.ok()) << again.error().message;
   EXPECT_TRUE(same_cells(again->scene(), c.scene()));
   EXPECT_EQ(again->emission_scale(), 32.0f);  // the file's
+  // Asking for more room to paint brighter lights rescales it.
+  Expected<Canvas> roomier = Canvas::from_scene(*desc, 100);
+  ASSERT_TRUE(roomier.ok()) << roomier.error().message;
+  EXPECT_EQ(roomier->emission_scale(), 100.0f);
 }
 
 TEST(PaintCanvas, SaveIsAllOrNothing) {

@@ -214,6 +214,20 @@ TEST_F(PaintWindow, ReplayShowsLightAndShadowAndSavesWhatItShows) {
   EXPECT_EQ(differing, 0);
 }
 
+// A scripted run whose final canvas the method refuses writes nothing and exits 1.
+TEST_F(PaintWindow, RefusedRenderFailsAScriptedRun) {
+  if (!have_display()) GTEST_SKIP() << x_server().why();
+  const std::string bright = tmp_.write(
+      "bright.json", R"({"strokes": [{"tool": "light", "intensity": 1e5, "points": [[8, 8]]}]})");
+  CliResult r =
+      paint({"--size", "32x32", "--storage", "f16", "--emission-scale", "1e6", "--replay", bright,
+             "--screenshot", tmp_.file("shot.png"), "--save", tmp_.file("p.json")});
+  EXPECT_EQ(r.status, 1) << r.err;
+  EXPECT_NE(r.err.find("half precision"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(tmp_.file("shot.png")));
+  EXPECT_FALSE(fs::exists(tmp_.file("p.json")));
+}
+
 // A scene file opens in the painter; measurement runs solve continuously and report times.
 TEST_F(PaintWindow, LoadsASceneFileAndReportsFrameTimes) {
   if (!have_display()) GTEST_SKIP() << x_server().why();

@@ -105,7 +105,7 @@ Expected<Canvas> Canvas::blank(int width, int height, float emission_scale) {
   return c;
 }
 
-Expected<Canvas> Canvas::from_scene(const SceneDesc& desc) {
+Expected<Canvas> Canvas::from_scene(const SceneDesc& desc, float min_scale) {
   if (desc.width > kMaxCanvasSide || desc.height > kMaxCanvasSide)
     return Error{desc.source + ": the painter edits grids up to " + std::to_string(kMaxCanvasSide) +
                  " cells a side, this one is " + std::to_string(desc.width) + "x" +
@@ -114,10 +114,12 @@ Expected<Canvas> Canvas::from_scene(const SceneDesc& desc) {
   if (!built) return built.error();
   float brightest = 0;
   for (float e : built->emission) brightest = std::max(brightest, e);
+  if (!(min_scale >= 0) || !std::isfinite(min_scale))
+    return Error{"canvas: emission scale must be a finite number > 0"};
   // A painting read back keeps its scale, so its cells stay on the same codes.
-  float scale = desc.layers.emission ? desc.layers.emission_scale : kDefaultEmissionScale;
-  if (!(scale >= brightest) || !(scale > 0)) {
-    scale = kDefaultEmissionScale;
+  float scale = desc.layers.emission ? desc.layers.emission_scale : 0.0f;
+  if (!(scale >= brightest) || !(scale >= min_scale) || !(scale > 0)) {
+    scale = min_scale > 0 ? min_scale : kDefaultEmissionScale;
     while (scale < brightest && scale < 1e30f) scale *= 2;
   }
   Expected<Canvas> c = blank(desc.width, desc.height, scale);
@@ -207,10 +209,15 @@ Status Canvas::apply(const Stroke& stroke, const std::string& where) {
 // covered twice.
 void Canvas::cover_segment(float ax, float ay, float bx, float by) {
   const float r = brush_.radius;
-  const int x0 = std::max(0, int(std::floor(std::min(ax, bx) - r - 1)));
-  const int x1 = std::min(scene_.width - 1, int(std::ceil(std::max(ax, bx) + r + 1)));
-  const int y0 = std::max(0, int(std::floor(std::min(ay, by) - r - 1)));
-  const int y1 = std::min(scene_.height - 1, int(std::ceil(std::max(ay, by) + r + 1)));
+  // Bounds clamped as floats first: points far off the grid must not overflow an int.
+  auto lo = [&](float a, float b, int n) {
+    return int(std::clamp(std::floor(std::min(a, b) - r - 1), 0.0f, float(n)));
+  };
+  auto hi = [&](float a, float b, int n) {
+    return int(std::clamp(std::ceil(std::max(a, b) + r + 1), -1.0f, float(n - 1)));
+  };
+  const int x0 = lo(ax, bx, scene_.width), x1 = hi(ax, bx, scene_.width);
+  const int y0 = lo(ay, by, scene_.height), y1 = hi(ay, by, scene_.height);
   if (x0 > x1 || y0 > y1) return;
   const float dx = bx - ax, dy = by - ay, len2 = dx * dx + dy * dy;
   for (int y = y0; y <= y1; ++y) {

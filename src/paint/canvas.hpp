@@ -52,9 +52,10 @@ class Canvas {
   static Expected<Canvas> blank(int width, int height,
                                 float emission_scale = kDefaultEmissionScale);
   // A scene file's cells, rasterised; values move to the nearest 16-bit code. The emission scale
-  // is the emission layer's own when it holds the brightest cell (a saved painting reads back
-  // unchanged), else the smallest power of two >= kDefaultEmissionScale that does.
-  static Expected<Canvas> from_scene(const SceneDesc& desc);
+  // is the emission layer's own when it holds the brightest cell and is >= min_scale (a saved
+  // painting reads back unchanged), else min_scale (0: kDefaultEmissionScale) doubled until it
+  // holds the brightest cell.
+  static Expected<Canvas> from_scene(const SceneDesc& desc, float min_scale = 0);
 
   const Scene& scene() const { return scene_; }
   int width() const { return scene_.width; }

@@ -223,7 +223,11 @@ void build_world(const Medium& m, float* planes) {
       const Cell& c = m.cells[i];
       const float sigma = m.step[i] > 0 ? m.step[i] : 0.0f;
       planes[kR * cells + i] = c.r, planes[kG * cells + i] = c.g, planes[kB * cells + i] = c.b;
-      for (int l = 0; l < 3; ++l) planes[(kTau0 + l) * cells + i] = std::exp(-sigma * kLengths[l]);
+      // Empty and opaque cells, most of a painted scene, need no exp.
+      for (int l = 0; l < 3; ++l)
+        planes[(kTau0 + l) * cells + i] = sigma == 0.0f      ? 1.0f
+                                          : sigma == kOpaque ? 0.0f
+                                                             : std::exp(-sigma * kLengths[l]);
     }
   });
 }
@@ -233,23 +237,47 @@ void build_view(const float* world, int width, int height, int d, const View& vi
   out.hp = view.h + 2 * kPad;
   const std::size_t cells = std::size_t(width) * height;
   const Rotation rot = rotation(d, width, height);
-  for (int p = 0; p < kPlanes; ++p) {
-    float* dst = out.plane(p);
-    const float* src = world + p * cells;
-    const float outside = p < kTau0 ? 0.0f : 1.0f;
-    // The padding: kPad cells above and below every column, and kPad empty columns after.
-    parallel_for(view.w + kPad, [&](int u) {
-      float* col = dst + std::size_t(u) * out.hp;
-      if (u >= view.w) {
-        std::fill(col, col + out.hp, outside);
-        return;
+  const int columns = view.w + kPad;  // kPad empty columns after the view
+  // Tiles of kBlock columns, all planes: a view column is a world row read forwards or backwards
+  // (|sv| = 1), or a world column, transposed in kBlock x kBlock blocks held in L1.
+  constexpr int kBlock = 8;
+  parallel_for((columns + kBlock - 1) / kBlock, [&](int tile) {
+    const int u0 = tile * kBlock, u1 = std::min(columns, u0 + kBlock);
+    const int ue = std::min(u1, view.w);
+    for (int p = 0; p < kPlanes; ++p) {
+      float* dst = out.plane(p);
+      const float* src = world + p * cells;
+      const float outside = p < kTau0 ? 0.0f : 1.0f;
+      // The padding: kPad cells above and below every column, and the empty columns.
+      for (int u = u0; u < u1; ++u) {
+        float* col = dst + std::size_t(u) * out.hp;
+        if (u >= view.w) {
+          std::fill(col, col + out.hp, outside);
+          continue;
+        }
+        std::fill(col, col + kPad, outside);
+        std::fill(col + kPad + view.h, col + out.hp, outside);
       }
-      std::fill(col, col + kPad, outside);
-      std::fill(col + kPad + view.h, col + out.hp, outside);
-    });
-    for_view_cells(rot, view.w, view.h,
-                   [&](int u, int v) { dst[out.at(u, v)] = src[rot.at(u, v)]; });
-  }
+      if (rot.sv == 1 || rot.sv == -1) {
+        for (int u = u0; u < ue; ++u) {
+          const float* from = src + rot.at(u, 0);
+          float* to = dst + out.at(u, 0);
+          if (rot.sv == 1)
+            std::copy_n(from, view.h, to);
+          else
+            for (int v = 0; v < view.h; ++v) to[v] = from[-v];
+        }
+        continue;
+      }
+      for (int v0 = 0; v0 < view.h; v0 += kBlock) {
+        const int ve = std::min(view.h, v0 + kBlock);
+        for (int v = v0; v < ve; ++v) {
+          const float* row = src + rot.at(0, v);
+          for (int u = u0; u < ue; ++u) dst[out.at(u, v)] = row[u * rot.su];
+        }
+      }
+    }
+  });
 }
 
 // The cells a ray from a cell centre to the cell centre at v_n(k) crosses, with its length in

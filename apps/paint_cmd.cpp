@@ -16,9 +16,12 @@
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <atomic>
+#include <charconv>
 #include <cmath>
 #include <condition_variable>
+#include <csignal>
 #include <cstdio>
+#include <filesystem>
 #include <functional>
 #include <iostream>
 #include <map>
@@ -42,7 +45,7 @@ namespace {
 constexpr int kUsage = 2;
 constexpr int kFailure = 1;
 constexpr float kPanelWidth = 340;
-constexpr float kMinHeight = 800;  // the panel's height with every section open
+constexpr float kMinHeight = 800;  // the panel scrolls when its open sections need more
 
 // ---- the solver thread ----------------------------------------------------------------------
 
@@ -85,11 +88,13 @@ class Solver {
   // `on_frame` runs on the solver thread after each frame is published (to wake the UI).
   explicit Solver(std::function<void()> on_frame)
       : on_frame_(std::move(on_frame)), thread_([this] { loop(); }) {}
+  // Waits for the frame in progress (a progressive method stops after its current pass).
   ~Solver() {
     {
       std::lock_guard lock(mutex_);
       quit_ = true;
     }
+    cancel_.store(true);
     wake_.notify_all();
     thread_.join();
   }
@@ -145,17 +150,23 @@ class Solver {
       f.scene_version = scene_version;
       f.options_version = options_version;
       f.serial = ++serial;
+      options.cancel = &cancel_;
       Stopwatch watch;
-      Expected<RenderResult> r = renderer_.render(*scene, options);
-      f.solve_ms = watch.ms();
-      if (r) {
-        f.stages = std::move(r->stages);
-        watch.restart();
-        f.rgb = io::display_rgb8(r->fluence, scene.get(), {look.exposure});
-        if (look.materials) show_materials(*scene, f.rgb);
-        f.display_ms = watch.ms();
-      } else {
-        f.error = r.error().message;
+      try {  // the library reports errors as values; anything thrown here is shown, not fatal
+        Expected<RenderResult> r = renderer_.render(*scene, options);
+        f.solve_ms = watch.ms();
+        if (r) {
+          f.stages = std::move(r->stages);
+          watch.restart();
+          f.rgb = io::display_rgb8(r->fluence, scene.get(), {look.exposure});
+          if (look.materials) show_materials(*scene, f.rgb);
+          f.display_ms = watch.ms();
+        } else {
+          f.error = r.error().message;
+        }
+      } catch (const std::exception& e) {
+        f.rgb.clear();
+        f.error = std::string("internal error: ") + e.what();
       }
       done_scene = scene_version;
       done_options = options_version;
@@ -173,6 +184,7 @@ class Solver {
   }
 
   std::function<void()> on_frame_;
+  std::atomic<bool> cancel_{false};
   std::mutex mutex_;
   std::condition_variable wake_;
   std::shared_ptr<const Scene> scene_;
@@ -187,10 +199,13 @@ class Solver {
 
 // ---- the window -----------------------------------------------------------------------------
 
+// "WxH" with positive integers (no signs, no spaces, no overflow).
 bool parse_size(const std::string& text, int& w, int& h) {
-  int n = 0;
-  return std::sscanf(text.c_str(), "%dx%d%n", &w, &h, &n) == 2 && n == int(text.size()) && w > 0 &&
-         h > 0;
+  const char* end = text.data() + text.size();
+  auto [p, ec] = std::from_chars(text.data(), end, w);
+  if (ec != std::errc() || p == end || *p != 'x') return false;
+  auto [q, ec2] = std::from_chars(p + 1, end, h);
+  return ec2 == std::errc() && q == end && w > 0 && h > 0 && text[0] != '-' && p[1] != '-';
 }
 
 Method method_of(const std::string& name) {
@@ -204,10 +219,24 @@ double median(std::vector<double> v) {
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
+// GLFW reports errors through a callback, possibly on the solver thread (glfwPostEmptyEvent).
+std::mutex glfw_error_mutex;
 std::string glfw_error;
 
 extern "C" void on_glfw_error(int, const char* text) {
+  std::lock_guard lock(glfw_error_mutex);
   glfw_error = text ? text : "unknown error";
+}
+
+std::string last_glfw_error() {
+  std::lock_guard lock(glfw_error_mutex);
+  return glfw_error;
+}
+
+// SIGINT and SIGTERM end the session as closing the window does (outputs are still written).
+std::atomic<bool> g_stop{false};
+extern "C" void on_stop_signal(int) {
+  g_stop.store(true);
 }
 
 class Painter {
@@ -219,6 +248,7 @@ class Painter {
     options_.threads = args.threads;
     options_.pt.spp = 4;
     options_.hrc.storage = args.storage == "f16" ? Storage::f16 : Storage::f32;
+    zoom_ = args.zoom;
     look_.exposure = args.exposure;
     look_.materials = !args.plain;
     environment_ = canvas_.scene().environment;
@@ -234,7 +264,8 @@ class Painter {
   void draw_panel();
   void submit();
   void upload(const Frame& f);
-  bool write_screenshot();
+  std::vector<unsigned char> read_window(int& w, int& h);
+  int write_outputs(const std::vector<unsigned char>* shot, int shot_w, int shot_h);
   void replace_canvas(paint::Canvas c);
 
   const PaintArgs& args_;
@@ -242,6 +273,7 @@ class Painter {
   std::vector<paint::Stroke> replay_;
   std::size_t replayed_ = 0;
   std::vector<paint::Stroke> recorded_;
+  float zoom_ = 0;  // --zoom, for the canvas the painter started with (0: fit)
 
   GLFWwindow* window_ = nullptr;
   GLuint texture_ = 0;
@@ -252,6 +284,7 @@ class Painter {
   RenderOptions options_;
   std::uint64_t options_version_ = 1;
   std::uint64_t submitted_scene_ = 0, submitted_options_ = 0;
+  bool submitted_continuous_ = false;
   Look look_;
   bool continuous_ = false;
   Rgb environment_{};
@@ -259,7 +292,7 @@ class Painter {
 
   paint::Brush brush_;
   bool painting_ = false;
-  bool undo_down_ = false, save_down_ = false;
+  bool undo_down_ = false, save_down_ = false, quit_down_ = false;
   std::string file_ = "painting.json";
   std::string message_;
   std::vector<double> solve_ms_, display_ms_, ui_ms_;
@@ -267,7 +300,7 @@ class Painter {
 };
 
 float Painter::zoom() const {
-  if (args_.zoom > 0) return args_.zoom;
+  if (zoom_ > 0) return zoom_;
   const int side = std::max(canvas_.width(), canvas_.height());
   return side <= 800 ? float(std::max(1, 800 / side)) : 800.0f / float(side);
 }
@@ -280,6 +313,7 @@ void Painter::resize_window() {
 
 void Painter::replace_canvas(paint::Canvas c) {
   canvas_ = std::move(c);
+  zoom_ = 0;  // fit the new grid (an explicit zoom could make it larger than the screen)
   environment_ = canvas_.scene().environment;
   environment_intensity_ = 1;
   recorded_.clear();
@@ -288,11 +322,14 @@ void Painter::replace_canvas(paint::Canvas c) {
 }
 
 void Painter::submit() {
+  // In continuous mode the canvas goes to the solver every frame; turning it off must reach the
+  // solver too, or it would go on solving the same canvas.
   if (canvas_.version() == submitted_scene_ && options_version_ == submitted_options_ &&
-      !continuous_)
+      continuous_ == submitted_continuous_ && !continuous_)
     return;
   submitted_scene_ = canvas_.version();
   submitted_options_ = options_version_;
+  submitted_continuous_ = continuous_;
   solver_->submit(std::make_shared<const Scene>(canvas_.scene()), submitted_scene_, options_,
                   options_version_, look_, continuous_);
 }
@@ -340,17 +377,18 @@ void Painter::handle_input() {
     canvas_.end_stroke();
     painting_ = false;
   }
-  // Tools on 1-4 (unless a text field has the keyboard).
-  if (!io.WantCaptureKeyboard && !painting_) {
+  // Keys, unless a text field has the keyboard (it takes Ctrl-Z and digits itself).
+  const bool typing = io.WantTextInput;
+  if (!typing && !painting_) {  // tools on 1-4
     const int keys[] = {GLFW_KEY_1, GLFW_KEY_2, GLFW_KEY_3, GLFW_KEY_4};
     const paint::Tool tools[] = {paint::Tool::light, paint::Tool::wall, paint::Tool::fog,
                                  paint::Tool::erase};
     for (int k = 0; k < 4; ++k)
       if (glfwGetKey(window_, keys[k]) == GLFW_PRESS) brush_.tool = tools[k];
   }
-  // Ctrl-Z and Ctrl-S, on the key going down.
-  const bool ctrl = glfwGetKey(window_, GLFW_KEY_LEFT_CONTROL) == GLFW_PRESS ||
-                    glfwGetKey(window_, GLFW_KEY_RIGHT_CONTROL) == GLFW_PRESS;
+  // Ctrl-Z, Ctrl-S and Ctrl-Q, on the key going down.
+  const bool ctrl = !typing && (glfwGetKey(window_, GLFW_KEY_LEFT_CONTROL) == GLFW_PRESS ||
+                                glfwGetKey(window_, GLFW_KEY_RIGHT_CONTROL) == GLFW_PRESS);
   const bool z_down = ctrl && glfwGetKey(window_, GLFW_KEY_Z) == GLFW_PRESS;
   if (z_down && !undo_down_ && !painting_ && canvas_.undo() && !recorded_.empty())
     recorded_.pop_back();
@@ -361,6 +399,9 @@ void Painter::handle_input() {
     message_ = s ? "saved " + file_ : s.error().message;
   }
   save_down_ = s_down;
+  const bool q_down = ctrl && glfwGetKey(window_, GLFW_KEY_Q) == GLFW_PRESS;
+  if (q_down && !quit_down_) glfwSetWindowShouldClose(window_, GLFW_TRUE);
+  quit_down_ = q_down;
 }
 
 void Painter::draw_panel() {
@@ -402,7 +443,7 @@ void Painter::draw_panel() {
                          ImGuiSliderFlags_Logarithmic);
     ImGui::SliderFloat("radius", &brush_.radius, 0.5f, paint::kMaxBrushRadius, "%.1f cells",
                        ImGuiSliderFlags_Logarithmic);
-    ImGui::TextDisabled("keys 1-4: tool; wheel: radius; Ctrl-Z: undo");
+    ImGui::TextDisabled("keys 1-4: tool; wheel: radius; Ctrl-Z: undo; Ctrl-Q: quit");
     if (ImGui::Button("Undo") && canvas_.undo() && !recorded_.empty()) recorded_.pop_back();
     ImGui::SameLine();
     if (ImGui::Button("Clear")) {
@@ -491,8 +532,8 @@ void Painter::draw_panel() {
   ImGui::End();
 }
 
-bool Painter::write_screenshot() {
-  int w = 0, h = 0;
+// The window's back buffer as 8-bit RGB, row 0 at the top.
+std::vector<unsigned char> Painter::read_window(int& w, int& h) {
   glfwGetFramebufferSize(window_, &w, &h);
   std::vector<unsigned char> rgb(std::size_t(w) * h * 3), flipped(rgb.size());
   glFinish();
@@ -502,17 +543,37 @@ bool Painter::write_screenshot() {
   const std::size_t row = std::size_t(w) * 3;
   for (int y = 0; y < h; ++y)  // OpenGL's rows start at the bottom
     std::copy_n(&rgb[std::size_t(h - 1 - y) * row], row, &flipped[std::size_t(y) * row]);
-  if (Status s = io::write_png8(args_.screenshot, w, h, flipped); !s) {
-    std::cerr << "penumbra paint: " << s.error().message << "\n";
-    return false;
+  return flipped;
+}
+
+// The screenshot, the saved painting and the recording, all or nothing.
+int Painter::write_outputs(const std::vector<unsigned char>* shot, int shot_w, int shot_h) {
+  std::vector<std::string> paths;
+  if (shot) paths.push_back(args_.screenshot);
+  std::vector<std::string> saved;
+  if (!args_.save.empty()) saved = *paint::Canvas::save_paths(args_.save);  // checked up front
+  const std::size_t first_saved = paths.size();
+  paths.insert(paths.end(), saved.begin(), saved.end());
+  if (!args_.record.empty()) paths.push_back(args_.record);
+  if (paths.empty()) return 0;
+  const paint::StrokeFile record{recorded_, canvas_.width(), canvas_.height()};
+  Status s = io::write_all(paths, [&](std::size_t i) -> Expected<io::StagedFile> {
+    if (shot && i == 0) return io::stage_png8(paths[0], shot_w, shot_h, *shot);
+    if (i >= first_saved && i < first_saved + saved.size())
+      return canvas_.stage_save(saved, i - first_saved);
+    return io::stage_text(paths[i], paint::strokes_json(record));
+  });
+  if (!s) {
+    std::cerr << "penumbra paint: " << s.error().message << "; nothing written\n";
+    return kFailure;
   }
-  return true;
+  return 0;
 }
 
 int Painter::run() {
   glfwSetErrorCallback(on_glfw_error);
   if (!glfwInit()) {
-    std::cerr << "penumbra paint: no display: cannot open a window (" << glfw_error
+    std::cerr << "penumbra paint: no display: cannot open a window (" << last_glfw_error()
               << "); set DISPLAY, or run under Xvfb for scripted use\n";
     return kFailure;
   }
@@ -524,7 +585,8 @@ int Painter::run() {
                              int(std::max(std::ceil(canvas_.height() * z), kMinHeight)),
                              "Penumbra painter", nullptr, nullptr);
   if (!window_) {
-    std::cerr << "penumbra paint: cannot create an OpenGL 3.0 window: " << glfw_error << "\n";
+    std::cerr << "penumbra paint: cannot create an OpenGL 3.0 window: " << last_glfw_error()
+              << "\n";
     glfwTerminate();
     return kFailure;
   }
@@ -546,15 +608,19 @@ int Painter::run() {
 
   continuous_ = args_.frames > 0;
   solver_ = std::make_unique<Solver>([] { glfwPostEmptyEvent(); });
+  std::signal(SIGINT, on_stop_signal);
+  std::signal(SIGTERM, on_stop_signal);
   int status = 0;
   bool done = false;
-  while (!done && !glfwWindowShouldClose(window_)) {
+  std::vector<unsigned char> shot;
+  int shot_w = 0, shot_h = 0;
+  while (!done && !glfwWindowShouldClose(window_) && !g_stop.load()) {
     // A replay draws as fast as it can; otherwise the window sleeps until input arrives or the
-    // solver posts a new frame.
+    // solver posts a new frame (waking twice a second to notice a signal).
     if (replayed_ < replay_.size())
       glfwPollEvents();
     else
-      glfwWaitEventsTimeout(0.1);
+      glfwWaitEventsTimeout(0.5);
     Stopwatch frame_watch;  // the window's own work, not the wait
     ImGui_ImplOpenGL3_NewFrame();
     ImGui_ImplGlfw_NewFrame();
@@ -572,7 +638,6 @@ int Painter::run() {
     } else {
       handle_input();
     }
-    draw_panel();
     submit();
     Frame f;
     if (solver_->latest(shown_.serial, f)) {
@@ -586,6 +651,7 @@ int Painter::run() {
       }
       shown_ = std::move(f);
     }
+    draw_panel();
 
     // The picture, then the brush outline over it.
     const float zz = zoom();
@@ -606,22 +672,26 @@ int Painter::run() {
     glClear(GL_COLOR_BUFFER_BIT);
     ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
 
-    // Scripted runs end once the solver has shown the final canvas.
+    // Scripted runs end once the solver has shown the final canvas, or refused it.
+    const bool scripted = !args_.screenshot.empty() || args_.frames > 0;
     const bool current = replayed_ >= replay_.size() && shown_.serial > 0 &&
                          shown_.scene_version == canvas_.version() &&
                          shown_.options_version == options_version_;
-    if (args_.frames > 0 && current && solve_ms_.size() >= std::size_t(args_.frames)) done = true;
-    if (!args_.screenshot.empty() && current && args_.frames == 0) done = true;
-    if (done && !shown_.error.empty()) {  // scripted: a refused render is a failure
+    if (scripted && current && !shown_.error.empty()) {
       std::cerr << "penumbra paint: the final canvas could not be rendered; nothing written\n";
       status = kFailure;
-    } else if (done && !args_.screenshot.empty() && !write_screenshot()) {
-      status = kFailure;
+      break;
     }
+    if (args_.frames > 0 && current && solve_ms_.size() >= std::size_t(args_.frames)) done = true;
+    if (!args_.screenshot.empty() && current && args_.frames == 0) done = true;
+    if (done && !args_.screenshot.empty()) shot = read_window(shot_w, shot_h);
     glfwSwapBuffers(window_);
     ui_ms_.push_back(frame_watch.ms());
   }
 
+  std::signal(SIGINT, SIG_DFL);
+  std::signal(SIGTERM, SIG_DFL);
+  glfwHideWindow(window_);  // the window goes at once; a slow frame in progress finishes unseen
   solver_.reset();
   glDeleteTextures(1, &texture_);
   ImGui_ImplOpenGL3_Shutdown();
@@ -630,16 +700,12 @@ int Painter::run() {
   glfwDestroyWindow(window_);
   glfwTerminate();
 
-  if (status == 0 && !args_.save.empty())
-    if (Status s = canvas_.save(args_.save); !s) {
-      std::cerr << "penumbra paint: " << s.error().message << "\n";
-      status = kFailure;
-    }
-  if (status == 0 && !args_.record.empty())
-    if (Status s = io::write_text_files({{args_.record, paint::strokes_json(recorded_)}}); !s) {
-      std::cerr << "penumbra paint: " << s.error().message << "\n";
-      status = kFailure;
-    }
+  if (status == 0 && !args_.screenshot.empty() && shot.empty()) {
+    std::cerr << "penumbra paint: " << (g_stop.load() ? "interrupted" : "the window was closed")
+              << " before the final frame; nothing written\n";
+    status = kFailure;
+  }
+  if (status == 0) status = write_outputs(shot.empty() ? nullptr : &shot, shot_w, shot_h);
   if (args_.stats) {
     std::printf("penumbra paint: %dx%d cells, method %s, %zu solver frames\n", canvas_.width(),
                 canvas_.height(), to_string(options_.method), solve_ms_.size());
@@ -736,43 +802,74 @@ int run_paint(const PaintArgs& a) {
     std::cerr << "penumbra paint: " << canvas.error().message << "\n";
     return kFailure;
   }
+  // Memory: the method's, plus the painter's copies of the canvas (the canvas, the stroke's
+  // starting cells, the solver's two) and its undo steps.
   RenderOptions probe;
   probe.method = method_of(a.method);
   probe.bounces = a.bounces;
   probe.hrc.storage = a.storage == "f16" ? Storage::f16 : Storage::f32;
-  if (Status s = check_memory(canvas->width(), canvas->height(), probe, false); !s) {
+  const int w = canvas->width(), h = canvas->height();
+  if (Status s = check_memory(w, h, probe, false); !s) {
     std::cerr << "penumbra paint: " << s.error().message << "\n";
+    return kFailure;
+  }
+  const std::uint64_t need = estimate_memory(w, h, probe) + 4 * scene_bytes(w, h) +
+                             std::min<std::uint64_t>(paint::kUndoBytes, 200 * scene_bytes(w, h));
+  if (need > probe.max_memory) {
+    std::cerr << "penumbra paint: a " << w << "x" << h << " canvas needs about " << (need >> 20)
+              << " MiB with the method's working memory and the undo steps, more than the "
+              << (probe.max_memory >> 20) << " MiB limit; paint a smaller grid\n";
     return kFailure;
   }
   std::vector<paint::Stroke> strokes;
   if (!a.replay.empty()) {
-    Expected<std::vector<paint::Stroke>> r = paint::load_strokes(a.replay);
+    Expected<paint::StrokeFile> r = paint::load_strokes(a.replay);
     if (!r) {
       std::cerr << "penumbra paint: " << r.error().message << "\n";
       return kFailure;
     }
-    for (std::size_t i = 0; i < r->size(); ++i)
+    for (std::size_t i = 0; i < r->strokes.size(); ++i)
       if (Status s =
-              canvas->check((*r)[i].brush, a.replay + ": strokes[" + std::to_string(i) + "]");
+              canvas->check(r->strokes[i].brush, a.replay + ": strokes[" + std::to_string(i) + "]");
           !s) {
         std::cerr << "penumbra paint: " << s.error().message << "\n";
         return kFailure;
       }
-    strokes = std::move(*r);
+    if (r->width > 0 && (r->width != w || r->height != h))
+      std::cerr << "penumbra paint: warning: " << a.replay << " was painted on a " << r->width
+                << "x" << r->height << " grid; replaying it on " << w << "x" << h << "\n";
+    strokes = std::move(r->strokes);
   }
-  if (!a.save.empty() && io::lowercase_extension(a.save) != ".json") {
-    std::cerr << "penumbra paint: --save: " << a.save << ": expected a .json name\n";
-    return kUsage;
-  }
-  for (const std::string& out : {a.screenshot, a.record, a.save})
-    if (!out.empty())
-      if (Status s = check_output(out); !s) {
-        std::cerr << "penumbra paint: " << s.error().message << "\n";
-        return kFailure;
-      }
+
+  // Outputs: names checked, places writable, no two the same file.
   if (!a.screenshot.empty() && io::lowercase_extension(a.screenshot) != ".png") {
     std::cerr << "penumbra paint: --screenshot: " << a.screenshot << ": expected a .png name\n";
     return kUsage;
+  }
+  std::vector<std::pair<std::string, std::string>> outputs;  // option, path
+  if (!a.screenshot.empty()) outputs.push_back({"--screenshot", a.screenshot});
+  if (!a.save.empty()) {
+    Expected<std::vector<std::string>> saved = paint::Canvas::save_paths(a.save);
+    if (!saved) {
+      std::cerr << "penumbra paint: --save: " << saved.error().message << "\n";
+      return kUsage;
+    }
+    for (const std::string& p : *saved) outputs.push_back({"--save", p});
+  }
+  if (!a.record.empty()) outputs.push_back({"--record", a.record});
+  for (std::size_t i = 0; i < outputs.size(); ++i) {
+    if (Status s = check_output(outputs[i].second); !s) {
+      std::cerr << "penumbra paint: " << outputs[i].first << ": " << s.error().message << "\n";
+      return kFailure;
+    }
+    std::error_code ec;
+    const std::filesystem::path pi = std::filesystem::weakly_canonical(outputs[i].second, ec);
+    for (std::size_t j = 0; j < i; ++j)
+      if (pi == std::filesystem::weakly_canonical(outputs[j].second, ec)) {
+        std::cerr << "penumbra paint: " << outputs[j].first << " and " << outputs[i].first
+                  << " would both write " << outputs[i].second << "\n";
+        return kUsage;
+      }
   }
   try {
     Painter painter(a, std::move(*canvas), std::move(strokes));

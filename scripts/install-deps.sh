@@ -8,7 +8,7 @@ packages=(
   libtbb-dev libstb-dev libopenexr-dev nlohmann-json3-dev libcli11-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libpng-dev
-  libglfw3-dev libgl-dev libglx-mesa0 libgl1-mesa-dri libimgui-dev xvfb
+  libglfw3-dev libgl-dev libglx-mesa0 libgl1-mesa-dri libimgui-dev xvfb xdotool
 )
 
 missing=()

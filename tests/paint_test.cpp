@@ -92,11 +92,26 @@ TEST(PaintCanvas, StrokesInterpolateBetweenFarPoints) {
 // Points far off the grid paint what they reach and nothing else.
 TEST(PaintCanvas, PointsFarOffTheGridAreSafe) {
   Canvas c = blank(16, 16);
-  paint_ok(c, {brush(Tool::wall, 2), {{1e30f, 1e30f}, {-1e30f, 8}, {-1e30f, -1e30f}}});
-  paint_ok(c, {brush(Tool::wall, 2), {{-100, 8.5f}, {100, 8.5f}}});
+  paint_ok(c, {brush(Tool::wall, 2), {{1e8f, 1e8f}, {-1e8f, -1e8f}}});
   const Scene& s = c.scene();
-  for (int x = 0; x < 16; ++x) EXPECT_EQ(s.opacity[s.index(x, 8)], 1.0f) << x;
-  EXPECT_EQ(s.opacity[s.index(8, 0)], 0.0f);
+  EXPECT_EQ(s.opacity[s.index(0, 0)], 1.0f);  // the diagonal crosses the grid
+  EXPECT_EQ(s.opacity[s.index(15, 15)], 1.0f);
+  EXPECT_EQ(s.opacity[s.index(15, 0)], 0.0f);
+  c.clear();
+  // Points as far as a float goes: the line is not defined to a cell there, but painting them
+  // is safe.
+  paint_ok(c, {brush(Tool::wall, 2), {{3e38f, 3e38f}, {-3e38f, -3e38f}, {3e38f, -3e38f}}});
+  c.clear();
+  // A segment from far left to far right covers its whole row: clipping keeps the precision.
+  for (float far : {100.0f, 1e8f, 1e20f, 3e38f}) {
+    paint_ok(c, {brush(Tool::wall, 2), {{-far, 8.5f}, {far, 8.5f}}});
+    for (int x = 0; x < 16; ++x) EXPECT_EQ(s.opacity[s.index(x, 8)], 1.0f) << far << " " << x;
+    EXPECT_EQ(s.opacity[s.index(8, 0)], 0.0f) << far;
+    c.clear();
+  }
+  // Wholly off the grid: nothing.
+  paint_ok(c, {brush(Tool::wall, 2), {{-3e38f, -50}, {3e38f, -50}}});
+  for (float o : s.opacity) ASSERT_EQ(o, 0.0f);
 }
 
 // Fog laid twice over the same cells by one stroke keeps the brush's opacity: a stroke covers a
@@ -146,6 +161,11 @@ TEST(PaintCanvas, VersionMovesOnEveryEdit) {
   EXPECT_LT(v0, v1);
   EXPECT_LT(v1, v2);
   EXPECT_LT(v2, v3);
+  // A new canvas (a scene loaded in place of this one) never repeats a version, or the solver
+  // would not render it.
+  Canvas d = blank(16, 16);
+  EXPECT_NE(d.version(), v0);
+  EXPECT_GT(d.version(), v3);
 }
 
 TEST(PaintCanvas, RefusesBrushesItCannotHold) {
@@ -292,32 +312,39 @@ TEST(PaintCanvas, SceneFileBecomesCanvasWithinOneCode) {
 // ---- stroke files ----------------------------------------------------------------------------
 
 TEST(PaintStrokes, ParseAndWriteRoundTrip) {
-  Expected<std::vector<Stroke>> s = paint::parse_strokes(R"({"strokes": [
+  Expected<paint::StrokeFile> f = paint::parse_strokes(R"({"size": [64, 32], "strokes": [
     {"tool": "light", "color": [1, 0.5, 0], "intensity": 6, "radius": 4, "points": [[1, 2], [3.5, 4]]},
     {"tool": "wall", "color": [0.5, 0.5, 0.5], "radius": 2, "points": [[10, 0]]},
     {"tool": "fog", "opacity": 0.3, "points": [[5, 5]]},
-    {"tool": "erase", "radius": 8, "points": [[0, 0], [9, 9]]}]})",
-                                                         "s.json");
-  ASSERT_TRUE(s.ok()) << s.error().message;
-  ASSERT_EQ(s->size(), 4u);
-  EXPECT_EQ((*s)[0].brush.tool, Tool::light);
-  EXPECT_EQ((*s)[0].brush.intensity, 6.0f);
-  EXPECT_EQ((*s)[0].points[1][0], 3.5f);
-  EXPECT_EQ((*s)[2].brush.opacity, 0.3f);
-  EXPECT_EQ((*s)[2].brush.radius, Brush{}.radius);  // default
-  EXPECT_EQ((*s)[3].brush.tool, Tool::erase);
+    {"tool": "erase", "radius": 8, "points": [[0, 0], [9, 9]]},
+    {"tool": "eraser", "points": [[1, 1]]}]})",
+                                                       "s.json");
+  ASSERT_TRUE(f.ok()) << f.error().message;
+  const std::vector<Stroke>& s = f->strokes;
+  ASSERT_EQ(s.size(), 5u);
+  EXPECT_EQ(f->width, 64);
+  EXPECT_EQ(f->height, 32);
+  EXPECT_EQ(s[0].brush.tool, Tool::light);
+  EXPECT_EQ(s[0].brush.intensity, 6.0f);
+  EXPECT_EQ(s[0].points[1][0], 3.5f);
+  EXPECT_EQ(s[2].brush.opacity, 0.3f);
+  EXPECT_EQ(s[2].brush.radius, Brush{}.radius);  // default
+  EXPECT_EQ(s[3].brush.tool, Tool::erase);
+  EXPECT_EQ(s[4].brush.tool, Tool::erase);  // "eraser", as the window calls it
 
-  Expected<std::vector<Stroke>> back = paint::parse_strokes(paint::strokes_json(*s), "back.json");
+  Expected<paint::StrokeFile> back = paint::parse_strokes(paint::strokes_json(*f), "back.json");
   ASSERT_TRUE(back.ok()) << back.error().message;
-  ASSERT_EQ(back->size(), s->size());
-  for (std::size_t i = 0; i < s->size(); ++i) {
-    const Brush &a = (*s)[i].brush, &b = (*back)[i].brush;
+  ASSERT_EQ(back->strokes.size(), s.size());
+  EXPECT_EQ(back->width, 64);
+  EXPECT_EQ(back->height, 32);
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    const Brush &a = s[i].brush, &b = back->strokes[i].brush;
     EXPECT_EQ(a.tool, b.tool);
     EXPECT_EQ(a.radius, b.radius);
     EXPECT_EQ(a.color.g, b.color.g);
     EXPECT_EQ(a.intensity, b.intensity);
     EXPECT_EQ(a.opacity, b.opacity);
-    EXPECT_EQ((*s)[i].points, (*back)[i].points);
+    EXPECT_EQ(s[i].points, back->strokes[i].points);
   }
 }
 
@@ -340,14 +367,17 @@ TEST(PaintStrokes, ErrorsNameTheFileAndJsonPath) {
       {R"({"strokes": 3})", "strokes"},
       {R"({"lines": []})", "lines"},
       {R"({"strokes": [)", "not valid JSON"},
+      {R"({"size": [0, 4], "strokes": []})", "size"},
+      {R"({"size": [4], "strokes": []})", "size"},
+      {R"({"size": [4.5, 4], "strokes": []})", "size"},
   };
   for (const auto& [text, path] : cases) {
-    Expected<std::vector<Stroke>> s = paint::parse_strokes(text, "bad.json");
+    Expected<paint::StrokeFile> s = paint::parse_strokes(text, "bad.json");
     ASSERT_FALSE(s.ok()) << text;
     EXPECT_EQ(s.error().message.rfind("bad.json: ", 0), 0u) << s.error().message;
     EXPECT_NE(s.error().message.find(path), std::string::npos) << s.error().message;
   }
-  Expected<std::vector<Stroke>> missing = paint::load_strokes("/nonexistent/strokes.json");
+  Expected<paint::StrokeFile> missing = paint::load_strokes("/nonexistent/strokes.json");
   ASSERT_FALSE(missing.ok());
   EXPECT_NE(missing.error().message.find("/nonexistent/strokes.json"), std::string::npos);
 }
@@ -356,14 +386,14 @@ TEST(PaintStrokes, ErrorsNameTheFileAndJsonPath) {
 TEST(PaintStrokes, ExampleStrokeFilesPaint) {
   int files = 0;
   for (const auto& e : fs::directory_iterator(fs::path(PENUMBRA_SOURCE_DIR) / "scenes/strokes")) {
-    Expected<std::vector<Stroke>> s = paint::load_strokes(e.path().string());
+    Expected<paint::StrokeFile> s = paint::load_strokes(e.path().string());
     ASSERT_TRUE(s.ok()) << s.error().message;
     Canvas c = blank(256, 256);
-    for (std::size_t i = 0; i < s->size(); ++i) {
-      Status st = c.apply((*s)[i], "strokes[" + std::to_string(i) + "]");
+    for (std::size_t i = 0; i < s->strokes.size(); ++i) {
+      Status st = c.apply(s->strokes[i], "strokes[" + std::to_string(i) + "]");
       EXPECT_TRUE(st.ok()) << e.path() << ": " << st.error().message;
     }
-    EXPECT_EQ(c.undo_steps(), s->size());
+    EXPECT_EQ(c.undo_steps(), s->strokes.size());
     ++files;
   }
   EXPECT_GE(files, 1);

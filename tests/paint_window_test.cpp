@@ -3,9 +3,11 @@
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <chrono>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <string>
@@ -30,7 +32,8 @@ constexpr const char* kStrokes = R"({"strokes": [
    "points": [[100, 110], [115, 120]]}
 ]})";
 
-// One Xvfb for the suite, on a display number no one else holds.
+// One Xvfb for the test process. It picks a free display itself (-displayfd), so test processes
+// running side by side never share or steal one.
 class XServer {
  public:
   XServer() {
@@ -38,26 +41,37 @@ class XServer {
       why_ = "Xvfb is not installed (scripts/install-deps.sh installs it)";
       return;
     }
-    for (int n = 100 + int(getpid() % 400); n < 1000 && display_.empty(); n += 7) {
-      if (fs::exists("/tmp/.X" + std::to_string(n) + "-lock")) continue;
-      const fs::path pidfile = fs::temp_directory_path() / ("penumbra_xvfb_" + std::to_string(n));
-      const std::string cmd = "Xvfb :" + std::to_string(n) +
-                              " -screen 0 1280x1024x24 -nolisten tcp >/dev/null 2>&1 & echo $! > " +
-                              penumbra::testing::quote(pidfile.string());
-      if (std::system(cmd.c_str()) != 0) continue;
+    installed_ = true;
+    const std::string tag = std::to_string(getpid());
+    const fs::path dir = fs::temp_directory_path();
+    const fs::path number = dir / ("penumbra_xvfb_display_" + tag),
+                   pidfile = dir / ("penumbra_xvfb_pid_" + tag),
+                   log = dir / ("penumbra_xvfb_log_" + tag);
+    using penumbra::testing::quote;
+    const std::string cmd = "Xvfb -displayfd 3 -screen 0 1280x1024x24 -nolisten tcp 3>" +
+                            quote(number.string()) + " 2>" + quote(log.string()) +
+                            " >/dev/null & echo $! > " + quote(pidfile.string());
+    if (std::system(cmd.c_str()) == 0) {
       pid_ = std::atoi(penumbra::testing::slurp(pidfile).c_str());
-      fs::remove(pidfile);
-      const std::string socket = "/tmp/.X11-unix/X" + std::to_string(n);
-      for (int tries = 0; tries < 100 && !fs::exists(socket); ++tries)
-        std::this_thread::sleep_for(std::chrono::milliseconds(100));
-      if (fs::exists(socket) && pid_ > 0 && kill(pid_, 0) == 0)
-        display_ = ":" + std::to_string(n);
-      else
-        stop();
+      // Xvfb writes the display number and a newline once it accepts connections.
+      for (int tries = 0; tries < 200; ++tries) {
+        const std::string n = penumbra::testing::slurp(number);
+        if (!n.empty() && n.back() == '\n') {
+          display_ = ":" + n.substr(0, n.size() - 1);
+          break;
+        }
+        if (pid_ <= 0 || kill(pid_, 0) != 0) break;
+        std::this_thread::sleep_for(std::chrono::milliseconds(50));
+      }
     }
-    if (display_.empty()) why_ = "no X server could be started with Xvfb";
+    if (display_.empty()) {
+      why_ = "Xvfb did not start: " + penumbra::testing::slurp(log);
+      stop();
+    }
+    for (const fs::path& p : {number, pidfile, log}) fs::remove(p);
   }
   ~XServer() { stop(); }
+  bool installed() const { return installed_; }
   const std::string& display() const { return display_; }
   const std::string& why() const { return why_; }
 
@@ -67,6 +81,7 @@ class XServer {
     pid_ = 0;
   }
   std::string display_, why_;
+  bool installed_ = false;
   int pid_ = 0;
 };
 
@@ -86,12 +101,12 @@ class PaintWindow : public ::testing::Test {
     unsetenv("WAYLAND_DISPLAY");
     return run_cli(args, tmp_.root());
   }
+  // Skipped only where Xvfb is not installed; installed but failing to start is a failure.
   bool have_display() {
-    if (x_server().display().empty()) {
-      std::printf("skipped: %s\n", x_server().why().c_str());
-      return false;
-    }
-    return true;
+    if (!x_server().display().empty()) return true;
+    if (x_server().installed()) ADD_FAILURE() << x_server().why();
+    std::printf("skipped: %s\n", x_server().why().c_str());
+    return false;
   }
   CliResult paint_headless(std::vector<std::string> args) {
     args.insert(args.begin(), "paint");
@@ -186,12 +201,13 @@ TEST_F(PaintWindow, ReplayShowsLightAndShadowAndSavesWhatItShows) {
   EXPECT_EQ(differing, 0);
 
   // The recording holds the strokes replayed; replaying it paints the same canvas.
-  penumbra::Expected<std::vector<penumbra::paint::Stroke>> rec =
+  penumbra::Expected<penumbra::paint::StrokeFile> rec =
       penumbra::paint::load_strokes(tmp_.file("recorded.json"));
   ASSERT_TRUE(rec.ok()) << rec.error().message;
-  ASSERT_EQ(rec->size(), 3u);
-  EXPECT_EQ((*rec)[1].brush.tool, penumbra::paint::Tool::wall);
-  EXPECT_EQ((*rec)[1].points.size(), 2u);
+  ASSERT_EQ(rec->strokes.size(), 3u);
+  EXPECT_EQ(rec->strokes[1].brush.tool, penumbra::paint::Tool::wall);
+  EXPECT_EQ(rec->strokes[1].points.size(), 2u);
+  EXPECT_EQ(rec->width, 128);
   r = paint({"--size", "128x128", "--zoom", "1", "--plain", "--replay", tmp_.file("recorded.json"),
              "--screenshot", tmp_.file("again.png")});
   ASSERT_EQ(r.status, 0) << r.err;
@@ -226,18 +242,105 @@ TEST_F(PaintWindow, RefusedRenderFailsAScriptedRun) {
   EXPECT_NE(r.err.find("half precision"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(tmp_.file("shot.png")));
   EXPECT_FALSE(fs::exists(tmp_.file("p.json")));
+  // A measurement run ends too, instead of waiting for frames that never render.
+  r = paint({"--size", "32x32", "--storage", "f16", "--emission-scale", "1e6", "--replay", bright,
+             "--frames", "3"});
+  EXPECT_EQ(r.status, 1) << r.err;
+}
+
+// Outputs that would overwrite each other, or that cannot be written, are refused before the
+// window opens, and nothing is written.
+TEST_F(PaintWindow, ConflictingOrUnwritableOutputsAreRefusedUpFront) {
+  CliResult r = paint_headless(
+      {"--size", "32x32", "--save", tmp_.file("q.json"), "--record", tmp_.file("q.json")});
+  EXPECT_EQ(r.status, 2) << r.err;
+  EXPECT_NE(r.err.find("--save and --record would both write"), std::string::npos) << r.err;
+  r = paint_headless({"--size", "32x32", "--save", tmp_.file("x.json"), "--screenshot",
+                      tmp_.file("x.albedo.png")});
+  EXPECT_EQ(r.status, 2) << r.err;
+  EXPECT_NE(r.err.find("would both write"), std::string::npos) << r.err;
+  fs::create_directories(tmp_.root() / "p.albedo.png");
+  r = paint_headless(
+      {"--size", "32x32", "--save", tmp_.file("p.json"), "--screenshot", tmp_.file("shot.png")});
+  EXPECT_EQ(r.status, 1) << r.err;
+  EXPECT_NE(r.err.find("p.albedo.png"), std::string::npos) << r.err;
+  r = paint_headless({"--size", "32x32", "--save", tmp_.file("p.txt")});
+  EXPECT_EQ(r.status, 2) << r.err;
+  for (const char* f : {"q.json", "x.json", "x.albedo.png", "p.json", "shot.png", "p.txt"})
+    EXPECT_FALSE(fs::exists(tmp_.file(f))) << f;
+}
+
+// The window driven by a (virtual) mouse and keyboard: two strokes, Ctrl-Z takes the second back,
+// Ctrl-Q quits; the recording and the saved painting hold the first stroke only.
+TEST_F(PaintWindow, MouseStrokesUndoAndQuit) {
+  if (!have_display()) GTEST_SKIP() << x_server().why();
+  if (std::system("command -v xdotool >/dev/null 2>&1") != 0)
+    GTEST_SKIP() << "xdotool is not installed (scripts/install-deps.sh installs it)";
+  using penumbra::testing::quote;
+  const std::string script =
+      "export DISPLAY=" + x_server().display() + "\n" + quote(PENUMBRA_CLI) +
+      " paint --size 64x64 --zoom 4 --record " + quote(tmp_.file("rec.json")) + " --save " +
+      quote(tmp_.file("out.json")) + " >" + quote(tmp_.file("paint.out")) + " 2>&1 &\n" +
+      "pid=$!\n"
+      "wid=$(timeout 30 xdotool search --sync --onlyvisible --name 'Penumbra painter' | head -1)\n"
+      "[ -n \"$wid\" ] || { kill $pid; exit 90; }\n"
+      "sleep 1\n"
+      "stroke() { xdotool mousemove --window $wid $1 $2; sleep 0.3; xdotool mousedown 1; "
+      "sleep 0.3; xdotool mousemove --window $wid $3 $4; sleep 0.3; xdotool mousemove --window "
+      "$wid $5 $6; sleep 0.3; xdotool mouseup 1; sleep 0.5; }\n"
+      "stroke 40 40 120 40 200 40\n"
+      "stroke 40 200 120 200 200 200\n"
+      "xdotool key ctrl+z; sleep 0.5\n"
+      "xdotool key ctrl+q\n"
+      "for i in $(seq 100); do kill -0 $pid 2>/dev/null || break; sleep 0.1; done\n"
+      "kill -0 $pid 2>/dev/null && { kill $pid; exit 91; }\n"
+      "wait $pid\n";
+  const std::string file = tmp_.write("drive.sh", script);
+  const int raw = std::system(("bash " + quote(file)).c_str());
+  const int status = raw != -1 && WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+  ASSERT_EQ(status, 0) << "painter: " << penumbra::testing::slurp(tmp_.file("paint.out"));
+
+  penumbra::Expected<penumbra::paint::StrokeFile> rec =
+      penumbra::paint::load_strokes(tmp_.file("rec.json"));
+  ASSERT_TRUE(rec.ok()) << rec.error().message;
+  ASSERT_EQ(rec->strokes.size(), 1u);
+  EXPECT_EQ(rec->strokes[0].brush.tool, penumbra::paint::Tool::light);
+  EXPECT_GE(rec->strokes[0].points.size(), 2u);
+  penumbra::Expected<penumbra::SceneDesc> saved = penumbra::load_scene(tmp_.file("out.json"));
+  ASSERT_TRUE(saved.ok()) << saved.error().message;
+  const penumbra::Scene scene = penumbra::testing::build_valid(*saved);
+  EXPECT_EQ(scene.opacity[scene.index(30, 10)], 1.0f);  // the first stroke, window y 40
+  EXPECT_EQ(scene.opacity[scene.index(30, 50)], 0.0f);  // the second, taken back
 }
 
 // A scene file opens in the painter; measurement runs solve continuously and report times.
+// A scene file opens in the painter as `penumbra render` draws it (to the 16-bit codes of the
+// painter's layers); measurement runs solve continuously and report times.
 TEST_F(PaintWindow, LoadsASceneFileAndReportsFrameTimes) {
   if (!have_display()) GTEST_SKIP() << x_server().why();
-  CliResult r = paint({PENUMBRA_SOURCE_DIR "/scenes/occluder.json", "--zoom", "0.5", "--frames",
-                       "3", "--stats", "--screenshot", tmp_.file("occluder.png")});
+  const std::string scene = PENUMBRA_SOURCE_DIR "/scenes/occluder.json";
+  CliResult r = paint({scene, "--zoom", "1", "--plain", "--frames", "3", "--stats", "--screenshot",
+                       tmp_.file("occluder.png")});
   ASSERT_EQ(r.status, 0) << r.err;
-  EXPECT_NE(r.out.find("method hrc"), std::string::npos) << r.out;
-  EXPECT_NE(r.out.find("solver frames"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("method hrc, 3 solver frames"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("merge down R"), std::string::npos) << r.out;
   const penumbra::io::RawImage shot = read_png("occluder.png");
-  EXPECT_GT(shot.width, 300);
+  r = run_cli({"render", scene, "--method", "hrc", "-o", tmp_.file("render.png"), "-q"},
+              tmp_.root());
+  ASSERT_EQ(r.status, 0) << r.err;
+  const penumbra::io::RawImage rendered = read_png("render.png");
+  ASSERT_GE(shot.width, rendered.width);
+  ASSERT_GE(shot.height, rendered.height);
+  double sum = 0, worst = 0;
+  for (int y = 0; y < rendered.height; ++y)
+    for (int x = 0; x < rendered.width * 3; ++x) {
+      const double d = std::fabs(rendered.pixels[std::size_t(y) * rendered.width * 3 + x] -
+                                 shot.pixels[std::size_t(y) * shot.width * 3 + x]);
+      sum += d;
+      worst = std::max(worst, d);
+    }
+  EXPECT_LT(sum / (rendered.width * rendered.height * 3.0), 0.1 / 255);
+  EXPECT_LE(worst, 2.5 / 255);
 }
 
 }  // namespace

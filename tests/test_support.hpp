@@ -93,9 +93,10 @@ struct CliResult {
 };
 
 // Runs the command line (PENUMBRA_CLI) with `args`, each quoted, capturing stdout and stderr in
-// files under `dir` and the exit code.
+// files under `dir` and the exit code (124 when it ran for more than 5 minutes).
 inline CliResult run_cli(const std::vector<std::string>& args, const std::filesystem::path& dir) {
-  std::string cmd = quote(PENUMBRA_CLI);
+  // A hang fails the test after 5 minutes (status 124) instead of holding ctest for its limit.
+  std::string cmd = "timeout -k 10 300 " + quote(PENUMBRA_CLI);
   // Appended piece by piece: GCC 12 warns falsely (-Wrestrict) on "literal" + std::string&&.
   for (const std::string& a : args) {
     cmd += ' ';

@@ -2,7 +2,9 @@
 #include "paint/canvas.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 
@@ -17,9 +19,15 @@ namespace {
 
 using json = nlohmann::json;
 
-// Undo steps share this much memory (a 512^2 canvas keeps about 70 steps).
-constexpr std::size_t kUndoBytes = std::size_t(512) << 20;
-constexpr std::size_t kMaxUndoSteps = 200;
+// Versions come from one counter, so two canvases (a loaded one replacing another) never share
+// one and the solver always sees the change.
+std::atomic<std::uint64_t> g_versions{0};
+
+std::string number_text(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", v);
+  return buf;
+}
 
 std::size_t cells_bytes(std::size_t cells) {
   return cells * 7 * sizeof(float);
@@ -102,6 +110,7 @@ Expected<Canvas> Canvas::blank(int width, int height, float emission_scale) {
   c.coverage_.assign(n, 0.0f);
   c.emission_scale_ = emission_scale;
   c.undo_limit_ = std::clamp<std::size_t>(kUndoBytes / cells_bytes(n), 1, kMaxUndoSteps);
+  c.touch();
   return c;
 }
 
@@ -122,6 +131,9 @@ Expected<Canvas> Canvas::from_scene(const SceneDesc& desc, float min_scale) {
     scale = min_scale > 0 ? min_scale : kDefaultEmissionScale;
     while (scale < brightest && scale < 1e30f) scale *= 2;
   }
+  if (!(scale >= brightest))
+    return Error{desc.source + ": its brightest cell (" + number_text(brightest) +
+                 ") is more than the painter holds (1e30)"};
   Expected<Canvas> c = blank(desc.width, desc.height, scale);
   if (!c) return c.error();
   Scene& s = c->scene_;
@@ -147,8 +159,7 @@ Status Canvas::check(const Brush& b, const std::string& where) const {
   if (b.tool == Tool::light) {
     const float top = std::max({b.color.r, b.color.g, b.color.b}) * b.intensity;
     if (!(b.intensity >= 0.0f) || !(top <= emission_scale_))
-      return bad("intensity: expected color * intensity in [0, " +
-                 std::to_string(int(emission_scale_)) +
+      return bad("intensity: expected color * intensity in [0, " + number_text(emission_scale_) +
                  "] (the canvas's emission scale; start the painter with a larger "
                  "--emission-scale)");
   }
@@ -209,6 +220,40 @@ Status Canvas::apply(const Stroke& stroke, const std::string& where) {
 // covered twice.
 void Canvas::cover_segment(float ax, float ay, float bx, float by) {
   const float r = brush_.radius;
+  // Only the part of the segment within r + 1 of the grid can cover a cell: clip it (in double,
+  // Liang-Barsky), so that points far off the grid leave the float arithmetic below exact. A
+  // clipped end lies on its clipping edge exactly; only its other coordinate is interpolated.
+  {
+    const double lo[2] = {-double(r) - 1, -double(r) - 1};
+    const double hi[2] = {scene_.width + double(r) + 1, scene_.height + double(r) + 1};
+    const double a[2] = {ax, ay}, d[2] = {double(bx) - ax, double(by) - ay};
+    double t0 = 0, t1 = 1;
+    int e0 = -1, e1 = -1;  // the edges (2 axis + side) that clipped each end
+    for (int axis = 0; axis < 2; ++axis) {
+      for (int side = 0; side < 2; ++side) {
+        const double p = side == 0 ? -d[axis] : d[axis];
+        const double q = side == 0 ? a[axis] - lo[axis] : hi[axis] - a[axis];
+        if (p == 0) {
+          if (q < 0) return;  // parallel to this edge and outside it
+          continue;
+        }
+        const double t = q / p;
+        if (p < 0 && t > t0) t0 = t, e0 = 2 * axis + side;
+        if (p > 0 && t < t1) t1 = t, e1 = 2 * axis + side;
+      }
+    }
+    if (t0 > t1) return;
+    auto end_point = [&](double t, int edge, float& x, float& y) {
+      if (edge < 0) return;  // not clipped
+      double c[2] = {a[0] + t * d[0], a[1] + t * d[1]};
+      c[edge / 2] = edge % 2 == 0 ? lo[edge / 2] : hi[edge / 2];
+      x = float(c[0]), y = float(c[1]);
+    };
+    float cx0 = ax, cy0 = ay, cx1 = bx, cy1 = by;
+    end_point(t0, e0, cx0, cy0);
+    end_point(t1, e1, cx1, cy1);
+    ax = cx0, ay = cy0, bx = cx1, by = cy1;
+  }
   // Bounds clamped as floats first: points far off the grid must not overflow an int.
   auto lo = [&](float a, float b, int n) {
     return int(std::clamp(std::floor(std::min(a, b) - r - 1), 0.0f, float(n)));
@@ -251,7 +296,11 @@ void Canvas::cover_segment(float ax, float ay, float bx, float by) {
       scene_.opacity[i] = snap_linear(scene_.opacity[i]);
     }
   }
-  ++version_;
+  touch();
+}
+
+void Canvas::touch() {
+  version_ = ++g_versions;
 }
 
 Canvas::Cells Canvas::snapshot() const {
@@ -262,7 +311,7 @@ void Canvas::restore(Cells&& cells) {
   scene_.emission = std::move(cells.emission);
   scene_.opacity = std::move(cells.opacity);
   scene_.albedo = std::move(cells.albedo);
-  ++version_;
+  touch();
 }
 
 void Canvas::push_undo(Cells&& cells) {
@@ -284,48 +333,57 @@ void Canvas::clear() {
   std::fill(scene_.emission.begin(), scene_.emission.end(), 0.0f);
   std::fill(scene_.opacity.begin(), scene_.opacity.end(), 0.0f);
   std::fill(scene_.albedo.begin(), scene_.albedo.end(), 0.0f);
-  ++version_;
+  touch();
 }
 
 void Canvas::set_environment(Rgb environment) {
   scene_.environment = environment;
-  ++version_;
+  touch();
+}
+
+Expected<std::vector<std::string>> Canvas::save_paths(const std::string& path) {
+  namespace fs = std::filesystem;
+  if (io::lowercase_extension(path) != ".json")
+    return Error{path + ": a painting is saved as a scene file; use a .json name"};
+  const fs::path target(path);
+  const std::string stem = target.stem().string();
+  std::vector<std::string> paths = {path};
+  for (const char* layer : {".emission.png", ".opacity.png", ".albedo.png"})
+    paths.push_back((target.parent_path() / (stem + layer)).string());
+  return paths;
+}
+
+Expected<io::StagedFile> Canvas::stage_save(const std::vector<std::string>& paths,
+                                            std::size_t k) const {
+  if (k == 0) {
+    const Rgb& env = scene_.environment;
+    auto name = [&](std::size_t i) { return std::filesystem::path(paths[i]).filename().string(); };
+    const json doc = {{"penumbra", 1},
+                      {"width", scene_.width},
+                      {"height", scene_.height},
+                      {"environment", {env.r, env.g, env.b}},
+                      {"layers",
+                       {{"emission", name(1)},
+                        {"opacity", name(2)},
+                        {"albedo", name(3)},
+                        {"emission_scale", emission_scale_}}}};
+    return io::stage_text(paths[0], doc.dump(2) + "\n");
+  }
+  const std::size_t n = scene_.cells();
+  const int channels = k == 2 ? 1 : 3;
+  std::vector<std::uint16_t> codes(n * std::size_t(channels));
+  for (std::size_t i = 0; i < codes.size(); ++i) {
+    if (k == 1) codes[i] = encode_srgb16(scene_.emission[i] / emission_scale_);
+    if (k == 2) codes[i] = encode_linear16(scene_.opacity[i]);
+    if (k == 3) codes[i] = encode_srgb16(scene_.albedo[i]);
+  }
+  return io::stage_png16(paths[k], scene_.width, scene_.height, channels, codes);
 }
 
 Status Canvas::save(const std::string& path) const {
-  namespace fs = std::filesystem;
-  const fs::path target(path);
-  if (io::lowercase_extension(path) != ".json")
-    return Error{path + ": a painting is saved as a scene file; use a .json name"};
-  const std::string stem = target.stem().string();
-  const std::string names[3] = {stem + ".emission.png", stem + ".opacity.png",
-                                stem + ".albedo.png"};
-  const Rgb& env = scene_.environment;
-  json doc = {{"penumbra", 1},
-              {"width", scene_.width},
-              {"height", scene_.height},
-              {"environment", {env.r, env.g, env.b}},
-              {"layers",
-               {{"emission", names[0]},
-                {"opacity", names[1]},
-                {"albedo", names[2]},
-                {"emission_scale", emission_scale_}}}};
-  const std::string text = doc.dump(2) + "\n";
-
-  const std::size_t n = scene_.cells();
-  std::vector<std::string> paths = {path};
-  for (const std::string& name : names) paths.push_back((target.parent_path() / name).string());
-  return io::write_all(paths, [&](std::size_t k) -> Expected<io::StagedFile> {
-    if (k == 0) return io::stage_text(paths[0], text);
-    const int channels = k == 2 ? 1 : 3;
-    std::vector<std::uint16_t> codes(n * std::size_t(channels));
-    for (std::size_t i = 0; i < codes.size(); ++i) {
-      if (k == 1) codes[i] = encode_srgb16(scene_.emission[i] / emission_scale_);
-      if (k == 2) codes[i] = encode_linear16(scene_.opacity[i]);
-      if (k == 3) codes[i] = encode_srgb16(scene_.albedo[i]);
-    }
-    return io::stage_png16(paths[k], scene_.width, scene_.height, channels, codes);
-  });
+  Expected<std::vector<std::string>> paths = save_paths(path);
+  if (!paths) return paths.error();
+  return io::write_all(*paths, [&](std::size_t k) { return stage_save(*paths, k); });
 }
 
 // ---- stroke files -------------------------------------------------------------------------
@@ -384,7 +442,7 @@ class StrokeReader {
       s.brush.tool = Tool::wall;
     else if (name == "fog")
       s.brush.tool = Tool::fog;
-    else if (name == "erase")
+    else if (name == "erase" || name == "eraser")
       s.brush.tool = Tool::erase;
     else
       fail(where + ".tool",
@@ -424,7 +482,7 @@ class StrokeReader {
 
 }  // namespace
 
-Expected<std::vector<Stroke>> parse_strokes(std::string_view text, const std::string& path) {
+Expected<StrokeFile> parse_strokes(std::string_view text, const std::string& path) {
   json doc;
   try {
     doc = json::parse(text);
@@ -435,28 +493,39 @@ Expected<std::vector<Stroke>> parse_strokes(std::string_view text, const std::st
     StrokeReader r(path);
     if (!doc.is_object()) r.fail("(document)", "expected an object with \"strokes\"");
     for (const auto& [key, value] : doc.items())
-      if (key != "strokes") r.fail(key, "unknown field (expected strokes)");
+      if (key != "strokes" && key != "size") r.fail(key, "unknown field (expected strokes, size)");
     if (!doc.contains("strokes") || !doc["strokes"].is_array())
       r.fail("strokes", "expected a list of strokes");
-    std::vector<Stroke> out;
+    StrokeFile out;
+    if (doc.contains("size")) {
+      const json& size = doc["size"];
+      if (!size.is_array() || size.size() != 2 || !size[0].is_number_integer() ||
+          !size[1].is_number_integer() || size[0].get<std::int64_t>() < 1 ||
+          size[1].get<std::int64_t>() < 1 || size[0].get<std::int64_t>() > kMaxGridSide ||
+          size[1].get<std::int64_t>() > kMaxGridSide)
+        r.fail("size", "expected [width, height] in cells, 1.." + std::to_string(kMaxGridSide) +
+                           " each, found " + r.found(size));
+      out.width = size[0].get<int>();
+      out.height = size[1].get<int>();
+    }
     const json& list = doc["strokes"];
     for (std::size_t i = 0; i < list.size(); ++i)
-      out.push_back(r.stroke(list[i], "strokes[" + std::to_string(i) + "]"));
+      out.strokes.push_back(r.stroke(list[i], "strokes[" + std::to_string(i) + "]"));
     return out;
   } catch (const StrokeError& e) {
     return Error{e.message};
   }
 }
 
-Expected<std::vector<Stroke>> load_strokes(const std::string& path) {
+Expected<StrokeFile> load_strokes(const std::string& path) {
   Expected<std::string> text = io::read_text(path, "the stroke file");
   if (!text) return text.error();
   return parse_strokes(*text, path);
 }
 
-std::string strokes_json(const std::vector<Stroke>& strokes) {
+std::string strokes_json(const StrokeFile& file) {
   json list = json::array();
-  for (const Stroke& s : strokes) {
+  for (const Stroke& s : file.strokes) {
     const Brush& b = s.brush;
     json j = {{"tool", to_string(b.tool)}, {"radius", b.radius}};
     if (b.tool != Tool::erase) j["color"] = {b.color.r, b.color.g, b.color.b};
@@ -467,7 +536,9 @@ std::string strokes_json(const std::vector<Stroke>& strokes) {
     j["points"] = std::move(pts);
     list.push_back(std::move(j));
   }
-  return json{{"strokes", list}}.dump(1) + "\n";
+  json doc = {{"strokes", list}};
+  if (file.width > 0) doc["size"] = {file.width, file.height};
+  return doc.dump(1) + "\n";
 }
 
 }  // namespace penumbra::paint

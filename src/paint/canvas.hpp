@@ -8,6 +8,7 @@
 #include <string_view>
 #include <vector>
 
+#include "io/image_io.hpp"
 #include "penumbra/error.hpp"
 #include "penumbra/image.hpp"
 #include "penumbra/scene.hpp"
@@ -19,6 +20,9 @@ inline constexpr int kMaxCanvasSide = 4096;
 // Emission is held as 16-bit sRGB codes times this scale (the file's `emission_scale`).
 inline constexpr float kDefaultEmissionScale = 64;
 inline constexpr float kMaxBrushRadius = 256;
+// Undo steps share this much memory, and are at most kMaxUndoSteps.
+inline constexpr std::size_t kUndoBytes = std::size_t(512) << 20;
+inline constexpr std::size_t kMaxUndoSteps = 200;
 
 enum class Tool { light, wall, fog, erase };
 const char* to_string(Tool t);
@@ -38,11 +42,16 @@ struct Stroke {
   std::vector<std::array<float, 2>> points;  // grid cells, y down
 };
 
-// Stroke files: {"strokes": [{"tool", "color", "intensity", "opacity", "radius", "points"}]}.
-// Messages name the file and the JSON path of the offending value.
-Expected<std::vector<Stroke>> parse_strokes(std::string_view json_text, const std::string& path);
-Expected<std::vector<Stroke>> load_strokes(const std::string& path);
-std::string strokes_json(const std::vector<Stroke>& strokes);
+// Stroke files: {"size": [w, h], "strokes": [{"tool", "color", "intensity", "opacity",
+// "radius", "points"}]}; "size" (optional) is the grid they were painted on. Messages name the
+// file and the JSON path of the offending value.
+struct StrokeFile {
+  std::vector<Stroke> strokes;
+  int width = 0, height = 0;  // 0: not given
+};
+Expected<StrokeFile> parse_strokes(std::string_view json_text, const std::string& path);
+Expected<StrokeFile> load_strokes(const std::string& path);
+std::string strokes_json(const StrokeFile& file);
 
 // The cell values of a canvas are always values a 16-bit PNG layer decodes to (the quantisation
 // happens as the brush paints), so a saved painting reads back bit for bit.
@@ -84,6 +93,10 @@ class Canvas {
   // Writes `path` (JSON) and beside it <stem>.emission.png, <stem>.opacity.png and
   // <stem>.albedo.png (16-bit), all or nothing.
   Status save(const std::string& path) const;
+  // The same in parts, for writing them together with other files: the four paths (the JSON
+  // first), and file k of them staged (io::write_all publishes them).
+  static Expected<std::vector<std::string>> save_paths(const std::string& path);
+  Expected<io::StagedFile> stage_save(const std::vector<std::string>& paths, std::size_t k) const;
 
  private:
   Canvas() = default;
@@ -97,7 +110,8 @@ class Canvas {
 
   Scene scene_;
   float emission_scale_ = kDefaultEmissionScale;
-  std::uint64_t version_ = 1;
+  std::uint64_t version_ = 0;
+  void touch();  // a new version, from a counter shared by all canvases
   std::vector<Cells> undo_;
   std::size_t undo_limit_ = 1;
 

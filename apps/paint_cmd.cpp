@@ -44,6 +44,7 @@ namespace {
 
 constexpr int kUsage = 2;
 constexpr int kFailure = 1;
+constexpr int kInterrupted = 130;  // SIGINT or SIGTERM: the outputs were still written
 constexpr float kPanelWidth = 340;
 constexpr float kMinHeight = 800;  // the panel scrolls when its open sections need more
 
@@ -239,6 +240,19 @@ extern "C" void on_stop_signal(int) {
   g_stop.store(true);
 }
 
+// The method's working memory plus the painter's copies of the canvas (the canvas, a stroke's
+// starting cells, the solver's two) and its undo steps, against the method's memory limit.
+Status painter_memory(int w, int h, const RenderOptions& o) {
+  const std::uint64_t need =
+      estimate_memory(w, h, o) + 4 * scene_bytes(w, h) +
+      std::min<std::uint64_t>(paint::kUndoBytes, paint::kMaxUndoSteps * scene_bytes(w, h));
+  if (need <= o.max_memory) return {};
+  return Error{"a " + std::to_string(w) + "x" + std::to_string(h) + " canvas with " +
+               to_string(o.method) + " needs about " + std::to_string(need >> 20) +
+               " MiB with the painter's copies and undo steps, more than the " +
+               std::to_string(o.max_memory >> 20) + " MiB limit; paint a smaller grid"};
+}
+
 class Painter {
  public:
   Painter(const PaintArgs& args, paint::Canvas canvas, std::vector<paint::Stroke> replay)
@@ -327,6 +341,11 @@ void Painter::submit() {
   if (canvas_.version() == submitted_scene_ && options_version_ == submitted_options_ &&
       continuous_ == submitted_continuous_ && !continuous_)
     return;
+  if (options_version_ != submitted_options_)
+    if (Status m = painter_memory(canvas_.width(), canvas_.height(), options_); !m) {
+      message_ = m.error().message;  // the solver goes on showing the last accepted settings
+      return;
+    }
   submitted_scene_ = canvas_.version();
   submitted_options_ = options_version_;
   submitted_continuous_ = continuous_;
@@ -379,27 +398,32 @@ void Painter::handle_input() {
   }
   // Keys, unless a text field has the keyboard (it takes Ctrl-Z and digits itself).
   const bool typing = io.WantTextInput;
-  if (!typing && !painting_) {  // tools on 1-4
+  {  // tools on 1-4
     const int keys[] = {GLFW_KEY_1, GLFW_KEY_2, GLFW_KEY_3, GLFW_KEY_4};
     const paint::Tool tools[] = {paint::Tool::light, paint::Tool::wall, paint::Tool::fog,
                                  paint::Tool::erase};
     for (int k = 0; k < 4; ++k)
-      if (glfwGetKey(window_, keys[k]) == GLFW_PRESS) brush_.tool = tools[k];
+      if (glfwGetKey(window_, keys[k]) == GLFW_PRESS && !typing && !painting_)
+        brush_.tool = tools[k];
   }
   // Ctrl-Z, Ctrl-S and Ctrl-Q, on the key going down.
-  const bool ctrl = !typing && (glfwGetKey(window_, GLFW_KEY_LEFT_CONTROL) == GLFW_PRESS ||
-                                glfwGetKey(window_, GLFW_KEY_RIGHT_CONTROL) == GLFW_PRESS);
-  const bool z_down = ctrl && glfwGetKey(window_, GLFW_KEY_Z) == GLFW_PRESS;
+  // Every key is read every frame, so that a sticky press is used up in the frame it belongs to.
+  auto pressed = [&](int key) { return glfwGetKey(window_, key) == GLFW_PRESS; };
+  const bool left_ctrl = pressed(GLFW_KEY_LEFT_CONTROL),
+             right_ctrl = pressed(GLFW_KEY_RIGHT_CONTROL);
+  const bool key_z = pressed(GLFW_KEY_Z), key_s = pressed(GLFW_KEY_S), key_q = pressed(GLFW_KEY_Q);
+  const bool ctrl = !typing && (left_ctrl || right_ctrl);
+  const bool z_down = ctrl && key_z;
   if (z_down && !undo_down_ && !painting_ && canvas_.undo() && !recorded_.empty())
     recorded_.pop_back();
   undo_down_ = z_down;
-  const bool s_down = ctrl && glfwGetKey(window_, GLFW_KEY_S) == GLFW_PRESS;
+  const bool s_down = ctrl && key_s;
   if (s_down && !save_down_) {
-    Status s = canvas_.save(file_);
-    message_ = s ? "saved " + file_ : s.error().message;
+    Status saved = canvas_.save(file_);
+    message_ = saved ? "saved " + file_ : saved.error().message;
   }
   save_down_ = s_down;
-  const bool q_down = ctrl && glfwGetKey(window_, GLFW_KEY_Q) == GLFW_PRESS;
+  const bool q_down = ctrl && key_q;
   if (q_down && !quit_down_) glfwSetWindowShouldClose(window_, GLFW_TRUE);
   quit_down_ = q_down;
 }
@@ -519,6 +543,8 @@ void Painter::draw_panel() {
           desc ? paint::Canvas::from_scene(*desc,
                                            args_.emission_scale_given ? args_.emission_scale : 0)
                : Expected<paint::Canvas>(desc.error());
+      if (c)
+        if (Status m = painter_memory(c->width(), c->height(), options_); !m) c = m.error();
       if (c) {
         replace_canvas(std::move(*c));
         message_ = "loaded " + file_;
@@ -591,6 +617,8 @@ int Painter::run() {
     return kFailure;
   }
   glfwMakeContextCurrent(window_);
+  // Shortcuts are polled once a frame: sticky keys keep a tap that is over before the poll.
+  glfwSetInputMode(window_, GLFW_STICKY_KEYS, GLFW_TRUE);
   // Replays and measurements run as fast as they can; a person gets vsync.
   glfwSwapInterval(args_.replay.empty() && args_.frames == 0 ? 1 : 0);
   IMGUI_CHECKVERSION();
@@ -638,7 +666,6 @@ int Painter::run() {
     } else {
       handle_input();
     }
-    submit();
     Frame f;
     if (solver_->latest(shown_.serial, f)) {
       upload(f);
@@ -652,6 +679,7 @@ int Painter::run() {
       shown_ = std::move(f);
     }
     draw_panel();
+    submit();  // after the panel, so its changes reach the solver in this pass
 
     // The picture, then the brush outline over it.
     const float zz = zoom();
@@ -689,9 +717,25 @@ int Painter::run() {
     ui_ms_.push_back(frame_watch.ms());
   }
 
+  // Outputs first: they need only the canvas, the strokes and the screenshot, not the frame in
+  // progress, which may take seconds to finish (RC) and cannot be cut short.
+  glfwHideWindow(window_);
+  const bool interrupted = g_stop.load();
+  if (status == 0 && !args_.screenshot.empty() && shot.empty()) {
+    std::cerr << "penumbra paint: " << (interrupted ? "interrupted" : "the window was closed")
+              << " before the final frame; nothing written\n";
+    status = kFailure;
+  }
+  if (status == 0 && args_.frames > 0 && solve_ms_.size() < std::size_t(args_.frames)) {
+    std::cerr << "penumbra paint: " << (interrupted ? "interrupted" : "the window was closed")
+              << " after " << solve_ms_.size() << " of " << args_.frames
+              << " frames; nothing written\n";
+    status = kFailure;
+  }
+  if (status == 0) status = write_outputs(shot.empty() ? nullptr : &shot, shot_w, shot_h);
+  if (status == 0 && interrupted) status = kInterrupted;
   std::signal(SIGINT, SIG_DFL);
   std::signal(SIGTERM, SIG_DFL);
-  glfwHideWindow(window_);  // the window goes at once; a slow frame in progress finishes unseen
   solver_.reset();
   glDeleteTextures(1, &texture_);
   ImGui_ImplOpenGL3_Shutdown();
@@ -700,12 +744,6 @@ int Painter::run() {
   glfwDestroyWindow(window_);
   glfwTerminate();
 
-  if (status == 0 && !args_.screenshot.empty() && shot.empty()) {
-    std::cerr << "penumbra paint: " << (g_stop.load() ? "interrupted" : "the window was closed")
-              << " before the final frame; nothing written\n";
-    status = kFailure;
-  }
-  if (status == 0) status = write_outputs(shot.empty() ? nullptr : &shot, shot_w, shot_h);
   if (args_.stats) {
     std::printf("penumbra paint: %dx%d cells, method %s, %zu solver frames\n", canvas_.width(),
                 canvas_.height(), to_string(options_.method), solve_ms_.size());
@@ -813,12 +851,8 @@ int run_paint(const PaintArgs& a) {
     std::cerr << "penumbra paint: " << s.error().message << "\n";
     return kFailure;
   }
-  const std::uint64_t need = estimate_memory(w, h, probe) + 4 * scene_bytes(w, h) +
-                             std::min<std::uint64_t>(paint::kUndoBytes, 200 * scene_bytes(w, h));
-  if (need > probe.max_memory) {
-    std::cerr << "penumbra paint: a " << w << "x" << h << " canvas needs about " << (need >> 20)
-              << " MiB with the method's working memory and the undo steps, more than the "
-              << (probe.max_memory >> 20) << " MiB limit; paint a smaller grid\n";
+  if (Status s = painter_memory(w, h, probe); !s) {
+    std::cerr << "penumbra paint: " << s.error().message << "\n";
     return kFailure;
   }
   std::vector<paint::Stroke> strokes;
@@ -862,10 +896,15 @@ int run_paint(const PaintArgs& a) {
       std::cerr << "penumbra paint: " << outputs[i].first << ": " << s.error().message << "\n";
       return kFailure;
     }
-    std::error_code ec;
-    const std::filesystem::path pi = std::filesystem::weakly_canonical(outputs[i].second, ec);
+    auto canonical = [](const std::string& p) {
+      std::error_code ec;
+      std::filesystem::path c = std::filesystem::weakly_canonical(p, ec);
+      if (ec) c = std::filesystem::absolute(p, ec).lexically_normal();
+      return ec ? std::filesystem::path(p) : c;
+    };
+    const std::filesystem::path pi = canonical(outputs[i].second);
     for (std::size_t j = 0; j < i; ++j)
-      if (pi == std::filesystem::weakly_canonical(outputs[j].second, ec)) {
+      if (pi == canonical(outputs[j].second)) {
         std::cerr << "penumbra paint: " << outputs[j].first << " and " << outputs[i].first
                   << " would both write " << outputs[i].second << "\n";
         return kUsage;

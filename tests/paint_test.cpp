@@ -98,6 +98,16 @@ TEST(PaintCanvas, PointsFarOffTheGridAreSafe) {
   EXPECT_EQ(s.opacity[s.index(15, 15)], 1.0f);
   EXPECT_EQ(s.opacity[s.index(15, 0)], 0.0f);
   c.clear();
+  // One end far off, the other on the grid: the line keeps its direction.
+  for (float far : {1e8f, 1e20f, 1e30f}) {
+    paint_ok(c, {brush(Tool::wall, 1), {{far, far}, {8, 8}}});
+    for (int i = 8; i < 16; ++i) EXPECT_EQ(s.opacity[s.index(i, i)], 1.0f) << far << " " << i;
+    EXPECT_EQ(s.opacity[s.index(15, 9)], 0.0f) << far;
+    c.clear();
+    paint_ok(c, {brush(Tool::wall, 1), {{8, 8}, {-far, far}}});
+    for (int i = 0; i < 8; ++i) EXPECT_EQ(s.opacity[s.index(i, 15 - i)], 1.0f) << far << " " << i;
+    c.clear();
+  }
   // Points as far as a float goes: the line is not defined to a cell there, but painting them
   // is safe.
   paint_ok(c, {brush(Tool::wall, 2), {{3e38f, 3e38f}, {-3e38f, -3e38f}, {3e38f, -3e38f}}});

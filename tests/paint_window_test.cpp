@@ -270,7 +270,8 @@ TEST_F(PaintWindow, ConflictingOrUnwritableOutputsAreRefusedUpFront) {
     EXPECT_FALSE(fs::exists(tmp_.file(f))) << f;
 }
 
-// The window driven by a (virtual) mouse and keyboard: two strokes, Ctrl-Z takes the second back,
+// The window driven by a (virtual) mouse and keyboard: two strokes, Ctrl-Z (a tap shorter than a
+// frame) takes the second back,
 // Ctrl-Q quits; the recording and the saved painting hold the first stroke only.
 TEST_F(PaintWindow, MouseStrokesUndoAndQuit) {
   if (!have_display()) GTEST_SKIP() << x_server().why();
@@ -290,8 +291,8 @@ TEST_F(PaintWindow, MouseStrokesUndoAndQuit) {
       "$wid $5 $6; sleep 0.3; xdotool mouseup 1; sleep 0.5; }\n"
       "stroke 40 40 120 40 200 40\n"
       "stroke 40 200 120 200 200 200\n"
-      "xdotool key ctrl+z; sleep 0.5\n"
-      "xdotool key ctrl+q\n"
+      "xdotool key --delay 0 ctrl+z; sleep 0.5\n"
+      "xdotool key --delay 0 ctrl+q\n"
       "for i in $(seq 100); do kill -0 $pid 2>/dev/null || break; sleep 0.1; done\n"
       "kill -0 $pid 2>/dev/null && { kill $pid; exit 91; }\n"
       "wait $pid\n";
@@ -314,6 +315,30 @@ TEST_F(PaintWindow, MouseStrokesUndoAndQuit) {
 }
 
 // A scene file opens in the painter; measurement runs solve continuously and report times.
+// Ctrl-C (SIGINT) ends a session as closing the window does: a painting session writes its
+// --save and exits 130; a measurement run that has not reached its frames fails, writing nothing.
+TEST_F(PaintWindow, InterruptWritesASessionButFailsAMeasurement) {
+  if (!have_display()) GTEST_SKIP() << x_server().why();
+  using penumbra::testing::quote;
+  auto interrupted = [&](const std::string& args) {
+    const std::string script = "export DISPLAY=" + x_server().display() + "\n" +
+                               quote(PENUMBRA_CLI) + " paint --size 64x64 " + args + " >" +
+                               quote(tmp_.file("paint.out")) + " 2>&1 &\npid=$!\nsleep 2\n" +
+                               "kill -INT $pid\nwait $pid\n";
+    const int raw = std::system(("bash -c " + quote(script)).c_str());
+    return raw != -1 && WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+  };
+  EXPECT_EQ(interrupted("--replay " + quote(strokes_) + " --save " + quote(tmp_.file("s.json"))),
+            130)
+      << penumbra::testing::slurp(tmp_.file("paint.out"));
+  EXPECT_TRUE(penumbra::load_scene(tmp_.file("s.json")).ok());
+  EXPECT_EQ(interrupted("--frames 1000000 --save " + quote(tmp_.file("m.json"))), 1)
+      << penumbra::testing::slurp(tmp_.file("paint.out"));
+  EXPECT_NE(penumbra::testing::slurp(tmp_.file("paint.out")).find("interrupted after"),
+            std::string::npos);
+  EXPECT_FALSE(fs::exists(tmp_.file("m.json")));
+}
+
 // A scene file opens in the painter as `penumbra render` draws it (to the 16-bit codes of the
 // painter's layers); measurement runs solve continuously and report times.
 TEST_F(PaintWindow, LoadsASceneFileAndReportsFrameTimes) {

@@ -243,15 +243,22 @@ void Canvas::cover_segment(float ax, float ay, float bx, float by) {
       }
     }
     if (t0 > t1) return;
-    auto end_point = [&](double t, int edge, float& x, float& y) {
+    // The clipped end lies on the edge; its other coordinate follows the line from whichever
+    // end is nearer the edge (from a far end, a + t d would cancel to nothing).
+    const double b2[2] = {bx, by};
+    auto end_point = [&](int edge, float& x, float& y) {
       if (edge < 0) return;  // not clipped
-      double c[2] = {a[0] + t * d[0], a[1] + t * d[1]};
-      c[edge / 2] = edge % 2 == 0 ? lo[edge / 2] : hi[edge / 2];
+      const int axis = edge / 2, other = 1 - axis;
+      const double e = edge % 2 == 0 ? lo[axis] : hi[axis];
+      const double* base = std::fabs(e - a[axis]) <= std::fabs(e - b2[axis]) ? a : b2;
+      double c[2];
+      c[axis] = e;
+      c[other] = base[other] + (e - base[axis]) * (d[other] / d[axis]);
       x = float(c[0]), y = float(c[1]);
     };
     float cx0 = ax, cy0 = ay, cx1 = bx, cy1 = by;
-    end_point(t0, e0, cx0, cy0);
-    end_point(t1, e1, cx1, cy1);
+    end_point(e0, cx0, cy0);
+    end_point(e1, cx1, cy1);
     ax = cx0, ay = cy0, bx = cx1, by = cy1;
   }
   // Bounds clamped as floats first: points far off the grid must not overflow an int.

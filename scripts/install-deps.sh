@@ -9,6 +9,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   libpng-dev
   libglfw3-dev libgl-dev libglx-mesa0 libgl1-mesa-dri libimgui-dev xvfb xdotool
+  libvulkan-dev glslc mesa-vulkan-drivers
 )
 
 missing=()

@@ -1,0 +1,12 @@
+// The compute shaders of src/gpu/shaders/, compiled to SPIR-V by glslc at build time and
+// embedded in the library.
+#pragma once
+
+#include <cstdint>
+#include <span>
+
+namespace penumbra::gpu::shaders {
+
+std::span<const std::uint32_t> medium();  // medium.comp: extinction per cell
+
+}  // namespace penumbra::gpu::shaders

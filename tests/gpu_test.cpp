@@ -1,0 +1,104 @@
+// The Vulkan layer on whatever device the machine has (Mesa's lavapipe in CI): device choice,
+// buffers, kernels, batches and timestamps, against the CPU code as reference.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <random>
+#include <vector>
+
+#include "flatland/medium.hpp"
+#include "gpu/shaders.hpp"
+#include "gpu/vulkan.hpp"
+
+namespace {
+
+using namespace penumbra;
+
+std::shared_ptr<gpu::Context> context() {
+  Expected<std::shared_ptr<gpu::Context>> c = gpu::Context::create(true);
+  EXPECT_TRUE(c.ok()) << (c.ok() ? "" : c.error().message)
+                      << " (scripts/install-deps.sh installs mesa-vulkan-drivers)";
+  return c.ok() ? *c : nullptr;
+}
+
+TEST(Gpu, OpensADeviceAndNamesIt) {
+  std::shared_ptr<gpu::Context> c = context();
+  ASSERT_TRUE(c);
+  EXPECT_FALSE(c->info().name.empty());
+  EXPECT_FALSE(c->info().type.empty());
+  EXPECT_GT(c->info().max_workgroups_x, 0u);
+  std::printf("device: %s (%s)\n", c->info().name.c_str(), c->info().type.c_str());
+}
+
+// The medium kernel against flatland's extinction(): every opacity class (clear, small values
+// where log(1 - o) loses digits, ordinary, opaque).
+TEST(Gpu, MediumKernelMatchesTheCpu) {
+  std::shared_ptr<gpu::Context> c = context();
+  ASSERT_TRUE(c);
+  std::vector<float> opacity = {0.0f, 1.0f, 1e-7f, 1e-4f, 0.01f, 0.0625f, 0.5f, 0.999f, 0.9999999f};
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  for (int i = 0; i < 100000; ++i) opacity.push_back(u(rng) * (i % 3 == 0 ? 0.05f : 1.0f));
+  const std::uint32_t n = std::uint32_t(opacity.size());
+  Expected<gpu::Buffer> in = c->buffer(n * sizeof(float)), out = c->buffer(n * sizeof(float));
+  ASSERT_TRUE(in.ok() && out.ok());
+  std::copy(opacity.begin(), opacity.end(), in->as<float>());
+  Expected<gpu::Kernel> k = c->kernel("medium", gpu::shaders::medium(), 2, sizeof(std::uint32_t));
+  ASSERT_TRUE(k.ok()) << k.error().message;
+  Expected<gpu::Batch> b = c->batch();
+  ASSERT_TRUE(b.ok()) << b.error().message;
+  gpu::Buffer* buffers[] = {&*in, &*out};
+  b->mark("medium");
+  b->dispatch(*k, buffers, &n, (n + 255) / 256);
+  Expected<std::vector<std::pair<std::string, double>>> times = b->run();
+  ASSERT_TRUE(times.ok()) << times.error().message;
+  if (c->info().timestamp_period_ns > 0) {
+    ASSERT_EQ(times->size(), 1u);
+    EXPECT_EQ((*times)[0].first, "medium");
+    EXPECT_GE((*times)[0].second, 0.0);
+  }
+  for (std::uint32_t i = 0; i < n; ++i) {
+    const float want = extinction(opacity[i]), got = out->as<float>()[i];
+    if (std::isinf(want)) {
+      ASSERT_TRUE(std::isinf(got)) << opacity[i];
+      continue;
+    }
+    ASSERT_NEAR(got, want, 1e-5f * want + 1e-30f) << "opacity " << opacity[i];
+  }
+}
+
+TEST(Gpu, MisuseIsAnErrorNotACrash) {
+  std::shared_ptr<gpu::Context> c = context();
+  ASSERT_TRUE(c);
+  Expected<gpu::Kernel> k = c->kernel("medium", gpu::shaders::medium(), 2, sizeof(std::uint32_t));
+  ASSERT_TRUE(k.ok()) << k.error().message;
+  Expected<gpu::Buffer> one = c->buffer(16);
+  ASSERT_TRUE(one.ok());
+  Expected<gpu::Batch> b = c->batch();
+  ASSERT_TRUE(b.ok());
+  gpu::Buffer* buffers[] = {&*one};
+  const std::uint32_t n = 4;
+  b->dispatch(*k, buffers, &n, 1);  // two buffers expected
+  Expected<std::vector<std::pair<std::string, double>>> r = b->run();
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find("takes 2 buffers"), std::string::npos) << r.error().message;
+  // An absurd allocation is refused up front with a message.
+  Expected<gpu::Buffer> huge = c->buffer(std::size_t(1) << 50);
+  ASSERT_FALSE(huge.ok());
+  EXPECT_NE(huge.error().message.find("larger than"), std::string::npos) << huge.error().message;
+}
+
+// Without a driver (the loader finds no ICD), creating a context says so.
+TEST(Gpu, NoDeviceIsAClearError) {
+  setenv("VK_ICD_FILENAMES", "/nonexistent/icd.json", 1);
+  setenv("VK_DRIVER_FILES", "/nonexistent/icd.json", 1);
+  Expected<std::shared_ptr<gpu::Context>> c = gpu::Context::create(true);
+  unsetenv("VK_ICD_FILENAMES");
+  unsetenv("VK_DRIVER_FILES");
+  ASSERT_FALSE(c.ok());
+  EXPECT_NE(c.error().message.find("no Vulkan 1.1 driver found"), std::string::npos)
+      << c.error().message;
+}
+
+}  // namespace

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "flatland/medium.hpp"
+#include "gpu/distance.hpp"
 #include "gpu/shaders.hpp"
 #include "gpu/vulkan.hpp"
 
@@ -99,6 +100,42 @@ TEST(Gpu, NoDeviceIsAClearError) {
   ASSERT_FALSE(c.ok());
   EXPECT_NE(c.error().message.find("no Vulkan 1.1 driver found"), std::string::npos)
       << c.error().message;
+}
+
+}  // namespace
+
+namespace {
+
+// The GPU's jump flooding finds the same seeds as the CPU's: the same distances, to sqrt's last
+// bits, on a grid that is neither square nor a power of two, with walls, fog and empty space.
+TEST(Gpu, JumpFloodingMatchesTheCpu) {
+  std::shared_ptr<gpu::Context> c = context();
+  ASSERT_TRUE(c);
+  Medium m;
+  m.width = 301;
+  m.height = 173;
+  m.cells.assign(std::size_t(m.width) * m.height, Cell{0, 0, 0});
+  m.step.assign(m.cells.size(), 0.0f);
+  std::mt19937 rng(3);
+  std::uniform_int_distribution<int> px(0, m.width - 1), py(0, m.height - 1);
+  for (int i = 0; i < 40; ++i) m.step[std::size_t(py(rng)) * m.width + px(rng)] = kOpaque;
+  for (int x = 50; x < 250; ++x) m.step[std::size_t(90) * m.width + x] = 0.3f;
+  const std::vector<float> cpu = jump_flood_distance(m);
+  std::vector<std::pair<std::string, double>> passes;
+  Expected<std::vector<float>> gpu = gpu::jump_flood_distance(*c, m, &passes);
+  ASSERT_TRUE(gpu.ok()) << gpu.error().message;
+  ASSERT_EQ(gpu->size(), cpu.size());
+  for (std::size_t i = 0; i < cpu.size(); ++i) {
+    ASSERT_NEAR((*gpu)[i], cpu[i], 1e-6f * cpu[i]) << "cell " << i;
+  }
+  if (c->info().timestamp_period_ns > 0) {
+    EXPECT_EQ(passes.size(), jump_flood_steps(301, 173).size() + 2);
+  }
+  // A grid without interacting cells: infinity everywhere, as on the CPU.
+  std::fill(m.step.begin(), m.step.end(), 0.0f);
+  gpu = gpu::jump_flood_distance(*c, m);
+  ASSERT_TRUE(gpu.ok()) << gpu.error().message;
+  for (float d : *gpu) ASSERT_TRUE(std::isinf(d));
 }
 
 }  // namespace

@@ -40,6 +40,16 @@ std::uint64_t distance_field_bytes(int width, int height) {
   return std::uint64_t(width) * height * (sizeof(float) + 2 * sizeof(std::int32_t));
 }
 
+std::vector<int> jump_flood_steps(int width, int height) {
+  int top = 1;
+  while (top * 2 < std::max(width, height)) top *= 2;
+  std::vector<int> steps;
+  for (int s = top; s >= 1; s /= 2) steps.push_back(s);
+  steps.push_back(2);
+  steps.push_back(1);
+  return steps;
+}
+
 std::vector<float> jump_flood_distance(const Medium& m) {
   const int w = m.width, h = m.height;
   const std::size_t n = std::size_t(w) * h;
@@ -77,13 +87,7 @@ std::vector<float> jump_flood_distance(const Medium& m) {
       }
     });
   };
-  int top = 1;
-  while (top * 2 < std::max(w, h)) top *= 2;
-  std::vector<int> steps;
-  for (int s = top; s >= 1; s /= 2) steps.push_back(s);
-  steps.push_back(2);
-  steps.push_back(1);
-  for (int s : steps) {
+  for (int s : jump_flood_steps(w, h)) {
     pass(a, b, s);
     std::swap(a, b);
   }

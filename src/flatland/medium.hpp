@@ -50,6 +50,9 @@ void fill_medium(const Scene& scene, Medium& medium);
 // (infinity when there is none): the jump flooding algorithm (seed 000, section 3.4.1) followed
 // by two corrective passes (steps 2 and 1), which remove nearly all of JFA's rare errors.
 std::vector<float> jump_flood_distance(const Medium& medium);
+// The passes' steps: powers of two from the largest below the grid's side down to 1, then the
+// corrective 2 and 1 (shared with the GPU backend).
+std::vector<int> jump_flood_steps(int width, int height);
 
 // Writes the jump length of every empty cell into medium.step, from jump_flood_distance.
 void build_distance_field(Medium& medium);

@@ -7,6 +7,9 @@
 
 namespace penumbra::gpu::shaders {
 
-std::span<const std::uint32_t> medium();  // medium.comp: extinction per cell
+std::span<const std::uint32_t> medium();        // medium.comp: extinction per cell
+std::span<const std::uint32_t> jfa_seed();      // jump flooding: seeds
+std::span<const std::uint32_t> jfa_pass();      // jump flooding: one pass of step k
+std::span<const std::uint32_t> jfa_distance();  // jump flooding: distances
 
 }  // namespace penumbra::gpu::shaders

@@ -1,0 +1,20 @@
+// The distance field on the GPU: jump flooding, pass for pass the CPU's
+// (flatland/medium.hpp jump_flood_distance), with the same tie rule, so both find the same seeds.
+#pragma once
+
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "flatland/medium.hpp"
+#include "gpu/vulkan.hpp"
+
+namespace penumbra::gpu {
+
+// Distance from each cell centre to the nearest interacting cell centre (infinity for none).
+// GPU time per pass is appended to `passes` when the device has timestamps.
+Expected<std::vector<float>> jump_flood_distance(
+    const Context& context, const Medium& medium,
+    std::vector<std::pair<std::string, double>>* passes = nullptr);
+
+}  // namespace penumbra::gpu

@@ -7,8 +7,10 @@
 #include <random>
 #include <vector>
 
+#include "flatland/hrc/hrc.hpp"
 #include "flatland/medium.hpp"
 #include "gpu/distance.hpp"
+#include "gpu/hrc.hpp"
 #include "gpu/shaders.hpp"
 #include "gpu/vulkan.hpp"
 
@@ -136,6 +138,35 @@ TEST(Gpu, JumpFloodingMatchesTheCpu) {
   gpu = gpu::jump_flood_distance(*c, m);
   ASSERT_TRUE(gpu.ok()) << gpu.error().message;
   for (float d : *gpu) ASSERT_TRUE(std::isinf(d));
+}
+
+}  // namespace
+
+namespace {
+
+// HRC's cross blur on the GPU against the CPU's: clear, foggy and opaque cells side by side, so
+// every rule (opaque copied, opaque and dissimilar neighbours left out, grid edges) is used.
+TEST(Gpu, CrossBlurMatchesTheCpu) {
+  std::shared_ptr<gpu::Context> c = context();
+  ASSERT_TRUE(c);
+  const int w = 97, h = 61;
+  const std::size_t n = std::size_t(w) * h;
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  std::vector<float> tau(n), f(3 * n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const float r = u(rng);
+    tau[i] = r < 0.2f ? 0.0f : r < 0.6f ? 1.0f : u(rng);
+  }
+  for (float& v : f) v = 10 * u(rng);
+  std::vector<float> cpu(3 * n);
+  hrc::cross_blur(w, h, tau.data(), f.data(), cpu.data());
+  Expected<std::vector<float>> gpu = gpu::cross_blur(*c, w, h, tau, f);
+  ASSERT_TRUE(gpu.ok()) << gpu.error().message;
+  for (std::size_t i = 0; i < 3 * n; ++i) {
+    ASSERT_NEAR((*gpu)[i], cpu[i], 1e-6f * cpu[i]) << "value " << i;
+  }
+  EXPECT_FALSE(gpu::cross_blur(*c, w, h, tau, std::vector<float>(5)).ok());
 }
 
 }  // namespace

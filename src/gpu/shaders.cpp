@@ -16,6 +16,9 @@ const std::uint32_t kJfaPass[] = {
 const std::uint32_t kJfaDistance[] = {
 #include "jfa_distance.comp.inc"
 };
+const std::uint32_t kCrossBlur[] = {
+#include "cross_blur.comp.inc"
+};
 
 }  // namespace
 
@@ -30,6 +33,9 @@ std::span<const std::uint32_t> jfa_pass() {
 }
 std::span<const std::uint32_t> jfa_distance() {
   return kJfaDistance;
+}
+std::span<const std::uint32_t> cross_blur() {
+  return kCrossBlur;
 }
 
 }  // namespace penumbra::gpu::shaders

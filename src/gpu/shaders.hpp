@@ -11,5 +11,6 @@ std::span<const std::uint32_t> medium();        // medium.comp: extinction per c
 std::span<const std::uint32_t> jfa_seed();      // jump flooding: seeds
 std::span<const std::uint32_t> jfa_pass();      // jump flooding: one pass of step k
 std::span<const std::uint32_t> jfa_distance();  // jump flooding: distances
+std::span<const std::uint32_t> cross_blur();    // HRC: eq. 21
 
 }  // namespace penumbra::gpu::shaders

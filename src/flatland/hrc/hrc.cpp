@@ -731,40 +731,6 @@ inline Interval near_segment(const ViewPlanes& vp, std::size_t own) {
           w_own * b[own] + w_next * b[next], t_own * t_next};
 }
 
-// Eq. 21: the 1-cell cross blur (4 at the centre, 1 at each side, over 8), leaving out
-// neighbours whose opacity differs from the cell's by more than kBlurOpacityStep (and those
-// beyond the grid), renormalised. Opacity over a cell length is 1 - tau(1/2)^2. Opaque cells
-// neither blur nor are blurred into others: their fluence is the light arriving at their faces,
-// and inside a wall it is zero, so averaging a wall's surface with its inside would darken the
-// light it re-emits.
-constexpr float kBlurOpacityStep = 0.5f;
-
-void cross_blur(int W, int H, const float* tau_half, const float* f, float* out) {
-  parallel_for(H, [&](int y) {
-    for (int x = 0; x < W; ++x) {
-      const std::size_t i = std::size_t(y) * W + x;
-      if (tau_half[i] == 0.0f) {  // opaque: kept as it is
-        std::copy(f + 3 * i, f + 3 * i + 3, out + 3 * i);
-        continue;
-      }
-      const float op = 1.0f - tau_half[i] * tau_half[i];
-      float r = 4 * f[3 * i], g = 4 * f[3 * i + 1], b = 4 * f[3 * i + 2], w = 4;
-      auto add = [&](int nx, int ny) {
-        if (nx < 0 || ny < 0 || nx >= W || ny >= H) return;
-        const std::size_t j = std::size_t(ny) * W + nx;
-        if (tau_half[j] == 0.0f) return;  // opaque
-        if (std::abs(1.0f - tau_half[j] * tau_half[j] - op) > kBlurOpacityStep) return;
-        r += f[3 * j], g += f[3 * j + 1], b += f[3 * j + 2], w += 1;
-      };
-      add(x - 1, y);
-      add(x + 1, y);
-      add(x, y - 1);
-      add(x, y + 1);
-      out[3 * i] = r / w, out[3 * i + 1] = g / w, out[3 * i + 2] = b / w;
-    }
-  });
-}
-
 template <class S>
 void solve_with(const Medium& m, const Rgb& env, const HrcOptions& o, Buffers<S>& buf,
                 Array<float>& planes, std::vector<float>& blurred, std::vector<float>& f,
@@ -918,6 +884,39 @@ void solve(const Medium& medium, const Rgb& environment, const HrcOptions& optio
     w.f16.release();
     solve_with(medium, environment, options, w.f32, w.planes, w.blurred, fluence, stages);
   }
+}
+
+// Eq. 21: the 1-cell cross blur (4 at the centre, 1 at each side, over 8), leaving out
+// neighbours whose opacity differs from the cell's by more than kBlurOpacityStep (and those
+// beyond the grid), renormalised. Opacity over a cell length is 1 - tau(1/2)^2. Opaque cells
+// neither blur nor are blurred into others: their fluence is the light arriving at their faces,
+// and inside a wall it is zero, so averaging a wall's surface with its inside would darken the
+// light it re-emits.
+
+void cross_blur(int W, int H, const float* tau_half, const float* f, float* out) {
+  parallel_for(H, [&](int y) {
+    for (int x = 0; x < W; ++x) {
+      const std::size_t i = std::size_t(y) * W + x;
+      if (tau_half[i] == 0.0f) {  // opaque: kept as it is
+        std::copy(f + 3 * i, f + 3 * i + 3, out + 3 * i);
+        continue;
+      }
+      const float op = 1.0f - tau_half[i] * tau_half[i];
+      float r = 4 * f[3 * i], g = 4 * f[3 * i + 1], b = 4 * f[3 * i + 2], w = 4;
+      auto add = [&](int nx, int ny) {
+        if (nx < 0 || ny < 0 || nx >= W || ny >= H) return;
+        const std::size_t j = std::size_t(ny) * W + nx;
+        if (tau_half[j] == 0.0f) return;  // opaque
+        if (std::abs(1.0f - tau_half[j] * tau_half[j] - op) > kBlurOpacityStep) return;
+        r += f[3 * j], g += f[3 * j + 1], b += f[3 * j + 2], w += 1;
+      };
+      add(x - 1, y);
+      add(x + 1, y);
+      add(x, y - 1);
+      add(x, y + 1);
+      out[3 * i] = r / w, out[3 * i + 1] = g / w, out[3 * i + 2] = b / w;
+    }
+  });
 }
 
 }  // namespace penumbra::hrc

@@ -62,4 +62,10 @@ class Workspace {
 void solve(const Medium& medium, const Rgb& environment, const HrcOptions& options,
            Workspace& workspace, std::vector<float>& fluence, std::vector<StageTime>& stages);
 
+// Eq. 21, the final 1-cell cross blur of the fluence f (3 floats per cell) into out, given the
+// transmittance over half a cell per cell (0: opaque). Neighbours whose opacity differs by more
+// than kBlurOpacityStep are left out; opaque cells neither blur nor are blurred into others.
+inline constexpr float kBlurOpacityStep = 0.5f;
+void cross_blur(int W, int H, const float* tau_half, const float* f, float* out);
+
 }  // namespace penumbra::hrc

@@ -13,6 +13,7 @@
 #include "gpu/hrc.hpp"
 #include "gpu/shaders.hpp"
 #include "gpu/vulkan.hpp"
+#include "penumbra/scene.hpp"
 
 namespace {
 
@@ -167,6 +168,54 @@ TEST(Gpu, CrossBlurMatchesTheCpu) {
     ASSERT_NEAR((*gpu)[i], cpu[i], 1e-6f * cpu[i]) << "value " << i;
   }
   EXPECT_FALSE(gpu::cross_blur(*c, w, h, tau, std::vector<float>(5)).ok());
+}
+
+}  // namespace
+
+namespace {
+
+// A whole HRC solve on the GPU against the CPU's, on grids that are square, oblong and not powers
+// of two, with walls, lights, fog and an environment, with and without the near segment and
+// the blur. The bound is a relative RMSE of 1e-3.
+TEST(Gpu, HrcSolveMatchesTheCpu) {
+  std::shared_ptr<gpu::Context> c = context();
+  ASSERT_TRUE(c);
+  struct Case {
+    int w, h;
+    bool near, blur;
+  };
+  for (const Case& k : {Case{64, 64, true, true}, Case{100, 37, true, true},
+                        Case{45, 80, false, false}, Case{128, 96, true, false}}) {
+    SceneDesc d;
+    d.width = k.w;
+    d.height = k.h;
+    d.environment = {0.05f, 0.08f, 0.1f};
+    d.shapes.push_back({Circle{{k.w * 0.3f, k.h * 0.5f}, 3}, Material{{6, 4, 2}, 1, {}}});
+    d.shapes.push_back({Box{{k.w * 0.55f, k.h * 0.5f}, {2, k.h * 0.5f}, 15}, Material{{}, 1, {}}});
+    d.shapes.push_back(
+        {Circle{{k.w * 0.75f, k.h * 0.3f}, 8}, Material{{0.2f, 0.1f, 0}, 0.15f, {}}});
+    const Scene s = *build_scene(d);
+    const Medium m = make_medium(s);
+    HrcOptions o;
+    o.near_segment = k.near;
+    o.cross_blur = k.blur;
+    hrc::Workspace workspace;
+    std::vector<float> cpu;
+    std::vector<StageTime> stages;
+    hrc::solve(m, s.environment, o, workspace, cpu, stages);
+    std::vector<std::pair<std::string, double>> passes;
+    Expected<std::vector<float>> gpu = gpu::hrc_solve(*c, m, s.environment, o, &passes);
+    ASSERT_TRUE(gpu.ok()) << gpu.error().message;
+    ASSERT_EQ(gpu->size(), cpu.size());
+    double err = 0, ref = 0;
+    for (std::size_t i = 0; i < cpu.size(); ++i) {
+      err += double((*gpu)[i] - cpu[i]) * ((*gpu)[i] - cpu[i]);
+      ref += double(cpu[i]) * cpu[i];
+    }
+    const double rel = std::sqrt(err / ref);
+    EXPECT_LT(rel, 1e-3) << k.w << "x" << k.h;
+    std::printf("%dx%d: relative RMSE GPU against CPU %.2e\n", k.w, k.h, rel);
+  }
 }
 
 }  // namespace

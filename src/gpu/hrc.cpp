@@ -2,7 +2,10 @@
 #include "gpu/hrc.hpp"
 
 #include <algorithm>
+#include <array>
+#include <cmath>
 #include <cstdint>
+#include <deque>
 
 #include "flatland/hrc/hrc.hpp"
 #include "gpu/shaders.hpp"
@@ -39,6 +42,225 @@ Expected<std::vector<float>> cross_blur(const Context& c, int width, int height,
   if (Expected<std::vector<std::pair<std::string, double>>> r = batch->run(); !r) return r.error();
   const float* o = out->as<float>();
   return std::vector<float>(o, o + 3 * n);
+}
+
+namespace {
+
+struct ViewShape {
+  int w, h, levels;
+  int probes(int n) const { return int((std::int64_t(w) + (1 << n) - 1) >> n); }
+};
+
+}  // namespace
+
+Expected<std::vector<float>> hrc_solve(const Context& c, const Medium& m, const Rgb& env,
+                                       const HrcOptions& o,
+                                       std::vector<std::pair<std::string, double>>* passes) {
+  if (o.storage != Storage::f32) return Error{"GPU HRC: only f32 storage so far"};
+  const int W = m.width, H = m.height, pad = hrc::view_pad();
+  const std::uint32_t cells = std::uint32_t(std::size_t(W) * H);
+  const ViewShape views[2] = {{W, H, hrc::level_count(W)}, {H, W, hrc::level_count(H)}};
+  const int levels = std::max(views[0].levels, views[1].levels);
+  // Sizes for both orientations, as hrc.cpp plan().
+  std::vector<std::size_t> t_size(std::size_t(levels) + 1, 0);
+  std::size_t r_size = 1, view_cells = 0;
+  for (const ViewShape& v : views) {
+    for (int n = 0; n <= v.levels; ++n)
+      t_size[std::size_t(n)] =
+          std::max(t_size[std::size_t(n)], std::size_t(v.probes(n)) * ((1u << n) + 1) * v.h);
+    for (int n = 0; n < v.levels; ++n)
+      r_size = std::max(r_size, std::size_t(v.probes(n)) * (1u << n) * v.h);
+    view_cells = std::max(view_cells, std::size_t(v.w + pad) * (v.h + 2 * pad));
+  }
+
+  // Kernels and buffers.
+  struct K {
+    const char* name;
+    std::span<const std::uint32_t> spirv;
+    int buffers;
+    std::uint32_t push;
+  };
+  const K specs[] = {{"hrc_world", shaders::hrc_world(), 3, 16},
+                     {"hrc_view", shaders::hrc_view(), 2, 36},
+                     {"hrc_trace", shaders::hrc_trace(), 4, 28},
+                     {"hrc_merge_up", shaders::hrc_merge_up(), 2, 20},
+                     {"hrc_merge_down", shaders::hrc_merge_down(), 5, 36},
+                     {"hrc_gather", shaders::hrc_gather(), 3, 52},
+                     {"cross_blur", shaders::cross_blur(), 3, 12}};
+  std::vector<Kernel> k;
+  for (const K& spec : specs) {
+    Expected<Kernel> kernel = c.kernel(spec.name, spec.spirv, spec.buffers, spec.push);
+    if (!kernel) return kernel.error();
+    k.push_back(std::move(*kernel));
+  }
+  std::deque<Buffer> keep;  // every buffer, alive (and in place) until the batch has run
+  auto make = [&](std::size_t floats) -> Expected<Buffer*> {
+    Expected<Buffer> b = c.buffer(std::max<std::size_t>(floats, 1) * sizeof(float));
+    if (!b) return b.error();
+    keep.push_back(std::move(*b));
+    return &keep.back();
+  };
+  Expected<Buffer*> emission = make(3 * std::size_t(cells)), step = make(cells),
+                    world = make(6 * std::size_t(cells)), view = make(6 * view_cells),
+                    fluence = make(3 * std::size_t(cells)), blurred = make(3 * std::size_t(cells)),
+                    angles = make((std::size_t(2) << levels) - 1), r0 = make(3 * r_size),
+                    r1 = make(3 * r_size);
+  for (const Expected<Buffer*>* b :
+       {&emission, &step, &world, &view, &fluence, &blurred, &angles, &r0, &r1})
+    if (!*b) return b->error();
+  std::vector<Buffer*> t;
+  for (std::size_t n = 0; n < t_size.size(); ++n) {
+    Expected<Buffer*> b = make(4 * t_size[n]);
+    if (!b) return b.error();
+    t.push_back(*b);
+  }
+  // The ray patterns of T_0..T_2: cells (du, dv, length, squared) and per k a range of them.
+  Buffer* pattern[3];
+  Buffer* range[3];
+  for (int n = 0; n < 3; ++n) {
+    std::vector<std::int32_t> cells_of, ranges_of;
+    for (int kk = 0; kk <= (1 << n); ++kk) {
+      const std::vector<hrc::TracedCell> pc = hrc::traced_cells(n, kk);
+      ranges_of.push_back(std::int32_t(cells_of.size() / 4));
+      ranges_of.push_back(std::int32_t(pc.size()));
+      for (const hrc::TracedCell& tc : pc) {
+        cells_of.push_back(tc.du);
+        cells_of.push_back(tc.dv);
+        cells_of.push_back(tc.length);
+        cells_of.push_back(tc.squared ? 1 : 0);
+      }
+    }
+    Expected<Buffer*> pb = make(cells_of.size()), rb = make(ranges_of.size());
+    if (!pb) return pb.error();
+    if (!rb) return rb.error();
+    std::copy(cells_of.begin(), cells_of.end(), (*pb)->as<std::int32_t>());
+    std::copy(ranges_of.begin(), ranges_of.end(), (*rb)->as<std::int32_t>());
+    pattern[n] = *pb;
+    range[n] = *rb;
+  }
+
+  // Upload: emission, extinction, cone angles.
+  float* e = (*emission)->as<float>();
+  for (std::size_t i = 0; i < cells; ++i) {
+    e[3 * i] = m.cells[i].r, e[3 * i + 1] = m.cells[i].g, e[3 * i + 2] = m.cells[i].b;
+  }
+  std::copy(m.step.begin(), m.step.end(), (*step)->as<float>());
+  float* ang = (*angles)->as<float>();
+  for (int lv = 0; lv <= levels; ++lv)
+    for (int a = 0; a < (1 << lv); ++a) ang[(1 << lv) - 1 + a] = hrc::cone_angle_of(lv, a);
+
+  Expected<Batch> batch = c.batch(256);
+  if (!batch) return batch.error();
+  auto groups = [](std::size_t n, std::uint32_t size) {
+    return std::uint32_t((n + size - 1) / size);
+  };
+  const std::array<float, 3> len = hrc::traced_lengths();
+  {
+    struct {
+      std::uint32_t cells;
+      float l0, l1, l2;
+    } push{cells, len[0], len[1], len[2]};
+    Buffer* b[] = {*emission, *step, *world};
+    batch->mark("views");
+    batch->dispatch(k[0], b, &push, groups(cells, 256));
+  }
+  for (int d = 0; d < 4; ++d) {
+    const ViewShape& v = views[d & 1];
+    const hrc::ViewRotation rot = hrc::view_rotation(d, W, H);
+    const int hp = v.h + 2 * pad;
+    {
+      const std::int32_t push[9] = {v.w,
+                                    v.h,
+                                    hp,
+                                    pad,
+                                    std::int32_t(cells),
+                                    std::int32_t(view_cells),
+                                    std::int32_t(rot.base),
+                                    std::int32_t(rot.su),
+                                    std::int32_t(rot.sv)};
+      Buffer* b[] = {*world, *view};
+      if (d > 0) batch->mark("views");
+      batch->dispatch(k[1], b, push, groups(std::size_t(hp), 64), groups(std::size_t(v.w + pad), 4),
+                      6);
+    }
+    batch->mark("trace T0-T2");
+    for (int n = 0; n <= std::min(2, v.levels); ++n) {
+      const int P = v.probes(n), rows = ((1 << n) + 1) * P;
+      const std::int32_t push[7] = {v.h, hp, pad, n, P, rows, std::int32_t(view_cells)};
+      Buffer* b[] = {*view, pattern[n], range[n], t[std::size_t(n)]};
+      batch->dispatch(k[2], b, push, groups(std::size_t(v.h), 64), groups(std::size_t(rows), 4));
+    }
+    batch->mark("merge up T3-TN");
+    for (int n = 3; n <= v.levels; ++n) {
+      const int P = v.probes(n - 1), P1 = v.probes(n), rows = ((1 << n) + 1) * P1;
+      const std::int32_t push[5] = {v.h, n - 1, P, P1, rows};
+      Buffer* b[] = {t[std::size_t(n - 1)], t[std::size_t(n)]};
+      batch->dispatch(k[3], b, push, groups(std::size_t(v.h), 64), groups(std::size_t(rows), 4));
+    }
+    batch->mark("merge down R");
+    Buffer* upper = *r1;  // unread at the top level
+    bool top = true;
+    for (int n = v.levels - 1; n >= 0; --n) {
+      Buffer* out = upper == *r0 ? *r1 : *r0;
+      const int P = v.probes(n), P1 = v.probes(n + 1), rows = (1 << n) * P;
+      struct {
+        std::int32_t h, n, P, P1, rows, top;
+        float er, eg, eb;
+      } push{v.h, n, P, P1, rows, top ? 1 : 0, env.r, env.g, env.b};
+      Buffer* b[] = {t[std::size_t(n)], t[std::size_t(n + 1)], upper, *angles, out};
+      batch->dispatch(k[4], b, &push, groups(std::size_t(v.h), 64), groups(std::size_t(rows), 4));
+      upper = out;
+      top = false;
+    }
+    batch->mark("views");
+    {
+      struct {
+        std::int32_t w, h, hp, pad;
+        std::uint32_t view_cells;
+        std::int32_t base, su, sv, first, near;
+        float er, eg, eb;
+      } push{v.w,
+             v.h,
+             hp,
+             pad,
+             std::uint32_t(view_cells),
+             std::int32_t(rot.base),
+             std::int32_t(rot.su),
+             std::int32_t(rot.sv),
+             d == 0 ? 1 : 0,
+             o.near_segment ? 1 : 0,
+             env.r,
+             env.g,
+             env.b};
+      Buffer* b[] = {upper, *view, *fluence};
+      batch->dispatch(k[5], b, &push, groups(std::size_t(v.h), 64), groups(std::size_t(v.w), 4));
+    }
+  }
+  Buffer* result = *fluence;
+  if (o.cross_blur) {
+    struct {
+      std::int32_t w, h;
+      float step;
+    } push{W, H, hrc::kBlurOpacityStep};
+    // The transmittance over half a cell, computed here as the CPU computes its world plane, so
+    // the blur's opacity test decides alike.
+    Expected<Buffer*> tau = make(cells);
+    if (!tau) return tau.error();
+    float* th = (*tau)->as<float>();
+    for (std::size_t i = 0; i < cells; ++i) {
+      const float sigma = m.step[i] > 0 ? m.step[i] : 0.0f;
+      th[i] = sigma == 0.0f ? 1.0f : std::isinf(sigma) ? 0.0f : std::exp(-sigma * len[0]);
+    }
+    batch->mark("cross blur");
+    Buffer* b[] = {*tau, *fluence, *blurred};
+    batch->dispatch(k[6], b, &push, groups(std::size_t(W), 16), groups(std::size_t(H), 16));
+    result = *blurred;
+  }
+  Expected<std::vector<std::pair<std::string, double>>> times = batch->run();
+  if (!times) return times.error();
+  if (passes) passes->insert(passes->end(), times->begin(), times->end());
+  const float* f = result->as<float>();
+  return std::vector<float>(f, f + 3 * std::size_t(cells));
 }
 
 }  // namespace penumbra::gpu

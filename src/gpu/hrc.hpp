@@ -4,7 +4,9 @@
 
 #include <vector>
 
+#include "flatland/medium.hpp"
 #include "gpu/vulkan.hpp"
+#include "penumbra/render.hpp"
 
 namespace penumbra::gpu {
 
@@ -13,5 +15,12 @@ namespace penumbra::gpu {
 Expected<std::vector<float>> cross_blur(const Context& context, int width, int height,
                                         const std::vector<float>& tau_half,
                                         const std::vector<float>& fluence);
+
+// A whole HRC solve on the GPU, as hrc::solve with f32 storage: the world planes, per quadrant
+// the rotated view, T_0..T_2, merge up, merge down and the gather, then the cross blur. Fluence
+// at every cell centre (3 floats per cell); GPU time per pass appended to `passes`.
+Expected<std::vector<float>> hrc_solve(
+    const Context& context, const Medium& medium, const Rgb& environment, const HrcOptions& options,
+    std::vector<std::pair<std::string, double>>* passes = nullptr);
 
 }  // namespace penumbra::gpu

@@ -20,6 +20,24 @@ const std::uint32_t kCrossBlur[] = {
 #include "cross_blur.comp.inc"
 };
 
+const std::uint32_t k_hrc_world[] = {
+#include "hrc_world.comp.inc"
+};
+const std::uint32_t k_hrc_view[] = {
+#include "hrc_view.comp.inc"
+};
+const std::uint32_t k_hrc_trace[] = {
+#include "hrc_trace.comp.inc"
+};
+const std::uint32_t k_hrc_merge_up[] = {
+#include "hrc_merge_up.comp.inc"
+};
+const std::uint32_t k_hrc_merge_down[] = {
+#include "hrc_merge_down.comp.inc"
+};
+const std::uint32_t k_hrc_gather[] = {
+#include "hrc_gather.comp.inc"
+};
 }  // namespace
 
 std::span<const std::uint32_t> medium() {
@@ -38,4 +56,22 @@ std::span<const std::uint32_t> cross_blur() {
   return kCrossBlur;
 }
 
+std::span<const std::uint32_t> hrc_world() {
+  return k_hrc_world;
+}
+std::span<const std::uint32_t> hrc_view() {
+  return k_hrc_view;
+}
+std::span<const std::uint32_t> hrc_trace() {
+  return k_hrc_trace;
+}
+std::span<const std::uint32_t> hrc_merge_up() {
+  return k_hrc_merge_up;
+}
+std::span<const std::uint32_t> hrc_merge_down() {
+  return k_hrc_merge_down;
+}
+std::span<const std::uint32_t> hrc_gather() {
+  return k_hrc_gather;
+}
 }  // namespace penumbra::gpu::shaders

@@ -7,10 +7,16 @@
 
 namespace penumbra::gpu::shaders {
 
-std::span<const std::uint32_t> medium();        // medium.comp: extinction per cell
-std::span<const std::uint32_t> jfa_seed();      // jump flooding: seeds
-std::span<const std::uint32_t> jfa_pass();      // jump flooding: one pass of step k
-std::span<const std::uint32_t> jfa_distance();  // jump flooding: distances
-std::span<const std::uint32_t> cross_blur();    // HRC: eq. 21
+std::span<const std::uint32_t> medium();          // medium.comp: extinction per cell
+std::span<const std::uint32_t> jfa_seed();        // jump flooding: seeds
+std::span<const std::uint32_t> jfa_pass();        // jump flooding: one pass of step k
+std::span<const std::uint32_t> jfa_distance();    // jump flooding: distances
+std::span<const std::uint32_t> cross_blur();      // HRC: eq. 21
+std::span<const std::uint32_t> hrc_world();       // HRC: emission and transmittance planes
+std::span<const std::uint32_t> hrc_view();        // HRC: a quadrant's rotated view
+std::span<const std::uint32_t> hrc_trace();       // HRC: T_0..T_2
+std::span<const std::uint32_t> hrc_merge_up();    // HRC: eqs. 18-20
+std::span<const std::uint32_t> hrc_merge_down();  // HRC: eqs. 14-17
+std::span<const std::uint32_t> hrc_gather();      // HRC: a quadrant's fluence
 
 }  // namespace penumbra::gpu::shaders

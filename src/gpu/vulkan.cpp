@@ -575,7 +575,7 @@ void Batch::mark(const std::string& pass) {
 }
 
 void Batch::dispatch(const Kernel& k, std::span<Buffer* const> buffers, const void* push,
-                     std::uint32_t groups_x, std::uint32_t groups_y) {
+                     std::uint32_t groups_x, std::uint32_t groups_y, std::uint32_t groups_z) {
   if (!recording_ || !error_) return;
   if (int(buffers.size()) != k.buffers_ || buffers.size() > kMaxBindings) {
     error_ = Error{"Vulkan: kernel " + k.name_ + " takes " + std::to_string(k.buffers_) +
@@ -617,7 +617,8 @@ void Batch::dispatch(const Kernel& k, std::span<Buffer* const> buffers, const vo
   if (k.push_bytes_ > 0)
     v.vkCmdPushConstants(cb, reinterpret_cast<VkPipelineLayout>(k.layout_),
                          VK_SHADER_STAGE_COMPUTE_BIT, 0, k.push_bytes_, push);
-  v.vkCmdDispatch(cb, groups_x, groups_y, 1);
+  if (groups_x > 0 && groups_y > 0 && groups_z > 0)
+    v.vkCmdDispatch(cb, groups_x, groups_y, groups_z);
   // The next dispatch reads what this one wrote.
   VkMemoryBarrier barrier{};
   barrier.sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER;

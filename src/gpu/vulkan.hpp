@@ -81,9 +81,9 @@ class Batch {
   Batch& operator=(Batch&&) = delete;
   Batch(const Batch&) = delete;
 
-  // `groups` workgroups in x and y. Buffers are bound in order to bindings 0, 1, ...
+  // `groups` workgroups in x, y and z. Buffers are bound in order to bindings 0, 1, ...
   void dispatch(const Kernel& kernel, std::span<Buffer* const> buffers, const void* push,
-                std::uint32_t groups_x, std::uint32_t groups_y = 1);
+                std::uint32_t groups_x, std::uint32_t groups_y = 1, std::uint32_t groups_z = 1);
   // Starts a timed pass (ends at the next mark or at submit).
   void mark(const std::string& pass);
   // Submits and waits. Pass times in milliseconds, in the order of mark().

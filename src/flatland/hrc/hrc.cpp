@@ -815,6 +815,32 @@ void solve_with(const Medium& m, const Rgb& env, const HrcOptions& o, Buffers<S>
 
 }  // namespace
 
+// ---- for the GPU backend: the same constants and tables -------------------------------------
+
+float cone_angle_of(int n, int a) {
+  return cone_angle(n, a);
+}
+
+int view_pad() {
+  return kPad;
+}
+
+std::array<float, 3> traced_lengths() {
+  return {kLengths[0], kLengths[1], kLengths[2]};
+}
+
+std::vector<TracedCell> traced_cells(int n, int k) {
+  std::vector<TracedCell> out;
+  for (const Segment& g : ray_patterns()[std::size_t(n)][std::size_t(k)])
+    out.push_back({g.du, g.dv, g.plane - kTau0, g.squared});
+  return out;
+}
+
+ViewRotation view_rotation(int d, int width, int height) {
+  const Rotation r = rotation(d, width, height);
+  return {r.base, r.su, r.sv};
+}
+
 int level_count(int w) {
   int n = 0;
   while ((std::int64_t(1) << n) < w) ++n;

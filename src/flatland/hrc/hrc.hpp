@@ -1,6 +1,8 @@
 // Holographic radiance cascades on the CPU (seed 004, section 4).
 #pragma once
 
+#include <array>
+#include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -67,5 +69,20 @@ void solve(const Medium& medium, const Rgb& environment, const HrcOptions& optio
 // than kBlurOpacityStep are left out; opaque cells neither blur nor are blurred into others.
 inline constexpr float kBlurOpacityStep = 0.5f;
 void cross_blur(int W, int H, const float* tau_half, const float* f, float* out);
+
+// What the GPU backend shares with this implementation, so both use the same numbers.
+float cone_angle_of(int n, int a);      // eq. 13, cone a of cascade n
+int view_pad();                         // empty cells around a rotated view
+std::array<float, 3> traced_lengths();  // the transmittance planes' lengths (and their doubles)
+struct TracedCell {
+  int du, dv;
+  int length;    // index into traced_lengths()
+  bool squared;  // twice that length
+};
+std::vector<TracedCell> traced_cells(int n, int k);  // the cells ray k of T_n crosses, in order
+struct ViewRotation {
+  std::ptrdiff_t base, su, sv;  // view cell (u, v) is world cell base + u su + v sv
+};
+ViewRotation view_rotation(int d, int width, int height);  // quadrant d = +x, +y, -x, -y
 
 }  // namespace penumbra::hrc

@@ -1,0 +1,33 @@
+#version 450
+// T_n for n <= 2 (hrc.cpp trace_level): ray k from probe (u = x 2^n, y) crosses a fixed pattern
+// of cells; front to back, emission weighted by the transmittance so far.
+layout(local_size_x = 64, local_size_y = 4) in;
+layout(std430, binding = 0) readonly buffer View { float view[]; };
+layout(std430, binding = 1) readonly buffer Pattern { ivec4 cells[]; };  // du, dv, length, squared
+layout(std430, binding = 2) readonly buffer Ranges { ivec2 ranges[]; };  // per k: first, count
+layout(std430, binding = 3) writeonly buffer T { float t[]; };
+layout(push_constant) uniform Push { int h; int hp; int pad; int n; int P; int rows; uint view_cells; } p;
+
+void main() {
+  int y = int(gl_GlobalInvocationID.x), row = int(gl_GlobalInvocationID.y);
+  if (y >= p.h || row >= p.rows) return;
+  int k = row / p.P, u = (row % p.P) << p.n;
+  precise float ar = 0.0, ag = 0.0, ab = 0.0, at = 1.0;
+  ivec2 range = ranges[k];
+  for (int s = range.x; s < range.x + range.y; ++s) {
+    ivec4 c = cells[s];
+    uint off = uint((u + c.x) * p.hp + p.pad + c.y + y);
+    float tau = view[uint(3 + c.z) * p.view_cells + off];
+    precise float tr = c.w != 0 ? tau * tau : tau;
+    precise float wgt = at * (1.0 - tr);
+    ar += wgt * view[off];
+    ag += wgt * view[p.view_cells + off];
+    ab += wgt * view[2u * p.view_cells + off];
+    at *= tr;
+  }
+  uint o = uint(row * 4) * uint(p.h) + uint(y);
+  t[o] = ar;
+  t[o + uint(p.h)] = ag;
+  t[o + 2u * uint(p.h)] = ab;
+  t[o + 3u * uint(p.h)] = at;
+}

@@ -9,6 +9,7 @@
 #include "bench_scenes.hpp"
 #include "flatland/medium.hpp"
 #include "gpu/distance.hpp"
+#include "gpu/hrc.hpp"
 #include "penumbra/scene.hpp"
 
 namespace {
@@ -47,5 +48,31 @@ void BM_JumpFloodGpu(benchmark::State& state) {
   state.counters["gpu_ms"] = gpu_ms / double(state.iterations());
 }
 BENCHMARK(BM_JumpFloodGpu)->Arg(512)->Arg(1024)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// A whole HRC solve (one bounce, f32): gpu_ms is the dispatches; the whole call also builds the
+// pipelines and buffers, which a renderer kept between frames will not.
+void BM_HrcGpu(benchmark::State& state) {
+  static Expected<std::shared_ptr<gpu::Context>> context = gpu::Context::create(true);
+  if (!context) {
+    state.SkipWithError(context.error().message.c_str());
+    return;
+  }
+  state.SetLabel((*context)->info().name);
+  const Scene scene = *build_scene(bench::lights_scene(int(state.range(0)), 102));
+  const Medium m = make_medium(scene);
+  double gpu_ms = 0;
+  for (auto _ : state) {
+    std::vector<std::pair<std::string, double>> passes;
+    Expected<std::vector<float>> f = gpu::hrc_solve(**context, m, scene.environment, {}, &passes);
+    if (!f) {
+      state.SkipWithError(f.error().message.c_str());
+      return;
+    }
+    benchmark::DoNotOptimize(f->data());
+    for (const auto& p : passes) gpu_ms += p.second;
+  }
+  state.counters["gpu_ms"] = gpu_ms / double(state.iterations());
+}
+BENCHMARK(BM_HrcGpu)->Arg(256)->Arg(512)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace

@@ -81,6 +81,7 @@ struct Frame {
   double solve_ms = 0, display_ms = 0;
   std::uint64_t scene_version = 0, options_version = 0;
   std::uint64_t serial = 0;  // counts solved frames
+  std::string device;        // what rendered it
   std::string error;         // the render was refused (the picture is the previous one)
 };
 
@@ -157,6 +158,7 @@ class Solver {
         Expected<RenderResult> r = renderer_.render(*scene, options);
         f.solve_ms = watch.ms();
         if (r) {
+          f.device = r->device;
           f.stages = std::move(r->stages);
           watch.restart();
           f.rgb = io::display_rgb8(r->fluence, scene.get(), {look.exposure});
@@ -207,6 +209,10 @@ bool parse_size(const std::string& text, int& w, int& h) {
   if (ec != std::errc() || p == end || *p != 'x') return false;
   auto [q, ec2] = std::from_chars(p + 1, end, h);
   return ec2 == std::errc() && q == end && w > 0 && h > 0 && text[0] != '-' && p[1] != '-';
+}
+
+Device device_of(const std::string& name) {
+  return name == "gpu" ? Device::gpu : name == "auto" ? Device::auto_ : Device::cpu;
 }
 
 Method method_of(const std::string& name) {
@@ -262,6 +268,7 @@ class Painter {
     options_.threads = args.threads;
     options_.pt.spp = 4;
     options_.hrc.storage = args.storage == "f16" ? Storage::f16 : Storage::f32;
+    options_.device = device_of(args.device);
     zoom_ = args.zoom;
     look_.exposure = args.exposure;
     look_.materials = !args.plain;
@@ -438,7 +445,7 @@ void Painter::draw_panel() {
 
   // The frame: per stage, as the solver measured it.
   if (ImGui::CollapsingHeader("Frame", ImGuiTreeNodeFlags_DefaultOpen)) {
-    ImGui::Text("method %s, frame %llu", to_string(options_.method),
+    ImGui::Text("method %s on %s, frame %llu", to_string(options_.method), shown_.device.c_str(),
                 (unsigned long long)shown_.serial);
     ImGui::Text("solve %.1f ms (%.0f fps), display %.1f ms", shown_.solve_ms,
                 shown_.solve_ms > 0 ? 1000.0 / shown_.solve_ms : 0.0, shown_.display_ms);
@@ -501,6 +508,10 @@ void Painter::draw_panel() {
     int m = int(options_.method);
     const char* names[] = {"rc", "pt", "hrc"};  // in the order of penumbra::Method
     if (ImGui::Combo("method", &m, names, 3)) options_.method = Method(m), changed = true;
+    int device = int(options_.device);
+    const char* devices[] = {"cpu", "gpu", "auto"};  // in the order of penumbra::Device
+    if (ImGui::Combo("device", &device, devices, 3))
+      options_.device = Device(device), changed = true;
     changed |= ImGui::SliderInt("bounces", &options_.bounces, 1, 8);
     changed |= ImGui::SliderInt("threads", &options_.threads, 0,
                                 int(std::max(1u, std::thread::hardware_concurrency())),
@@ -773,8 +784,9 @@ std::unique_ptr<PaintCommand> add_paint_command(CLI::App& app) {
   c->add_option("--method", a.method, "Method (switchable in the window)")
       ->check(CLI::IsMember({"hrc", "rc", "pt"}))
       ->capture_default_str();
-  c->add_option("--device", a.device, "Where the solver runs: cpu (gpu: not built yet)")
-      ->check(CLI::IsMember({"cpu", "gpu"}))
+  c->add_option("--device", a.device,
+                "Where the solver runs: cpu, gpu (Vulkan; HRC, one bounce, f32), auto")
+      ->check(CLI::IsMember({"cpu", "gpu", "auto"}))
       ->capture_default_str();
   c->add_option("--replay", a.replay, "Stroke file to paint, one stroke per window frame");
   c->add_option("--screenshot", a.screenshot,
@@ -812,11 +824,6 @@ std::unique_ptr<PaintCommand> add_paint_command(CLI::App& app) {
 }
 
 int run_paint(const PaintArgs& a) {
-  if (a.device == "gpu") {
-    std::cerr << "penumbra paint: --device gpu: this build has no GPU backend yet; use --device "
-                 "cpu\n";
-    return kUsage;
-  }
   if (!std::isfinite(a.exposure)) {
     std::cerr << "penumbra paint: --exposure: expected a finite number of EV\n";
     return kUsage;
@@ -846,6 +853,11 @@ int run_paint(const PaintArgs& a) {
   probe.method = method_of(a.method);
   probe.bounces = a.bounces;
   probe.hrc.storage = a.storage == "f16" ? Storage::f16 : Storage::f32;
+  probe.device = device_of(a.device);
+  if (Status s = check_options(canvas->width(), canvas->height(), probe); !s) {
+    std::cerr << "penumbra paint: " << s.error().message << "\n";
+    return kUsage;
+  }
   const int w = canvas->width(), h = canvas->height();
   if (Status s = check_memory(w, h, probe, false); !s) {
     std::cerr << "penumbra paint: " << s.error().message << "\n";

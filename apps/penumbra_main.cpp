@@ -125,6 +125,7 @@ struct RenderArgs {
   std::string fix = "bilinear";
   std::string sampler = "r1";
   std::string storage = "f32";
+  std::string device = "cpu";
   std::string max_memory = "8G";
   float exposure = 0;
   bool json = false;
@@ -157,6 +158,9 @@ int run_render(const RenderArgs& a) {
                    : a.method == "hrc" ? penumbra::Method::hrc
                                        : penumbra::Method::rc;
   options.hrc.storage = a.storage == "f16" ? penumbra::Storage::f16 : penumbra::Storage::f32;
+  options.device = a.device == "gpu"    ? penumbra::Device::gpu
+                   : a.device == "auto" ? penumbra::Device::auto_
+                                        : penumbra::Device::cpu;
   options.pt.sampler = a.sampler == "random" ? penumbra::Sampler::random : penumbra::Sampler::r1;
   if (!std::isfinite(a.exposure)) {
     std::cerr << "penumbra render: --exposure: expected a finite number of EV\n";
@@ -220,6 +224,7 @@ int run_render(const RenderArgs& a) {
     nlohmann::json stages = nlohmann::json::object();
     for (const penumbra::StageTime& s : result->stages) stages[s.name] = s.ms;
     nlohmann::json j = {{"method", penumbra::to_string(options.method)},
+                        {"device", result->device},
                         {"scene", desc->source},
                         {"width", scene->width},
                         {"height", scene->height},
@@ -236,9 +241,9 @@ int run_render(const RenderArgs& a) {
                         {"outputs", a.outputs}};
     std::cout << j.dump(2) << "\n";
   } else if (!a.quiet) {
-    std::printf("penumbra %s: %s, %dx%d cells, method %s, ", penumbra::kVersion,
+    std::printf("penumbra %s: %s, %dx%d cells, method %s on %s, ", penumbra::kVersion,
                 desc->source.c_str(), scene->width, scene->height,
-                penumbra::to_string(options.method));
+                penumbra::to_string(options.method), result->device.c_str());
     if (options.method == penumbra::Method::pt)
       std::printf("%llu samples per cell, sampler %s%s\n", (unsigned long long)result->samples,
                   penumbra::to_string(options.pt.sampler), options.pt.nee ? ", nee" : "");
@@ -326,6 +331,12 @@ int main(int argc, char** argv) {
   render->add_flag("--extend", rc.extend, "Build long intervals by extending a short traced one");
   render->add_option("--extend-length", rc.extend_length, "Traced length before extension, cells")
       ->check(CLI::Range(1.0f, 1.0e6f))
+      ->capture_default_str();
+  render
+      ->add_option("--device", a.device,
+                   "cpu; gpu (Vulkan, a CPU driver such as lavapipe included); auto (a hardware "
+                   "GPU when there is one and the method runs there, else the CPU)")
+      ->check(CLI::IsMember({"cpu", "gpu", "auto"}))
       ->capture_default_str();
   render->add_option("--storage", a.storage, "hrc: precision of T and R: f32, f16")
       ->check(CLI::IsMember({"f32", "f16"}))

@@ -2,6 +2,7 @@
 // buffers, kernels, batches and timestamps, against the CPU code as reference.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <random>
@@ -13,6 +14,7 @@
 #include "gpu/hrc.hpp"
 #include "gpu/shaders.hpp"
 #include "gpu/vulkan.hpp"
+#include "penumbra/render.hpp"
 #include "penumbra/scene.hpp"
 
 namespace {
@@ -216,6 +218,62 @@ TEST(Gpu, HrcSolveMatchesTheCpu) {
     EXPECT_LT(rel, 1e-3) << k.w << "x" << k.h;
     std::printf("%dx%d: relative RMSE GPU against CPU %.2e\n", k.w, k.h, rel);
   }
+}
+
+}  // namespace
+
+namespace {
+
+// render() with --device gpu runs HRC on the GPU and agrees with the CPU; what the GPU does not
+// run yet is refused with a message; auto falls back to the CPU where there is no hardware GPU.
+TEST(Gpu, RenderOnTheGpuDevice) {
+  SceneDesc d;
+  d.width = 80;
+  d.height = 60;
+  d.environment = {0.02f, 0.02f, 0.03f};
+  d.shapes.push_back({Circle{{20, 30}, 4}, Material{{5, 4, 3}, 1, {}}});
+  d.shapes.push_back({Box{{45, 30}, {3, 30}, 0}, Material{{}, 1, {0.5f, 0.5f, 0.5f}}});
+  const Scene s = *build_scene(d);
+  RenderOptions o;
+  o.method = Method::hrc;
+  Expected<RenderResult> cpu = render(s, o);
+  ASSERT_TRUE(cpu.ok()) << cpu.error().message;
+  EXPECT_EQ(cpu->device, "cpu");
+  for (Device dev : {Device::gpu, Device::auto_}) {
+    o.device = dev;
+    Renderer renderer;  // twice: the second render reuses the context
+    for (int i = 0; i < 2; ++i) {
+      Expected<RenderResult> r = renderer.render(s, o);
+      ASSERT_TRUE(r.ok()) << r.error().message;
+      if (dev == Device::gpu) {
+        EXPECT_NE(r->device, "cpu");
+        EXPECT_TRUE(std::any_of(r->stages.begin(), r->stages.end(),
+                                [](const StageTime& st) { return st.name == "gpu merge down R"; }));
+      }
+      double err = 0, ref = 0;
+      for (std::size_t k = 0; k < 3 * s.cells(); ++k) {
+        const double a = r->fluence.data()[k], b = cpu->fluence.data()[k];
+        err += (a - b) * (a - b);
+        ref += b * b;
+      }
+      EXPECT_LT(std::sqrt(err / ref), 1e-3) << to_string(dev);
+    }
+  }
+  o.device = Device::gpu;
+  o.method = Method::rc;
+  Expected<RenderResult> r = render(s, o);
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find("only --method hrc"), std::string::npos) << r.error().message;
+  o.method = Method::hrc;
+  o.bounces = 2;
+  EXPECT_FALSE(render(s, o).ok());
+  o.bounces = 1;
+  o.hrc.storage = Storage::f16;
+  EXPECT_FALSE(render(s, o).ok());
+  o.device = Device::auto_;  // not ported: the CPU does it
+  Expected<RenderResult> fallback = render(s, o);
+  ASSERT_TRUE(fallback.ok()) << fallback.error().message;
+  EXPECT_EQ(fallback->device, "cpu");
 }
 
 }  // namespace

@@ -161,8 +161,9 @@ TEST_F(PaintWindow, BadInputIsReportedBeforeTheWindow) {
   r = paint_headless({tmp_.file("missing.json")});
   EXPECT_EQ(r.status, 1) << r.err;
   EXPECT_NE(r.err.find("missing.json"), std::string::npos) << r.err;
-  r = paint_headless({"--device", "gpu"});
+  r = paint_headless({"--device", "gpu", "--method", "rc"});  // RC does not run on the GPU yet
   EXPECT_EQ(r.status, 2) << r.err;
+  EXPECT_NE(r.err.find("only --method hrc runs on the GPU"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(tmp_.file("shot.png")));
 }
 

@@ -79,8 +79,17 @@ struct RenderProgress {
   double fraction = 0;  // of the work asked for (samples or time), 0..1
 };
 
+// Where a method runs.
+enum class Device {
+  cpu,    // this machine's cores
+  gpu,    // Vulkan compute on the best device, a CPU driver (lavapipe) included; an error if none
+  auto_,  // a hardware GPU when there is one and the method runs there, the CPU otherwise
+};
+
 struct RenderOptions {
   Method method = Method::rc;
+  // The GPU runs HRC with f32 storage and one bounce so far (docs/GPU.md).
+  Device device = Device::cpu;
   RcOptions rc;
   PtOptions pt;
   HrcOptions hrc;
@@ -111,6 +120,7 @@ struct RenderResult {
   std::uint64_t samples = 0;       // pt: samples per cell in the result
   bool cancelled = false;          // pt: stopped early through RenderOptions::cancel
   RenderOptions options;           // the options used, with derived values filled in
+  std::string device = "cpu";      // what ran it: "cpu", or the GPU's name
 };
 
 // Checks options against a grid size: ranges, combinations, and hierarchies too deep to build.
@@ -153,5 +163,6 @@ const char* to_string(Method m);
 const char* to_string(MergeFix f);
 const char* to_string(Sampler s);
 const char* to_string(Storage s);
+const char* to_string(Device d);
 
 }  // namespace penumbra

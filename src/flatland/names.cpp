@@ -47,4 +47,16 @@ const char* to_string(Storage s) {
   return "?";
 }
 
+const char* to_string(Device d) {
+  switch (d) {
+    case Device::cpu:
+      return "cpu";
+    case Device::gpu:
+      return "gpu";
+    case Device::auto_:
+      return "auto";
+  }
+  return "?";
+}
+
 }  // namespace penumbra

@@ -3,6 +3,7 @@
 
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -13,8 +14,15 @@
 #include "flatland/medium.hpp"
 #include "flatland/pt/pt.hpp"
 #include "flatland/rc/rc.hpp"
+#include "gpu/hrc.hpp"
+#include "gpu/vulkan.hpp"
 
 namespace penumbra {
+namespace {
+struct GpuFailure {  // carries a GPU error out of the task arena
+  std::string message;
+};
+}  // namespace
 
 Status check_options(int width, int height, const RenderOptions& o) {
   auto bad = [](const std::string& what) { return Status(Error{what}); };
@@ -31,6 +39,15 @@ Status check_options(int width, int height, const RenderOptions& o) {
       return bad("time: expected a number of seconds >= 0, found " + std::to_string(pt.seconds));
     if (pt.spp == 0 && pt.seconds == 0) return bad("spp: 0 (no limit) needs a time limit (--time)");
     return {};
+  }
+  if (o.device == Device::gpu) {
+    if (o.method != Method::hrc)
+      return bad(std::string("device gpu: only --method hrc runs on the GPU so far, not ") +
+                 to_string(o.method) + " (docs/GPU.md)");
+    if (o.hrc.storage != Storage::f32)
+      return bad("device gpu: HRC on the GPU stores f32 only so far; drop --storage f16");
+    if (o.bounces > 1)
+      return bad("device gpu: HRC on the GPU computes one bounce so far; drop --bounces");
   }
   if (o.method == Method::hrc) return {};
   const RcOptions& rc = o.rc;
@@ -134,11 +151,41 @@ std::uint64_t scene_bytes(int width, int height) {
   return std::uint64_t(width) * height * 7 * sizeof(float);
 }
 
-// What a Renderer keeps between renders: the packed medium and HRC's buffers.
+// What a Renderer keeps between renders: the packed medium, HRC's buffers, the GPU context.
 struct Renderer::State {
   Medium medium;
   hrc::Workspace workspace;
+  std::shared_ptr<gpu::Context> gpu;
+  bool gpu_hardware_tried = false;
+  std::shared_ptr<gpu::Context> gpu_hardware;
 };
+
+namespace {
+
+// The GPU context a render would use: any Vulkan device for `gpu`, a hardware one for `auto`
+// (null, and no error, when there is none or the options do not run on the GPU).
+Expected<std::shared_ptr<gpu::Context>> gpu_for(const RenderOptions& o, Renderer::State& state) {
+  if (o.device == Device::cpu) return std::shared_ptr<gpu::Context>();
+  if (o.device == Device::gpu) {
+    if (!state.gpu) {
+      Expected<std::shared_ptr<gpu::Context>> c = gpu::Context::create(true);
+      if (!c) return c.error();
+      state.gpu = *c;
+    }
+    return state.gpu;
+  }
+  RenderOptions as_gpu = o;
+  as_gpu.device = Device::gpu;
+  if (!check_options(1, 1, as_gpu)) return std::shared_ptr<gpu::Context>();  // not ported
+  if (!state.gpu_hardware_tried) {
+    state.gpu_hardware_tried = true;
+    Expected<std::shared_ptr<gpu::Context>> c = gpu::Context::create(false);
+    if (c) state.gpu_hardware = *c;
+  }
+  return state.gpu_hardware;
+}
+
+}  // namespace
 
 namespace {
 
@@ -159,6 +206,10 @@ Expected<RenderResult> render_unchecked(const Scene& scene, const RenderOptions&
   if (options.method == Method::hrc)
     if (Status s = hrc::check_scene(scene, options.hrc); !s) return s.error();
   result.memory_bytes = estimate(scene.width, scene.height, options, plan);
+
+  Expected<std::shared_ptr<gpu::Context>> device = gpu_for(options, state);
+  if (!device) return device.error();
+  if (*device) result.device = (*device)->info().name;
 
   rc::fill_directions(plan);
   tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
@@ -190,6 +241,26 @@ Expected<RenderResult> render_unchecked(const Scene& scene, const RenderOptions&
       if (options.method == Method::rc)
         return rc::solve(medium, scene.environment, plan, options.rc, stages);
       std::vector<float> f;
+      if (*device) {  // HRC on the GPU: stages are the GPU's pass times, summed by name
+        std::vector<std::pair<std::string, double>> passes;
+        Stopwatch call;
+        Expected<std::vector<float>> g =
+            gpu::hrc_solve(**device, medium, scene.environment, options.hrc, &passes);
+        if (!g) throw GpuFailure{g.error().message};
+        // What the passes' timestamps do not cover: pipelines, buffers, transfers, submission.
+        double in_passes = 0;
+        for (const auto& pass : passes) in_passes += pass.second;
+        passes.push_back({"setup and transfers", std::max(0.0, call.ms() - in_passes)});
+        for (const auto& [name, ms] : passes) {
+          auto it = std::find_if(stages.begin(), stages.end(),
+                                 [&](const StageTime& st) { return st.name == "gpu " + name; });
+          if (it == stages.end())
+            stages.push_back({"gpu " + name, ms});
+          else
+            it->ms += ms;
+        }
+        return std::move(*g);
+      }
       hrc::solve(medium, scene.environment, options.hrc, workspace, f, stages);
       return f;
     };
@@ -238,6 +309,8 @@ Expected<RenderResult> Renderer::render(const Scene& scene, const RenderOptions&
   // process took the memory) becomes an Error.
   try {
     return render_unchecked(scene, options, *state_);
+  } catch (const GpuFailure& e) {
+    return Error{e.message};
   } catch (const std::bad_alloc&) {
     state_ = std::make_unique<State>();  // give back what the failed render held
     return Error{"out of memory while rendering"};

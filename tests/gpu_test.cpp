@@ -56,7 +56,8 @@ TEST(Gpu, MediumKernelMatchesTheCpu) {
   ASSERT_TRUE(b.ok()) << b.error().message;
   gpu::Buffer* buffers[] = {&*in, &*out};
   b->mark("medium");
-  b->dispatch(*k, buffers, &n, (n + 255) / 256);
+  const gpu::Groups g = gpu::groups_1d(n, 256, c->info());
+  b->dispatch(*k, buffers, &n, g.x, g.y);
   Expected<std::vector<std::pair<std::string, double>>> times = b->run();
   ASSERT_TRUE(times.ok()) << times.error().message;
   if (c->info().timestamp_period_ns > 0) {
@@ -264,6 +265,14 @@ TEST(Gpu, RenderOnTheGpuDevice) {
   Expected<RenderResult> r = render(s, o);
   ASSERT_FALSE(r.ok());
   EXPECT_NE(r.error().message.find("only --method hrc"), std::string::npos) << r.error().message;
+  o.method = Method::pt;  // the path tracer is not on the GPU: refused, not run on the CPU
+  EXPECT_FALSE(render(s, o).ok());
+  o.device = Device::auto_;
+  o.pt.spp = 1;
+  Expected<RenderResult> pt = render(s, o);
+  ASSERT_TRUE(pt.ok()) << pt.error().message;
+  EXPECT_EQ(pt->device, "cpu");
+  o.device = Device::gpu;
   o.method = Method::hrc;
   o.bounces = 2;
   EXPECT_FALSE(render(s, o).ok());
@@ -274,6 +283,40 @@ TEST(Gpu, RenderOnTheGpuDevice) {
   Expected<RenderResult> fallback = render(s, o);
   ASSERT_TRUE(fallback.ok()) << fallback.error().message;
   EXPECT_EQ(fallback->device, "cpu");
+}
+
+}  // namespace
+
+namespace {
+
+// 1-D work is folded so that x stays within the device's limit, and the folded kernel still
+// covers every element exactly once (a limit of 3 groups in x forces 5 rows of groups).
+TEST(Gpu, OneDimensionalWorkFoldsIntoTwo) {
+  gpu::DeviceInfo info;
+  info.max_workgroups_x = 3;
+  gpu::Groups g = gpu::groups_1d(256 * 13 + 1, 256, info);
+  EXPECT_EQ(g.x, 3u);
+  EXPECT_EQ(g.y, 5u);
+  info.max_workgroups_x = 65535;
+  g = gpu::groups_1d(std::size_t(16384) * 16384, 256, info);
+  EXPECT_LE(g.x, 65535u);
+  EXPECT_GE(std::uint64_t(g.x) * g.y * 256, std::uint64_t(16384) * 16384);
+  std::shared_ptr<gpu::Context> c = context();
+  ASSERT_TRUE(c);
+  const std::uint32_t n = 256 * 13 + 1;
+  Expected<gpu::Buffer> in = c->buffer(n * sizeof(float)), out = c->buffer(n * sizeof(float));
+  ASSERT_TRUE(in.ok() && out.ok());
+  for (std::uint32_t i = 0; i < n; ++i) in->as<float>()[i] = 1.0f - 1.0f / float(i + 2);
+  std::fill(out->as<float>(), out->as<float>() + n, -1.0f);
+  Expected<gpu::Kernel> k = c->kernel("medium", gpu::shaders::medium(), 2, sizeof(std::uint32_t));
+  ASSERT_TRUE(k.ok());
+  Expected<gpu::Batch> b = c->batch();
+  ASSERT_TRUE(b.ok());
+  gpu::Buffer* buffers[] = {&*in, &*out};
+  b->dispatch(*k, buffers, &n, 3, 5);  // folded as groups_1d does with a limit of 3
+  ASSERT_TRUE(b->run().ok());
+  for (std::uint32_t i = 0; i < n; ++i)
+    ASSERT_NEAR(out->as<float>()[i], extinction(in->as<float>()[i]), 1e-5f * 10) << i;
 }
 
 }  // namespace

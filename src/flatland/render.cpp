@@ -32,14 +32,6 @@ Status check_options(int width, int height, const RenderOptions& o) {
   if (o.bounces < 1 || o.bounces > 64)
     return bad("bounces: expected 1..64, found " + std::to_string(o.bounces));
   if (o.threads < 0) return bad("threads: expected >= 0, found " + std::to_string(o.threads));
-  if (o.method == Method::pt) {
-    const PtOptions& pt = o.pt;
-    if (pt.spp < 0) return bad("spp: expected >= 0, found " + std::to_string(pt.spp));
-    if (!(pt.seconds >= 0) || !std::isfinite(pt.seconds))
-      return bad("time: expected a number of seconds >= 0, found " + std::to_string(pt.seconds));
-    if (pt.spp == 0 && pt.seconds == 0) return bad("spp: 0 (no limit) needs a time limit (--time)");
-    return {};
-  }
   if (o.device == Device::gpu) {
     if (o.method != Method::hrc)
       return bad(std::string("device gpu: only --method hrc runs on the GPU so far, not ") +
@@ -48,6 +40,14 @@ Status check_options(int width, int height, const RenderOptions& o) {
       return bad("device gpu: HRC on the GPU stores f32 only so far; drop --storage f16");
     if (o.bounces > 1)
       return bad("device gpu: HRC on the GPU computes one bounce so far; drop --bounces");
+  }
+  if (o.method == Method::pt) {
+    const PtOptions& pt = o.pt;
+    if (pt.spp < 0) return bad("spp: expected >= 0, found " + std::to_string(pt.spp));
+    if (!(pt.seconds >= 0) || !std::isfinite(pt.seconds))
+      return bad("time: expected a number of seconds >= 0, found " + std::to_string(pt.seconds));
+    if (pt.spp == 0 && pt.seconds == 0) return bad("spp: 0 (no limit) needs a time limit (--time)");
+    return {};
   }
   if (o.method == Method::hrc) return {};
   const RcOptions& rc = o.rc;
@@ -209,7 +209,6 @@ Expected<RenderResult> render_unchecked(const Scene& scene, const RenderOptions&
 
   Expected<std::shared_ptr<gpu::Context>> device = gpu_for(options, state);
   if (!device) return device.error();
-  if (*device) result.device = (*device)->info().name;
 
   rc::fill_directions(plan);
   tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
@@ -246,7 +245,13 @@ Expected<RenderResult> render_unchecked(const Scene& scene, const RenderOptions&
         Stopwatch call;
         Expected<std::vector<float>> g =
             gpu::hrc_solve(**device, medium, scene.environment, options.hrc, &passes);
+        if (!g && options.device == Device::auto_) {  // auto: the CPU does it instead
+          hrc::solve(medium, scene.environment, options.hrc, workspace, f, stages);
+          stages.push_back({"gpu failed, cpu used: " + g.error().message, 0.0});
+          return f;
+        }
         if (!g) throw GpuFailure{g.error().message};
+        result.device = (*device)->info().name;
         // What the passes' timestamps do not cover: pipelines, buffers, transfers, submission.
         double in_passes = 0;
         for (const auto& pass : passes) in_passes += pass.second;

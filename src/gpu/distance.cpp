@@ -35,7 +35,8 @@ Expected<std::vector<float>> jump_flood_distance(
   const std::uint32_t gx = (std::uint32_t(w) + 15) / 16, gy = (std::uint32_t(h) + 15) / 16;
   Buffer* seeding[] = {&*step, &*a};
   batch->mark("jfa seed");
-  batch->dispatch(*seed, seeding, &n, (n + 255) / 256);
+  const Groups g = groups_1d(n, 256, c.info());
+  batch->dispatch(*seed, seeding, &n, g.x, g.y);
   Buffer* ping = &*a;
   Buffer* pong = &*b;
   for (int k : steps) {

@@ -162,7 +162,8 @@ Expected<std::vector<float>> hrc_solve(const Context& c, const Medium& m, const 
     } push{cells, len[0], len[1], len[2]};
     Buffer* b[] = {*emission, *step, *world};
     batch->mark("views");
-    batch->dispatch(k[0], b, &push, groups(cells, 256));
+    const Groups g = groups_1d(cells, 256, c.info());
+    batch->dispatch(k[0], b, &push, g.x, g.y);
   }
   for (int d = 0; d < 4; ++d) {
     const ViewShape& v = views[d & 1];

@@ -80,6 +80,7 @@ struct Context::Impl {
   std::uint32_t family = 0;
   std::uint32_t memory_type = 0;
   std::uint64_t heap_bytes = 0;  // of the heap buffers come from
+  std::uint32_t timestamp_bits = 0;
   VkCommandPool command_pool = VK_NULL_HANDLE;
 
   ~Impl() {
@@ -239,12 +240,19 @@ Expected<std::shared_ptr<Context>> Context::create(bool allow_cpu) {
     v.vkGetPhysicalDeviceMemoryProperties(d, &mp);
     const VkMemoryPropertyFlags want =
         VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
+    // The host-visible coherent type on the largest heap: a small device-local window (a
+    // 256 MiB BAR without resizable BAR) would hold only small grids. Among equals, cached
+    // memory reads back faster.
     int type = -1;
+    auto heap_of = [&](int i) { return mp.memoryHeaps[mp.memoryTypes[i].heapIndex].size; };
     for (std::uint32_t i = 0; i < mp.memoryTypeCount; ++i) {
       const VkMemoryPropertyFlags f = mp.memoryTypes[i].propertyFlags;
       if ((f & want) != want) continue;
-      // Device-local and host-visible (resizable BAR, unified memory) beats host memory.
-      if (type < 0 || (f & VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT)) type = int(i);
+      const bool cached = f & VK_MEMORY_PROPERTY_HOST_CACHED_BIT;
+      if (type < 0 || heap_of(int(i)) > heap_of(type) ||
+          (heap_of(int(i)) == heap_of(type) && cached &&
+           !(mp.memoryTypes[type].propertyFlags & VK_MEMORY_PROPERTY_HOST_CACHED_BIT)))
+        type = int(i);
     }
     if (type < 0) continue;
     if (rank(p.deviceType) >= best_rank) continue;
@@ -260,6 +268,9 @@ Expected<std::shared_ptr<Context>> Context::create(bool allow_cpu) {
     info.timestamp_period_ns =
         fp[std::size_t(family)].timestampValidBits > 0 ? double(p.limits.timestampPeriod) : 0.0;
     info.max_workgroups_x = p.limits.maxComputeWorkGroupCount[0];
+    info.max_workgroups_y = p.limits.maxComputeWorkGroupCount[1];
+    info.max_buffer_bytes = p.limits.maxStorageBufferRange;
+    v.timestamp_bits = fp[std::size_t(family)].timestampValidBits;
     info.device_local_bytes = 0;
     for (std::uint32_t h = 0; h < mp.memoryHeapCount; ++h)
       if (mp.memoryHeaps[h].flags & VK_MEMORY_HEAP_DEVICE_LOCAL_BIT)
@@ -342,7 +353,12 @@ void Buffer::release() {
 
 Expected<Buffer> Context::buffer(std::size_t bytes) const {
   const Impl& v = *impl_;
-  // Refused before the driver sees it: larger than the whole heap cannot succeed.
+  // Refused before the driver sees it: a storage buffer cannot be bound past the device's
+  // range, and larger than the whole heap cannot succeed.
+  if (bytes > info_.max_buffer_bytes)
+    return Error{"Vulkan: a buffer of " + std::to_string(bytes >> 20) + " MiB is larger than " +
+                 info_.name + " can bind (" + std::to_string(info_.max_buffer_bytes >> 20) +
+                 " MiB); use a smaller grid or --device cpu"};
   if (bytes > v.heap_bytes)
     return Error{"Vulkan: a buffer of " + std::to_string(bytes >> 20) + " MiB is larger than " +
                  info_.name + "'s memory heap (" + std::to_string(v.heap_bytes >> 20) + " MiB)"};
@@ -673,10 +689,21 @@ Expected<std::vector<std::pair<std::string, double>>> Batch::run() {
         !q)
       return q.error();
     const double ns = context_->info().timestamp_period_ns;
-    for (std::size_t i = 0; i < passes_.size(); ++i)
-      times.push_back({passes_[i], double(ticks[i + 1] - ticks[i]) * ns * 1e-6});
+    const std::uint32_t bits = context_->impl().timestamp_bits;
+    const std::uint64_t mask = bits >= 64 ? ~std::uint64_t(0) : (std::uint64_t(1) << bits) - 1;
+    for (std::size_t i = 0; i < passes_.size(); ++i)  // counters wrap at their valid bits
+      times.push_back({passes_[i], double((ticks[i + 1] - ticks[i]) & mask) * ns * 1e-6});
   }
   return times;
+}
+
+Groups groups_1d(std::size_t n, std::uint32_t size, const DeviceInfo& info) {
+  const std::uint64_t groups = (n + size - 1) / size;
+  const std::uint64_t max_x = std::max<std::uint32_t>(info.max_workgroups_x, 1);
+  Groups g;
+  g.x = std::uint32_t(std::min<std::uint64_t>(std::max<std::uint64_t>(groups, 1), max_x));
+  g.y = std::uint32_t((groups + g.x - 1) / g.x);
+  return g;
 }
 
 }  // namespace penumbra::gpu

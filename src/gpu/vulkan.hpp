@@ -21,8 +21,17 @@ struct DeviceInfo {
   bool cpu = false;  // a CPU driver such as lavapipe
   std::uint64_t device_local_bytes = 0;
   double timestamp_period_ns = 0;  // 0: the queue has no timestamps
-  std::uint32_t max_workgroups_x = 0;
+  std::uint32_t max_workgroups_x = 0, max_workgroups_y = 0;
+  std::uint64_t max_buffer_bytes = 0;  // the largest storage buffer a kernel can bind
 };
+
+// Workgroups for n invocations of a 1-D kernel with `size` per group, folded into x and y so
+// that neither passes the device's limit: the kernel's index is
+// gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * size.
+struct Groups {
+  std::uint32_t x = 1, y = 1;
+};
+Groups groups_1d(std::size_t n, std::uint32_t size, const DeviceInfo& info);
 
 class Context;
 
@@ -100,6 +109,8 @@ class Batch {
   Status error_;
 };
 
+// Buffers, kernels and batches refer to their Context, which must outlive them. A Context is
+// used by one thread at a time (its command pool and queue are not locked).
 class Context {
  public:
   // Opens the Vulkan loader and the first suitable device: a hardware GPU when there is one;

@@ -8,7 +8,8 @@ layout(std430, binding = 2) writeonly buffer World { float world[]; };      // 6
 layout(push_constant) uniform Push { uint cells; float l0; float l1; float l2; } p;
 
 void main() {
-  uint i = gl_GlobalInvocationID.x;
+  // 1-D work folded into x and y (gpu::groups_1d), so no dimension passes the device limit.
+  uint i = gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * gl_WorkGroupSize.x;
   if (i >= p.cells) return;
   float sigma = step_[i] > 0.0 ? step_[i] : 0.0;
   bool opaque = isinf(sigma);

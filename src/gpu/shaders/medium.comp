@@ -7,7 +7,8 @@ layout(std430, binding = 1) writeonly buffer Sigma { float sigma[]; };
 layout(push_constant) uniform Push { uint cells; } p;
 
 void main() {
-  uint i = gl_GlobalInvocationID.x;
+  // 1-D work folded into x and y (gpu::groups_1d), so no dimension passes the device limit.
+  uint i = gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * gl_WorkGroupSize.x;
   if (i >= p.cells) return;
   float o = opacity[i];
   float s;

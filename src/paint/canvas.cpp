@@ -12,6 +12,7 @@
 #include "flatland/rasterize.hpp"
 #include "io/image_io.hpp"
 #include "io/path_util.hpp"
+#include "penumbra/render.hpp"
 
 namespace penumbra::paint {
 
@@ -29,16 +30,21 @@ std::string number_text(double v) {
   return buf;
 }
 
-std::size_t cells_bytes(std::size_t cells) {
-  return cells * 7 * sizeof(float);
-}
-
 // The value a layer file holds for `v`: emission and albedo as sRGB codes, opacity linear.
 float snap_srgb(float v, float scale) {
   return decode_srgb16(encode_srgb16(v / scale)) * scale;
 }
 float snap_linear(float v) {
   return decode_linear16(encode_linear16(v));
+}
+
+// Cell i of s moved to the layer codes, emission relative to `scale`.
+void snap_cell(Scene& s, std::size_t i, float scale) {
+  s.opacity[i] = snap_linear(s.opacity[i]);
+  for (std::size_t k = 3 * i; k < 3 * i + 3; ++k) {
+    s.emission[k] = snap_srgb(s.emission[k], scale);
+    s.albedo[k] = snap_srgb(s.albedo[k], 1.0f);
+  }
 }
 
 }  // namespace
@@ -109,7 +115,8 @@ Expected<Canvas> Canvas::blank(int width, int height, float emission_scale) {
   c.scene_.albedo.assign(3 * n, 0.0f);
   c.coverage_.assign(n, 0.0f);
   c.emission_scale_ = emission_scale;
-  c.undo_limit_ = std::clamp<std::size_t>(kUndoBytes / cells_bytes(n), 1, kMaxUndoSteps);
+  c.undo_limit_ =
+      std::clamp<std::size_t>(kUndoBytes / scene_bytes(width, height), 1, kMaxUndoSteps);
   c.touch();
   return c;
 }
@@ -137,15 +144,10 @@ Expected<Canvas> Canvas::from_scene(const SceneDesc& desc, float min_scale) {
   Expected<Canvas> c = blank(desc.width, desc.height, scale);
   if (!c) return c.error();
   Scene& s = c->scene_;
-  s.environment = built->environment;
+  s = std::move(*built);
   parallel_for(s.height, [&](int y) {
-    for (std::size_t i = s.index(0, y), end = i + std::size_t(s.width); i < end; ++i) {
-      s.opacity[i] = snap_linear(built->opacity[i]);
-      for (std::size_t k = 3 * i; k < 3 * i + 3; ++k) {
-        s.emission[k] = snap_srgb(built->emission[k], scale);
-        s.albedo[k] = snap_srgb(built->albedo[k], 1.0f);
-      }
-    }
+    for (std::size_t i = s.index(0, y), end = i + std::size_t(s.width); i < end; ++i)
+      snap_cell(s, i, scale);
   });
   return c;
 }
@@ -174,14 +176,12 @@ Status Canvas::begin_stroke(const Brush& brush, float x, float y) {
   if (stroking_) end_stroke();
   brush_ = brush;
   material_ = brush.material();
-  const Material& m = material_;
-  const float e[3] = {m.emission.r, m.emission.g, m.emission.b};
-  const float a[3] = {m.albedo.r, m.albedo.g, m.albedo.b};
-  for (int c = 0; c < 3; ++c) {
-    brush_cell_[c] = snap_srgb(e[c], emission_scale_);
-    brush_cell_[4 + c] = snap_srgb(a[c], 1.0f);
-  }
-  brush_cell_[3] = snap_linear(m.opacity);
+  snapped_ = material_;
+  snapped_.opacity = snap_linear(material_.opacity);
+  for (float* v : {&snapped_.emission.r, &snapped_.emission.g, &snapped_.emission.b})
+    *v = snap_srgb(*v, emission_scale_);
+  for (float* v : {&snapped_.albedo.r, &snapped_.albedo.g, &snapped_.albedo.b})
+    *v = snap_srgb(*v, 1.0f);
   before_ = snapshot();
   stroking_ = true;
   last_x_ = x;
@@ -281,26 +281,17 @@ void Canvas::cover_segment(float ax, float ay, float bx, float by) {
       const std::size_t i = scene_.index(x, y);
       if (cover <= coverage_[i]) continue;
       coverage_[i] = cover;
-      float* e = &scene_.emission[3 * i];
-      float* a = &scene_.albedo[3 * i];
-      if (cover >= 1.0f) {
-        for (int c = 0; c < 3; ++c) e[c] = brush_cell_[c], a[c] = brush_cell_[4 + c];
-        scene_.opacity[i] = brush_cell_[3];
+      if (cover >= 1.0f) {  // fully covered: the brush's material, already on the codes
+        blend(scene_, i, 1.0f, snapped_);
         continue;
       }
       // Partly covered: the cell as it was before the stroke, under the brush's material by
       // the rasteriser's rule for edge cells, then moved to the layer codes.
-      for (int c = 0; c < 3; ++c) {
-        e[c] = before_.emission[3 * i + c];
-        a[c] = before_.albedo[3 * i + c];
-      }
+      std::copy_n(&before_.emission[3 * i], 3, &scene_.emission[3 * i]);
+      std::copy_n(&before_.albedo[3 * i], 3, &scene_.albedo[3 * i]);
       scene_.opacity[i] = before_.opacity[i];
       blend(scene_, i, blend_fraction(cover, material_), material_);
-      for (int c = 0; c < 3; ++c) {
-        e[c] = snap_srgb(e[c], emission_scale_);
-        a[c] = snap_srgb(a[c], 1.0f);
-      }
-      scene_.opacity[i] = snap_linear(scene_.opacity[i]);
+      snap_cell(scene_, i, emission_scale_);
     }
   }
   touch();

@@ -118,8 +118,8 @@ class Canvas {
   // The stroke in progress: the cells before it, its coverage so far, its brush.
   bool stroking_ = false;
   Brush brush_;
-  Material material_;
-  float brush_cell_[7] = {};  // snapped material of a fully covered cell
+  Material material_;  // what the brush paints
+  Material snapped_;   // the same on the layer codes: what a fully covered cell holds
   Cells before_;
   std::vector<float> coverage_;
   float last_x_ = 0, last_y_ = 0;

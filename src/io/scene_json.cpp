@@ -17,97 +17,19 @@
 #include <utility>
 
 #include "io/image_io.hpp"
+#include "io/json_reader.hpp"
 #include "penumbra/scene.hpp"
 
 namespace penumbra {
 namespace {
 
+using io::describe;
+using io::expected_text;
+using io::fail;
+using io::format_number;
+using io::in_range;
+using io::Range;
 using nlohmann::json;
-
-// Internal only: thrown by the checkers below and turned into an Error at the API boundary.
-struct SceneFailure {
-  std::string message;
-};
-
-[[noreturn]] void fail(const std::string& file, const std::string& path, const std::string& what) {
-  throw SceneFailure{file + ": " + path + ": " + what};
-}
-
-// Shortest text that reads back as the same float ("-0.1", "16385", "inf", "nan").
-std::string format_number(float v) {
-  char buf[64];
-  auto r = std::to_chars(buf, buf + sizeof buf, v);
-  return std::string(buf, r.ptr);
-}
-
-std::string format_number(double v) {
-  char buf[64];
-  auto r = std::to_chars(buf, buf + sizeof buf, v);
-  return std::string(buf, r.ptr);
-}
-
-// What a JSON value is, for "found ..." in messages.
-std::string describe(const json& j) {
-  switch (j.type()) {
-    case json::value_t::number_integer:
-    case json::value_t::number_unsigned:
-      return j.dump();
-    case json::value_t::number_float: {
-      // "512.0", not "512": the point is that it is not an integer.
-      double d = j.get<double>();
-      std::string s = format_number(d);
-      if (std::isfinite(d) && d == std::floor(d) && std::fabs(d) < 1e15) s += ".0";
-      return s;
-    }
-    case json::value_t::string: {
-      std::string s = j.dump();
-      if (s.size() > 60) s = s.substr(0, 56) + "...\"";
-      return "the string " + s;
-    }
-    case json::value_t::boolean:
-      return j.get<bool>() ? "true" : "false";
-    case json::value_t::null:
-      return "null";
-    case json::value_t::array:
-      return "an array of " + std::to_string(j.size()) + (j.size() == 1 ? " element" : " elements");
-    case json::value_t::object:
-      return "an object";
-    default:
-      return "an unsupported value";
-  }
-}
-
-// Value ranges, shared by the JSON walk and `validate`.
-enum class Range { any, nonneg, positive, unit };
-
-const char* expected_text(Range r) {
-  switch (r) {
-    case Range::any:
-      return "a finite number";
-    case Range::nonneg:
-      return "a number >= 0";
-    case Range::positive:
-      return "a number > 0";
-    case Range::unit:
-      return "a number in [0, 1]";
-  }
-  return "a number";
-}
-
-bool in_range(double v, Range r) {
-  if (!std::isfinite(v)) return false;
-  switch (r) {
-    case Range::any:
-      return true;
-    case Range::nonneg:
-      return v >= 0;
-    case Range::positive:
-      return v > 0;
-    case Range::unit:
-      return v >= 0 && v <= 1;
-  }
-  return false;
-}
 
 void check_float(const std::string& file, const std::string& path, float v, Range r) {
   if (!std::isfinite(v)) fail(file, path, "expected a finite number, found " + format_number(v));
@@ -221,88 +143,14 @@ void check_desc(const SceneDesc& desc) {
 
 // ---- The JSON walk: structure and types. ----
 
-class Walker {
+class Walker : public io::JsonReader {
  public:
-  explicit Walker(std::string file) : file_(std::move(file)) {}
-
-  [[noreturn]] void fail_at(const std::string& path, const std::string& what) const {
-    fail(file_, path, what);
-  }
-  [[noreturn]] void expected(const std::string& path, const std::string& what,
-                             const json& found) const {
-    fail(file_, path, "expected " + what + ", found " + describe(found));
-  }
-
-  static bool is_comment_key(const std::string& key) {
-    return (!key.empty() && key[0] == '_') || key == "comment" || key == "description";
-  }
-
-  // Rejects keys that are neither known nor comments, so a typo is never silently ignored.
-  void check_keys(const json& obj, const std::string& prefix,
-                  std::initializer_list<std::string_view> allowed) const {
-    for (const auto& item : obj.items()) {
-      const std::string& key = item.key();
-      if (is_comment_key(key)) continue;
-      if (std::find(allowed.begin(), allowed.end(), key) != allowed.end()) continue;
-      std::string list;
-      for (std::string_view a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
-      fail_at(prefix.empty() ? key : prefix + "." + key,
-              "unknown key \"" + key + "\", expected one of: " + list +
-                  " (or a comment key: \"comment\", \"description\", \"_...\")");
-    }
-  }
-
-  const json& require(const json& obj, const std::string& prefix, const char* key,
-                      const std::string& what) const {
-    auto it = obj.find(key);
-    std::string path = prefix.empty() ? key : prefix + "." + key;
-    if (it == obj.end()) fail_at(path, "missing, expected " + what);
-    return *it;
-  }
-
-  // A finite number that fits a float; ranges are checked later by `validate`.
-  float number(const json& j, const std::string& path, Range r) const {
-    if (!j.is_number()) expected(path, expected_text(r), j);
-    double d = j.get<double>();
-    float f = static_cast<float>(d);
-    if (!std::isfinite(d) || !std::isfinite(f)) expected(path, "a finite number", j);
-    // The range is checked on the number as written too: 1.00000001 rounds to the float 1.
-    if (!in_range(d, r) || !in_range(f, r)) expected(path, expected_text(r), j);
-    return f;
-  }
-
-  int grid_side(const json& j, const std::string& path) const {
-    std::string what = "an integer in 1.." + std::to_string(kMaxGridSide);
-    if (!j.is_number_integer()) expected(path, what, j);
-    bool ok = j.is_number_unsigned() ? j.get<std::uint64_t>() <= std::uint64_t(kMaxGridSide)
-                                     : j.get<std::int64_t>() <= kMaxGridSide;
-    if (!ok || j.get<std::int64_t>() < 1) expected(path, what, j);
-    return static_cast<int>(j.get<std::int64_t>());
-  }
-
-  std::array<float, 2> point(const json& j, const std::string& path) const {
-    if (!j.is_array() || j.size() != 2) expected(path, "an [x, y] pair of numbers", j);
-    return {number(j[0], path + "[0]", Range::any), number(j[1], path + "[1]", Range::any)};
-  }
+  using JsonReader::JsonReader;
 
   std::array<float, 2> size2(const json& j, const std::string& path) const {
     if (!j.is_array() || j.size() != 2) expected(path, "a [w, h] pair of numbers > 0", j);
     return {number(j[0], path + "[0]", Range::positive),
             number(j[1], path + "[1]", Range::positive)};
-  }
-
-  Rgb rgb(const json& j, const std::string& path, Range r) const {
-    std::string what = std::string("an array of 3 numbers") + (r == Range::unit     ? " in [0, 1]"
-                                                               : r == Range::nonneg ? " >= 0"
-                                                                                    : "");
-    if (!j.is_array() || j.size() != 3) expected(path, what, j);
-    return {number(j[0], path + "[0]", r), number(j[1], path + "[1]", r),
-            number(j[2], path + "[2]", r)};
-  }
-
-  std::string string(const json& j, const std::string& path, const std::string& what) const {
-    if (!j.is_string()) expected(path, what, j);
-    return j.get<std::string>();
   }
 
   Shape shape(const json& j, const std::string& path) const {
@@ -356,9 +204,6 @@ class Walker {
     if (j.contains("albedo")) s.material.albedo = rgb(j["albedo"], path + ".albedo", Range::unit);
     return s;
   }
-
- private:
-  std::string file_;
 };
 
 // One decoded layer file: RGB (grey expanded) or its first channel.
@@ -468,9 +313,9 @@ SceneDesc parse_or_throw(std::string_view text, const std::string& path) {
     // nlohmann refuses numbers beyond double range (1e999) while parsing: find their path.
     PathTracker tracker;
     json::sax_parse(text.begin(), text.end(), &tracker);
-    throw SceneFailure{path + ": " + tracker.error_path() + ": expected a finite number, found " +
-                       (tracker.token().empty() ? "a number out of range" : tracker.token()) +
-                       " (out of range)"};
+    throw io::JsonFailure{
+        path + ": " + tracker.error_path() + ": expected a finite number, found " +
+        (tracker.token().empty() ? "a number out of range" : tracker.token()) + " (out of range)"};
   } catch (const json::parse_error& e) {
     // nlohmann's byte is the 1-based index of the last character read (the offending one).
     auto [line, column] = line_column(text, e.byte > 0 ? e.byte - 1 : 0);
@@ -478,8 +323,8 @@ SceneDesc parse_or_throw(std::string_view text, const std::string& path) {
     // Drop nlohmann's "[json.exception...] parse error at line L, column C: " prefix.
     if (auto colon = detail.find(": "); colon != std::string::npos)
       detail = detail.substr(colon + 2);
-    throw SceneFailure{path + ": line " + std::to_string(line) + ", column " +
-                       std::to_string(column) + ": invalid JSON: " + detail};
+    throw io::JsonFailure{path + ": line " + std::to_string(line) + ", column " +
+                          std::to_string(column) + ": invalid JSON: " + detail};
   }
 
   Walker w(path);
@@ -560,7 +405,7 @@ SceneDesc parse_or_throw(std::string_view text, const std::string& path) {
 Expected<SceneDesc> parse_scene(std::string_view json_text, const std::string& path) {
   try {
     return parse_or_throw(json_text, path);
-  } catch (const SceneFailure& f) {
+  } catch (const io::JsonFailure& f) {
     return Error{f.message};
   } catch (const std::exception& e) {  // e.g. allocation failure: still no throw across the API
     return Error{path + ": " + e.what()};
@@ -576,7 +421,7 @@ Expected<SceneDesc> load_scene(const std::string& path) {
 Status validate(const SceneDesc& desc) {
   try {
     check_desc(desc);
-  } catch (const SceneFailure& f) {
+  } catch (const io::JsonFailure& f) {
     return Error{f.message};
   }
   return {};

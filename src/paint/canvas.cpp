@@ -11,6 +11,7 @@
 #include "core/parallel.hpp"
 #include "flatland/rasterize.hpp"
 #include "io/image_io.hpp"
+#include "io/json_reader.hpp"
 #include "io/path_util.hpp"
 #include "penumbra/render.hpp"
 
@@ -388,51 +389,17 @@ Status Canvas::save(const std::string& path) const {
 
 namespace {
 
-struct StrokeError {
-  std::string message;
-};
-
-class StrokeReader {
+// A stroke file read with the scene loader's reader (its messages, keys and number rules).
+class StrokeReader : public io::JsonReader {
  public:
-  explicit StrokeReader(const std::string& file) : file_(file) {}
+  using JsonReader::JsonReader;
 
-  [[noreturn]] void fail(const std::string& where, const std::string& what) const {
-    throw StrokeError{file_ + ": " + where + ": " + what};
-  }
-  std::string found(const json& j) const {
-    std::string s = j.dump();
-    return s.size() > 40 ? s.substr(0, 37) + "..." : s;
-  }
-  float number(const json& j, const std::string& where) const {
-    if (!j.is_number()) fail(where, "expected a number, found " + found(j));
-    const double v = j.get<double>();
-    if (!std::isfinite(v) || std::fabs(v) > 1e30) fail(where, "expected a finite number");
-    return float(v);
-  }
-  Rgb color(const json& j, const std::string& where) const {
-    if (!j.is_array() || j.size() != 3) fail(where, "expected [r, g, b], found " + found(j));
-    Rgb c{number(j[0], where + "[0]"), number(j[1], where + "[1]"), number(j[2], where + "[2]")};
-    for (int k = 0; k < 3; ++k) {
-      const float v = k == 0 ? c.r : k == 1 ? c.g : c.b;
-      if (v < 0 || v > 1)
-        fail(where + "[" + std::to_string(k) + "]",
-             "expected a value in [0, 1], found " + found(j[std::size_t(k)]));
-    }
-    return c;
-  }
   Stroke stroke(const json& j, const std::string& where) const {
-    if (!j.is_object()) fail(where, "expected an object, found " + found(j));
-    for (const auto& [key, value] : j.items()) {
-      static const char* kKeys[] = {"tool", "color", "intensity", "opacity", "radius", "points"};
-      if (std::find_if(std::begin(kKeys), std::end(kKeys),
-                       [&](const char* k) { return key == k; }) == std::end(kKeys))
-        fail(where + "." + key,
-             "unknown field (expected tool, color, intensity, opacity, "
-             "radius, points)");
-    }
+    if (!j.is_object()) expected(where, "a stroke object", j);
+    check_keys(j, where, {"tool", "color", "intensity", "opacity", "radius", "points"});
     Stroke s;
-    if (!j.contains("tool")) fail(where + ".tool", "missing (light, wall, fog or erase)");
-    const json& tool = j["tool"];
+    const char* kTools = "\"light\", \"wall\", \"fog\" or \"erase\"";
+    const json& tool = require(j, where, "tool", kTools);
     const std::string name = tool.is_string() ? tool.get<std::string>() : "";
     if (name == "light")
       s.brush.tool = Tool::light;
@@ -443,39 +410,28 @@ class StrokeReader {
     else if (name == "erase" || name == "eraser")
       s.brush.tool = Tool::erase;
     else
-      fail(where + ".tool",
-           "expected \"light\", \"wall\", \"fog\" or \"erase\", found " + found(tool));
-    if (j.contains("color")) s.brush.color = color(j["color"], where + ".color");
-    if (j.contains("intensity")) {
-      s.brush.intensity = number(j["intensity"], where + ".intensity");
-      if (s.brush.intensity < 0) fail(where + ".intensity", "expected a number >= 0");
-    }
+      expected(where + ".tool", kTools, tool);
+    if (j.contains("color")) s.brush.color = rgb(j["color"], where + ".color", io::Range::unit);
+    if (j.contains("intensity"))
+      s.brush.intensity = number(j["intensity"], where + ".intensity", io::Range::nonneg);
     if (j.contains("opacity")) {
-      s.brush.opacity = number(j["opacity"], where + ".opacity");
+      s.brush.opacity = number(j["opacity"], where + ".opacity", io::Range::unit);
       if (!(s.brush.opacity > 0 && s.brush.opacity < 1))
-        fail(where + ".opacity", "expected a fraction in (0, 1)");
+        expected(where + ".opacity", "a fraction in (0, 1) (1 is a wall)", j["opacity"]);
     }
     if (j.contains("radius")) {
-      s.brush.radius = number(j["radius"], where + ".radius");
+      s.brush.radius = number(j["radius"], where + ".radius", io::Range::any);
       if (!(s.brush.radius >= 0.5f && s.brush.radius <= kMaxBrushRadius))
-        fail(where + ".radius", "expected 0.5.." + std::to_string(int(kMaxBrushRadius)) +
-                                    " cells, found " + found(j["radius"]));
+        expected(where + ".radius", "0.5.." + std::to_string(int(kMaxBrushRadius)) + " cells",
+                 j["radius"]);
     }
-    if (!j.contains("points")) fail(where + ".points", "missing (a list of [x, y] cells)");
-    const json& pts = j["points"];
+    const json& pts = require(j, where, "points", "a list of [x, y] cells");
     if (!pts.is_array() || pts.empty())
-      fail(where + ".points", "expected a non-empty list of [x, y], found " + found(pts));
-    for (std::size_t i = 0; i < pts.size(); ++i) {
-      const std::string p = where + ".points[" + std::to_string(i) + "]";
-      if (!pts[i].is_array() || pts[i].size() != 2)
-        fail(p, "expected [x, y], found " + found(pts[i]));
-      s.points.push_back({number(pts[i][0], p + "[0]"), number(pts[i][1], p + "[1]")});
-    }
+      expected(where + ".points", "a non-empty list of [x, y] cells", pts);
+    for (std::size_t i = 0; i < pts.size(); ++i)
+      s.points.push_back(point(pts[i], where + ".points[" + std::to_string(i) + "]"));
     return s;
   }
-
- private:
-  std::string file_;
 };
 
 }  // namespace
@@ -488,29 +444,23 @@ Expected<StrokeFile> parse_strokes(std::string_view text, const std::string& pat
     return Error{path + ": not valid JSON: " + e.what()};
   }
   try {
-    StrokeReader r(path);
-    if (!doc.is_object()) r.fail("(document)", "expected an object with \"strokes\"");
-    for (const auto& [key, value] : doc.items())
-      if (key != "strokes" && key != "size") r.fail(key, "unknown field (expected strokes, size)");
-    if (!doc.contains("strokes") || !doc["strokes"].is_array())
-      r.fail("strokes", "expected a list of strokes");
+    const StrokeReader r(path);
+    if (!doc.is_object()) r.expected("(document)", "an object with \"strokes\"", doc);
+    r.check_keys(doc, "", {"strokes", "size"});
+    const json& list = r.require(doc, "", "strokes", "a list of strokes");
+    if (!list.is_array()) r.expected("strokes", "a list of strokes", list);
     StrokeFile out;
     if (doc.contains("size")) {
       const json& size = doc["size"];
-      if (!size.is_array() || size.size() != 2 || !size[0].is_number_integer() ||
-          !size[1].is_number_integer() || size[0].get<std::int64_t>() < 1 ||
-          size[1].get<std::int64_t>() < 1 || size[0].get<std::int64_t>() > kMaxGridSide ||
-          size[1].get<std::int64_t>() > kMaxGridSide)
-        r.fail("size", "expected [width, height] in cells, 1.." + std::to_string(kMaxGridSide) +
-                           " each, found " + r.found(size));
-      out.width = size[0].get<int>();
-      out.height = size[1].get<int>();
+      if (!size.is_array() || size.size() != 2)
+        r.expected("size", "[width, height] in cells", size);
+      out.width = r.grid_side(size[0], "size[0]");
+      out.height = r.grid_side(size[1], "size[1]");
     }
-    const json& list = doc["strokes"];
     for (std::size_t i = 0; i < list.size(); ++i)
       out.strokes.push_back(r.stroke(list[i], "strokes[" + std::to_string(i) + "]"));
     return out;
-  } catch (const StrokeError& e) {
+  } catch (const io::JsonFailure& e) {
     return Error{e.message};
   }
 }

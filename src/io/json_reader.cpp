@@ -1,0 +1,163 @@
+// The JSON reader shared by the scene loader and the stroke files.
+#include "io/json_reader.hpp"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <cstdint>
+
+#include "penumbra/scene.hpp"
+
+namespace penumbra::io {
+
+using nlohmann::json;
+
+void fail(const std::string& file, const std::string& path, const std::string& what) {
+  throw JsonFailure{file + ": " + path + ": " + what};
+}
+
+std::string format_number(float v) {
+  char buf[64];
+  auto r = std::to_chars(buf, buf + sizeof buf, v);
+  return std::string(buf, r.ptr);
+}
+
+std::string format_number(double v) {
+  char buf[64];
+  auto r = std::to_chars(buf, buf + sizeof buf, v);
+  return std::string(buf, r.ptr);
+}
+
+std::string describe(const json& j) {
+  switch (j.type()) {
+    case json::value_t::number_integer:
+    case json::value_t::number_unsigned:
+      return j.dump();
+    case json::value_t::number_float: {
+      // "512.0", not "512": the point is that it is not an integer.
+      double d = j.get<double>();
+      std::string s = format_number(d);
+      if (std::isfinite(d) && d == std::floor(d) && std::fabs(d) < 1e15) s += ".0";
+      return s;
+    }
+    case json::value_t::string: {
+      std::string s = j.dump();
+      if (s.size() > 60) s = s.substr(0, 56) + "...\"";
+      return "the string " + s;
+    }
+    case json::value_t::boolean:
+      return j.get<bool>() ? "true" : "false";
+    case json::value_t::null:
+      return "null";
+    case json::value_t::array:
+      return "an array of " + std::to_string(j.size()) + (j.size() == 1 ? " element" : " elements");
+    case json::value_t::object:
+      return "an object";
+    default:
+      return "an unsupported value";
+  }
+}
+
+const char* expected_text(Range r) {
+  switch (r) {
+    case Range::any:
+      return "a finite number";
+    case Range::nonneg:
+      return "a number >= 0";
+    case Range::positive:
+      return "a number > 0";
+    case Range::unit:
+      return "a number in [0, 1]";
+  }
+  return "a number";
+}
+
+bool in_range(double v, Range r) {
+  if (!std::isfinite(v)) return false;
+  switch (r) {
+    case Range::any:
+      return true;
+    case Range::nonneg:
+      return v >= 0;
+    case Range::positive:
+      return v > 0;
+    case Range::unit:
+      return v >= 0 && v <= 1;
+  }
+  return false;
+}
+
+void JsonReader::fail_at(const std::string& path, const std::string& what) const {
+  fail(file_, path, what);
+}
+void JsonReader::expected(const std::string& path, const std::string& what,
+                          const json& found) const {
+  fail(file_, path, "expected " + what + ", found " + describe(found));
+}
+
+bool JsonReader::is_comment_key(const std::string& key) {
+  return (!key.empty() && key[0] == '_') || key == "comment" || key == "description";
+}
+
+void JsonReader::check_keys(const json& obj, const std::string& prefix,
+                            std::initializer_list<std::string_view> allowed) const {
+  for (const auto& item : obj.items()) {
+    const std::string& key = item.key();
+    if (is_comment_key(key)) continue;
+    if (std::find(allowed.begin(), allowed.end(), key) != allowed.end()) continue;
+    std::string list;
+    for (std::string_view a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
+    fail_at(prefix.empty() ? key : prefix + "." + key,
+            "unknown key \"" + key + "\", expected one of: " + list +
+                " (or a comment key: \"comment\", \"description\", \"_...\")");
+  }
+}
+
+const json& JsonReader::require(const json& obj, const std::string& prefix, const char* key,
+                                const std::string& what) const {
+  auto it = obj.find(key);
+  std::string path = prefix.empty() ? key : prefix + "." + key;
+  if (it == obj.end()) fail_at(path, "missing, expected " + what);
+  return *it;
+}
+
+float JsonReader::number(const json& j, const std::string& path, Range r) const {
+  if (!j.is_number()) expected(path, expected_text(r), j);
+  double d = j.get<double>();
+  float f = static_cast<float>(d);
+  if (!std::isfinite(d) || !std::isfinite(f)) expected(path, "a finite number", j);
+  // The range is checked on the number as written too: 1.00000001 rounds to the float 1.
+  if (!in_range(d, r) || !in_range(f, r)) expected(path, expected_text(r), j);
+  return f;
+}
+
+int JsonReader::grid_side(const json& j, const std::string& path) const {
+  std::string what = "an integer in 1.." + std::to_string(kMaxGridSide);
+  if (!j.is_number_integer()) expected(path, what, j);
+  bool ok = j.is_number_unsigned() ? j.get<std::uint64_t>() <= std::uint64_t(kMaxGridSide)
+                                   : j.get<std::int64_t>() <= kMaxGridSide;
+  if (!ok || j.get<std::int64_t>() < 1) expected(path, what, j);
+  return static_cast<int>(j.get<std::int64_t>());
+}
+
+std::array<float, 2> JsonReader::point(const json& j, const std::string& path) const {
+  if (!j.is_array() || j.size() != 2) expected(path, "an [x, y] pair of numbers", j);
+  return {number(j[0], path + "[0]", Range::any), number(j[1], path + "[1]", Range::any)};
+}
+
+Rgb JsonReader::rgb(const json& j, const std::string& path, Range r) const {
+  std::string what = std::string("an array of 3 numbers") + (r == Range::unit     ? " in [0, 1]"
+                                                             : r == Range::nonneg ? " >= 0"
+                                                                                  : "");
+  if (!j.is_array() || j.size() != 3) expected(path, what, j);
+  return {number(j[0], path + "[0]", r), number(j[1], path + "[1]", r),
+          number(j[2], path + "[2]", r)};
+}
+
+std::string JsonReader::string(const json& j, const std::string& path,
+                               const std::string& what) const {
+  if (!j.is_string()) expected(path, what, j);
+  return j.get<std::string>();
+}
+
+}  // namespace penumbra::io

@@ -31,6 +31,7 @@
 #include <thread>
 #include <vector>
 
+#include "cli_enums.hpp"
 #include "core/timer.hpp"
 #include "io/display.hpp"
 #include "io/image_io.hpp"
@@ -211,14 +212,6 @@ bool parse_size(const std::string& text, int& w, int& h) {
   return ec2 == std::errc() && q == end && w > 0 && h > 0 && text[0] != '-' && p[1] != '-';
 }
 
-Device device_of(const std::string& name) {
-  return name == "gpu" ? Device::gpu : name == "auto" ? Device::auto_ : Device::cpu;
-}
-
-Method method_of(const std::string& name) {
-  return name == "rc" ? Method::rc : name == "pt" ? Method::pt : Method::hrc;
-}
-
 double median(std::vector<double> v) {
   if (v.empty()) return 0;
   std::sort(v.begin(), v.end());
@@ -263,12 +256,7 @@ class Painter {
  public:
   Painter(const PaintArgs& args, paint::Canvas canvas, std::vector<paint::Stroke> replay)
       : args_(args), canvas_(std::move(canvas)), replay_(std::move(replay)) {
-    options_.method = method_of(args.method);
-    options_.bounces = args.bounces;
-    options_.threads = args.threads;
-    options_.pt.spp = 4;
-    options_.hrc.storage = args.storage == "f16" ? Storage::f16 : Storage::f32;
-    options_.device = device_of(args.device);
+    options_ = args.options;
     zoom_ = args.zoom;
     look_.exposure = args.exposure;
     look_.materials = !args.plain;
@@ -506,10 +494,10 @@ void Painter::draw_panel() {
   if (ImGui::CollapsingHeader("Method", ImGuiTreeNodeFlags_DefaultOpen)) {
     bool changed = false;
     int m = int(options_.method);
-    const char* names[] = {"rc", "pt", "hrc"};  // in the order of penumbra::Method
+    const char* names[] = {to_string(Method(0)), to_string(Method(1)), to_string(Method(2))};
     if (ImGui::Combo("method", &m, names, 3)) options_.method = Method(m), changed = true;
     int device = int(options_.device);
-    const char* devices[] = {"cpu", "gpu", "auto"};  // in the order of penumbra::Device
+    const char* devices[] = {to_string(Device(0)), to_string(Device(1)), to_string(Device(2))};
     if (ImGui::Combo("device", &device, devices, 3))
       options_.device = Device(device), changed = true;
     changed |= ImGui::SliderInt("bounces", &options_.bounces, 1, 8);
@@ -781,13 +769,10 @@ std::unique_ptr<PaintCommand> add_paint_command(CLI::App& app) {
   CLI::App* c = cmd->app;
   c->add_option("scene", a.scene, "Scene file to start from (JSON, format 1)");
   c->add_option("--size", a.size, "Grid of a blank canvas, WxH cells")->capture_default_str();
-  c->add_option("--method", a.method, "Method (switchable in the window)")
-      ->check(CLI::IsMember({"hrc", "rc", "pt"}))
-      ->capture_default_str();
-  c->add_option("--device", a.device,
-                "Where the solver runs: cpu, gpu (Vulkan; HRC, one bounce, f32), auto")
-      ->check(CLI::IsMember({"cpu", "gpu", "auto"}))
-      ->capture_default_str();
+  add_enum_option(c, "--method", a.options.method, {Method::hrc, Method::rc, Method::pt},
+                  "Method (switchable in the window)");
+  add_enum_option(c, "--device", a.options.device, {Device::cpu, Device::gpu, Device::auto_},
+                  "Where the solver runs: cpu, gpu (Vulkan; HRC, one bounce, f32), auto");
   c->add_option("--replay", a.replay, "Stroke file to paint, one stroke per window frame");
   c->add_option("--screenshot", a.screenshot,
                 "Save the window as PNG once the solver shows the final canvas, then exit");
@@ -803,13 +788,12 @@ std::unique_ptr<PaintCommand> add_paint_command(CLI::App& app) {
       ->check(CLI::Range(1e-3f, 1e9f))
       ->each([&a](const std::string&) { a.emission_scale_given = true; })
       ->capture_default_str();
-  c->add_option("--storage", a.storage, "hrc: precision of T and R: f32, f16")
-      ->check(CLI::IsMember({"f32", "f16"}))
-      ->capture_default_str();
-  c->add_option("--bounces", a.bounces, "Diffuse bounces")
+  add_enum_option(c, "--storage", a.options.hrc.storage, {Storage::f32, Storage::f16},
+                  "hrc: precision of T and R: f32, f16");
+  c->add_option("--bounces", a.options.bounces, "Diffuse bounces")
       ->check(CLI::Range(1, 8))
       ->capture_default_str();
-  c->add_option("--threads", a.threads, "Solver threads (0: all cores)")
+  c->add_option("--threads", a.options.threads, "Solver threads (0: all cores)")
       ->check(CLI::Range(0, 1024))
       ->capture_default_str();
   c->add_option("--exposure", a.exposure, "Display exposure in EV")->capture_default_str();
@@ -849,11 +833,7 @@ int run_paint(const PaintArgs& a) {
   }
   // Memory: the method's, plus the painter's copies of the canvas (the canvas, the stroke's
   // starting cells, the solver's two) and its undo steps.
-  RenderOptions probe;
-  probe.method = method_of(a.method);
-  probe.bounces = a.bounces;
-  probe.hrc.storage = a.storage == "f16" ? Storage::f16 : Storage::f32;
-  probe.device = device_of(a.device);
+  const RenderOptions& probe = a.options;
   if (Status s = check_options(canvas->width(), canvas->height(), probe); !s) {
     std::cerr << "penumbra paint: " << s.error().message << "\n";
     return kUsage;

@@ -4,25 +4,27 @@
 #include <memory>
 #include <string>
 
+#include "penumbra/render.hpp"
+
 namespace CLI {
 class App;
 }
 
 struct PaintArgs {
-  std::string scene;             // empty: a blank canvas of `size`
-  std::string size = "256x256";  // cells, for a blank canvas
-  std::string method = "hrc";
-  std::string device = "cpu";
-  std::string storage = "f32";  // hrc
-  std::string replay;           // stroke file to paint at start
-  std::string screenshot;       // PNG of the window after the replay; then exit
-  std::string record;           // stroke file written at exit
-  std::string save;             // scene file (JSON + PNG layers) written at exit
-  float zoom = 0;               // window pixels per cell (0: fit about 800 pixels)
+  PaintArgs() {
+    options.method = penumbra::Method::hrc;  // the fastest CPU method
+    options.pt.spp = 4;                      // a quick look, not a reference
+  }
+  penumbra::RenderOptions options;  // the panel's starting settings (method, device, ...)
+  std::string scene;                // empty: a blank canvas of `size`
+  std::string size = "256x256";     // cells, for a blank canvas
+  std::string replay;               // stroke file to paint at start
+  std::string screenshot;           // PNG of the window after the replay; then exit
+  std::string record;               // stroke file written at exit
+  std::string save;                 // scene file (JSON + PNG layers) written at exit
+  float zoom = 0;                   // window pixels per cell (0: fit about 800 pixels)
   float emission_scale = 64;
   bool emission_scale_given = false;  // else a loaded painting keeps its own scale
-  int bounces = 1;
-  int threads = 0;
   float exposure = 0;
   int frames = 0;  // > 0: solve continuously, exit after this many solver frames
   bool stats = false;

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "cli_enums.hpp"
 #include "compare_cmd.hpp"
 #include "core/timer.hpp"
 #include "paint_cmd.hpp"
@@ -121,11 +122,6 @@ void draw_progress(const penumbra::RenderProgress& p) {
 struct RenderArgs {
   std::string scene;
   std::vector<std::string> outputs;
-  std::string method = "rc";
-  std::string fix = "bilinear";
-  std::string sampler = "r1";
-  std::string storage = "f32";
-  std::string device = "cpu";
   std::string max_memory = "8G";
   float exposure = 0;
   bool json = false;
@@ -151,17 +147,6 @@ int run_render(const RenderArgs& a) {
               << a.max_memory << "'\n";
     return kUsage;
   }
-  static const std::map<std::string, MergeFix> fixes = {
-      {"bilinear", MergeFix::bilinear}, {"none", MergeFix::none}, {"nearest", MergeFix::nearest}};
-  options.rc.fix = fixes.at(a.fix);
-  options.method = a.method == "pt"    ? penumbra::Method::pt
-                   : a.method == "hrc" ? penumbra::Method::hrc
-                                       : penumbra::Method::rc;
-  options.hrc.storage = a.storage == "f16" ? penumbra::Storage::f16 : penumbra::Storage::f32;
-  options.device = a.device == "gpu"    ? penumbra::Device::gpu
-                   : a.device == "auto" ? penumbra::Device::auto_
-                                        : penumbra::Device::cpu;
-  options.pt.sampler = a.sampler == "random" ? penumbra::Sampler::random : penumbra::Sampler::r1;
   if (!std::isfinite(a.exposure)) {
     std::cerr << "penumbra render: --exposure: expected a finite number of EV\n";
     return kUsage;
@@ -288,9 +273,8 @@ int main(int argc, char** argv) {
       ->add_option("-o,--output", a.outputs,
                    "Output file: .png (display), .exr or .pfm (fluence); repeatable")
       ->required();
-  render->add_option("--method", a.method, "Method")
-      ->check(CLI::IsMember({"rc", "pt", "hrc"}))
-      ->capture_default_str();
+  add_enum_option(render, "--method", a.options.method,
+                  {penumbra::Method::rc, penumbra::Method::pt, penumbra::Method::hrc}, "Method");
   penumbra::PtOptions& pt = a.options.pt;
   CLI::Option* spp =
       render
@@ -303,9 +287,9 @@ int main(int argc, char** argv) {
           ->check(CLI::NonNegativeNumber);
   render->add_flag("--nee", pt.nee,
                    "pt: next event estimation (aim at emitting regions, combined by MIS)");
-  render->add_option("--sampler", a.sampler, "pt: direction sequence: r1 (low discrepancy), random")
-      ->check(CLI::IsMember({"r1", "random"}))
-      ->capture_default_str();
+  add_enum_option(render, "--sampler", pt.sampler,
+                  {penumbra::Sampler::r1, penumbra::Sampler::random},
+                  "pt: direction sequence: r1 (low discrepancy), random");
   render->add_option("--seed", pt.seed, "pt: random seed")->capture_default_str();
   penumbra::RcOptions& rc = a.options.rc;
   render->add_option("--probe-spacing", rc.probe_spacing, "Cascade-0 probe spacing s0 in cells")
@@ -323,24 +307,21 @@ int main(int argc, char** argv) {
   render->add_option("--cascades", rc.cascades, "Number of cascades (0: reach the grid diagonal)")
       ->check(CLI::Range(0, 16))
       ->capture_default_str();
-  render->add_option("--fix", a.fix, "Merge: bilinear (fix), none (vanilla), nearest")
-      ->check(CLI::IsMember({"bilinear", "none", "nearest"}))
-      ->capture_default_str();
+  add_enum_option(render, "--fix", rc.fix, {MergeFix::bilinear, MergeFix::none, MergeFix::nearest},
+                  "Merge: bilinear (fix), none (vanilla), nearest");
   render->add_flag("--preaverage", rc.preaverage,
                    "Trace a 2x2 sub-probe neighbourhood and store the average");
   render->add_flag("--extend", rc.extend, "Build long intervals by extending a short traced one");
   render->add_option("--extend-length", rc.extend_length, "Traced length before extension, cells")
       ->check(CLI::Range(1.0f, 1.0e6f))
       ->capture_default_str();
-  render
-      ->add_option("--device", a.device,
-                   "cpu; gpu (Vulkan, a CPU driver such as lavapipe included); auto (a hardware "
-                   "GPU when there is one and the method runs there, else the CPU)")
-      ->check(CLI::IsMember({"cpu", "gpu", "auto"}))
-      ->capture_default_str();
-  render->add_option("--storage", a.storage, "hrc: precision of T and R: f32, f16")
-      ->check(CLI::IsMember({"f32", "f16"}))
-      ->capture_default_str();
+  add_enum_option(render, "--device", a.options.device,
+                  {penumbra::Device::cpu, penumbra::Device::gpu, penumbra::Device::auto_},
+                  "cpu; gpu (Vulkan, a CPU driver such as lavapipe included); auto (a hardware "
+                  "GPU when there is one and the method runs there, else the CPU)");
+  add_enum_option(render, "--storage", a.options.hrc.storage,
+                  {penumbra::Storage::f32, penumbra::Storage::f16},
+                  "hrc: precision of T and R: f32, f16");
   bool no_cross_blur = false;
   render->add_flag("--no-cross-blur", no_cross_blur, "hrc: skip the final 1-cell cross blur");
   bool no_near_segment = false;

@@ -44,34 +44,18 @@ Expected<std::vector<float>> cross_blur(const Context& c, int width, int height,
   return std::vector<float>(o, o + 3 * n);
 }
 
-namespace {
-
-struct ViewShape {
-  int w, h, levels;
-  int probes(int n) const { return int((std::int64_t(w) + (1 << n) - 1) >> n); }
-};
-
-}  // namespace
-
 Expected<std::vector<float>> hrc_solve(const Context& c, const Medium& m, const Rgb& env,
                                        const HrcOptions& o,
                                        std::vector<std::pair<std::string, double>>* passes) {
   if (o.storage != Storage::f32) return Error{"GPU HRC: only f32 storage so far"};
-  const int W = m.width, H = m.height, pad = hrc::view_pad();
+  const int W = m.width, H = m.height, pad = hrc::kPad;
   const std::uint32_t cells = std::uint32_t(std::size_t(W) * H);
-  const ViewShape views[2] = {{W, H, hrc::level_count(W)}, {H, W, hrc::level_count(H)}};
-  const int levels = std::max(views[0].levels, views[1].levels);
-  // Sizes for both orientations, as hrc.cpp plan().
-  std::vector<std::size_t> t_size(std::size_t(levels) + 1, 0);
-  std::size_t r_size = 1, view_cells = 0;
-  for (const ViewShape& v : views) {
-    for (int n = 0; n <= v.levels; ++n)
-      t_size[std::size_t(n)] =
-          std::max(t_size[std::size_t(n)], std::size_t(v.probes(n)) * ((1u << n) + 1) * v.h);
-    for (int n = 0; n < v.levels; ++n)
-      r_size = std::max(r_size, std::size_t(v.probes(n)) * (1u << n) * v.h);
-    view_cells = std::max(view_cells, std::size_t(v.w + pad) * (v.h + 2 * pad));
-  }
+  // The CPU solve's sizes for both view orientations.
+  const hrc::Sizes sz = hrc::plan(W, H);
+  const hrc::View* views = sz.views;
+  const int levels = int(sz.t.size()) - 1;
+  const std::vector<std::size_t>& t_size = sz.t;
+  const std::size_t r_size = std::max<std::size_t>(sz.r, 1), view_cells = sz.pad;
 
   // Kernels and buffers.
   struct K {
@@ -147,14 +131,14 @@ Expected<std::vector<float>> hrc_solve(const Context& c, const Medium& m, const 
   std::copy(m.step.begin(), m.step.end(), (*step)->as<float>());
   float* ang = (*angles)->as<float>();
   for (int lv = 0; lv <= levels; ++lv)
-    for (int a = 0; a < (1 << lv); ++a) ang[(1 << lv) - 1 + a] = hrc::cone_angle_of(lv, a);
+    for (int a = 0; a < (1 << lv); ++a) ang[(1 << lv) - 1 + a] = hrc::cone_angle(lv, a);
 
   Expected<Batch> batch = c.batch(256);
   if (!batch) return batch.error();
   auto groups = [](std::size_t n, std::uint32_t size) {
     return std::uint32_t((n + size - 1) / size);
   };
-  const std::array<float, 3> len = hrc::traced_lengths();
+  const float* len = hrc::kLengths;
   {
     struct {
       std::uint32_t cells;
@@ -166,8 +150,8 @@ Expected<std::vector<float>> hrc_solve(const Context& c, const Medium& m, const 
     batch->dispatch(k[0], b, &push, g.x, g.y);
   }
   for (int d = 0; d < 4; ++d) {
-    const ViewShape& v = views[d & 1];
-    const hrc::ViewRotation rot = hrc::view_rotation(d, W, H);
+    const hrc::View& v = views[d & 1];
+    const hrc::Rotation rot = hrc::rotation(d, W, H);
     const int hp = v.h + 2 * pad;
     {
       const std::int32_t push[9] = {v.w,

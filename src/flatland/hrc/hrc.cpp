@@ -57,34 +57,6 @@ inline int vy(int n, int k) {
   return 2 * k - (1 << n);
 }
 
-// Eq. 13: the angle of cone a (the paper's i = a + 1/2) of cascade n.
-float cone_angle(int n, int a) {
-  const double s = double(1 << n);
-  return float(std::atan2(2.0 * (a + 1) - s, s) - std::atan2(2.0 * a - s, s));
-}
-
-// One quadrant's rotated grid: w cells along the gathering direction (+u), h across.
-struct View {
-  int w = 0, h = 0;
-  int levels = 0;                                                                 // N
-  int probes(int n) const { return int((std::int64_t(w) + (1 << n) - 1) >> n); }  // P_n
-  std::size_t t_size(int n) const { return std::size_t(probes(n)) * ((1 << n) + 1) * h; }
-  std::size_t r_size(int n) const { return std::size_t(probes(n)) * (1 << n) * h; }
-};
-
-View make_view(int w, int h) {
-  return {w, h, level_count(w)};
-}
-
-// Rotated views carry this many empty cells beyond the grid (the longest traced ray, T_2's
-// (4, +-4), ends 4 cells out), so the traced levels read them without bounds checks.
-constexpr int kPad = 5;
-
-// The rays of T_0..T_2 cross cells along 6 lengths: 1/2, sqrt5/4, sqrt2/2 and their doubles.
-// A rotated view keeps, per cell, the emission and the transmittance over the three short
-// ones (the doubles are their squares), so tracing is multiply-adds: no exp, no branch, the
-// same work whatever the scene holds. Opaque cells have transmittance 0 (e^-inf).
-constexpr float kLengths[3] = {0.5f, 0.559016994f, 0.707106781f};
 enum Plane { kR, kG, kB, kTau0, kTau1, kTau2, kPlanes };
 
 // Structure of arrays: plane p holds `cells` floats, column by column (v fastest), like T and R.
@@ -97,29 +69,6 @@ struct ViewPlanes {
   // Offset of view cell (u, v) in a plane.
   std::size_t at(int u, int v) const { return std::size_t(u) * hp + kPad + v; }
 };
-
-// Everything solve() allocates, sized for both view orientations: working_bytes() and solve()
-// agree by construction.
-struct Sizes {
-  View views[2];
-  std::vector<std::size_t> t;  // elements of T_n, n = 0..N
-  std::size_t r = 0;           // elements of one R layer
-  std::size_t pad = 0;         // cells of the rotated medium
-};
-
-Sizes plan(int width, int height) {
-  Sizes s;
-  s.views[0] = make_view(width, height);
-  s.views[1] = make_view(height, width);
-  const int levels = std::max(s.views[0].levels, s.views[1].levels);
-  s.t.assign(std::size_t(levels) + 1, 0);
-  for (const View& v : s.views) {
-    for (int n = 0; n <= v.levels; ++n) s.t[n] = std::max(s.t[n], v.t_size(n));
-    for (int n = 0; n < v.levels; ++n) s.r = std::max(s.r, v.r_size(n));
-    s.pad = std::max(s.pad, std::size_t(v.w + kPad) * (v.h + 2 * kPad));
-  }
-  return s;
-}
 
 template <class S>
 std::uint64_t bytes_of(const Sizes& s, int width, int height, bool blur) {
@@ -170,28 +119,6 @@ struct Buffers {
     r[0].release(), r[1].release();
   }
 };
-
-// Where view cell (u, v) of quadrant d = +x, +y, -x, -y lies in a row-major world array:
-// base + u * su + v * sv. The rotation takes the quadrant's direction to +u (a rotation, not a
-// mirror, so a rotated scene permutes the quadrants and nothing else).
-struct Rotation {
-  std::ptrdiff_t base, su, sv;
-  std::ptrdiff_t at(int u, int v) const { return base + u * su + v * sv; }
-};
-
-Rotation rotation(int d, int width, int height) {
-  const std::ptrdiff_t W = width, last_row = std::ptrdiff_t(height - 1) * W;
-  switch (d) {
-    case 0:
-      return {0, 1, W};  // (x, y) = (u, v)
-    case 1:
-      return {W - 1, W, -1};  // (x, y) = (W - 1 - v, u)
-    case 2:
-      return {last_row + W - 1, -1, -W};  // (x, y) = (W - 1 - u, H - 1 - v)
-    default:
-      return {last_row, -W, 1};  // (x, y) = (v, H - 1 - u)
-  }
-}
 
 // Calls f(u, v) for every cell of a w x h view in an order that reads and writes memory in
 // runs: along v when the world neighbour of a v step is adjacent (|sv| = 1), otherwise in
@@ -815,18 +742,43 @@ void solve_with(const Medium& m, const Rgb& env, const HrcOptions& o, Buffers<S>
 
 }  // namespace
 
-// ---- for the GPU backend: the same constants and tables -------------------------------------
+// ---- the geometry shared with the GPU backend (hrc.hpp) ---------------------------------------
 
-float cone_angle_of(int n, int a) {
-  return cone_angle(n, a);
+float cone_angle(int n, int a) {
+  const double s = double(1 << n);
+  return float(std::atan2(2.0 * (a + 1) - s, s) - std::atan2(2.0 * a - s, s));
 }
 
-int view_pad() {
-  return kPad;
+View make_view(int w, int h) {
+  return {w, h, level_count(w)};
 }
 
-std::array<float, 3> traced_lengths() {
-  return {kLengths[0], kLengths[1], kLengths[2]};
+Sizes plan(int width, int height) {
+  Sizes s;
+  s.views[0] = make_view(width, height);
+  s.views[1] = make_view(height, width);
+  const int levels = std::max(s.views[0].levels, s.views[1].levels);
+  s.t.assign(std::size_t(levels) + 1, 0);
+  for (const View& v : s.views) {
+    for (int n = 0; n <= v.levels; ++n) s.t[n] = std::max(s.t[n], v.t_size(n));
+    for (int n = 0; n < v.levels; ++n) s.r = std::max(s.r, v.r_size(n));
+    s.pad = std::max(s.pad, std::size_t(v.w + kPad) * (v.h + 2 * kPad));
+  }
+  return s;
+}
+
+Rotation rotation(int d, int width, int height) {
+  const std::ptrdiff_t W = width, last_row = std::ptrdiff_t(height - 1) * W;
+  switch (d) {
+    case 0:
+      return {0, 1, W};  // (x, y) = (u, v)
+    case 1:
+      return {W - 1, W, -1};  // (x, y) = (W - 1 - v, u)
+    case 2:
+      return {last_row + W - 1, -1, -W};  // (x, y) = (W - 1 - u, H - 1 - v)
+    default:
+      return {last_row, -W, 1};  // (x, y) = (v, H - 1 - u)
+  }
 }
 
 std::vector<TracedCell> traced_cells(int n, int k) {
@@ -834,11 +786,6 @@ std::vector<TracedCell> traced_cells(int n, int k) {
   for (const Segment& g : ray_patterns()[std::size_t(n)][std::size_t(k)])
     out.push_back({g.du, g.dv, g.plane - kTau0, g.squared});
   return out;
-}
-
-ViewRotation view_rotation(int d, int width, int height) {
-  const Rotation r = rotation(d, width, height);
-  return {r.base, r.su, r.sv};
 }
 
 int level_count(int w) {

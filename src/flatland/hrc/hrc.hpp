@@ -70,19 +70,56 @@ void solve(const Medium& medium, const Rgb& environment, const HrcOptions& optio
 inline constexpr float kBlurOpacityStep = 0.5f;
 void cross_blur(int W, int H, const float* tau_half, const float* f, float* out);
 
-// What the GPU backend shares with this implementation, so both use the same numbers.
-float cone_angle_of(int n, int a);      // eq. 13, cone a of cascade n
-int view_pad();                         // empty cells around a rotated view
-std::array<float, 3> traced_lengths();  // the transmittance planes' lengths (and their doubles)
+// ---- The geometry of the solve, shared with the GPU backend (src/gpu/hrc.cpp) ----
+
+// Eq. 13: the angle of cone a (the paper's i = a + 1/2) of cascade n.
+float cone_angle(int n, int a);
+
+// One quadrant's rotated grid: w cells along the gathering direction (+u), h across.
+struct View {
+  int w = 0, h = 0;
+  int levels = 0;                                                                 // N
+  int probes(int n) const { return int((std::int64_t(w) + (1 << n) - 1) >> n); }  // P_n
+  std::size_t t_size(int n) const { return std::size_t(probes(n)) * ((1 << n) + 1) * h; }
+  std::size_t r_size(int n) const { return std::size_t(probes(n)) * (1 << n) * h; }
+};
+View make_view(int w, int h);
+
+// Rotated views carry this many empty cells beyond the grid (the longest traced ray, T_2's
+// (4, +-4), ends 4 cells out), so the traced levels read them without bounds checks.
+inline constexpr int kPad = 5;
+
+// The rays of T_0..T_2 cross cells along 6 lengths: 1/2, sqrt5/4, sqrt2/2 and their doubles.
+// A rotated view keeps, per cell, the emission and the transmittance over the three short
+// ones (the doubles are their squares), so tracing is multiply-adds: no exp, no branch, the
+// same work whatever the scene holds. Opaque cells have transmittance 0 (e^-inf).
+inline constexpr float kLengths[3] = {0.5f, 0.559016994f, 0.707106781f};
+
+// Everything a solve allocates, sized for both view orientations: working_bytes() and solve()
+// agree by construction.
+struct Sizes {
+  View views[2];
+  std::vector<std::size_t> t;  // elements of T_n, n = 0..N
+  std::size_t r = 0;           // elements of one R layer
+  std::size_t pad = 0;         // cells of the rotated medium
+};
+Sizes plan(int width, int height);
+
+// Where view cell (u, v) of quadrant d = +x, +y, -x, -y lies in a row-major world array:
+// base + u * su + v * sv. The rotation takes the quadrant's direction to +u (a rotation, not a
+// mirror, so a rotated scene permutes the quadrants and nothing else).
+struct Rotation {
+  std::ptrdiff_t base, su, sv;
+  std::ptrdiff_t at(int u, int v) const { return base + u * su + v * sv; }
+};
+Rotation rotation(int d, int width, int height);
+
+// The cells ray k of T_n crosses, in order, each with its length.
 struct TracedCell {
   int du, dv;
-  int length;    // index into traced_lengths()
+  int length;    // index into kLengths
   bool squared;  // twice that length
 };
-std::vector<TracedCell> traced_cells(int n, int k);  // the cells ray k of T_n crosses, in order
-struct ViewRotation {
-  std::ptrdiff_t base, su, sv;  // view cell (u, v) is world cell base + u su + v sv
-};
-ViewRotation view_rotation(int d, int width, int height);  // quadrant d = +x, +y, -x, -y
+std::vector<TracedCell> traced_cells(int n, int k);
 
 }  // namespace penumbra::hrc

@@ -206,7 +206,7 @@ TEST(Gpu, HrcSolveMatchesTheCpu) {
     std::vector<float> cpu;
     std::vector<StageTime> stages;
     hrc::solve(m, s.environment, o, workspace, cpu, stages);
-    std::vector<std::pair<std::string, double>> passes;
+    std::vector<StageTime> passes;
     Expected<std::vector<float>> gpu = gpu::hrc_solve(*c, m, s.environment, o, &passes);
     ASSERT_TRUE(gpu.ok()) << gpu.error().message;
     ASSERT_EQ(gpu->size(), cpu.size());

@@ -3,7 +3,6 @@
 
 #include <tbb/task_arena.h>
 
-#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -240,9 +239,8 @@ Expected<RenderResult> render_unchecked(const Scene& scene, const RenderOptions&
       if (options.method == Method::rc)
         return rc::solve(medium, scene.environment, plan, options.rc, stages);
       std::vector<float> f;
-      if (*device) {  // HRC on the GPU: stages are the GPU's pass times, summed by name
-        std::vector<std::pair<std::string, double>> passes;
-        Stopwatch call;
+      if (*device) {  // HRC on the GPU: stages are the GPU's pass times
+        std::vector<StageTime> passes;
         Expected<std::vector<float>> g =
             gpu::hrc_solve(**device, medium, scene.environment, options.hrc, &passes);
         if (!g && options.device == Device::auto_) {  // auto: the CPU does it instead
@@ -252,18 +250,7 @@ Expected<RenderResult> render_unchecked(const Scene& scene, const RenderOptions&
         }
         if (!g) throw GpuFailure{g.error().message};
         result.device = (*device)->info().name;
-        // What the passes' timestamps do not cover: pipelines, buffers, transfers, submission.
-        double in_passes = 0;
-        for (const auto& pass : passes) in_passes += pass.second;
-        passes.push_back({"setup and transfers", std::max(0.0, call.ms() - in_passes)});
-        for (const auto& [name, ms] : passes) {
-          auto it = std::find_if(stages.begin(), stages.end(),
-                                 [&](const StageTime& st) { return st.name == "gpu " + name; });
-          if (it == stages.end())
-            stages.push_back({"gpu " + name, ms});
-          else
-            it->ms += ms;
-        }
+        for (const StageTime& p : passes) stages.push_back({"gpu " + p.name, p.ms});
         return std::move(*g);
       }
       hrc::solve(medium, scene.environment, options.hrc, workspace, f, stages);

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <deque>
 
+#include "core/timer.hpp"
 #include "flatland/hrc/hrc.hpp"
 #include "gpu/shaders.hpp"
 
@@ -22,7 +23,8 @@ Expected<std::vector<float>> cross_blur(const Context& c, int width, int height,
   struct Push {
     std::int32_t w, h;
     float step;
-  } push{width, height, hrc::kBlurOpacityStep};
+    std::uint32_t tau_offset;
+  } push{width, height, hrc::kBlurOpacityStep, 0};
   Expected<Kernel> k = c.kernel("cross_blur", shaders::cross_blur(), 3, sizeof(Push));
   if (!k) return k.error();
   Expected<Buffer> tau = c.buffer(n * sizeof(float));
@@ -45,9 +47,9 @@ Expected<std::vector<float>> cross_blur(const Context& c, int width, int height,
 }
 
 Expected<std::vector<float>> hrc_solve(const Context& c, const Medium& m, const Rgb& env,
-                                       const HrcOptions& o,
-                                       std::vector<std::pair<std::string, double>>* passes) {
+                                       const HrcOptions& o, std::vector<StageTime>* stages) {
   if (o.storage != Storage::f32) return Error{"GPU HRC: only f32 storage so far"};
+  Stopwatch call;
   const int W = m.width, H = m.height, pad = hrc::kPad;
   const std::uint32_t cells = std::uint32_t(std::size_t(W) * H);
   // The CPU solve's sizes for both view orientations.
@@ -70,7 +72,7 @@ Expected<std::vector<float>> hrc_solve(const Context& c, const Medium& m, const 
                      {"hrc_merge_up", shaders::hrc_merge_up(), 2, 20},
                      {"hrc_merge_down", shaders::hrc_merge_down(), 5, 36},
                      {"hrc_gather", shaders::hrc_gather(), 3, 52},
-                     {"cross_blur", shaders::cross_blur(), 3, 12}};
+                     {"cross_blur", shaders::cross_blur(), 3, 16}};
   std::vector<Kernel> k;
   for (const K& spec : specs) {
     Expected<Kernel> kernel = c.kernel(spec.name, spec.spirv, spec.buffers, spec.push);
@@ -226,24 +228,29 @@ Expected<std::vector<float>> hrc_solve(const Context& c, const Medium& m, const 
     struct {
       std::int32_t w, h;
       float step;
-    } push{W, H, hrc::kBlurOpacityStep};
-    // The transmittance over half a cell, computed here as the CPU computes its world plane, so
-    // the blur's opacity test decides alike.
-    Expected<Buffer*> tau = make(cells);
-    if (!tau) return tau.error();
-    float* th = (*tau)->as<float>();
-    for (std::size_t i = 0; i < cells; ++i) {
-      const float sigma = m.step[i] > 0 ? m.step[i] : 0.0f;
-      th[i] = sigma == 0.0f ? 1.0f : std::isinf(sigma) ? 0.0f : std::exp(-sigma * len[0]);
-    }
+      std::uint32_t tau_offset;
+    } push{W, H, hrc::kBlurOpacityStep, 3 * cells};
     batch->mark("cross blur");
-    Buffer* b[] = {*tau, *fluence, *blurred};
+    Buffer* b[] = {*world, *fluence, *blurred};  // the transmittance over half a cell: plane 3
     batch->dispatch(k[6], b, &push, groups(std::size_t(W), 16), groups(std::size_t(H), 16));
     result = *blurred;
   }
   Expected<std::vector<std::pair<std::string, double>>> times = batch->run();
   if (!times) return times.error();
-  if (passes) passes->insert(passes->end(), times->begin(), times->end());
+  if (stages) {  // each pass summed over the quadrants, then what the timestamps do not cover
+    const std::size_t first = stages->size();
+    double in_passes = 0;
+    for (const auto& [name, ms] : *times) {
+      in_passes += ms;
+      auto it = std::find_if(stages->begin() + std::ptrdiff_t(first), stages->end(),
+                             [&](const StageTime& st) { return st.name == name; });
+      if (it == stages->end())
+        stages->push_back({name, ms});
+      else
+        it->ms += ms;
+    }
+    stages->push_back({"setup and transfers", std::max(0.0, call.ms() - in_passes)});
+  }
   const float* f = result->as<float>();
   return std::vector<float>(f, f + 3 * std::size_t(cells));
 }

@@ -18,9 +18,10 @@ Expected<std::vector<float>> cross_blur(const Context& context, int width, int h
 
 // A whole HRC solve on the GPU, as hrc::solve with f32 storage: the world planes, per quadrant
 // the rotated view, T_0..T_2, merge up, merge down and the gather, then the cross blur. Fluence
-// at every cell centre (3 floats per cell); GPU time per pass appended to `passes`.
-Expected<std::vector<float>> hrc_solve(
-    const Context& context, const Medium& medium, const Rgb& environment, const HrcOptions& options,
-    std::vector<std::pair<std::string, double>>* passes = nullptr);
+// at every cell centre (3 floats per cell). Appended to `stages`: the GPU time of each pass
+// (timestamp queries, summed over the quadrants) and "setup and transfers" for the rest.
+Expected<std::vector<float>> hrc_solve(const Context& context, const Medium& medium,
+                                       const Rgb& environment, const HrcOptions& options,
+                                       std::vector<StageTime>* stages = nullptr);
 
 }  // namespace penumbra::gpu

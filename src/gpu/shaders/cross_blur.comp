@@ -6,14 +6,15 @@ layout(local_size_x = 16, local_size_y = 16) in;
 layout(std430, binding = 0) readonly buffer Tau { float tau_half[]; };
 layout(std430, binding = 1) readonly buffer Fluence { float f[]; };
 layout(std430, binding = 2) writeonly buffer Out { float o[]; };
-layout(push_constant) uniform Push { int w; int h; float step; } p;
+// tau_half starts at tau_offset (the HRC world's first transmittance plane, or a buffer of its own).
+layout(push_constant) uniform Push { int w; int h; float step; uint tau_offset; } p;
 
 void main() {
   int x = int(gl_GlobalInvocationID.x), y = int(gl_GlobalInvocationID.y);
   if (x >= p.w || y >= p.h) return;
   int i = y * p.w + x;
   vec3 c = vec3(f[3 * i], f[3 * i + 1], f[3 * i + 2]);
-  float t = tau_half[i];
+  float t = tau_half[p.tau_offset + uint(i)];
   if (t == 0.0) {
     o[3 * i] = c.r;
     o[3 * i + 1] = c.g;
@@ -29,7 +30,7 @@ void main() {
     int nx = x + side[k].x, ny = y + side[k].y;
     if (nx < 0 || ny < 0 || nx >= p.w || ny >= p.h) continue;
     int j = ny * p.w + nx;
-    float tj = tau_half[j];
+    float tj = tau_half[p.tau_offset + uint(j)];
     if (tj == 0.0) continue;
     precise float oj = 1.0 - tj * tj;
     if (abs(oj - opacity) > p.step) continue;

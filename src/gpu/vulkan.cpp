@@ -320,15 +320,8 @@ Context::~Context() = default;
 Buffer::~Buffer() {
   release();
 }
-Buffer::Buffer(Buffer&& o) noexcept
-    : context_(o.context_),
-      buffer_(o.buffer_),
-      memory_(o.memory_),
-      bytes_(o.bytes_),
-      mapped_(o.mapped_) {
-  o.context_ = nullptr;
-  o.buffer_ = o.memory_ = 0;
-  o.mapped_ = nullptr;
+Buffer::Buffer(Buffer&& o) noexcept {
+  *this = std::move(o);
 }
 Buffer& Buffer::operator=(Buffer&& o) noexcept {
   if (this != &o) {

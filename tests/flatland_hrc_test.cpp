@@ -29,17 +29,12 @@ RenderOptions hrc(Storage storage = Storage::f32) {
   return o;
 }
 
+// The converged reference: the path tracer with next event estimation.
 RenderOptions pt(int spp) {
-  RenderOptions o;
-  o.method = Method::pt;
-  o.pt.spp = spp;
-  o.pt.nee = true;
-  return o;
+  return testing::pt_options(spp, Sampler::r1, true);
 }
 
-ImageRgb run(const Scene& s, const RenderOptions& o) {
-  return testing::render_valid(s, o).fluence;
-}
+using testing::fluence_of;
 
 // Relative error of the disk light against F = 2 L asin(r / d), at cells at least 4 cells from
 // the disk and the border.
@@ -102,7 +97,7 @@ TEST(FlatlandHrc, DiskLightMatchesClosedForm) {
   };
   for (const Case& c : {Case{128, 128, 64.3f, 63.8f}, Case{150, 97, 80.3f, 47.8f}}) {
     const Scene s = disk_scene(c.w, c.h, c.cx, c.cy, 12, 2.5f);
-    const ImageRgb f = run(s, hrc()), ref = run(s, pt(256));
+    const ImageRgb f = fluence_of(s, hrc()), ref = fluence_of(s, pt(256));
     ASSERT_EQ(f.width(), c.w);
     ASSERT_EQ(f.height(), c.h);
     const DiskError e = disk_error(c.w, c.h, c.cx, c.cy, 12, 2.5f, f);
@@ -135,7 +130,7 @@ TEST(FlatlandHrc, UniformEnvironmentGivesTwoPiE) {
           RenderOptions o = hrc(storage);
           o.hrc.near_segment = near;
           o.hrc.cross_blur = blur;
-          const ImageRgb f = run(build(d), o);
+          const ImageRgb f = fluence_of(build(d), o);
           const double tol = storage == Storage::f16 ? 5e-3 : 1e-5;
           for (int y = 0; y < c.h; ++y)
             for (int x = 0; x < c.w; ++x) {
@@ -172,7 +167,7 @@ TEST(FlatlandHrc, VolumetricBoxMatchesThePathTracer) {
     RenderOptions a = hrc(), b = pt(1024), c = pt(1024);
     a.bounces = b.bounces = c.bounces = bounces;
     c.pt.seed = 7;
-    const ImageRgb f = run(s, a), ref = run(s, b), ref2 = run(s, c);
+    const ImageRgb f = fluence_of(s, a), ref = fluence_of(s, b), ref2 = fluence_of(s, c);
     const double noise = relative_l1(ref2, ref), err = relative_l1(f, ref);
     EXPECT_LT(err, 2 * noise) << "bounces " << bounces << ": pt runs differ by " << noise;
     EXPECT_LT(err, 0.006) << "bounces " << bounces;
@@ -189,7 +184,8 @@ TEST(FlatlandHrc, PenumbraBeatsRadianceCascades) {
   d.shapes.push_back({Circle{{64, 128}, 5}, Material{{20, 20, 20}, 1, {}}});
   d.shapes.push_back({Box{{136, 128}, {14, 14}, 0}, Material{}});
   const Scene s = build(d);
-  const ImageRgb ref = run(s, pt(512)), a = run(s, hrc()), b = run(s, RenderOptions{});
+  const ImageRgb ref = fluence_of(s, pt(512)), a = fluence_of(s, hrc()),
+                 b = fluence_of(s, RenderOptions{});
   auto rmse = [&](const ImageRgb& f) {
     double e2 = 0;
     int n = 0;
@@ -230,7 +226,7 @@ TEST(FlatlandHrc, RotatingTheSceneRotatesTheResult) {
   for (int bounces : {1, 2}) {
     RenderOptions o = hrc();
     o.bounces = bounces;
-    const ImageRgb a = run(s, o), b = run(t, o);
+    const ImageRgb a = fluence_of(s, o), b = fluence_of(t, o);
     ASSERT_EQ(b.width(), h);
     double worst = 0;
     for (int y = 0; y < h; ++y)
@@ -247,9 +243,9 @@ TEST(FlatlandHrc, SameBitsWithOneAndTwoThreads) {
   for (Storage storage : {Storage::f32, Storage::f16}) {
     RenderOptions o = hrc(storage);
     o.threads = 1;
-    const ImageRgb a = run(s, o);
+    const ImageRgb a = fluence_of(s, o);
     o.threads = 2;
-    const ImageRgb b = run(s, o);
+    const ImageRgb b = fluence_of(s, o);
     ASSERT_EQ(a.size(), b.size());
     EXPECT_EQ(0, std::memcmp(a.data(), b.data(), a.size() * sizeof(float))) << to_string(storage);
   }
@@ -259,7 +255,7 @@ TEST(FlatlandHrc, SameBitsWithOneAndTwoThreads) {
 // scene (measured 0.016% mean), and a scene too bright for it is refused, not overflowed.
 TEST(FlatlandHrc, HalfPrecisionHoldsAccuracyAndRefusesOverflow) {
   const Scene s = build(default_scene());
-  const ImageRgb a = run(s, hrc(Storage::f32)), b = run(s, hrc(Storage::f16));
+  const ImageRgb a = fluence_of(s, hrc(Storage::f32)), b = fluence_of(s, hrc(Storage::f16));
   EXPECT_LT(relative_l1(b, a), 1e-3);
   EXPECT_LT(hrc::structure_bytes(512, 512, Storage::f16) * 2,
             hrc::structure_bytes(512, 512, Storage::f32) + 1);
@@ -301,14 +297,14 @@ TEST(FlatlandHrc, SecondBounceReemitsAlbedoTimesMeanRadiance) {
   d.shapes.push_back({Circle{{20, 32}, 4}, Material{{5, 5, 5}, 1, {}}});
   d.shapes.push_back({Box{{45, 32}, {6, 40}, 0}, Material{{}, 1, {0.8f, 0.5f, 0.2f}}});
   const Scene s = build(d);
-  const ImageRgb first = run(s, hrc());
+  const ImageRgb first = fluence_of(s, hrc());
   Scene lit = s;
   for (std::size_t i = 0; i < s.emission.size(); ++i)
     lit.emission[i] += s.albedo[i] * first.data()[i] / float(2 * kPi);
-  const ImageRgb by_hand = run(lit, hrc());
+  const ImageRgb by_hand = fluence_of(lit, hrc());
   RenderOptions two = hrc();
   two.bounces = 2;
-  const ImageRgb second = run(s, two);
+  const ImageRgb second = fluence_of(s, two);
   for (std::size_t i = 0; i < second.size(); ++i)
     ASSERT_NEAR(second.data()[i], by_hand.data()[i], 1e-4);
   EXPECT_GT(second.at(38, 32).r, first.at(38, 32).r * 1.05f);
@@ -322,7 +318,7 @@ TEST(FlatlandHrc, NoLeakThroughOneCellWall) {
   d.height = 64;
   d.shapes.push_back({Circle{{30, 32}, 6}, Material{{10, 10, 10}, 1, {}}});
   d.shapes.push_back({Box{{64.5f, 32}, {1, 64}, 0}, Material{}});
-  const ImageRgb f = run(build(d), hrc());
+  const ImageRgb f = fluence_of(build(d), hrc());
   EXPECT_GT(f.at(50, 32).r, 1.0f);
   float dark = 0;
   for (int y = 0; y < 64; ++y)
@@ -342,7 +338,7 @@ TEST(FlatlandHrc, CrossBlurSmoothsButKeepsWallsApart) {
   const Scene s = build(d);
   RenderOptions off = hrc();
   off.hrc.cross_blur = false;
-  const ImageRgb a = run(s, off), b = run(s, hrc());
+  const ImageRgb a = fluence_of(s, off), b = fluence_of(s, hrc());
   auto roughness = [&](const ImageRgb& f) {  // mean |second difference| across the shadow
     double sum = 0;
     for (int x = 80; x < 128; ++x)

@@ -22,18 +22,8 @@ Scene build(const SceneDesc& d) {
   return testing::build_valid(d);
 }
 
-RenderOptions pt_options(int spp, Sampler sampler = Sampler::r1, bool nee = false) {
-  RenderOptions o;
-  o.method = Method::pt;
-  o.pt.spp = spp;
-  o.pt.sampler = sampler;
-  o.pt.nee = nee;
-  return o;
-}
-
-ImageRgb run(const Scene& s, const RenderOptions& o) {
-  return testing::render_valid(s, o).fluence;
-}
+using testing::fluence_of;
+using testing::pt_options;
 
 // An opaque disk light of radiance L in the middle of an n x n grid, black environment.
 struct Disk {
@@ -74,7 +64,7 @@ TEST(FlatlandPt, UniformEnvironmentIsExactAtAnySampleCount) {
   for (int spp : {1, 3, 16})
     for (Sampler sampler : {Sampler::r1, Sampler::random})
       for (bool nee : {false, true}) {
-        const ImageRgb f = run(s, pt_options(spp, sampler, nee));
+        const ImageRgb f = fluence_of(s, pt_options(spp, sampler, nee));
         for (int y = 0; y < d.height; ++y)
           for (int x = 0; x < d.width; ++x) {
             const Rgb c = f.at(x, y);
@@ -111,7 +101,7 @@ TEST(FlatlandPt, UniformMediumMatchesTheClosedForm) {
     }
     return sum * 2 * kPi / n;
   };
-  const ImageRgb f = run(s, pt_options(1024));
+  const ImageRgb f = fluence_of(s, pt_options(1024));
   for (auto [x, y] : {std::pair{0, 0}, {5, 7}, {16, 12}, {31, 23}, {20, 3}}) {
     const double want = exact(x + 0.5, y + 0.5);
     EXPECT_NEAR(f.at(x, y).r, want, 2e-3 * want) << x << "," << y;
@@ -124,8 +114,8 @@ TEST(FlatlandPt, UniformMediumMatchesTheClosedForm) {
 TEST(FlatlandPt, RandomSamplerErrorHalvesAtFourTimesTheSamples) {
   const Disk disk;
   const Scene s = disk.scene();
-  const double e8 = disk.rmse(run(s, pt_options(8, Sampler::random)));
-  const double e32 = disk.rmse(run(s, pt_options(32, Sampler::random)));
+  const double e8 = disk.rmse(fluence_of(s, pt_options(8, Sampler::random)));
+  const double e32 = disk.rmse(fluence_of(s, pt_options(32, Sampler::random)));
   EXPECT_NEAR(e32 / e8, 0.5, 0.06) << e8 << " " << e32;
 }
 
@@ -134,12 +124,12 @@ TEST(FlatlandPt, RandomSamplerErrorHalvesAtFourTimesTheSamples) {
 TEST(FlatlandPt, R1ConvergesAtLeastAsFastAndReachesTheClosedForm) {
   const Disk disk;
   const Scene s = disk.scene();
-  const double e8 = disk.rmse(run(s, pt_options(8)));
-  const double e32 = disk.rmse(run(s, pt_options(32)));
-  const double e32_random = disk.rmse(run(s, pt_options(32, Sampler::random)));
+  const double e8 = disk.rmse(fluence_of(s, pt_options(8)));
+  const double e32 = disk.rmse(fluence_of(s, pt_options(32)));
+  const double e32_random = disk.rmse(fluence_of(s, pt_options(32, Sampler::random)));
   EXPECT_LT(e32 / e8, 0.5);
   EXPECT_LT(e32, e32_random);
-  const ImageRgb f = run(s, pt_options(512, Sampler::r1, true));
+  const ImageRgb f = fluence_of(s, pt_options(512, Sampler::r1, true));
   double mean_rel = 0;
   int cells = 0;
   disk.for_cells([&](int x, int y, double exact) {
@@ -162,7 +152,7 @@ TEST(FlatlandPt, NeeAgreesWithPlainSamplingAndHasLessVariance) {
   RenderOptions plain = pt_options(16, Sampler::random),
                 nee = pt_options(16, Sampler::random, true);
   nee.pt.seed = 7;  // independent of the plain run's numbers
-  const ImageRgb a = run(s, plain), b = run(s, nee);
+  const ImageRgb a = fluence_of(s, plain), b = fluence_of(s, nee);
   double sum = 0, sum2 = 0;
   int n = 0;
   for (int y = 0; y < d.height; ++y)
@@ -176,8 +166,8 @@ TEST(FlatlandPt, NeeAgreesWithPlainSamplingAndHasLessVariance) {
   EXPECT_LT(std::abs(mean) / (sd / std::sqrt(n)), 4.0) << "mean difference " << mean;
   const Scene lone = disk.scene();
   // Half the samples stay uniform (the MIS mixture), which bounds the gain; measured 0.34.
-  EXPECT_LT(disk.rmse(run(lone, pt_options(16, Sampler::random, true))),
-            0.5 * disk.rmse(run(lone, pt_options(16, Sampler::random))));
+  EXPECT_LT(disk.rmse(fluence_of(lone, pt_options(16, Sampler::random, true))),
+            0.5 * disk.rmse(fluence_of(lone, pt_options(16, Sampler::random))));
 }
 
 // Two bounces are the fixed-point iteration the cascades run: the same as one bounce of a scene
@@ -190,7 +180,7 @@ TEST(FlatlandPt, SecondBounceIsDirectLightOfTheReemittingScene) {
   d.shapes.push_back({Box{{20, 37}, {36, 4}, 0}, Material{{0, 0, 0}, 1, {0.7f, 0.7f, 0.7f}}});
   d.shapes.push_back({Box{{26, 22}, {6, 6}, 0}, Material{{0, 0, 0}, 0.4f, {0.5f, 0.8f, 0.5f}}});
   const Scene s = build(d);
-  const ImageRgb f1 = run(s, pt_options(1024, Sampler::r1, true));
+  const ImageRgb f1 = fluence_of(s, pt_options(1024, Sampler::r1, true));
   Scene s2 = s;
   const Medium m = make_medium(s);
   for (std::size_t i = 0; i < s.cells(); ++i)
@@ -200,8 +190,8 @@ TEST(FlatlandPt, SecondBounceIsDirectLightOfTheReemittingScene) {
   RenderOptions two = pt_options(1024, Sampler::r1, true);
   two.pt.seed = 3;
   two.bounces = 2;
-  const ImageRgb want = run(s2, pt_options(1024, Sampler::r1, true));
-  const ImageRgb got = run(s, two);
+  const ImageRgb want = fluence_of(s2, pt_options(1024, Sampler::r1, true));
+  const ImageRgb got = fluence_of(s, two);
   double err = 0, norm = 0, bounce = 0;
   for (std::size_t i = 0; i < want.size(); ++i) {
     err += std::abs(got.data()[i] - want.data()[i]);
@@ -225,7 +215,7 @@ TEST(FlatlandPt, CascadesAgreeWithTheConvergedPathTracer) {
   for (int bounces : {1, 3}) {
     RenderOptions pt = pt_options(512, Sampler::r1, true), rc;
     pt.bounces = rc.bounces = bounces;
-    const ImageRgb want = run(s, pt), got = run(s, rc);
+    const ImageRgb want = fluence_of(s, pt), got = fluence_of(s, rc);
     double err = 0, norm = 0;
     for (std::size_t i = 0; i < want.size(); ++i) {
       err += std::abs(got.data()[i] - want.data()[i]);
@@ -241,9 +231,9 @@ TEST(FlatlandPt, SameBitsOnAnyThreadCountAndAfterATimeLimit) {
   RenderOptions o = pt_options(5, Sampler::r1, true);
   o.bounces = 2;
   o.threads = 1;
-  const ImageRgb one = run(s, o);
+  const ImageRgb one = fluence_of(s, o);
   o.threads = 2;
-  const ImageRgb two = run(s, o);
+  const ImageRgb two = fluence_of(s, o);
   ASSERT_EQ(one.size(), two.size());
   EXPECT_TRUE(std::equal(one.data(), one.data() + one.size(), two.data()));
   // A time limit splits the samples into passes of its own choosing; the result of N samples is
@@ -253,7 +243,7 @@ TEST(FlatlandPt, SameBitsOnAnyThreadCountAndAfterATimeLimit) {
   Expected<RenderResult> t = render(s, timed);
   ASSERT_TRUE(t.ok());
   EXPECT_GE(t->samples, 1u);
-  const ImageRgb same = run(s, pt_options(int(t->samples)));
+  const ImageRgb same = fluence_of(s, pt_options(int(t->samples)));
   EXPECT_TRUE(std::equal(same.data(), same.data() + same.size(), t->fluence.data()));
 }
 
@@ -273,7 +263,7 @@ TEST(FlatlandPt, CancelStopsAfterTheCurrentPass) {
   EXPECT_TRUE(r->cancelled);
   EXPECT_EQ(r->samples, 1u);
   EXPECT_EQ(calls, 1);
-  const ImageRgb first = run(s, pt_options(1));
+  const ImageRgb first = fluence_of(s, pt_options(1));
   EXPECT_TRUE(std::equal(first.data(), first.data() + first.size(), r->fluence.data()));
 }
 

@@ -34,6 +34,21 @@ inline RenderResult render_valid(const Scene& s, const RenderOptions& o = {}) {
   return r.ok() ? *r : RenderResult{};
 }
 
+// The fluence render() gives where the test expects it to succeed.
+inline ImageRgb fluence_of(const Scene& s, const RenderOptions& o) {
+  return render_valid(s, o).fluence;
+}
+
+// The path tracer with `spp` samples per cell.
+inline RenderOptions pt_options(int spp, Sampler sampler = Sampler::r1, bool nee = false) {
+  RenderOptions o;
+  o.method = Method::pt;
+  o.pt.spp = spp;
+  o.pt.sampler = sampler;
+  o.pt.nee = nee;
+  return o;
+}
+
 // A directory of the running test's own under the test temporary directory, removed at the end.
 class TestDir {
  public:

@@ -219,6 +219,8 @@ int run_render(const RenderArgs& a) {
                         {"load_ms", load_ms},
                         {"write_ms", write_ms},
                         {"memory_bytes", result->memory_bytes},
+                        {"gpu_memory_bytes", result->gpu_memory_bytes},
+                        {"uploaded_bytes", result->uploaded_bytes},
                         {"intervals", result->intervals},
                         {"samples", result->samples},
                         {"cancelled", result->cancelled},
@@ -249,6 +251,10 @@ int run_render(const RenderArgs& a) {
                     : "  working memory %.1f MiB, %.1f M intervals traced (%.1f M/s)\n",
                 double(result->memory_bytes) / (1 << 20), double(result->intervals) / 1e6,
                 double(result->intervals) / 1e3 / result->time_ms);
+    if (result->gpu_memory_bytes > 0)
+      std::printf("  GPU memory %.1f MiB, %.2f MiB uploaded\n",
+                  double(result->gpu_memory_bytes) / (1 << 20),
+                  double(result->uploaded_bytes) / (1 << 20));
     for (const std::string& out : a.outputs) std::printf("  wrote %s\n", out.c_str());
   }
   if (result->cancelled) {

@@ -372,6 +372,31 @@ TEST_F(Cli, LargestGridIsRefusedUpFront) {
   EXPECT_NE(r.err.find("huge.json"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("16384x16384"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("limit"), std::string::npos) << r.err;
+  for (const char* method : {"rc", "hrc"}) {  // on the GPU too, where the host holds less
+    const Result g =
+        run({"render", huge, "--device", "gpu", "--method", method, "-o", out("x.pfm")});
+    expect_failure(g, 1);
+    EXPECT_NE(g.err.find("16384x16384"), std::string::npos) << g.err;
+  }
+}
+
+// --device gpu (lavapipe in CI): the JSON names the device and gives the GPU time of each pass,
+// the GPU memory and the bytes uploaded.
+TEST_F(Cli, GpuRenderReportsDevicePassesAndMemory) {
+  for (const char* method : {"rc", "hrc"}) {
+    const Result r =
+        render_ok({"--json", "--method", method, "--device", "gpu", "-o", out("g.pfm")});
+    nlohmann::json j;
+    ASSERT_NO_THROW(j = nlohmann::json::parse(r.out)) << r.out;
+    EXPECT_NE(j.at("device"), "cpu");
+    const nlohmann::json& stages = j.at("stages");
+    EXPECT_TRUE(stages.contains(std::string(method) == "rc" ? "gpu cascade 0" : "gpu merge down R"))
+        << stages.dump();
+    EXPECT_TRUE(stages.contains("gpu upload")) << stages.dump();
+    EXPECT_TRUE(stages.contains("setup and transfers")) << stages.dump();
+    EXPECT_GT(j.at("gpu_memory_bytes").get<std::uint64_t>(), 0u);
+    EXPECT_GT(j.at("uploaded_bytes").get<std::uint64_t>(), 0u);
+  }
 }
 
 TEST_F(Cli, ExtendNeedsAFixOtherThanBilinear) {

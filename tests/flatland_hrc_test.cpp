@@ -97,17 +97,22 @@ TEST(FlatlandHrc, DiskLightMatchesClosedForm) {
   };
   for (const Case& c : {Case{128, 128, 64.3f, 63.8f}, Case{150, 97, 80.3f, 47.8f}}) {
     const Scene s = disk_scene(c.w, c.h, c.cx, c.cy, 12, 2.5f);
-    const ImageRgb f = fluence_of(s, hrc()), ref = fluence_of(s, pt(256));
-    ASSERT_EQ(f.width(), c.w);
-    ASSERT_EQ(f.height(), c.h);
-    const DiskError e = disk_error(c.w, c.h, c.cx, c.cy, 12, 2.5f, f);
+    const ImageRgb ref = fluence_of(s, pt(256));
     const DiskError e_pt = disk_error(c.w, c.h, c.cx, c.cy, 12, 2.5f, ref);
-    const DiskError e_vs = against(f, ref, c.cx, c.cy, 12);
-    EXPECT_GT(e.cells, 5000);
-    EXPECT_LT(e.mean_abs, e_pt.mean_abs + 0.005) << c.w << "x" << c.h;
-    EXPECT_LT(e.max_abs, 0.05);
-    EXPECT_LT(e_vs.mean_abs, 0.01);
-    EXPECT_LT(std::abs(e_vs.mean), 0.01);
+    for (Device device : {Device::cpu, Device::gpu}) {  // the GPU through lavapipe in CI
+      RenderOptions o = hrc();
+      o.device = device;
+      const ImageRgb f = fluence_of(s, o);
+      ASSERT_EQ(f.width(), c.w);
+      ASSERT_EQ(f.height(), c.h);
+      const DiskError e = disk_error(c.w, c.h, c.cx, c.cy, 12, 2.5f, f);
+      const DiskError e_vs = against(f, ref, c.cx, c.cy, 12);
+      EXPECT_GT(e.cells, 5000);
+      EXPECT_LT(e.mean_abs, e_pt.mean_abs + 0.005) << c.w << "x" << c.h << " " << to_string(device);
+      EXPECT_LT(e.max_abs, 0.05);
+      EXPECT_LT(e_vs.mean_abs, 0.01);
+      EXPECT_LT(std::abs(e_vs.mean), 0.01);
+    }
   }
 }
 
@@ -122,25 +127,29 @@ TEST(FlatlandHrc, UniformEnvironmentGivesTwoPiE) {
   for (const Case& c : {Case{97, 61}, Case{64, 64}, Case{1, 17}, Case{33, 1}, Case{2, 3}})
     for (Storage storage : {Storage::f32, Storage::f16})
       for (bool near : {true, false})
-        for (bool blur : {true, false}) {
-          SceneDesc d;
-          d.width = c.w;
-          d.height = c.h;
-          d.environment = {0.5f, 1.0f, 2.0f};
-          RenderOptions o = hrc(storage);
-          o.hrc.near_segment = near;
-          o.hrc.cross_blur = blur;
-          const ImageRgb f = fluence_of(build(d), o);
-          const double tol = storage == Storage::f16 ? 5e-3 : 1e-5;
-          for (int y = 0; y < c.h; ++y)
-            for (int x = 0; x < c.w; ++x) {
-              const Rgb v = f.at(x, y);
-              ASSERT_NEAR(v.r, 2 * kPi * 0.5, tol * 2 * kPi * 0.5)
-                  << c.w << "x" << c.h << " " << to_string(storage) << " at " << x << "," << y;
-              ASSERT_NEAR(v.g, 2 * kPi * 1.0, tol * 2 * kPi * 1.0);
-              ASSERT_NEAR(v.b, 2 * kPi * 2.0, tol * 2 * kPi * 2.0);
-            }
-        }
+        for (bool blur : {true, false})
+          for (Device device : {Device::cpu, Device::gpu}) {  // GPU: f32 only
+            if (device == Device::gpu && storage == Storage::f16) continue;
+            SceneDesc d;
+            d.width = c.w;
+            d.height = c.h;
+            d.environment = {0.5f, 1.0f, 2.0f};
+            RenderOptions o = hrc(storage);
+            o.device = device;
+            o.hrc.near_segment = near;
+            o.hrc.cross_blur = blur;
+            const ImageRgb f = fluence_of(build(d), o);
+            const double tol = storage == Storage::f16 ? 5e-3 : 1e-5;
+            for (int y = 0; y < c.h; ++y)
+              for (int x = 0; x < c.w; ++x) {
+                const Rgb v = f.at(x, y);
+                ASSERT_NEAR(v.r, 2 * kPi * 0.5, tol * 2 * kPi * 0.5)
+                    << c.w << "x" << c.h << " " << to_string(storage) << " " << to_string(device)
+                    << " at " << x << "," << y;
+                ASSERT_NEAR(v.g, 2 * kPi * 1.0, tol * 2 * kPi * 1.0);
+                ASSERT_NEAR(v.b, 2 * kPi * 2.0, tol * 2 * kPi * 2.0);
+              }
+          }
 }
 
 // Mean |a - b| / mean b over every cell and channel.
@@ -297,17 +306,21 @@ TEST(FlatlandHrc, SecondBounceReemitsAlbedoTimesMeanRadiance) {
   d.shapes.push_back({Circle{{20, 32}, 4}, Material{{5, 5, 5}, 1, {}}});
   d.shapes.push_back({Box{{45, 32}, {6, 40}, 0}, Material{{}, 1, {0.8f, 0.5f, 0.2f}}});
   const Scene s = build(d);
-  const ImageRgb first = fluence_of(s, hrc());
-  Scene lit = s;
-  for (std::size_t i = 0; i < s.emission.size(); ++i)
-    lit.emission[i] += s.albedo[i] * first.data()[i] / float(2 * kPi);
-  const ImageRgb by_hand = fluence_of(lit, hrc());
-  RenderOptions two = hrc();
-  two.bounces = 2;
-  const ImageRgb second = fluence_of(s, two);
-  for (std::size_t i = 0; i < second.size(); ++i)
-    ASSERT_NEAR(second.data()[i], by_hand.data()[i], 1e-4);
-  EXPECT_GT(second.at(38, 32).r, first.at(38, 32).r * 1.05f);
+  for (Device device : {Device::cpu, Device::gpu}) {
+    RenderOptions one = hrc();
+    one.device = device;
+    const ImageRgb first = fluence_of(s, one);
+    Scene lit = s;
+    for (std::size_t i = 0; i < s.emission.size(); ++i)
+      lit.emission[i] += s.albedo[i] * first.data()[i] / float(2 * kPi);
+    const ImageRgb by_hand = fluence_of(lit, one);
+    RenderOptions two = one;
+    two.bounces = 2;
+    const ImageRgb second = fluence_of(s, two);
+    for (std::size_t i = 0; i < second.size(); ++i)
+      ASSERT_NEAR(second.data()[i], by_hand.data()[i], 1e-4) << to_string(device);
+    EXPECT_GT(second.at(38, 32).r, first.at(38, 32).r * 1.05f);
+  }
 }
 
 // A light left of a one-cell wall that spans the grid: nothing reaches the right side, and the

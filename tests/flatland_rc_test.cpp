@@ -59,16 +59,21 @@ DiskError disk_error(const DiskScene& ds, const ImageRgb& f) {
   return e;
 }
 
+// On both backends (the GPU through lavapipe in CI).
 TEST(FlatlandRc, DiskLightMatchesClosedForm) {
   DiskScene ds;
-  RenderResult r = run(ds.scene());
-  DiskError e = disk_error(ds, r.fluence);
-  EXPECT_GT(e.cells, 5000);
-  // Measured at the defaults: mean 1.05%, max 4.2% (docs/QUALITY.md). The mean is the
-  // rasterised disk's own 0.5% plus the bias of interpolating probes of a convex field; the
-  // worst cells sit on ring artifacts at cascade boundaries.
-  EXPECT_LT(e.mean_rel, 0.02);
-  EXPECT_LT(e.max_rel, 0.05) << "mean " << e.mean_rel;
+  for (Device device : {Device::cpu, Device::gpu}) {
+    RenderOptions o;
+    o.device = device;
+    RenderResult r = run(ds.scene(), o);
+    DiskError e = disk_error(ds, r.fluence);
+    EXPECT_GT(e.cells, 5000);
+    // Measured at the defaults: mean 1.05%, max 4.2% (docs/QUALITY.md). The mean is the
+    // rasterised disk's own 0.5% plus the bias of interpolating probes of a convex field; the
+    // worst cells sit on ring artifacts at cascade boundaries.
+    EXPECT_LT(e.mean_rel, 0.02) << to_string(device);
+    EXPECT_LT(e.max_rel, 0.05) << to_string(device) << " mean " << e.mean_rel;
+  }
 }
 
 // Every merge mode and option stays close to the closed form, and the bilinear fix is the most
@@ -157,19 +162,22 @@ TEST(FlatlandRc, SecondBounceReemitsAlbedoTimesMeanRadiance) {
   d.shapes.push_back({Circle{{20, 32}, 4}, Material{{5, 5, 5}, 1, {}}});
   d.shapes.push_back({Box{{45, 32}, {6, 40}, 0}, Material{{}, 1, {0.8f, 0.5f, 0.2f}}});
   Scene s = build(d);
-  RenderOptions one;
-  RenderResult first = run(s, one);
-  Scene lit = s;
-  for (std::size_t i = 0; i < s.emission.size(); ++i)
-    lit.emission[i] += s.albedo[i] * first.fluence.data()[i] / float(2 * kPi);
-  RenderResult by_hand = run(lit, one);
-  RenderOptions two;
-  two.bounces = 2;
-  RenderResult second = run(s, two);
-  for (std::size_t i = 0; i < second.fluence.size(); ++i)
-    ASSERT_NEAR(second.fluence.data()[i], by_hand.fluence.data()[i], 1e-4);
-  // The lit face of the wall brightens the cells in front of it.
-  EXPECT_GT(second.fluence.at(38, 32).r, first.fluence.at(38, 32).r * 1.05f);
+  for (Device device : {Device::cpu, Device::gpu}) {
+    RenderOptions one;
+    one.device = device;
+    RenderResult first = run(s, one);
+    Scene lit = s;
+    for (std::size_t i = 0; i < s.emission.size(); ++i)
+      lit.emission[i] += s.albedo[i] * first.fluence.data()[i] / float(2 * kPi);
+    RenderResult by_hand = run(lit, one);
+    RenderOptions two = one;
+    two.bounces = 2;
+    RenderResult second = run(s, two);
+    for (std::size_t i = 0; i < second.fluence.size(); ++i)
+      ASSERT_NEAR(second.fluence.data()[i], by_hand.fluence.data()[i], 1e-4) << to_string(device);
+    // The lit face of the wall brightens the cells in front of it.
+    EXPECT_GT(second.fluence.at(38, 32).r, first.fluence.at(38, 32).r * 1.05f);
+  }
 }
 
 TEST(FlatlandRc, UniformEnvironmentGivesTwoPiE) {
@@ -178,21 +186,23 @@ TEST(FlatlandRc, UniformEnvironmentGivesTwoPiE) {
   d.height = 61;  // not a power of two, not square
   d.environment = {0.5f, 1.0f, 2.0f};
   Scene s = build(d);
-  for (MergeFix fix : {MergeFix::bilinear, MergeFix::none, MergeFix::nearest})
-    for (int branching : {4, 2}) {
-      RenderOptions o;
-      o.rc.fix = fix;
-      o.rc.branching = branching;
-      RenderResult r = run(s, o);
-      for (int y = 0; y < d.height; ++y)
-        for (int x = 0; x < d.width; ++x) {
-          const Rgb f = r.fluence.at(x, y);
-          ASSERT_NEAR(f.r, 2 * kPi * 0.5, 1e-3 * 2 * kPi * 0.5)
-              << to_string(fix) << " " << x << "," << y;
-          ASSERT_NEAR(f.g, 2 * kPi * 1.0, 1e-3 * 2 * kPi * 1.0);
-          ASSERT_NEAR(f.b, 2 * kPi * 2.0, 1e-3 * 2 * kPi * 2.0);
-        }
-    }
+  for (Device device : {Device::cpu, Device::gpu})
+    for (MergeFix fix : {MergeFix::bilinear, MergeFix::none, MergeFix::nearest})
+      for (int branching : {4, 2}) {
+        RenderOptions o;
+        o.device = device;
+        o.rc.fix = fix;
+        o.rc.branching = branching;
+        RenderResult r = run(s, o);
+        for (int y = 0; y < d.height; ++y)
+          for (int x = 0; x < d.width; ++x) {
+            const Rgb f = r.fluence.at(x, y);
+            ASSERT_NEAR(f.r, 2 * kPi * 0.5, 1e-3 * 2 * kPi * 0.5)
+                << to_string(device) << " " << to_string(fix) << " " << x << "," << y;
+            ASSERT_NEAR(f.g, 2 * kPi * 1.0, 1e-3 * 2 * kPi * 1.0);
+            ASSERT_NEAR(f.b, 2 * kPi * 2.0, 1e-3 * 2 * kPi * 2.0);
+          }
+      }
 }
 
 // A light left of a one-cell wall that spans the grid: nothing may reach the right side.

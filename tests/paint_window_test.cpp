@@ -161,9 +161,9 @@ TEST_F(PaintWindow, BadInputIsReportedBeforeTheWindow) {
   r = paint_headless({tmp_.file("missing.json")});
   EXPECT_EQ(r.status, 1) << r.err;
   EXPECT_NE(r.err.find("missing.json"), std::string::npos) << r.err;
-  r = paint_headless({"--device", "gpu", "--method", "rc"});  // RC does not run on the GPU yet
+  r = paint_headless({"--device", "gpu", "--method", "pt"});  // the path tracer is CPU only
   EXPECT_EQ(r.status, 2) << r.err;
-  EXPECT_NE(r.err.find("only --method hrc runs on the GPU"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("path tracer runs on the CPU only"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(tmp_.file("shot.png")));
 }
 
@@ -229,6 +229,32 @@ TEST_F(PaintWindow, ReplayShowsLightAndShadowAndSavesWhatItShows) {
       differing += again.pixels[std::size_t(y) * again.width * 3 + x] !=
                    shot.pixels[std::size_t(y) * shot.width * 3 + x];
   EXPECT_EQ(differing, 0);
+}
+
+// The painter on the GPU (lavapipe in CI), RC and HRC: the canvas is the CPU's to within one
+// 8-bit step.
+TEST_F(PaintWindow, GpuCanvasMatchesTheCpu) {
+  if (!have_display()) GTEST_SKIP() << x_server().why();
+  for (const char* method : {"rc", "hrc"}) {
+    std::vector<penumbra::io::RawImage> shots;
+    for (const char* device : {"cpu", "gpu"}) {
+      const std::string name = std::string(method) + "_" + device + ".png";
+      CliResult r =
+          paint({"--size", "128x128", "--zoom", "1", "--plain", "--method", method, "--device",
+                 device, "--replay", strokes_, "--screenshot", tmp_.file(name)});
+      ASSERT_EQ(r.status, 0) << r.err;
+      shots.push_back(read_png(name));
+    }
+    ASSERT_EQ(shots[0].width, shots[1].width);
+    int worst = 0;
+    for (int y = 0; y < 128; ++y)
+      for (int x = 0; x < 128 * 3; ++x) {
+        const std::size_t i = std::size_t(y) * shots[0].width * 3 + x;
+        worst = std::max(worst, std::abs(int(shots[0].pixels[i]) - int(shots[1].pixels[i])));
+      }
+    EXPECT_LE(worst, 1) << method;
+    EXPECT_GT(grey(shots[1], 52, 64), 0.8f) << method;  // the light is there
+  }
 }
 
 // A scripted run whose final canvas the method refuses writes nothing and exits 1.

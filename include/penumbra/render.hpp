@@ -88,7 +88,7 @@ enum class Device {
 
 struct RenderOptions {
   Method method = Method::rc;
-  // The GPU runs HRC with f32 storage and one bounce so far (docs/GPU.md).
+  // The GPU runs RC (no interval extension) and HRC (f32 storage), any bounces (docs/GPU.md).
   Device device = Device::cpu;
   RcOptions rc;
   PtOptions pt;
@@ -112,15 +112,17 @@ struct StageTime {
 };
 
 struct RenderResult {
-  ImageRgb fluence;                // linear RGB fluence at every cell centre
-  std::vector<StageTime> stages;   // in the order they ran
-  double time_ms = 0;              // computation only, no file I/O
-  std::uint64_t memory_bytes = 0;  // peak working memory of the method (not the scene)
-  std::uint64_t intervals = 0;     // ray intervals traced (all bounces; pt: rays)
-  std::uint64_t samples = 0;       // pt: samples per cell in the result
-  bool cancelled = false;          // pt: stopped early through RenderOptions::cancel
-  RenderOptions options;           // the options used, with derived values filled in
-  std::string device = "cpu";      // what ran it: "cpu", or the GPU's name
+  ImageRgb fluence;                    // linear RGB fluence at every cell centre
+  std::vector<StageTime> stages;       // in the order they ran
+  double time_ms = 0;                  // computation only, no file I/O
+  std::uint64_t memory_bytes = 0;      // peak working memory of the method (not the scene)
+  std::uint64_t intervals = 0;         // ray intervals traced (all bounces; pt: rays)
+  std::uint64_t samples = 0;           // pt: samples per cell in the result
+  bool cancelled = false;              // pt: stopped early through RenderOptions::cancel
+  RenderOptions options;               // the options used, with derived values filled in
+  std::string device = "cpu";          // what ran it: "cpu", or the GPU's name
+  std::uint64_t gpu_memory_bytes = 0;  // on a GPU: device memory the render keeps allocated
+  std::uint64_t uploaded_bytes = 0;    // on a GPU: bytes copied to it (only what changed)
 };
 
 // Checks options against a grid size: ranges, combinations, and hierarchies too deep to build.

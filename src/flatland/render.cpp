@@ -13,16 +13,10 @@
 #include "flatland/medium.hpp"
 #include "flatland/pt/pt.hpp"
 #include "flatland/rc/rc.hpp"
-#include "gpu/hrc.hpp"
+#include "gpu/solver.hpp"
 #include "gpu/vulkan.hpp"
 
 namespace penumbra {
-namespace {
-struct GpuFailure {  // carries a GPU error out of the task arena
-  std::string message;
-};
-}  // namespace
-
 Status check_options(int width, int height, const RenderOptions& o) {
   auto bad = [](const std::string& what) { return Status(Error{what}); };
   if (width < 1 || height < 1 || width > kMaxGridSide || height > kMaxGridSide)
@@ -32,13 +26,12 @@ Status check_options(int width, int height, const RenderOptions& o) {
     return bad("bounces: expected 1..64, found " + std::to_string(o.bounces));
   if (o.threads < 0) return bad("threads: expected >= 0, found " + std::to_string(o.threads));
   if (o.device == Device::gpu) {
-    if (o.method != Method::hrc)
-      return bad(std::string("device gpu: only --method hrc runs on the GPU so far, not ") +
-                 to_string(o.method) + " (docs/GPU.md)");
-    if (o.hrc.storage != Storage::f32)
-      return bad("device gpu: HRC on the GPU stores f32 only so far; drop --storage f16");
-    if (o.bounces > 1)
-      return bad("device gpu: HRC on the GPU computes one bounce so far; drop --bounces");
+    if (o.method == Method::pt)
+      return bad("device gpu: the path tracer runs on the CPU only (docs/GPU.md)");
+    if (o.method == Method::hrc && o.hrc.storage != Storage::f32)
+      return bad("device gpu: HRC on the GPU stores f32 only; drop --storage f16");
+    if (o.method == Method::rc && o.rc.extend)
+      return bad("device gpu: interval extension runs on the CPU only; drop --extend");
   }
   if (o.method == Method::pt) {
     const PtOptions& pt = o.pt;
@@ -95,6 +88,8 @@ namespace {
 std::uint64_t estimate(int width, int height, const RenderOptions& o,
                        const std::vector<rc::Cascade>& plan) {
   const std::uint64_t cells = std::uint64_t(width) * height;
+  // On the GPU the host holds a copy of what the device's scene holds, and the fluence.
+  if (o.device == Device::gpu) return cells * (7 + 3) * sizeof(float);
   std::uint64_t bytes = cells * (sizeof(Cell) + sizeof(float));  // medium: emission and step
   if (o.method == Method::hrc) {
     bytes += hrc::working_bytes(width, height, o.hrc);
@@ -150,38 +145,39 @@ std::uint64_t scene_bytes(int width, int height) {
   return std::uint64_t(width) * height * 7 * sizeof(float);
 }
 
-// What a Renderer keeps between renders: the packed medium, HRC's buffers, the GPU context.
+// What a Renderer keeps between renders: the packed medium, HRC's buffers, and the GPU solvers
+// (their kernels, scene and buffers stay on the device).
 struct Renderer::State {
   Medium medium;
   hrc::Workspace workspace;
-  std::shared_ptr<gpu::Context> gpu;
+  std::unique_ptr<gpu::Solver> gpu;  // any Vulkan device, for Device::gpu
   bool gpu_hardware_tried = false;
-  std::shared_ptr<gpu::Context> gpu_hardware;
+  std::unique_ptr<gpu::Solver> gpu_hardware;  // a hardware GPU, for Device::auto_
 };
 
 namespace {
 
-// The GPU context a render would use: any Vulkan device for `gpu`, a hardware one for `auto`
+// The GPU solver a render would use: any Vulkan device for `gpu`, a hardware one for `auto`
 // (null, and no error, when there is none or the options do not run on the GPU).
-Expected<std::shared_ptr<gpu::Context>> gpu_for(const RenderOptions& o, Renderer::State& state) {
-  if (o.device == Device::cpu) return std::shared_ptr<gpu::Context>();
+Expected<gpu::Solver*> gpu_for(const RenderOptions& o, Renderer::State& state) {
+  if (o.device == Device::cpu) return static_cast<gpu::Solver*>(nullptr);
   if (o.device == Device::gpu) {
     if (!state.gpu) {
       Expected<std::shared_ptr<gpu::Context>> c = gpu::Context::create(true);
       if (!c) return c.error();
-      state.gpu = *c;
+      state.gpu = std::make_unique<gpu::Solver>(*c);
     }
-    return state.gpu;
+    return state.gpu.get();
   }
   RenderOptions as_gpu = o;
   as_gpu.device = Device::gpu;
-  if (!check_options(1, 1, as_gpu)) return std::shared_ptr<gpu::Context>();  // not ported
+  if (!check_options(1, 1, as_gpu)) return static_cast<gpu::Solver*>(nullptr);  // not ported
   if (!state.gpu_hardware_tried) {
     state.gpu_hardware_tried = true;
     Expected<std::shared_ptr<gpu::Context>> c = gpu::Context::create(false);
-    if (c) state.gpu_hardware = *c;
+    if (c) state.gpu_hardware = std::make_unique<gpu::Solver>(*c);
   }
-  return state.gpu_hardware;
+  return state.gpu_hardware.get();
 }
 
 }  // namespace
@@ -206,10 +202,34 @@ Expected<RenderResult> render_unchecked(const Scene& scene, const RenderOptions&
     if (Status s = hrc::check_scene(scene, options.hrc); !s) return s.error();
   result.memory_bytes = estimate(scene.width, scene.height, options, plan);
 
-  Expected<std::shared_ptr<gpu::Context>> device = gpu_for(options, state);
+  Expected<gpu::Solver*> device = gpu_for(options, state);
   if (!device) return device.error();
 
   rc::fill_directions(plan);
+  auto count_intervals = [&] {
+    for (const StageTime& s : result.stages) result.time_ms += s.ms;
+    if (options.method == Method::rc)
+      result.intervals = rc::traced_intervals(plan, options.rc) * std::uint64_t(options.bounces);
+    if (options.method == Method::hrc)
+      result.intervals =
+          hrc::traced_intervals(scene.width, scene.height) * std::uint64_t(options.bounces);
+  };
+  if (*device) {  // the whole render on the GPU: the stages are its pass times
+    gpu::Solver& solver = **device;
+    Expected<std::vector<float>> f = solver.render(scene, options, plan, result.stages);
+    if (f) {
+      result.fluence = ImageRgb(scene.width, scene.height, std::move(*f));
+      result.device = solver.context().info().name;
+      result.gpu_memory_bytes = gpu::Solver::device_bytes(scene.width, scene.height, options, plan);
+      result.uploaded_bytes = solver.uploaded_bytes();
+      count_intervals();
+      return result;
+    }
+    if (options.device != Device::auto_) return f.error();
+    result.stages.clear();  // auto: the CPU does it instead
+    result.stages.push_back({"gpu failed, cpu used: " + f.error().message, 0.0});
+  }
+
   tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
   arena.execute([&] {
     Stopwatch watch;
@@ -239,20 +259,6 @@ Expected<RenderResult> render_unchecked(const Scene& scene, const RenderOptions&
       if (options.method == Method::rc)
         return rc::solve(medium, scene.environment, plan, options.rc, stages);
       std::vector<float> f;
-      if (*device) {  // HRC on the GPU: stages are the GPU's pass times
-        std::vector<StageTime> passes;
-        Expected<std::vector<float>> g =
-            gpu::hrc_solve(**device, medium, scene.environment, options.hrc, &passes);
-        if (!g && options.device == Device::auto_) {  // auto: the CPU does it instead
-          hrc::solve(medium, scene.environment, options.hrc, workspace, f, stages);
-          stages.push_back({"gpu failed, cpu used: " + g.error().message, 0.0});
-          return f;
-        }
-        if (!g) throw GpuFailure{g.error().message};
-        result.device = (*device)->info().name;
-        for (const StageTime& p : passes) stages.push_back({"gpu " + p.name, p.ms});
-        return std::move(*g);
-      }
       hrc::solve(medium, scene.environment, options.hrc, workspace, f, stages);
       return f;
     };
@@ -280,12 +286,7 @@ Expected<RenderResult> render_unchecked(const Scene& scene, const RenderOptions&
     }
     result.fluence = ImageRgb(scene.width, scene.height, std::move(f));
   });
-  for (const StageTime& s : result.stages) result.time_ms += s.ms;
-  if (options.method == Method::rc)
-    result.intervals = rc::traced_intervals(plan, options.rc) * std::uint64_t(options.bounces);
-  if (options.method == Method::hrc)
-    result.intervals =
-        hrc::traced_intervals(scene.width, scene.height) * std::uint64_t(options.bounces);
+  count_intervals();
   return result;
 }
 
@@ -301,8 +302,6 @@ Expected<RenderResult> Renderer::render(const Scene& scene, const RenderOptions&
   // process took the memory) becomes an Error.
   try {
     return render_unchecked(scene, options, *state_);
-  } catch (const GpuFailure& e) {
-    return Error{e.message};
   } catch (const std::bad_alloc&) {
     state_ = std::make_unique<State>();  // give back what the failed render held
     return Error{"out of memory while rendering"};

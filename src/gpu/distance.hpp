@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "flatland/medium.hpp"
+#include "gpu/cache.hpp"
 #include "gpu/vulkan.hpp"
 
 namespace penumbra::gpu {
@@ -16,5 +17,9 @@ namespace penumbra::gpu {
 Expected<std::vector<float>> jump_flood_distance(
     const Context& context, const Medium& medium,
     std::vector<std::pair<std::string, double>>* passes = nullptr);
+
+// Records build_distance_field into `batch`: the jump length of every empty cell written into
+// `step` (a medium's step values without jumps), as one timed pass "distance field".
+Status record_distance_field(Cache& cache, Batch& batch, int width, int height, Buffer& step);
 
 }  // namespace penumbra::gpu

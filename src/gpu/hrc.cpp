@@ -5,9 +5,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
-#include <deque>
 
-#include "core/timer.hpp"
 #include "flatland/hrc/hrc.hpp"
 #include "gpu/shaders.hpp"
 
@@ -46,11 +44,21 @@ Expected<std::vector<float>> cross_blur(const Context& c, int width, int height,
   return std::vector<float>(o, o + 3 * n);
 }
 
-Expected<std::vector<float>> hrc_solve(const Context& c, const Medium& m, const Rgb& env,
-                                       const HrcOptions& o, std::vector<StageTime>* stages) {
+std::uint64_t hrc_device_bytes(int W, int H) {
+  const hrc::Sizes sz = hrc::plan(W, H);
+  const int levels = int(sz.t.size()) - 1;
+  std::uint64_t bytes = std::uint64_t(W) * H * (6 + 3) * sizeof(float);  // world, fluence
+  bytes += 6 * std::uint64_t(sz.pad) * sizeof(float);                    // view
+  bytes += 2 * 3 * std::uint64_t(std::max<std::size_t>(sz.r, 1)) * sizeof(float);
+  bytes += ((std::uint64_t(2) << levels) - 1) * sizeof(float);  // cone angles
+  for (std::size_t t : sz.t) bytes += 4 * std::uint64_t(t) * sizeof(float);
+  return bytes;
+}
+
+Status record_hrc(Cache& cache, Batch& batch, int W, int H, Buffer& step, Buffer& emission,
+                  const Rgb& env, const HrcOptions& o, Buffer& fluence_out) {
   if (o.storage != Storage::f32) return Error{"GPU HRC: only f32 storage so far"};
-  Stopwatch call;
-  const int W = m.width, H = m.height, pad = hrc::kPad;
+  const int pad = hrc::kPad;
   const std::uint32_t cells = std::uint32_t(std::size_t(W) * H);
   // The CPU solve's sizes for both view orientations.
   const hrc::Sizes sz = hrc::plan(W, H);
@@ -59,7 +67,6 @@ Expected<std::vector<float>> hrc_solve(const Context& c, const Medium& m, const 
   const std::vector<std::size_t>& t_size = sz.t;
   const std::size_t r_size = std::max<std::size_t>(sz.r, 1), view_cells = sz.pad;
 
-  // Kernels and buffers.
   struct K {
     const char* name;
     std::span<const std::uint32_t> spirv;
@@ -73,34 +80,35 @@ Expected<std::vector<float>> hrc_solve(const Context& c, const Medium& m, const 
                      {"hrc_merge_down", shaders::hrc_merge_down(), 5, 36},
                      {"hrc_gather", shaders::hrc_gather(), 3, 52},
                      {"cross_blur", shaders::cross_blur(), 3, 16}};
-  std::vector<Kernel> k;
-  for (const K& spec : specs) {
-    Expected<Kernel> kernel = c.kernel(spec.name, spec.spirv, spec.buffers, spec.push);
+  const Kernel* k[std::size(specs)];
+  for (std::size_t i = 0; i < std::size(specs); ++i) {
+    Expected<const Kernel*> kernel =
+        cache.kernel(specs[i].name, specs[i].spirv, specs[i].buffers, specs[i].push);
     if (!kernel) return kernel.error();
-    k.push_back(std::move(*kernel));
+    k[i] = *kernel;
   }
-  std::deque<Buffer> keep;  // every buffer, alive (and in place) until the batch has run
-  auto make = [&](std::size_t floats) -> Expected<Buffer*> {
-    Expected<Buffer> b = c.buffer(std::max<std::size_t>(floats, 1) * sizeof(float));
-    if (!b) return b.error();
-    keep.push_back(std::move(*b));
-    return &keep.back();
+  auto make = [&](const std::string& role, std::size_t floats) {
+    return cache.buffer("hrc " + role, std::max<std::size_t>(floats, 1) * sizeof(float));
   };
-  Expected<Buffer*> emission = make(3 * std::size_t(cells)), step = make(cells),
-                    world = make(6 * std::size_t(cells)), view = make(6 * view_cells),
-                    fluence = make(3 * std::size_t(cells)), blurred = make(3 * std::size_t(cells)),
-                    angles = make((std::size_t(2) << levels) - 1), r0 = make(3 * r_size),
-                    r1 = make(3 * r_size);
-  for (const Expected<Buffer*>* b :
-       {&emission, &step, &world, &view, &fluence, &blurred, &angles, &r0, &r1})
+  Expected<Buffer*> world = make("world", 6 * std::size_t(cells)),
+                    view = make("view", 6 * view_cells), r0 = make("r0", 3 * r_size),
+                    r1 = make("r1", 3 * r_size);
+  for (const Expected<Buffer*>* b : {&world, &view, &r0, &r1})
     if (!*b) return b->error();
+  Buffer* fluence = &fluence_out;
+  if (o.cross_blur) {  // the gather writes a buffer of its own, the blur writes fluence_out
+    Expected<Buffer*> f = make("fluence", 3 * std::size_t(cells));
+    if (!f) return f.error();
+    fluence = *f;
+  }
   std::vector<Buffer*> t;
   for (std::size_t n = 0; n < t_size.size(); ++n) {
-    Expected<Buffer*> b = make(4 * t_size[n]);
+    Expected<Buffer*> b = make(std::string("t ").append(std::to_string(n)), 4 * t_size[n]);
     if (!b) return b.error();
     t.push_back(*b);
   }
-  // The ray patterns of T_0..T_2: cells (du, dv, length, squared) and per k a range of them.
+  // Tables: the ray patterns of T_0..T_2 (cells du, dv, length, squared, and per k a range of
+  // them) and the cone angles.
   Buffer* pattern[3];
   Buffer* range[3];
   for (int n = 0; n < 3; ++n) {
@@ -116,27 +124,22 @@ Expected<std::vector<float>> hrc_solve(const Context& c, const Medium& m, const 
         cells_of.push_back(tc.squared ? 1 : 0);
       }
     }
-    Expected<Buffer*> pb = make(cells_of.size()), rb = make(ranges_of.size());
+    Expected<Buffer*> pb = cache.table(batch, "hrc pattern " + std::to_string(n), cells_of.data(),
+                                       cells_of.size() * 4);
     if (!pb) return pb.error();
+    Expected<Buffer*> rb = cache.table(batch, "hrc range " + std::to_string(n), ranges_of.data(),
+                                       ranges_of.size() * 4);
     if (!rb) return rb.error();
-    std::copy(cells_of.begin(), cells_of.end(), (*pb)->as<std::int32_t>());
-    std::copy(ranges_of.begin(), ranges_of.end(), (*rb)->as<std::int32_t>());
     pattern[n] = *pb;
     range[n] = *rb;
   }
-
-  // Upload: emission, extinction, cone angles.
-  float* e = (*emission)->as<float>();
-  for (std::size_t i = 0; i < cells; ++i) {
-    e[3 * i] = m.cells[i].r, e[3 * i + 1] = m.cells[i].g, e[3 * i + 2] = m.cells[i].b;
-  }
-  std::copy(m.step.begin(), m.step.end(), (*step)->as<float>());
-  float* ang = (*angles)->as<float>();
+  std::vector<float> ang((std::size_t(2) << levels) - 1);
   for (int lv = 0; lv <= levels; ++lv)
-    for (int a = 0; a < (1 << lv); ++a) ang[(1 << lv) - 1 + a] = hrc::cone_angle(lv, a);
+    for (int a = 0; a < (1 << lv); ++a)
+      ang[std::size_t((1 << lv) - 1 + a)] = hrc::cone_angle(lv, a);
+  Expected<Buffer*> angles = cache.table(batch, "hrc angles", ang.data(), ang.size() * 4);
+  if (!angles) return angles.error();
 
-  Expected<Batch> batch = c.batch(256);
-  if (!batch) return batch.error();
   auto groups = [](std::size_t n, std::uint32_t size) {
     return std::uint32_t((n + size - 1) / size);
   };
@@ -146,10 +149,10 @@ Expected<std::vector<float>> hrc_solve(const Context& c, const Medium& m, const 
       std::uint32_t cells;
       float l0, l1, l2;
     } push{cells, len[0], len[1], len[2]};
-    Buffer* b[] = {*emission, *step, *world};
-    batch->mark("views");
-    const Groups g = groups_1d(cells, 256, c.info());
-    batch->dispatch(k[0], b, &push, g.x, g.y);
+    Buffer* b[] = {&emission, &step, *world};
+    batch.mark("views");
+    const Groups g = groups_1d(cells, 256, cache.context().info());
+    batch.dispatch(*k[0], b, &push, g.x, g.y);
   }
   for (int d = 0; d < 4; ++d) {
     const hrc::View& v = views[d & 1];
@@ -166,25 +169,25 @@ Expected<std::vector<float>> hrc_solve(const Context& c, const Medium& m, const 
                                     std::int32_t(rot.su),
                                     std::int32_t(rot.sv)};
       Buffer* b[] = {*world, *view};
-      if (d > 0) batch->mark("views");
-      batch->dispatch(k[1], b, push, groups(std::size_t(hp), 64), groups(std::size_t(v.w + pad), 4),
-                      6);
+      if (d > 0) batch.mark("views");
+      batch.dispatch(*k[1], b, push, groups(std::size_t(hp), 64), groups(std::size_t(v.w + pad), 4),
+                     6);
     }
-    batch->mark("trace T0-T2");
+    batch.mark("trace T0-T2");
     for (int n = 0; n <= std::min(2, v.levels); ++n) {
       const int P = v.probes(n), rows = ((1 << n) + 1) * P;
       const std::int32_t push[7] = {v.h, hp, pad, n, P, rows, std::int32_t(view_cells)};
       Buffer* b[] = {*view, pattern[n], range[n], t[std::size_t(n)]};
-      batch->dispatch(k[2], b, push, groups(std::size_t(v.h), 64), groups(std::size_t(rows), 4));
+      batch.dispatch(*k[2], b, push, groups(std::size_t(v.h), 64), groups(std::size_t(rows), 4));
     }
-    batch->mark("merge up T3-TN");
+    batch.mark("merge up T3-TN");
     for (int n = 3; n <= v.levels; ++n) {
       const int P = v.probes(n - 1), P1 = v.probes(n), rows = ((1 << n) + 1) * P1;
       const std::int32_t push[5] = {v.h, n - 1, P, P1, rows};
       Buffer* b[] = {t[std::size_t(n - 1)], t[std::size_t(n)]};
-      batch->dispatch(k[3], b, push, groups(std::size_t(v.h), 64), groups(std::size_t(rows), 4));
+      batch.dispatch(*k[3], b, push, groups(std::size_t(v.h), 64), groups(std::size_t(rows), 4));
     }
-    batch->mark("merge down R");
+    batch.mark("merge down R");
     Buffer* upper = *r1;  // unread at the top level
     bool top = true;
     for (int n = v.levels - 1; n >= 0; --n) {
@@ -195,11 +198,11 @@ Expected<std::vector<float>> hrc_solve(const Context& c, const Medium& m, const 
         float er, eg, eb;
       } push{v.h, n, P, P1, rows, top ? 1 : 0, env.r, env.g, env.b};
       Buffer* b[] = {t[std::size_t(n)], t[std::size_t(n + 1)], upper, *angles, out};
-      batch->dispatch(k[4], b, &push, groups(std::size_t(v.h), 64), groups(std::size_t(rows), 4));
+      batch.dispatch(*k[4], b, &push, groups(std::size_t(v.h), 64), groups(std::size_t(rows), 4));
       upper = out;
       top = false;
     }
-    batch->mark("views");
+    batch.mark("views");
     {
       struct {
         std::int32_t w, h, hp, pad;
@@ -219,40 +222,21 @@ Expected<std::vector<float>> hrc_solve(const Context& c, const Medium& m, const 
              env.r,
              env.g,
              env.b};
-      Buffer* b[] = {upper, *view, *fluence};
-      batch->dispatch(k[5], b, &push, groups(std::size_t(v.h), 64), groups(std::size_t(v.w), 4));
+      Buffer* b[] = {upper, *view, fluence};
+      batch.dispatch(*k[5], b, &push, groups(std::size_t(v.h), 64), groups(std::size_t(v.w), 4));
     }
   }
-  Buffer* result = *fluence;
   if (o.cross_blur) {
     struct {
       std::int32_t w, h;
       float step;
       std::uint32_t tau_offset;
     } push{W, H, hrc::kBlurOpacityStep, 3 * cells};
-    batch->mark("cross blur");
-    Buffer* b[] = {*world, *fluence, *blurred};  // the transmittance over half a cell: plane 3
-    batch->dispatch(k[6], b, &push, groups(std::size_t(W), 16), groups(std::size_t(H), 16));
-    result = *blurred;
+    batch.mark("cross blur");
+    Buffer* b[] = {*world, fluence, &fluence_out};  // the transmittance over half a cell: plane 3
+    batch.dispatch(*k[6], b, &push, groups(std::size_t(W), 16), groups(std::size_t(H), 16));
   }
-  Expected<std::vector<std::pair<std::string, double>>> times = batch->run();
-  if (!times) return times.error();
-  if (stages) {  // each pass summed over the quadrants, then what the timestamps do not cover
-    const std::size_t first = stages->size();
-    double in_passes = 0;
-    for (const auto& [name, ms] : *times) {
-      in_passes += ms;
-      auto it = std::find_if(stages->begin() + std::ptrdiff_t(first), stages->end(),
-                             [&](const StageTime& st) { return st.name == name; });
-      if (it == stages->end())
-        stages->push_back({name, ms});
-      else
-        it->ms += ms;
-    }
-    stages->push_back({"setup and transfers", std::max(0.0, call.ms() - in_passes)});
-  }
-  const float* f = result->as<float>();
-  return std::vector<float>(f, f + 3 * std::size_t(cells));
+  return {};
 }
 
 }  // namespace penumbra::gpu

@@ -38,6 +38,18 @@ const std::uint32_t k_hrc_merge_down[] = {
 const std::uint32_t k_hrc_gather[] = {
 #include "hrc_gather.comp.inc"
 };
+const std::uint32_t k_jfa_jump[] = {
+#include "jfa_jump.comp.inc"
+};
+const std::uint32_t k_rc_merge[] = {
+#include "rc_merge.comp.inc"
+};
+const std::uint32_t k_rc_fluence[] = {
+#include "rc_fluence.comp.inc"
+};
+const std::uint32_t k_bounce[] = {
+#include "bounce.comp.inc"
+};
 }  // namespace
 
 std::span<const std::uint32_t> medium() {
@@ -73,5 +85,17 @@ std::span<const std::uint32_t> hrc_merge_down() {
 }
 std::span<const std::uint32_t> hrc_gather() {
   return k_hrc_gather;
+}
+std::span<const std::uint32_t> jfa_jump() {
+  return k_jfa_jump;
+}
+std::span<const std::uint32_t> rc_merge() {
+  return k_rc_merge;
+}
+std::span<const std::uint32_t> rc_fluence() {
+  return k_rc_fluence;
+}
+std::span<const std::uint32_t> bounce() {
+  return k_bounce;
 }
 }  // namespace penumbra::gpu::shaders

@@ -18,5 +18,9 @@ std::span<const std::uint32_t> hrc_trace();       // HRC: T_0..T_2
 std::span<const std::uint32_t> hrc_merge_up();    // HRC: eqs. 18-20
 std::span<const std::uint32_t> hrc_merge_down();  // HRC: eqs. 14-17
 std::span<const std::uint32_t> hrc_gather();      // HRC: a quadrant's fluence
+std::span<const std::uint32_t> jfa_jump();        // jump flooding: jumps into the step values
+std::span<const std::uint32_t> rc_merge();        // RC: one cascade, traced and merged
+std::span<const std::uint32_t> rc_fluence();      // RC: fluence from cascade 0
+std::span<const std::uint32_t> bounce();          // emission of the next bounce
 
 }  // namespace penumbra::gpu::shaders

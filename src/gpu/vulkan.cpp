@@ -54,6 +54,7 @@ namespace penumbra::gpu {
   X(vkCmdBindDescriptorSets)       \
   X(vkCmdPushConstants)            \
   X(vkCmdDispatch)                 \
+  X(vkCmdCopyBuffer)               \
   X(vkCmdPipelineBarrier)          \
   X(vkCmdResetQueryPool)           \
   X(vkCmdWriteTimestamp)           \
@@ -78,8 +79,10 @@ struct Context::Impl {
   VkDevice device = VK_NULL_HANDLE;
   VkQueue queue = VK_NULL_HANDLE;
   std::uint32_t family = 0;
-  std::uint32_t memory_type = 0;
-  std::uint64_t heap_bytes = 0;  // of the heap buffers come from
+  std::uint32_t memory_type = 0;         // host-visible: what the host writes and reads back
+  std::uint64_t heap_bytes = 0;          // of the heap host buffers come from
+  std::uint32_t device_memory_type = 0;  // device-local: what only kernels touch
+  std::uint64_t device_heap_bytes = 0;
   std::uint32_t timestamp_bits = 0;
   VkCommandPool command_pool = VK_NULL_HANDLE;
 
@@ -256,6 +259,16 @@ Expected<std::shared_ptr<Context>> Context::create(bool allow_cpu) {
     }
     if (type < 0) continue;
     if (rank(p.deviceType) >= best_rank) continue;
+    // Working buffers: device-local memory on the largest such heap (on a discrete GPU the
+    // host-visible heap may be system memory behind PCIe); the host type where there is none.
+    int local = -1;
+    for (std::uint32_t i = 0; i < mp.memoryTypeCount; ++i)
+      if ((mp.memoryTypes[i].propertyFlags & VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT) &&
+          (local < 0 || heap_of(int(i)) > heap_of(local)))
+        local = int(i);
+    if (local < 0) local = type;
+    v.device_memory_type = std::uint32_t(local);
+    v.device_heap_bytes = heap_of(local);
     v.heap_bytes = mp.memoryHeaps[mp.memoryTypes[type].heapIndex].size;
     best_rank = rank(p.deviceType);
     v.physical = d;
@@ -344,17 +357,20 @@ void Buffer::release() {
   mapped_ = nullptr;
 }
 
-Expected<Buffer> Context::buffer(std::size_t bytes) const {
+Expected<Buffer> Context::buffer(std::size_t bytes, Memory where) const {
   const Impl& v = *impl_;
+  const bool host = where == Memory::host;
+  const std::uint64_t heap = host ? v.heap_bytes : v.device_heap_bytes;
+  const std::uint32_t memory_type = host ? v.memory_type : v.device_memory_type;
   // Refused before the driver sees it: a storage buffer cannot be bound past the device's
   // range, and larger than the whole heap cannot succeed.
   if (bytes > info_.max_buffer_bytes)
     return Error{"Vulkan: a buffer of " + std::to_string(bytes >> 20) + " MiB is larger than " +
                  info_.name + " can bind (" + std::to_string(info_.max_buffer_bytes >> 20) +
                  " MiB); use a smaller grid or --device cpu"};
-  if (bytes > v.heap_bytes)
+  if (bytes > heap)
     return Error{"Vulkan: a buffer of " + std::to_string(bytes >> 20) + " MiB is larger than " +
-                 info_.name + "'s memory heap (" + std::to_string(v.heap_bytes >> 20) + " MiB)"};
+                 info_.name + "'s memory heap (" + std::to_string(heap >> 20) + " MiB)"};
   Buffer b;
   b.context_ = this;
   b.bytes_ = bytes;
@@ -370,12 +386,13 @@ Expected<Buffer> Context::buffer(std::size_t bytes) const {
   b.buffer_ = reinterpret_cast<std::uint64_t>(buffer);
   VkMemoryRequirements req;
   v.vkGetBufferMemoryRequirements(v.device, buffer, &req);
-  if (!(req.memoryTypeBits & (1u << v.memory_type)))
-    return Error{"Vulkan: a buffer cannot live in the chosen host-visible memory"};
+  if (!(req.memoryTypeBits & (1u << memory_type)))
+    return Error{std::string("Vulkan: a buffer cannot live in the chosen ") +
+                 (host ? "host-visible" : "device-local") + " memory"};
   VkMemoryAllocateInfo mai{};
   mai.sType = VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO;
   mai.allocationSize = req.size;
-  mai.memoryTypeIndex = v.memory_type;
+  mai.memoryTypeIndex = memory_type;
   VkDeviceMemory memory = VK_NULL_HANDLE;
   if (Status s = check(v.vkAllocateMemory(v.device, &mai, nullptr, &memory),
                        ("allocating " + std::to_string(bytes) + " bytes").c_str());
@@ -384,10 +401,11 @@ Expected<Buffer> Context::buffer(std::size_t bytes) const {
   b.memory_ = reinterpret_cast<std::uint64_t>(memory);
   if (Status s = check(v.vkBindBufferMemory(v.device, buffer, memory, 0), "binding memory"); !s)
     return s.error();
-  if (Status s =
-          check(v.vkMapMemory(v.device, memory, 0, VK_WHOLE_SIZE, 0, &b.mapped_), "mapping memory");
-      !s)
-    return s.error();
+  if (host)
+    if (Status s = check(v.vkMapMemory(v.device, memory, 0, VK_WHOLE_SIZE, 0, &b.mapped_),
+                         "mapping memory");
+        !s)
+      return s.error();
   return b;
 }
 
@@ -578,7 +596,7 @@ void Batch::mark(const std::string& pass) {
   }
   const Context::Impl& v = context_->impl();
   v.vkCmdWriteTimestamp(reinterpret_cast<VkCommandBuffer>(command_buffer_),
-                        VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+                        VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT,
                         reinterpret_cast<VkQueryPool>(query_pool_), std::uint32_t(passes_.size()));
   passes_.push_back(pass);
 }
@@ -628,14 +646,37 @@ void Batch::dispatch(const Kernel& k, std::span<Buffer* const> buffers, const vo
                          VK_SHADER_STAGE_COMPUTE_BIT, 0, k.push_bytes_, push);
   if (groups_x > 0 && groups_y > 0 && groups_z > 0)
     v.vkCmdDispatch(cb, groups_x, groups_y, groups_z);
-  // The next dispatch reads what this one wrote.
-  VkMemoryBarrier barrier{};
-  barrier.sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER;
-  barrier.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT;
-  barrier.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT;
-  v.vkCmdPipelineBarrier(cb, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
-                         VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0, 1, &barrier, 0, nullptr, 0,
-                         nullptr);
+  barrier(VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT);
+}
+
+void Batch::barrier(std::uint32_t src_stage, std::uint32_t src_access) {
+  // Whatever comes next (a dispatch or a copy) sees what this command wrote.
+  const Context::Impl& v = context_->impl();
+  VkMemoryBarrier b{};
+  b.sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER;
+  b.srcAccessMask = src_access;
+  b.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT |
+                    VK_ACCESS_TRANSFER_READ_BIT | VK_ACCESS_TRANSFER_WRITE_BIT;
+  v.vkCmdPipelineBarrier(reinterpret_cast<VkCommandBuffer>(command_buffer_), src_stage,
+                         VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT, 0,
+                         1, &b, 0, nullptr, 0, nullptr);
+}
+
+void Batch::copy(const Buffer& src, std::size_t src_offset, const Buffer& dst,
+                 std::size_t dst_offset, std::size_t bytes) {
+  if (!recording_ || !error_ || bytes == 0) return;
+  if (src.context_ != context_ || dst.context_ != context_ || src_offset > src.bytes_ ||
+      bytes > src.bytes_ - src_offset || dst_offset > dst.bytes_ ||
+      bytes > dst.bytes_ - dst_offset) {
+    error_ = Error{"Vulkan: a copy of " + std::to_string(bytes) + " bytes outside its buffers"};
+    return;
+  }
+  const Context::Impl& v = context_->impl();
+  VkBufferCopy region{src_offset, dst_offset, bytes};
+  v.vkCmdCopyBuffer(reinterpret_cast<VkCommandBuffer>(command_buffer_),
+                    reinterpret_cast<VkBuffer>(src.buffer_),
+                    reinterpret_cast<VkBuffer>(dst.buffer_), 1, &region);
+  barrier(VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT);
 }
 
 Expected<std::vector<std::pair<std::string, double>>> Batch::run() {
@@ -646,16 +687,16 @@ Expected<std::vector<std::pair<std::string, double>>> Batch::run() {
   VkCommandBuffer cb = reinterpret_cast<VkCommandBuffer>(command_buffer_);
   const bool timed = query_pool_ && !passes_.empty() && passes_.size() < queries_;
   if (timed)
-    v.vkCmdWriteTimestamp(cb, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+    v.vkCmdWriteTimestamp(cb, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT,
                           reinterpret_cast<VkQueryPool>(query_pool_),
                           std::uint32_t(passes_.size()));
   // What the kernels wrote is visible to the host after the fence.
   VkMemoryBarrier barrier{};
   barrier.sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER;
-  barrier.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT;
+  barrier.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_TRANSFER_WRITE_BIT;
   barrier.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
-  v.vkCmdPipelineBarrier(cb, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 1,
-                         &barrier, 0, nullptr, 0, nullptr);
+  v.vkCmdPipelineBarrier(cb, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT,
+                         VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &barrier, 0, nullptr, 0, nullptr);
   if (Status s = check(v.vkEndCommandBuffer(cb), "recording commands"); !s) return s.error();
   VkFenceCreateInfo fci{};
   fci.sType = VK_STRUCTURE_TYPE_FENCE_CREATE_INFO;

@@ -35,8 +35,11 @@ Groups groups_1d(std::size_t n, std::uint32_t size, const DeviceInfo& info);
 
 class Context;
 
-// A storage buffer in memory the host can map (the backend's data is small next to a GPU's
-// bandwidth needs for now; device-local staging comes with the first large transfer).
+// Where a buffer lives: host-visible memory, mapped, for what the host writes or reads back; or
+// device-local memory for what only kernels touch (filled and read through Batch::copy).
+enum class Memory { host, device };
+
+// A storage buffer.
 class Buffer {
  public:
   Buffer() = default;
@@ -44,7 +47,7 @@ class Buffer {
   Buffer(Buffer&& other) noexcept;
   Buffer& operator=(Buffer&& other) noexcept;
   std::size_t bytes() const { return bytes_; }
-  void* data() const { return mapped_; }  // persistently mapped, coherent
+  void* data() const { return mapped_; }  // Memory::host: persistently mapped, coherent; else null
   template <class T>
   T* as() const {
     return static_cast<T*>(mapped_);
@@ -93,6 +96,9 @@ class Batch {
   // `groups` workgroups in x, y and z. Buffers are bound in order to bindings 0, 1, ...
   void dispatch(const Kernel& kernel, std::span<Buffer* const> buffers, const void* push,
                 std::uint32_t groups_x, std::uint32_t groups_y = 1, std::uint32_t groups_z = 1);
+  // Copies bytes between buffers (host to device for uploads, device to host to read back).
+  void copy(const Buffer& src, std::size_t src_offset, const Buffer& dst, std::size_t dst_offset,
+            std::size_t bytes);
   // Starts a timed pass (ends at the next mark or at submit).
   void mark(const std::string& pass);
   // Submits and waits. Pass times in milliseconds, in the order of mark().
@@ -101,6 +107,7 @@ class Batch {
  private:
   friend class Context;
   explicit Batch(const Context* c) : context_(c) {}
+  void barrier(std::uint32_t src_stage, std::uint32_t src_access);
   const Context* context_;
   std::uint64_t command_buffer_ = 0, query_pool_ = 0, descriptor_pool_ = 0;
   std::vector<std::string> passes_;
@@ -121,7 +128,7 @@ class Context {
   Context& operator=(const Context&) = delete;
 
   const DeviceInfo& info() const { return info_; }
-  Expected<Buffer> buffer(std::size_t bytes) const;
+  Expected<Buffer> buffer(std::size_t bytes, Memory where = Memory::host) const;
   Expected<Kernel> kernel(const std::string& name, std::span<const std::uint32_t> spirv,
                           int buffers, std::uint32_t push_bytes) const;
   Expected<Batch> batch(std::uint32_t max_passes = 32) const;

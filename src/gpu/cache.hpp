@@ -1,0 +1,44 @@
+// What the GPU backend keeps between renders: compiled kernels, working buffers by role, and
+// small tables already on the device (uploaded again only when their bytes change).
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "gpu/vulkan.hpp"
+
+namespace penumbra::gpu {
+
+class Cache {
+ public:
+  explicit Cache(const Context& context) : context_(context) {}
+  const Context& context() const { return context_; }
+
+  Expected<const Kernel*> kernel(const std::string& name, std::span<const std::uint32_t> spirv,
+                                 int buffers, std::uint32_t push_bytes);
+  // The buffer kept under `role`, allocated again only when its size or memory changes. One
+  // role has one size within a batch (a reallocation frees what recorded commands refer to).
+  Expected<Buffer*> buffer(const std::string& role, std::size_t bytes,
+                           Memory where = Memory::device);
+  // A device buffer under `role` holding `bytes` of `data`, copied in `batch` through a staging
+  // buffer unless it holds these bytes already. Counts into uploaded.
+  Expected<Buffer*> table(Batch& batch, const std::string& role, const void* data,
+                          std::size_t bytes);
+
+  // After a batch that failed: no table is trusted to be on the device.
+  void forget_tables() { tables_.clear(); }
+
+  std::uint64_t uploaded = 0;  // bytes copied to the GPU since the caller last reset it
+
+ private:
+  const Context& context_;
+  std::map<std::string, Kernel> kernels_;
+  std::map<std::string, Buffer> buffers_;  // node-based: pointers stay valid as roles are added
+  std::map<std::string, Memory> memory_;
+  std::map<std::string, std::vector<unsigned char>> tables_;
+};
+
+}  // namespace penumbra::gpu

@@ -1,0 +1,25 @@
+// Flatland radiance cascades on the GPU, pass for pass the CPU's (flatland/rc/rc.cpp): one
+// dispatch per cascade, top down, ping-pong between two cascade buffers in the direction-first
+// layout, then the fluence.
+#pragma once
+
+#include <vector>
+
+#include "flatland/rc/cascade.hpp"
+#include "gpu/cache.hpp"
+#include "penumbra/render.hpp"
+
+namespace penumbra::gpu {
+
+// Records a solve into `batch`: reads the medium (`step`: extinction or minus the jump length,
+// `emission`: 3 floats per cell), writes the fluence (3 floats per cell) into `fluence`. `plan`
+// has its directions filled. Each cascade is a timed pass "cascade n", then "fluence".
+// Interval extension is not ported (check_options refuses it on the GPU).
+Status record_rc(Cache& cache, Batch& batch, int width, int height, Buffer& step, Buffer& emission,
+                 const Rgb& environment, const std::vector<rc::Cascade>& plan,
+                 const RcOptions& options, Buffer& fluence);
+
+// Device bytes record_rc keeps: two cascade buffers and the direction tables.
+std::uint64_t rc_device_bytes(const std::vector<rc::Cascade>& plan);
+
+}  // namespace penumbra::gpu

@@ -1,0 +1,49 @@
+#version 450
+#extension GL_GOOGLE_include_directive : require
+// Flatland RC, the fluence at every cell centre from merged cascade 0, as flatland/rc/rc.cpp
+// fluence(): F = sum over the Q0 cones of 2pi/Q0 * radiance, bilinear over the probes the cell
+// can see (weights times visibility), plain bilinear for a cell that sees none.
+layout(local_size_x = 16, local_size_y = 16) in;
+layout(std430, binding = 0) readonly buffer Step { float step_[]; };
+layout(std430, binding = 1) readonly buffer Emission { float emission[]; };
+layout(std430, binding = 2) readonly buffer Cascade0 { vec4 r0[]; };
+layout(std430, binding = 3) writeonly buffer Fluence { float f[]; };
+layout(push_constant) uniform Push {
+  int w, h;
+  int spacing, nx, ny, directions;
+  float cone;
+} p;
+
+#include "trace.glsl"
+
+void main() {
+  const int x = int(gl_GlobalInvocationID.x), y = int(gl_GlobalInvocationID.y);
+  if (x >= p.w || y >= p.h) return;
+  const vec2 c = vec2(float(x) + 0.5, float(y) + 0.5);
+  ivec2 fx, fy;
+  vec4 fw;
+  footprint(p.spacing, ivec2(p.nx, p.ny), c, fx, fy, fw);
+  vec4 w = fw;
+  float total = 0.0;
+  for (int a = 0; a < 4; ++a) {
+    if (w[a] == 0.0) continue;
+    const vec2 q = vec2((float(fx[a & 1]) + 0.5) * float(p.spacing),
+                        (float(fy[a >> 1]) + 0.5) * float(p.spacing));
+    w[a] *= trace_segment(p.w, p.h, c, q, true).a;
+    total += w[a];
+  }
+  const bool sees = total > 1e-6;
+  const vec4 wt = sees ? w : fw;
+  const float norm = sees ? 1.0 / total : 1.0;
+  vec3 sum = vec3(0.0);
+  for (int k = 0; k < p.directions; ++k)
+    for (int a = 0; a < 4; ++a) {
+      if (wt[a] == 0.0) continue;
+      sum += wt[a] *
+             r0[(uint(k) * uint(p.ny) + uint(fy[a >> 1])) * uint(p.nx) + uint(fx[a & 1])].rgb;
+    }
+  const uint o = 3u * (uint(y) * uint(p.w) + uint(x));
+  f[o] = sum.r * norm * p.cone;
+  f[o + 1] = sum.g * norm * p.cone;
+  f[o + 2] = sum.b * norm * p.cone;
+}

@@ -88,7 +88,7 @@ enum class Device {
 
 struct RenderOptions {
   Method method = Method::rc;
-  // The GPU runs RC (no interval extension) and HRC (f32 storage), any bounces (docs/GPU.md).
+  // The GPU runs RC (no interval extension) and HRC, any bounces (docs/GPU.md).
   Device device = Device::cpu;
   RcOptions rc;
   PtOptions pt;

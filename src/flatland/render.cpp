@@ -28,8 +28,6 @@ Status check_options(int width, int height, const RenderOptions& o) {
   if (o.device == Device::gpu) {
     if (o.method == Method::pt)
       return bad("device gpu: the path tracer runs on the CPU only (docs/GPU.md)");
-    if (o.method == Method::hrc && o.hrc.storage != Storage::f32)
-      return bad("device gpu: HRC on the GPU stores f32 only; drop --storage f16");
     if (o.method == Method::rc && o.rc.extend)
       return bad("device gpu: interval extension runs on the CPU only; drop --extend");
   }

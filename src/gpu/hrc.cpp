@@ -44,20 +44,25 @@ Expected<std::vector<float>> cross_blur(const Context& c, int width, int height,
   return std::vector<float>(o, o + 3 * n);
 }
 
-std::uint64_t hrc_device_bytes(int W, int H) {
+std::uint64_t hrc_device_bytes(int W, int H, Storage storage) {
   const hrc::Sizes sz = hrc::plan(W, H);
   const int levels = int(sz.t.size()) - 1;
+  const std::uint64_t value = storage == Storage::f16 ? 2 : 4;           // a stored T or R value
   std::uint64_t bytes = std::uint64_t(W) * H * (6 + 3) * sizeof(float);  // world, fluence
   bytes += 6 * std::uint64_t(sz.pad) * sizeof(float);                    // view
-  bytes += 2 * 3 * std::uint64_t(std::max<std::size_t>(sz.r, 1)) * sizeof(float);
+  bytes += 2 * 3 * std::uint64_t(std::max<std::size_t>(sz.r, 1)) * value;
   bytes += ((std::uint64_t(2) << levels) - 1) * sizeof(float);  // cone angles
-  for (std::size_t t : sz.t) bytes += 4 * std::uint64_t(t) * sizeof(float);
+  for (std::size_t t : sz.t) bytes += 4 * std::uint64_t(t) * value;
   return bytes;
 }
 
 Status record_hrc(Cache& cache, Batch& batch, int W, int H, Buffer& step, Buffer& emission,
                   const Rgb& env, const HrcOptions& o, Buffer& fluence_out) {
-  if (o.storage != Storage::f32) return Error{"GPU HRC: only f32 storage so far"};
+  const bool f16 = o.storage == Storage::f16;
+  if (f16 && !cache.context().info().storage_f16)
+    return Error{"device gpu: " + cache.context().info().name +
+                 " cannot store 16-bit floats (storageBuffer16BitAccess); drop --storage f16"};
+  const std::size_t value = f16 ? 2 : 4;  // bytes of one stored T or R value
   const int pad = hrc::kPad;
   const std::uint32_t cells = std::uint32_t(std::size_t(W) * H);
   // The CPU solve's sizes for both view orientations.
@@ -73,13 +78,14 @@ Status record_hrc(Cache& cache, Batch& batch, int W, int H, Buffer& step, Buffer
     int buffers;
     std::uint32_t push;
   };
-  const K specs[] = {{"hrc_world", shaders::hrc_world(), 3, 16},
-                     {"hrc_view", shaders::hrc_view(), 2, 36},
-                     {"hrc_trace", shaders::hrc_trace(), 4, 28},
-                     {"hrc_merge_up", shaders::hrc_merge_up(), 2, 20},
-                     {"hrc_merge_down", shaders::hrc_merge_down(), 5, 36},
-                     {"hrc_gather", shaders::hrc_gather(), 3, 52},
-                     {"cross_blur", shaders::cross_blur(), 3, 16}};
+  const K specs[] = {
+      {"hrc_world", shaders::hrc_world(), 3, 16},
+      {"hrc_view", shaders::hrc_view(), 2, 36},
+      {f16 ? "hrc_trace f16" : "hrc_trace", shaders::hrc_trace(f16), 4, 28},
+      {f16 ? "hrc_merge_up f16" : "hrc_merge_up", shaders::hrc_merge_up(f16), 2, 20},
+      {f16 ? "hrc_merge_down f16" : "hrc_merge_down", shaders::hrc_merge_down(f16), 5, 36},
+      {f16 ? "hrc_gather f16" : "hrc_gather", shaders::hrc_gather(f16), 3, 52},
+      {"cross_blur", shaders::cross_blur(), 3, 16}};
   const Kernel* k[std::size(specs)];
   for (std::size_t i = 0; i < std::size(specs); ++i) {
     Expected<const Kernel*> kernel =
@@ -87,12 +93,12 @@ Status record_hrc(Cache& cache, Batch& batch, int W, int H, Buffer& step, Buffer
     if (!kernel) return kernel.error();
     k[i] = *kernel;
   }
-  auto make = [&](const std::string& role, std::size_t floats) {
-    return cache.buffer("hrc " + role, std::max<std::size_t>(floats, 1) * sizeof(float));
+  auto make = [&](const std::string& role, std::size_t values, std::size_t bytes = 4) {
+    return cache.buffer("hrc " + role, std::max<std::size_t>(values, 1) * bytes);
   };
   Expected<Buffer*> world = make("world", 6 * std::size_t(cells)),
-                    view = make("view", 6 * view_cells), r0 = make("r0", 3 * r_size),
-                    r1 = make("r1", 3 * r_size);
+                    view = make("view", 6 * view_cells), r0 = make("r0", 3 * r_size, value),
+                    r1 = make("r1", 3 * r_size, value);
   for (const Expected<Buffer*>* b : {&world, &view, &r0, &r1})
     if (!*b) return b->error();
   Buffer* fluence = &fluence_out;
@@ -103,7 +109,7 @@ Status record_hrc(Cache& cache, Batch& batch, int W, int H, Buffer& step, Buffer
   }
   std::vector<Buffer*> t;
   for (std::size_t n = 0; n < t_size.size(); ++n) {
-    Expected<Buffer*> b = make(std::string("t ").append(std::to_string(n)), 4 * t_size[n]);
+    Expected<Buffer*> b = make(std::string("t ").append(std::to_string(n)), 4 * t_size[n], value);
     if (!b) return b.error();
     t.push_back(*b);
   }

@@ -29,14 +29,26 @@ const std::uint32_t k_hrc_view[] = {
 const std::uint32_t k_hrc_trace[] = {
 #include "hrc_trace.comp.inc"
 };
+const std::uint32_t k_hrc_trace_f16[] = {
+#include "hrc_trace_f16.comp.inc"
+};
 const std::uint32_t k_hrc_merge_up[] = {
 #include "hrc_merge_up.comp.inc"
+};
+const std::uint32_t k_hrc_merge_up_f16[] = {
+#include "hrc_merge_up_f16.comp.inc"
 };
 const std::uint32_t k_hrc_merge_down[] = {
 #include "hrc_merge_down.comp.inc"
 };
+const std::uint32_t k_hrc_merge_down_f16[] = {
+#include "hrc_merge_down_f16.comp.inc"
+};
 const std::uint32_t k_hrc_gather[] = {
 #include "hrc_gather.comp.inc"
+};
+const std::uint32_t k_hrc_gather_f16[] = {
+#include "hrc_gather_f16.comp.inc"
 };
 const std::uint32_t k_jfa_jump[] = {
 #include "jfa_jump.comp.inc"
@@ -74,16 +86,20 @@ std::span<const std::uint32_t> hrc_world() {
 std::span<const std::uint32_t> hrc_view() {
   return k_hrc_view;
 }
-std::span<const std::uint32_t> hrc_trace() {
+std::span<const std::uint32_t> hrc_trace(bool f16) {
+  if (f16) return k_hrc_trace_f16;
   return k_hrc_trace;
 }
-std::span<const std::uint32_t> hrc_merge_up() {
+std::span<const std::uint32_t> hrc_merge_up(bool f16) {
+  if (f16) return k_hrc_merge_up_f16;
   return k_hrc_merge_up;
 }
-std::span<const std::uint32_t> hrc_merge_down() {
+std::span<const std::uint32_t> hrc_merge_down(bool f16) {
+  if (f16) return k_hrc_merge_down_f16;
   return k_hrc_merge_down;
 }
-std::span<const std::uint32_t> hrc_gather() {
+std::span<const std::uint32_t> hrc_gather(bool f16) {
+  if (f16) return k_hrc_gather_f16;
   return k_hrc_gather;
 }
 std::span<const std::uint32_t> jfa_jump() {

@@ -51,7 +51,7 @@ std::uint64_t Solver::device_bytes(int W, int H, const RenderOptions& o,
     bytes += rc_device_bytes(plan) * 2;  // the direction table has a staging copy; take it twice
     if (o.distance_field) bytes += 2 * cells * sizeof(std::int32_t);  // seeds
   } else {
-    bytes += hrc_device_bytes(W, H);
+    bytes += hrc_device_bytes(W, H, o.hrc.storage);
   }
   return bytes;
 }

@@ -19,6 +19,7 @@ namespace penumbra::gpu {
   X(vkGetPhysicalDeviceProperties)            \
   X(vkGetPhysicalDeviceQueueFamilyProperties) \
   X(vkGetPhysicalDeviceMemoryProperties)      \
+  X(vkGetPhysicalDeviceFeatures2)             \
   X(vkCreateDevice)                           \
   X(vkGetDeviceProcAddr)
 
@@ -305,6 +306,18 @@ Expected<std::shared_ptr<Context>> Context::create(bool allow_cpu) {
   dci.sType = VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO;
   dci.queueCreateInfoCount = 1;
   dci.pQueueCreateInfos = &qci;
+  // 16-bit floats in storage buffers (HRC's --storage f16), where the device has them.
+  VkPhysicalDevice16BitStorageFeatures storage16{};
+  storage16.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_16BIT_STORAGE_FEATURES;
+  VkPhysicalDeviceFeatures2 features{};
+  features.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2;
+  features.pNext = &storage16;
+  v.vkGetPhysicalDeviceFeatures2(v.physical, &features);
+  VkPhysicalDevice16BitStorageFeatures enable16{};
+  enable16.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_16BIT_STORAGE_FEATURES;
+  enable16.storageBuffer16BitAccess = storage16.storageBuffer16BitAccess;
+  c->info_.storage_f16 = storage16.storageBuffer16BitAccess == VK_TRUE;
+  dci.pNext = &enable16;
   if (Status s =
           check(v.vkCreateDevice(v.physical, &dci, nullptr, &v.device), "creating the device");
       !s)

@@ -23,6 +23,7 @@ struct DeviceInfo {
   double timestamp_period_ns = 0;  // 0: the queue has no timestamps
   std::uint32_t max_workgroups_x = 0, max_workgroups_y = 0;
   std::uint64_t max_buffer_bytes = 0;  // the largest storage buffer a kernel can bind
+  bool storage_f16 = false;  // 16-bit floats in storage buffers (storageBuffer16BitAccess)
 };
 
 // Workgroups for n invocations of a 1-D kernel with `size` per group, folded into x and y so

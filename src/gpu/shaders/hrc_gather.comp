@@ -1,9 +1,11 @@
 #version 450
+#extension GL_GOOGLE_include_directive : require
+#include "storage.glsl"
 // A quadrant's fluence (hrc.cpp solve_with): R_0 at [u + 1, v], after the near segment from the
 // cell's centre, into the world's fluence through the rotation; the first quadrant writes, the
 // others add.
 layout(local_size_x = 64, local_size_y = 4) in;
-layout(std430, binding = 0) readonly buffer R0 { float r0[]; };
+layout(std430, binding = 0) readonly buffer R0 { stored_t r0[]; };
 layout(std430, binding = 1) readonly buffer View { float view[]; };
 layout(std430, binding = 2) buffer Fluence { float f[]; };
 layout(push_constant) uniform Push {
@@ -18,7 +20,7 @@ void main() {
   vec3 q = vec3(p.er, p.eg, p.eb) * quarter;
   if (u + 1 < p.w) {
     uint c = uint((u + 1) * 3) * uint(p.h) + uint(v);
-    q = vec3(r0[c], r0[c + uint(p.h)], r0[c + 2u * uint(p.h)]);
+    q = vec3(float(r0[c]), float(r0[c + uint(p.h)]), float(r0[c + 2u * uint(p.h)]));
   }
   if (p.near != 0) {
     uint own = uint(u * p.hp + p.pad + v), next = own + uint(p.hp);

@@ -1,28 +1,30 @@
 #version 450
+#extension GL_GOOGLE_include_directive : require
+#include "storage.glsl"
 // R_n from R_{n+1}, T_n and T_{n+1} (hrc.cpp merge_down, eqs. 14-17). Past the grid, and at the
 // top level, a cone holds the environment over its angle.
 layout(local_size_x = 64, local_size_y = 4) in;
-layout(std430, binding = 0) readonly buffer Tn { float tn[]; };
-layout(std430, binding = 1) readonly buffer Tn1 { float tn1[]; };
-layout(std430, binding = 2) readonly buffer Rn1 { float rn1[]; };
+layout(std430, binding = 0) readonly buffer Tn { stored_t tn[]; };
+layout(std430, binding = 1) readonly buffer Tn1 { stored_t tn1[]; };
+layout(std430, binding = 2) readonly buffer Rn1 { stored_t rn1[]; };
 layout(std430, binding = 3) readonly buffer Angles { float angle[]; };  // level m at 2^m - 1
-layout(std430, binding = 4) writeonly buffer Rn { float rn[]; };
+layout(std430, binding = 4) writeonly buffer Rn { stored_t rn[]; };
 layout(push_constant) uniform Push {
   int h; int n; int P; int P1; int rows; int top; float er; float eg; float eb;
 } p;
 
 vec4 get_t(int k, int x, int y) {  // T_n, always inside
   uint c = uint((k * p.P + x) * 4) * uint(p.h) + uint(y);
-  return vec4(tn[c], tn[c + uint(p.h)], tn[c + 2u * uint(p.h)], tn[c + 3u * uint(p.h)]);
+  return vec4(float(tn[c]), float(tn[c + uint(p.h)]), float(tn[c + 2u * uint(p.h)]), float(tn[c + 3u * uint(p.h)]));
 }
 vec4 get_t1(int k, int x, int y) {  // T_{n+1}, always inside
   uint c = uint((k * p.P1 + x) * 4) * uint(p.h) + uint(y);
-  return vec4(tn1[c], tn1[c + uint(p.h)], tn1[c + 2u * uint(p.h)], tn1[c + 3u * uint(p.h)]);
+  return vec4(float(tn1[c]), float(tn1[c + uint(p.h)]), float(tn1[c + 2u * uint(p.h)]), float(tn1[c + 3u * uint(p.h)]));
 }
 vec3 get_r(int j, int x, int y, float a) {  // R_{n+1}, or the environment over angle a
   if (p.top != 0 || x >= p.P1 || y < 0 || y >= p.h) return vec3(p.er * a, p.eg * a, p.eb * a);
   uint c = uint((j * p.P1 + x) * 3) * uint(p.h) + uint(y);
-  return vec3(rn1[c], rn1[c + uint(p.h)], rn1[c + 2u * uint(p.h)]);
+  return vec3(float(rn1[c]), float(rn1[c + uint(p.h)]), float(rn1[c + 2u * uint(p.h)]));
 }
 
 int vy(int n, int k) { return 2 * k - (1 << n); }
@@ -49,7 +51,7 @@ void main() {
     o = 0.5 * (f0p + ap * ep.rgb + ep.a * f1p + f0m + am * em.rgb + em.a * f1m);
   }
   uint c = uint(row * 3) * uint(p.h) + uint(y);
-  rn[c] = o.r;
-  rn[c + uint(p.h)] = o.g;
-  rn[c + 2u * uint(p.h)] = o.b;
+  rn[c] = stored_t(o.r);
+  rn[c + uint(p.h)] = stored_t(o.g);
+  rn[c + 2u * uint(p.h)] = stored_t(o.b);
 }

@@ -1,14 +1,16 @@
 #version 450
+#extension GL_GOOGLE_include_directive : require
+#include "storage.glsl"
 // T_{n+1} from T_n (hrc.cpp merge_up, eqs. 18-20). Reads past the grid are empty intervals.
 layout(local_size_x = 64, local_size_y = 4) in;
-layout(std430, binding = 0) readonly buffer Tn { float tn[]; };
-layout(std430, binding = 1) writeonly buffer Tn1 { float tn1[]; };
+layout(std430, binding = 0) readonly buffer Tn { stored_t tn[]; };
+layout(std430, binding = 1) writeonly buffer Tn1 { stored_t tn1[]; };
 layout(push_constant) uniform Push { int h; int n; int P; int P1; int rows; } p;
 
 vec4 get_t(int k, int x, int y) {
   if (x >= p.P || y < 0 || y >= p.h) return vec4(0.0, 0.0, 0.0, 1.0);
   uint c = uint((k * p.P + x) * 4) * uint(p.h) + uint(y);
-  return vec4(tn[c], tn[c + uint(p.h)], tn[c + 2u * uint(p.h)], tn[c + 3u * uint(p.h)]);
+  return vec4(float(tn[c]), float(tn[c + uint(p.h)]), float(tn[c + 2u * uint(p.h)]), float(tn[c + 3u * uint(p.h)]));
 }
 
 vec4 merge(vec4 near, vec4 far) {
@@ -31,8 +33,8 @@ void main() {
     o = 0.5 * (a + b);
   }
   uint c = uint(row * 4) * uint(p.h) + uint(y);
-  tn1[c] = o.r;
-  tn1[c + uint(p.h)] = o.g;
-  tn1[c + 2u * uint(p.h)] = o.b;
-  tn1[c + 3u * uint(p.h)] = o.a;
+  tn1[c] = stored_t(o.r);
+  tn1[c + uint(p.h)] = stored_t(o.g);
+  tn1[c + 2u * uint(p.h)] = stored_t(o.b);
+  tn1[c + 3u * uint(p.h)] = stored_t(o.a);
 }

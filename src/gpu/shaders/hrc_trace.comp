@@ -1,11 +1,13 @@
 #version 450
+#extension GL_GOOGLE_include_directive : require
+#include "storage.glsl"
 // T_n for n <= 2 (hrc.cpp trace_level): ray k from probe (u = x 2^n, y) crosses a fixed pattern
 // of cells; front to back, emission weighted by the transmittance so far.
 layout(local_size_x = 64, local_size_y = 4) in;
 layout(std430, binding = 0) readonly buffer View { float view[]; };
 layout(std430, binding = 1) readonly buffer Pattern { ivec4 cells[]; };  // du, dv, length, squared
 layout(std430, binding = 2) readonly buffer Ranges { ivec2 ranges[]; };  // per k: first, count
-layout(std430, binding = 3) writeonly buffer T { float t[]; };
+layout(std430, binding = 3) writeonly buffer T { stored_t t[]; };
 layout(push_constant) uniform Push { int h; int hp; int pad; int n; int P; int rows; uint view_cells; } p;
 
 void main() {
@@ -26,8 +28,8 @@ void main() {
     at *= tr;
   }
   uint o = uint(row * 4) * uint(p.h) + uint(y);
-  t[o] = ar;
-  t[o + uint(p.h)] = ag;
-  t[o + 2u * uint(p.h)] = ab;
-  t[o + 3u * uint(p.h)] = at;
+  t[o] = stored_t(ar);
+  t[o + uint(p.h)] = stored_t(ag);
+  t[o + 2u * uint(p.h)] = stored_t(ab);
+  t[o + 3u * uint(p.h)] = stored_t(at);
 }

@@ -7,7 +7,7 @@
 // did not change (upload, medium, distance field) are shown from the first render.
 //
 //   penumbra_gpu_passes [--sizes 512,1024,2048] [--runs 5] [--method rc|hrc|both]
-//                       [--device gpu|cpu]
+//                       [--device gpu|cpu] [--storage f32|f16]
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cstdio>
@@ -30,22 +30,23 @@ double median(std::vector<double> v) {
   return n == 0 ? 0.0 : n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
-// Bytes HRC's passes must move at least (f32: 16 bytes per T element, 12 per R element), over
-// the four quadrants.
-std::map<std::string, double> hrc_traffic(int w, int h) {
+// Bytes HRC's passes must move at least (4 values per T element, 3 per R element, of `value`
+// bytes each), over the four quadrants.
+std::map<std::string, double> hrc_traffic(int w, int h, double value) {
+  const double te = 4 * value, re = 3 * value;
   const hrc::Sizes sz = hrc::plan(w, h);
   std::map<std::string, double> bytes;
   for (int d = 0; d < 4; ++d) {
     const hrc::View& v = sz.views[d & 1];
     const double view_cells = double(v.w + hrc::kPad) * (v.h + 2 * hrc::kPad);
     double trace = view_cells * 6 * 4;
-    for (int n = 0; n <= std::min(2, v.levels); ++n) trace += double(v.t_size(n)) * 16;
+    for (int n = 0; n <= std::min(2, v.levels); ++n) trace += double(v.t_size(n)) * te;
     double up = 0;
-    for (int n = 3; n <= v.levels; ++n) up += double(v.t_size(n - 1) + v.t_size(n)) * 16;
+    for (int n = 3; n <= v.levels; ++n) up += double(v.t_size(n - 1) + v.t_size(n)) * te;
     double down = 0;
     for (int n = v.levels - 1; n >= 0; --n)
-      down += double(v.t_size(n) + v.t_size(n + 1)) * 16 +
-              double(v.r_size(n + 1) * (n + 1 < v.levels) + v.r_size(n)) * 12;
+      down += double(v.t_size(n) + v.t_size(n + 1)) * te +
+              double(v.r_size(n + 1) * (n + 1 < v.levels) + v.r_size(n)) * re;
     bytes["gpu trace T0-T2"] += trace;
     bytes["gpu merge up T3-TN"] += up;
     bytes["gpu merge down R"] += down;
@@ -59,13 +60,15 @@ int main(int argc, char** argv) {
   CLI::App app{"Per-pass times of RC and HRC on the GPU (or the CPU), warm, median of runs"};
   std::vector<int> sizes = {512, 1024, 2048};
   int runs = 5;
-  std::string method = "both", device = "gpu";
+  std::string method = "both", device = "gpu", storage = "f32";
   app.add_option("--sizes", sizes, "Grid sides")->delimiter(',')->check(CLI::Range(16, 8192));
   app.add_option("--runs", runs, "Timed renders per case (after one warm-up)")
       ->check(CLI::Range(1, 1000));
   app.add_option("--method", method, "rc, hrc or both")
       ->check(CLI::IsMember({"rc", "hrc", "both"}));
   app.add_option("--device", device, "gpu or cpu")->check(CLI::IsMember({"gpu", "cpu"}));
+  app.add_option("--storage", storage, "hrc: f32 or f16 (the paper's)")
+      ->check(CLI::IsMember({"f32", "f16"}));
   CLI11_PARSE(app, argc, argv);
 
   std::vector<Method> methods;
@@ -80,6 +83,7 @@ int main(int argc, char** argv) {
       o.method = m;
       o.device = device == "gpu" ? Device::gpu : Device::cpu;
       o.max_memory = std::uint64_t(64) << 30;
+      o.hrc.storage = storage == "f16" ? Storage::f16 : Storage::f32;
       Renderer renderer;
       std::map<std::string, std::vector<double>> passes;
       std::vector<std::string> order;
@@ -108,7 +112,8 @@ int main(int argc, char** argv) {
         }
       }
       const std::map<std::string, double> traffic =
-          m == Method::hrc ? hrc_traffic(size, size) : std::map<std::string, double>{};
+          m == Method::hrc ? hrc_traffic(size, size, storage == "f16" ? 2 : 4)
+                           : std::map<std::string, double>{};
       for (const std::string& pass : order) {
         const double ms = median(passes[pass]);
         auto t = traffic.find(pass);

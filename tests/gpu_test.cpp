@@ -410,6 +410,14 @@ TEST(Gpu, SceneStaysOnTheGpuBetweenRenders) {
     EXPECT_EQ(pixels(edited->fluence), pixels(fresh(s).fluence)) << to_string(method);
     EXPECT_NE(pixels(edited->fluence), pixels(first->fluence));
 
+    // New emission alone (a light's colour): the medium stays, one row goes up.
+    s.emission[3 * s.index(11, 21)] = 5;
+    Expected<RenderResult> recoloured = kept.render(s, o);
+    ASSERT_TRUE(recoloured.ok()) << recoloured.error().message;
+    EXPECT_EQ(recoloured->uploaded_bytes, std::uint64_t(w) * 7 * sizeof(float));
+    EXPECT_FALSE(has(*recoloured, "gpu medium"));
+    EXPECT_EQ(pixels(recoloured->fluence), pixels(fresh(s).fluence)) << to_string(method);
+
     // Another grid size: everything goes up again.
     const Scene other = mixed_scene(40, 30);
     Expected<RenderResult> resized = kept.render(other, o);
@@ -417,6 +425,74 @@ TEST(Gpu, SceneStaysOnTheGpuBetweenRenders) {
     EXPECT_GE(resized->uploaded_bytes, std::uint64_t(40) * 30 * 7 * sizeof(float));
     EXPECT_EQ(pixels(resized->fluence), pixels(fresh(other).fluence));
   }
+}
+
+// What the solver allocates on the device is what it estimated, across methods, storage,
+// bounces and the distance field; buffers of options no longer used are freed.
+TEST(Gpu, DeviceMemoryIsWhatTheEstimateSays) {
+  std::shared_ptr<gpu::Context> c = context();
+  ASSERT_TRUE(c);
+  gpu::Solver solver(c);
+  const Scene s = mixed_scene(96, 80);
+  struct Case {
+    const char* name;
+    RenderOptions o;
+  };
+  std::vector<Case> cases;
+  auto add = [&](const char* name, auto edit) {
+    RenderOptions o;
+    o.device = Device::gpu;
+    edit(o);
+    cases.push_back({name, o});
+  };
+  add("rc", [](RenderOptions& o) { o.method = Method::rc; });
+  add("rc 2 bounces, 16 directions",
+      [](RenderOptions& o) { o.method = Method::rc, o.bounces = 2, o.rc.directions = 16; });
+  add("hrc", [](RenderOptions& o) { o.method = Method::hrc; });
+  add("hrc f16", [](RenderOptions& o) { o.method = Method::hrc, o.hrc.storage = Storage::f16; });
+  add("rc, plain DDA", [](RenderOptions& o) { o.method = Method::rc, o.distance_field = false; });
+  for (const Case& k : cases) {
+    std::vector<rc::Cascade> plan;
+    if (k.o.method == Method::rc) {
+      plan = rc::plan_cascades(s.width, s.height, k.o.rc);
+      rc::fill_directions(plan);
+    }
+    std::vector<StageTime> stages;
+    Expected<std::vector<float>> f = solver.render(s, k.o, plan, stages);
+    ASSERT_TRUE(f.ok()) << k.name << ": " << f.error().message;
+    const std::uint64_t estimate = gpu::Solver::device_bytes(s.width, s.height, k.o, plan);
+    const std::uint64_t held = solver.allocated_bytes();
+    EXPECT_LE(held, estimate) << k.name;
+    EXPECT_GE(double(held), 0.98 * double(estimate)) << k.name;  // tables round up a little
+  }
+}
+
+// A render refused part way (a cascade larger than the device can bind) leaves nothing stale:
+// the next render on the same renderer equals a fresh one's.
+TEST(Gpu, RefusedRenderLeavesNoStaleState) {
+  std::shared_ptr<gpu::Context> c = context();
+  ASSERT_TRUE(c);
+  const Scene s = mixed_scene(64, 48);
+  RenderOptions o;
+  o.method = Method::rc;
+  o.device = Device::gpu;
+  Renderer kept;
+  ASSERT_TRUE(kept.render(s, o).ok());
+  const int side = 384;
+  const Scene big = mixed_scene(side, side);
+  RenderOptions many = o;
+  many.rc.directions = 64;
+  const bool too_big =
+      std::uint64_t(side) * side * 64 * 16 > c->info().max_buffer_bytes;  // lavapipe: 128 MiB
+  Expected<RenderResult> refused = kept.render(big, many);
+  if (too_big) {
+    ASSERT_FALSE(refused.ok());
+    EXPECT_NE(refused.error().message.find("can bind"), std::string::npos)
+        << refused.error().message;
+  }
+  Expected<RenderResult> after = kept.render(s, o);
+  ASSERT_TRUE(after.ok()) << after.error().message;
+  EXPECT_EQ(pixels(after->fluence), pixels(penumbra::testing::render_valid(s, o).fluence));
 }
 
 // A render larger than the device's memory is refused before anything is allocated, with the

@@ -143,20 +143,20 @@ std::uint64_t scene_bytes(int width, int height) {
   return std::uint64_t(width) * height * 7 * sizeof(float);
 }
 
-// What a Renderer keeps between renders: the packed medium, HRC's buffers, and the GPU solvers
-// (their kernels, scene and buffers stay on the device).
+// What a Renderer keeps between renders: the packed medium, HRC's buffers, and the GPU solver
+// (its kernels, scene and buffers stay on the device).
 struct Renderer::State {
   Medium medium;
   hrc::Workspace workspace;
-  std::unique_ptr<gpu::Solver> gpu;  // any Vulkan device, for Device::gpu
-  bool gpu_hardware_tried = false;
-  std::unique_ptr<gpu::Solver> gpu_hardware;  // a hardware GPU, for Device::auto_
+  std::unique_ptr<gpu::Solver> gpu;  // on the best Vulkan device, lavapipe included
+  bool gpu_tried = false;            // whether auto looked for a hardware GPU
 };
 
 namespace {
 
 // The GPU solver a render would use: any Vulkan device for `gpu`, a hardware one for `auto`
-// (null, and no error, when there is none or the options do not run on the GPU).
+// (null, and no error, when there is none or the options do not run on the GPU). Both take a
+// hardware GPU first, so one solver serves both.
 Expected<gpu::Solver*> gpu_for(const RenderOptions& o, Renderer::State& state) {
   if (o.device == Device::cpu) return static_cast<gpu::Solver*>(nullptr);
   if (o.device == Device::gpu) {
@@ -170,12 +170,13 @@ Expected<gpu::Solver*> gpu_for(const RenderOptions& o, Renderer::State& state) {
   RenderOptions as_gpu = o;
   as_gpu.device = Device::gpu;
   if (!check_options(1, 1, as_gpu)) return static_cast<gpu::Solver*>(nullptr);  // not ported
-  if (!state.gpu_hardware_tried) {
-    state.gpu_hardware_tried = true;
+  if (!state.gpu && !state.gpu_tried) {
+    state.gpu_tried = true;
     Expected<std::shared_ptr<gpu::Context>> c = gpu::Context::create(false);
-    if (c) state.gpu_hardware = std::make_unique<gpu::Solver>(*c);
+    if (c) state.gpu = std::make_unique<gpu::Solver>(*c);
   }
-  return state.gpu_hardware.get();
+  if (state.gpu && state.gpu->context().info().cpu) return static_cast<gpu::Solver*>(nullptr);
+  return state.gpu.get();
 }
 
 }  // namespace

@@ -1,5 +1,6 @@
 #include "gpu/cache.hpp"
 
+#include <algorithm>
 #include <cstring>
 
 namespace penumbra::gpu {
@@ -44,6 +45,26 @@ Expected<Buffer*> Cache::table(Batch& batch, const std::string& role, const void
               static_cast<const unsigned char*>(data) + bytes);
   uploaded += bytes;
   return *device;
+}
+
+std::uint64_t Cache::allocated(Memory where) const {
+  std::uint64_t bytes = 0;
+  for (const auto& [role, buffer] : buffers_)
+    if (memory_.at(role) == where) bytes += buffer.bytes();
+  return bytes;
+}
+
+void Cache::release_except(std::span<const std::string> keep) {
+  for (auto it = buffers_.begin(); it != buffers_.end();) {
+    if (std::any_of(keep.begin(), keep.end(),
+                    [&](const std::string& k) { return it->first.starts_with(k); })) {
+      ++it;
+      continue;
+    }
+    tables_.erase(it->first);
+    memory_.erase(it->first);
+    it = buffers_.erase(it);
+  }
 }
 
 }  // namespace penumbra::gpu

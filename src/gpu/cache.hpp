@@ -28,8 +28,15 @@ class Cache {
   Expected<Buffer*> table(Batch& batch, const std::string& role, const void* data,
                           std::size_t bytes);
 
-  // After a batch that failed: no table is trusted to be on the device.
+  // After a batch that failed or was never run: no table is trusted to be on the device.
   void forget_tables() { tables_.clear(); }
+  // Frees every buffer whose role does not start with one of `keep` (a render with other
+  // options keeps only what it shares with the last one, so memory checks see what is really
+  // allocated); with nothing listed, every buffer.
+  void release_except(std::span<const std::string> keep);
+
+  // Bytes of the buffers held in `where`.
+  std::uint64_t allocated(Memory where) const;
 
   std::uint64_t uploaded = 0;  // bytes copied to the GPU since the caller last reset it
 

@@ -53,7 +53,20 @@ std::uint64_t hrc_device_bytes(int W, int H, Storage storage) {
   bytes += 2 * 3 * std::uint64_t(std::max<std::size_t>(sz.r, 1)) * value;
   bytes += ((std::uint64_t(2) << levels) - 1) * sizeof(float);  // cone angles
   for (std::size_t t : sz.t) bytes += 4 * std::uint64_t(t) * value;
+  for (int n = 0; n < 3; ++n)  // the ray pattern tables
+    for (int k = 0; k <= (1 << n); ++k)
+      bytes += 2 * sizeof(std::int32_t) + hrc::traced_cells(n, k).size() * 4 * sizeof(std::int32_t);
   return bytes;
+}
+
+std::uint64_t hrc_largest_buffer(int W, int H, Storage storage) {
+  const hrc::Sizes sz = hrc::plan(W, H);
+  const std::uint64_t value = storage == Storage::f16 ? 2 : 4;
+  std::uint64_t largest = std::max(std::uint64_t(W) * H * 6 * sizeof(float),    // world
+                                   6 * std::uint64_t(sz.pad) * sizeof(float));  // view
+  largest = std::max(largest, 3 * std::uint64_t(sz.r) * value);
+  for (std::size_t t : sz.t) largest = std::max(largest, 4 * std::uint64_t(t) * value);
+  return largest;
 }
 
 Status record_hrc(Cache& cache, Batch& batch, int W, int H, Buffer& step, Buffer& emission,

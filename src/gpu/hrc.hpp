@@ -25,7 +25,8 @@ Expected<std::vector<float>> cross_blur(const Context& context, int width, int h
 Status record_hrc(Cache& cache, Batch& batch, int width, int height, Buffer& step, Buffer& emission,
                   const Rgb& environment, const HrcOptions& options, Buffer& fluence);
 
-// Device bytes record_hrc keeps.
+// Device bytes record_hrc keeps, and the largest single buffer among them.
 std::uint64_t hrc_device_bytes(int width, int height, Storage storage);
+std::uint64_t hrc_largest_buffer(int width, int height, Storage storage);
 
 }  // namespace penumbra::gpu

@@ -17,6 +17,15 @@ std::uint64_t rc_device_bytes(const std::vector<rc::Cascade>& plan) {
   return 2 * largest * 4 * sizeof(float) + directions * 2 * sizeof(float);
 }
 
+std::uint64_t rc_largest_buffer(const std::vector<rc::Cascade>& plan) {
+  std::uint64_t largest = 0, directions = 0;
+  for (const rc::Cascade& c : plan) {
+    largest = std::max<std::uint64_t>(largest, c.size());
+    directions += std::uint64_t(c.directions);
+  }
+  return std::max(largest * 4 * sizeof(float), directions * 2 * sizeof(float));
+}
+
 Status record_rc(Cache& cache, Batch& batch, int W, int H, Buffer& step, Buffer& emission,
                  const Rgb& env, const std::vector<rc::Cascade>& plan, const RcOptions& o,
                  Buffer& fluence) {

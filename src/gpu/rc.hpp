@@ -19,7 +19,9 @@ Status record_rc(Cache& cache, Batch& batch, int width, int height, Buffer& step
                  const Rgb& environment, const std::vector<rc::Cascade>& plan,
                  const RcOptions& options, Buffer& fluence);
 
-// Device bytes record_rc keeps: two cascade buffers and the direction tables.
+// Device bytes record_rc keeps (two cascade buffers and the direction table), and the largest
+// single buffer among them.
 std::uint64_t rc_device_bytes(const std::vector<rc::Cascade>& plan);
+std::uint64_t rc_largest_buffer(const std::vector<rc::Cascade>& plan);
 
 }  // namespace penumbra::gpu

@@ -44,11 +44,12 @@ Solver::~Solver() = default;
 std::uint64_t Solver::device_bytes(int W, int H, const RenderOptions& o,
                                    const std::vector<rc::Cascade>& plan) {
   const std::uint64_t cells = std::uint64_t(W) * H;
-  // Scene arrays twice (staging and device), step, fluence on the device and read back.
-  std::uint64_t bytes = cells * sizeof(float) * (2 * 7 + 1 + 3 + 3);
+  // Device-local: the scene arrays, step and fluence (the staging copies and the read-back
+  // buffer are host memory).
+  std::uint64_t bytes = cells * sizeof(float) * (7 + 1 + 3);
   if (o.bounces > 1) bytes += cells * 3 * sizeof(float);  // the bounce's emission
   if (o.method == Method::rc) {
-    bytes += rc_device_bytes(plan) * 2;  // the direction table has a staging copy; take it twice
+    bytes += rc_device_bytes(plan);
     if (o.distance_field) bytes += 2 * cells * sizeof(std::int32_t);  // seeds
   } else {
     bytes += hrc_device_bytes(W, H, o.hrc.storage);
@@ -56,15 +57,30 @@ std::uint64_t Solver::device_bytes(int W, int H, const RenderOptions& o,
   return bytes;
 }
 
+std::uint64_t Solver::allocated_bytes() const {
+  return impl_->cache.allocated(Memory::device);
+}
+
 Status Solver::check_memory(const DeviceInfo& info, int W, int H, const RenderOptions& o,
                             const std::vector<rc::Cascade>& plan) {
+  const std::string grid = std::to_string(W) + "x" + std::to_string(H);
+  const std::string advice = std::string("; use a smaller grid") +
+                             (o.method == Method::rc ? ", a larger --probe-spacing" : "") +
+                             " or --device cpu";
+  // One buffer beyond what a kernel can bind would fail halfway through recording.
+  const std::uint64_t largest = std::max(
+      std::uint64_t(W) * H * 3 * sizeof(float),
+      o.method == Method::rc ? rc_largest_buffer(plan) : hrc_largest_buffer(W, H, o.hrc.storage));
+  if (info.max_buffer_bytes > 0 && largest > info.max_buffer_bytes)
+    return Error{"device gpu: a " + grid + " grid needs a buffer of " +
+                 std::to_string(largest >> 20) + " MiB, more than " + info.name + " can bind (" +
+                 std::to_string(info.max_buffer_bytes >> 20) + " MiB)" +
+                 (o.method == Method::rc ? "; use fewer --directions" : "") + advice};
   const std::uint64_t need = device_bytes(W, H, o, plan);
   if (info.device_local_bytes == 0 || need <= info.device_local_bytes) return {};
-  return Error{"device gpu: a " + std::to_string(W) + "x" + std::to_string(H) + " grid needs " +
-               std::to_string(need >> 20) + " MiB of GPU memory, more than " + info.name +
-               " has (" + std::to_string(info.device_local_bytes >> 20) +
-               " MiB); use a smaller grid" +
-               (o.method == Method::rc ? ", a larger --probe-spacing" : "") + " or --device cpu"};
+  return Error{"device gpu: a " + grid + " grid needs " + std::to_string(need >> 20) +
+               " MiB of GPU memory, more than " + info.name + " has (" +
+               std::to_string(info.device_local_bytes >> 20) + " MiB)" + advice};
 }
 
 Expected<std::vector<float>> Solver::render(const Scene& scene, const RenderOptions& o,
@@ -81,23 +97,41 @@ Expected<std::vector<float>> Solver::render(const Scene& scene, const RenderOpti
     return Error{std::string("GPU: ") + to_string(o.method) + " does not run on the GPU"};
   const DeviceInfo& info = context_->info();
   if (Status st = check_memory(info, W, H, o, plan); !st) return st.error();
-  if (W != s.width || H != s.height) {
+  // Buffers of other options (the other method, seeds without the distance field, a bounce's
+  // emission) are freed, so what is allocated is what check_memory counted; a new grid frees
+  // everything.
+  std::vector<std::string> keep;
+  if (W == s.width && H == s.height) {
+    keep = {"opacity", "emission", "albedo", "step", "fluence", "read back"};
+    if (o.bounces > 1) keep.push_back("bounce emission");
+    if (o.method == Method::rc) keep.push_back("rc ");
+    if (o.method == Method::rc && o.distance_field) keep.push_back("jfa ");
+    if (o.method == Method::hrc) keep.push_back("hrc ");
+  } else {
     for (std::vector<float>& h : s.held) h.clear();
     s.width = W, s.height = H;
     s.medium_valid = false;
   }
+  cache.release_except(keep);
+  // What this render records is on the device only once its batches have run: until then (and
+  // for good if it fails anywhere, recording included) nothing is trusted.
+  struct Invalidate {
+    Impl& s;
+    bool armed = true;
+    ~Invalidate() {
+      if (!armed) return;
+      s.cache.forget_tables();
+      for (std::vector<float>& h : s.held) h.clear();
+      s.medium_valid = false;
+    }
+  } invalidate{s};
 
   // Per bounce a batch of its own (a batch holds a bounded number of dispatches); the first
   // also uploads the scene and builds the medium.
   std::vector<std::pair<std::string, std::vector<std::pair<std::string, double>>>> timed;
   auto run = [&](Batch& batch, const std::string& prefix) -> Status {
     Expected<std::vector<std::pair<std::string, double>>> t = batch.run();
-    if (!t) {
-      cache.forget_tables();
-      for (std::vector<float>& h : s.held) h.clear();
-      s.medium_valid = false;
-      return t.error();
-    }
+    if (!t) return t.error();  // Invalidate forgets what the batch was to upload
     timed.push_back({prefix, std::move(*t)});
     return {};
   };
@@ -132,17 +166,21 @@ Expected<std::vector<float>> Solver::render(const Scene& scene, const RenderOpti
   if (Status st = begin(512); !st) return st.error();
   // Upload: the rows from the first to the last that differ from what the device holds.
   int first = H, last = -1;
+  bool opacity_changed = false;
   for (int a = 0; a < 3; ++a) {
     const std::vector<float>& now = scene.*kArrays[a].member;
     const std::vector<float>& held = s.held[a];
     const std::size_t row = std::size_t(W) * kArrays[a].floats;
     if (held.size() != now.size()) {
       first = 0, last = H - 1;
+      opacity_changed = true;
       break;
     }
     for (int y = 0; y < H; ++y)
-      if (std::memcmp(&held[y * row], &now[y * row], row * sizeof(float)) != 0)
+      if (std::memcmp(&held[y * row], &now[y * row], row * sizeof(float)) != 0) {
         first = std::min(first, y), last = std::max(last, y);
+        opacity_changed |= a == 0;
+      }
   }
   if (last >= first) {
     batch->mark("upload");
@@ -160,7 +198,9 @@ Expected<std::vector<float>> Solver::render(const Scene& scene, const RenderOpti
       cache.uploaded += bytes;
       s.held[a] = now;
     }
-    s.medium_valid = false;
+    // The medium (extinction and jumps) depends on opacity alone: new emission or albedo
+    // keeps it.
+    if (opacity_changed) s.medium_valid = false;
   }
   const bool jumps = o.method == Method::rc && o.distance_field;
   if (!s.medium_valid || s.medium_jumps != jumps) {
@@ -206,6 +246,7 @@ Expected<std::vector<float>> Solver::render(const Scene& scene, const RenderOpti
   batch->mark("read back");
   batch->copy(**fluence, 0, **readback, 0, cells * 3 * sizeof(float));
   if (Status st = run(*batch, prefix); !st) return st.error();
+  invalidate.armed = false;
   const float* f = (*readback)->as<float>();
   std::vector<float> result(f, f + 3 * cells);
 

@@ -37,7 +37,10 @@ class Solver {
   // of grid, then only the rows that changed, plus any table that changed.
   std::uint64_t uploaded_bytes() const { return uploaded_; }
 
-  // GPU memory a render needs (all of it stays allocated between renders).
+  // Device-local bytes the solver holds now (after a render: what device_bytes estimated).
+  std::uint64_t allocated_bytes() const;
+
+  // Device-local memory a render needs (all of it stays allocated between renders).
   static std::uint64_t device_bytes(int width, int height, const RenderOptions& options,
                                     const std::vector<rc::Cascade>& plan);
   // Refuses, before anything is allocated, a render that needs more than the device's memory.

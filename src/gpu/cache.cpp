@@ -16,7 +16,8 @@ Expected<const Kernel*> Cache::kernel(const std::string& name, std::span<const s
   return &it->second;
 }
 
-Expected<Buffer*> Cache::buffer(const std::string& role, std::size_t bytes, Memory where) {
+Expected<Buffer*> Cache::buffer(const std::string& role, std::size_t bytes, Memory where,
+                                bool in_pieces) {
   bytes = std::max<std::size_t>(bytes, 4);
   auto it = buffers_.find(role);
   if (it != buffers_.end() && it->second.bytes() == bytes && memory_[role] == where)
@@ -25,7 +26,7 @@ Expected<Buffer*> Cache::buffer(const std::string& role, std::size_t bytes, Memo
     buffers_.erase(it);  // freed before the new one is allocated: the two need not fit at once
     tables_.erase(role);
   }
-  Expected<Buffer> b = context_.buffer(bytes, where);
+  Expected<Buffer> b = context_.buffer(bytes, where, in_pieces);
   if (!b) return b.error();
   memory_[role] = where;
   return &buffers_.emplace(role, std::move(*b)).first->second;

@@ -22,7 +22,7 @@ class Cache {
   // The buffer kept under `role`, allocated again only when its size or memory changes. One
   // role has one size within a batch (a reallocation frees what recorded commands refer to).
   Expected<Buffer*> buffer(const std::string& role, std::size_t bytes,
-                           Memory where = Memory::device);
+                           Memory where = Memory::device, bool in_pieces = false);
   // A device buffer under `role` holding `bytes` of `data`, copied in `batch` through a staging
   // buffer unless it holds these bytes already. Counts into uploaded.
   Expected<Buffer*> table(Batch& batch, const std::string& role, const void* data,

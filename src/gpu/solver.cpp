@@ -32,9 +32,10 @@ struct Solver::Impl {
   explicit Impl(const Context& c) : cache(c) {}
   Cache cache;
   int width = 0, height = 0;
-  std::vector<float> held[3];  // what the device's scene arrays hold (empty: nothing yet)
-  bool medium_valid = false;   // the step buffer matches held[] ...
-  bool medium_jumps = false;   // ... and has distance-field jumps
+  std::vector<float> held[3];       // what the device's scene arrays hold (empty: nothing yet)
+  bool medium_valid = false;        // the step buffer matches held[] ...
+  bool medium_jumps = false;        // ... and has distance-field jumps
+  std::uint64_t binding_limit = 0;  // 0: the device's
 };
 
 Solver::Solver(std::shared_ptr<Context> context)
@@ -57,6 +58,10 @@ std::uint64_t Solver::device_bytes(int W, int H, const RenderOptions& o,
   return bytes;
 }
 
+void Solver::limit_binding(std::uint64_t bytes) {
+  impl_->binding_limit = bytes;
+}
+
 std::uint64_t Solver::allocated_bytes() const {
   return impl_->cache.allocated(Memory::device);
 }
@@ -70,7 +75,8 @@ Status Solver::check_memory(const DeviceInfo& info, int W, int H, const RenderOp
   // One buffer beyond what a kernel can bind would fail halfway through recording.
   const std::uint64_t largest = std::max(
       std::uint64_t(W) * H * 3 * sizeof(float),
-      o.method == Method::rc ? rc_largest_buffer(plan) : hrc_largest_buffer(W, H, o.hrc.storage));
+      o.method == Method::rc ? rc_smallest_binding(plan, o.rc.branching) + info.offset_alignment
+                             : hrc_largest_buffer(W, H, o.hrc.storage));
   if (info.max_buffer_bytes > 0 && largest > info.max_buffer_bytes)
     return Error{"device gpu: a " + grid + " grid needs a buffer of " +
                  std::to_string(largest >> 20) + " MiB, more than " + info.name + " can bind (" +
@@ -220,7 +226,8 @@ Expected<std::vector<float>> Solver::render(const Scene& scene, const RenderOpti
 
   auto solve = [&](Batch& b, Buffer& emission) -> Status {
     if (o.method == Method::rc)
-      return record_rc(cache, b, W, H, **step, emission, scene.environment, plan, o.rc, **fluence);
+      return record_rc(cache, b, W, H, **step, emission, scene.environment, plan, o.rc, **fluence,
+                       s.binding_limit ? s.binding_limit : info.max_buffer_bytes);
     return record_hrc(cache, b, W, H, **step, emission, scene.environment, o.hrc, **fluence);
   };
   if (Status st = solve(*batch, *device[1]); !st) return st.error();

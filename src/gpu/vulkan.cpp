@@ -284,6 +284,7 @@ Expected<std::shared_ptr<Context>> Context::create(bool allow_cpu) {
     info.max_workgroups_x = p.limits.maxComputeWorkGroupCount[0];
     info.max_workgroups_y = p.limits.maxComputeWorkGroupCount[1];
     info.max_buffer_bytes = p.limits.maxStorageBufferRange;
+    info.offset_alignment = std::max<std::uint64_t>(p.limits.minStorageBufferOffsetAlignment, 1);
     v.timestamp_bits = fp[std::size_t(family)].timestampValidBits;
     info.device_local_bytes = 0;
     for (std::uint32_t h = 0; h < mp.memoryHeapCount; ++h)
@@ -370,14 +371,14 @@ void Buffer::release() {
   mapped_ = nullptr;
 }
 
-Expected<Buffer> Context::buffer(std::size_t bytes, Memory where) const {
+Expected<Buffer> Context::buffer(std::size_t bytes, Memory where, bool in_pieces) const {
   const Impl& v = *impl_;
   const bool host = where == Memory::host;
   const std::uint64_t heap = host ? v.heap_bytes : v.device_heap_bytes;
   const std::uint32_t memory_type = host ? v.memory_type : v.device_memory_type;
   // Refused before the driver sees it: a storage buffer cannot be bound past the device's
   // range, and larger than the whole heap cannot succeed.
-  if (bytes > info_.max_buffer_bytes)
+  if (bytes > info_.max_buffer_bytes && !in_pieces)
     return Error{"Vulkan: a buffer of " + std::to_string(bytes >> 20) + " MiB is larger than " +
                  info_.name + " can bind (" + std::to_string(info_.max_buffer_bytes >> 20) +
                  " MiB); use a smaller grid or --device cpu"};
@@ -616,11 +617,36 @@ void Batch::mark(const std::string& pass) {
 
 void Batch::dispatch(const Kernel& k, std::span<Buffer* const> buffers, const void* push,
                      std::uint32_t groups_x, std::uint32_t groups_y, std::uint32_t groups_z) {
+  Range ranges[kMaxBindings];
+  const std::size_t n = std::min<std::size_t>(buffers.size(), kMaxBindings + 1);
+  if (n > kMaxBindings) {
+    error_ = Error{"Vulkan: kernel " + k.name_ + " given more than " +
+                   std::to_string(kMaxBindings) + " buffers"};
+    return;
+  }
+  for (std::size_t i = 0; i < n; ++i) ranges[i].buffer = buffers[i];
+  dispatch(k, std::span<const Range>(ranges, n), push, groups_x, groups_y, groups_z);
+}
+
+void Batch::dispatch(const Kernel& k, std::span<const Range> buffers, const void* push,
+                     std::uint32_t groups_x, std::uint32_t groups_y, std::uint32_t groups_z) {
   if (!recording_ || !error_) return;
   if (int(buffers.size()) != k.buffers_ || buffers.size() > kMaxBindings) {
     error_ = Error{"Vulkan: kernel " + k.name_ + " takes " + std::to_string(k.buffers_) +
                    " buffers, given " + std::to_string(buffers.size())};
     return;
+  }
+  const DeviceInfo& info = context_->info();
+  for (const Range& r : buffers) {
+    const std::size_t size = r.buffer ? r.buffer->bytes_ : 0;
+    const std::size_t bytes = r.bytes ? r.bytes : size - std::min(r.offset, size);
+    if (!r.buffer || r.offset >= size || bytes > size - r.offset ||
+        r.offset % info.offset_alignment != 0 || bytes > info.max_buffer_bytes) {
+      error_ =
+          Error{"Vulkan: kernel " + k.name_ + " given a buffer range of " + std::to_string(bytes) +
+                " bytes at " + std::to_string(r.offset) + " that it cannot bind"};
+      return;
+    }
   }
   const Context::Impl& v = context_->impl();
   VkCommandBuffer cb = reinterpret_cast<VkCommandBuffer>(command_buffer_);
@@ -640,7 +666,8 @@ void Batch::dispatch(const Kernel& k, std::span<Buffer* const> buffers, const vo
   VkDescriptorBufferInfo infos[kMaxBindings];
   VkWriteDescriptorSet writes[kMaxBindings];
   for (std::size_t i = 0; i < buffers.size(); ++i) {
-    infos[i] = {reinterpret_cast<VkBuffer>(buffers[i]->buffer_), 0, VK_WHOLE_SIZE};
+    infos[i] = {reinterpret_cast<VkBuffer>(buffers[i].buffer->buffer_), buffers[i].offset,
+                buffers[i].bytes ? buffers[i].bytes : VK_WHOLE_SIZE};
     writes[i] = {};
     writes[i].sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET;
     writes[i].dstSet = set;

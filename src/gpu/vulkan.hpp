@@ -22,7 +22,9 @@ struct DeviceInfo {
   std::uint64_t device_local_bytes = 0;
   double timestamp_period_ns = 0;  // 0: the queue has no timestamps
   std::uint32_t max_workgroups_x = 0, max_workgroups_y = 0;
-  std::uint64_t max_buffer_bytes = 0;  // the largest storage buffer a kernel can bind
+  std::uint64_t max_buffer_bytes = 0;  // the largest storage buffer range a kernel can bind
+  std::uint64_t offset_alignment =
+      1;                     // of a bound range's offset (minStorageBufferOffsetAlignment)
   bool storage_f16 = false;  // 16-bit floats in storage buffers (storageBuffer16BitAccess)
 };
 
@@ -97,6 +99,14 @@ class Batch {
   // `groups` workgroups in x, y and z. Buffers are bound in order to bindings 0, 1, ...
   void dispatch(const Kernel& kernel, std::span<Buffer* const> buffers, const void* push,
                 std::uint32_t groups_x, std::uint32_t groups_y = 1, std::uint32_t groups_z = 1);
+  // The same with part of a buffer at a binding: `bytes` from `offset` (a multiple of
+  // DeviceInfo::offset_alignment; 0 bytes: to the end), for buffers larger than one binding.
+  struct Range {
+    const Buffer* buffer = nullptr;
+    std::size_t offset = 0, bytes = 0;
+  };
+  void dispatch(const Kernel& kernel, std::span<const Range> ranges, const void* push,
+                std::uint32_t groups_x, std::uint32_t groups_y = 1, std::uint32_t groups_z = 1);
   // Copies bytes between buffers (host to device for uploads, device to host to read back).
   void copy(const Buffer& src, std::size_t src_offset, const Buffer& dst, std::size_t dst_offset,
             std::size_t bytes);
@@ -129,7 +139,10 @@ class Context {
   Context& operator=(const Context&) = delete;
 
   const DeviceInfo& info() const { return info_; }
-  Expected<Buffer> buffer(std::size_t bytes, Memory where = Memory::host) const;
+  // A buffer larger than max_buffer_bytes is refused unless `in_pieces`: then the caller binds
+  // it only in ranges (Batch::Range) of at most that size.
+  Expected<Buffer> buffer(std::size_t bytes, Memory where = Memory::host,
+                          bool in_pieces = false) const;
   Expected<Kernel> kernel(const std::string& name, std::span<const std::uint32_t> spirv,
                           int buffers, std::uint32_t push_bytes) const;
   Expected<Batch> batch(std::uint32_t max_passes = 32) const;

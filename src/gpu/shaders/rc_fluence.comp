@@ -7,11 +7,15 @@ layout(local_size_x = 16, local_size_y = 16) in;
 layout(std430, binding = 0) readonly buffer Step { float step_[]; };
 layout(std430, binding = 1) readonly buffer Emission { float emission[]; };
 layout(std430, binding = 2) readonly buffer Cascade0 { vec4 r0[]; };
-layout(std430, binding = 3) writeonly buffer Fluence { float f[]; };
+layout(std430, binding = 3) buffer Fluence { float f[]; };
+// A cascade 0 larger than one binding is summed a slab of directions at a time: Cascade0 bound
+// from direction k0 (its element base); the first slab writes, the others add.
 layout(push_constant) uniform Push {
   int w, h;
   int spacing, nx, ny, directions;
   float cone;
+  int k0, first;
+  uint base;
 } p;
 
 #include "trace.glsl"
@@ -36,14 +40,22 @@ void main() {
   const vec4 wt = sees ? w : fw;
   const float norm = sees ? 1.0 / total : 1.0;
   vec3 sum = vec3(0.0);
-  for (int k = 0; k < p.directions; ++k)
+  for (int k = 0; k < p.directions; ++k)  // the slab's directions
     for (int a = 0; a < 4; ++a) {
       if (wt[a] == 0.0) continue;
       sum += wt[a] *
-             r0[(uint(k) * uint(p.ny) + uint(fy[a >> 1])) * uint(p.nx) + uint(fx[a & 1])].rgb;
+             r0[p.base + (uint(k) * uint(p.ny) + uint(fy[a >> 1])) * uint(p.nx) + uint(fx[a & 1])]
+                 .rgb;
     }
   const uint o = 3u * (uint(y) * uint(p.w) + uint(x));
-  f[o] = sum.r * norm * p.cone;
-  f[o + 1] = sum.g * norm * p.cone;
-  f[o + 2] = sum.b * norm * p.cone;
+  const vec3 v = sum * norm * p.cone;
+  if (p.first != 0) {
+    f[o] = v.r;
+    f[o + 1] = v.g;
+    f[o + 2] = v.b;
+  } else {
+    f[o] += v.r;
+    f[o + 1] += v.g;
+    f[o + 2] += v.b;
+  }
 }

@@ -8,6 +8,8 @@ layout(local_size_x = 64) in;
 layout(std430, binding = 0) readonly buffer Step { float step_[]; };
 layout(std430, binding = 1) readonly buffer Emission { float emission[]; };
 layout(std430, binding = 2) readonly buffer Dirs { vec2 dirs[]; };  // every cascade's, in turn
+// Cascades larger than one binding are merged a slab of directions at a time: Out is bound from
+// direction k0 (its element out_base), Upper from direction u_k0 (its element upper_base).
 layout(std430, binding = 3) readonly buffer Upper { vec4 upper[]; };
 layout(std430, binding = 4) writeonly buffer Out { vec4 out_[]; };
 layout(push_constant) uniform Push {
@@ -21,7 +23,15 @@ layout(push_constant) uniform Push {
   int branching, fix;  // fix: 0 none, 1 nearest, 2 bilinear (RcOptions::fix)
   int flags;           // 1: top cascade, 2: rays leave an opaque start cell, 4: pre-averaging
   float er, eg, eb;
+  int k0, slab;         // the directions of this dispatch: k0 .. k0 + slab - 1
+  int u_k0;             // the first direction of Upper's bound range
+  uint out_base, upper_base;
 } p;
+
+vec4 upper_at(int kk, int qi, int qj) {
+  return upper[p.upper_base + (uint(kk - p.u_k0) * uint(p.u_ny) + uint(qj)) * uint(p.u_nx) +
+               uint(qi)];
+}
 
 #include "trace.glsl"
 
@@ -50,7 +60,7 @@ vec4 merged_radiance(int k, vec2 pos) {
         const vec2 q = vec2((float(qi) + 0.5) * float(p.u_spacing),
                             (float(qj) + 0.5) * float(p.u_spacing));
         const vec4 seg = trace_segment(p.w, p.h, pos + dd * p.t_begin, q + dd * p.u_t_begin, skip);
-        const vec4 up = upper[(uint(kk) * uint(p.u_ny) + uint(qj)) * uint(p.u_nx) + uint(qi)];
+        const vec4 up = upper_at(kk, qi, qj);
         sum += merge_intervals(seg, up) * (fw[a] * inv_b);
       }
     }
@@ -63,16 +73,12 @@ vec4 merged_radiance(int k, vec2 pos) {
     footprint(p.u_spacing, un, pos, fx, fy, fw);
     for (int ci = 0; ci < p.branching; ++ci)
       for (int a = 0; a < 4; ++a)
-        far += upper[(uint(p.branching * k + ci) * uint(p.u_ny) + uint(fy[a >> 1])) * uint(p.u_nx) +
-                     uint(fx[a & 1])] *
-               (fw[a] * inv_b);
+        far += upper_at(p.branching * k + ci, fx[a & 1], fy[a >> 1]) * (fw[a] * inv_b);
   } else {
     const int qi = clamp(int(floor(pos.x / float(p.u_spacing))), 0, p.u_nx - 1);
     const int qj = clamp(int(floor(pos.y / float(p.u_spacing))), 0, p.u_ny - 1);
     for (int ci = 0; ci < p.branching; ++ci)
-      far += upper[(uint(p.branching * k + ci) * uint(p.u_ny) + uint(qj)) * uint(p.u_nx) +
-                   uint(qi)] *
-             inv_b;
+      far += upper_at(p.branching * k + ci, qi, qj) * inv_b;
   }
   return merge_intervals(
       trace_interval(p.w, p.h, pos.x, pos.y, d.x, d.y, p.t_begin, p.t_end, skip), far);
@@ -82,8 +88,8 @@ void main() {
   // 1-D work folded into x and y (gpu::groups_1d).
   const uint e = gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * gl_WorkGroupSize.x;
   const uint per_direction = uint(p.nx) * uint(p.ny);
-  if (e >= per_direction * uint(p.directions)) return;
-  const int k = int(e / per_direction);
+  if (e >= per_direction * uint(p.slab)) return;
+  const int k = p.k0 + int(e / per_direction);
   const uint r = e % per_direction;
   const int i = int(r % uint(p.nx)), j = int(r / uint(p.nx));
   const vec2 pos = vec2((float(i) + 0.5) * float(p.spacing), (float(j) + 0.5) * float(p.spacing));
@@ -93,8 +99,8 @@ void main() {
     vec4 v = vec4(0.0);
     for (int a = 0; a < 4; ++a)
       v += merged_radiance(k, pos + vec2((a & 1) != 0 ? hh : -hh, (a & 2) != 0 ? hh : -hh)) * 0.25;
-    out_[e] = v;
+    out_[p.out_base + e] = v;
   } else {
-    out_[e] = merged_radiance(k, pos);
+    out_[p.out_base + e] = merged_radiance(k, pos);
   }
 }

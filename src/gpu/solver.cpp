@@ -5,6 +5,7 @@
 #include <optional>
 #include <string>
 
+#include "core/huge_pages.hpp"
 #include "core/timer.hpp"
 #include "gpu/cache.hpp"
 #include "gpu/distance.hpp"
@@ -255,7 +256,9 @@ Expected<std::vector<float>> Solver::render(const Scene& scene, const RenderOpti
   if (Status st = run(*batch, prefix); !st) return st.error();
   invalidate.armed = false;
   const float* f = (*readback)->as<float>();
-  std::vector<float> result(f, f + 3 * cells);
+  std::vector<float> result;
+  reserve_huge(result, 3 * cells);
+  result.assign(f, f + 3 * cells);
 
   // Stages: each batch's passes, summed by name (HRC repeats its passes per quadrant).
   double in_passes = 0;

@@ -28,6 +28,7 @@
 #include <type_traits>
 #include <utility>
 
+#include "core/huge_pages.hpp"
 #include "core/parallel.hpp"
 #include "core/timer.hpp"
 #include "flatland/interval.hpp"
@@ -674,6 +675,7 @@ void solve_with(const Medium& m, const Rgb& env, const HrcOptions& o, Buffers<S>
   vp.data = world + cells * kPlanes;
   vp.cells = sz.pad;
   const Patterns& patterns = ray_patterns();
+  reserve_huge(f, cells * 3);
   f.resize(cells * 3);
   std::vector<S> empty;  // a column of empty intervals: what T reads beyond the grid
 
@@ -733,6 +735,7 @@ void solve_with(const Medium& m, const Rgb& env, const HrcOptions& o, Buffers<S>
   stages.push_back({"merge down R", ms_down});
   if (o.cross_blur) {
     watch.restart();
+    reserve_huge(blurred, cells * 3);
     blurred.resize(cells * 3);
     cross_blur(W, H, world + kTau0 * cells, f.data(), blurred.data());
     std::swap(f, blurred);

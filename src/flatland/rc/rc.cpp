@@ -5,6 +5,7 @@
 #include <cmath>
 #include <string>
 
+#include "core/huge_pages.hpp"
 #include "core/parallel.hpp"
 #include "core/timer.hpp"
 #include "flatland/interval.hpp"
@@ -178,7 +179,9 @@ Interval* extend_intervals(const Medium& m, const Cascade& c, float piece, bool 
 // of merged cascade 0 that the cell can see (visibility-weighted bilinear), so light does not
 // leak through walls thinner than the probe spacing.
 std::vector<float> fluence(const Medium& m, const Cascade& c0, const Interval* r0) {
-  std::vector<float> out(std::size_t(m.width) * m.height * 3);
+  std::vector<float> out;
+  reserve_huge(out, std::size_t(m.width) * m.height * 3);
+  out.resize(std::size_t(m.width) * m.height * 3);
   const float cone = float(kTwoPi / c0.directions);
   parallel_for(m.height, [&](int y) {
     for (int x = 0; x < m.width; ++x) {

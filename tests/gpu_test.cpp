@@ -97,6 +97,28 @@ TEST(Gpu, MisuseIsAnErrorNotACrash) {
   Expected<gpu::Buffer> huge = c->buffer(std::size_t(1) << 50);
   ASSERT_FALSE(huge.ok());
   EXPECT_NE(huge.error().message.find("larger than"), std::string::npos) << huge.error().message;
+  // Buffer ranges past the end, at a misaligned offset, or copies outside a buffer: errors.
+  Expected<gpu::Buffer> two = c->buffer(64);
+  ASSERT_TRUE(two.ok());
+  const std::size_t align = c->info().offset_alignment;
+  for (const gpu::Batch::Range bad :
+       {gpu::Batch::Range{&*two, 0, 128}, gpu::Batch::Range{&*two, 64, 0},
+        gpu::Batch::Range{&*two, align > 1 ? align / 2 : 64, 4}}) {
+    Expected<gpu::Batch> rb = c->batch();
+    ASSERT_TRUE(rb.ok());
+    const gpu::Batch::Range ranges[] = {{&*one}, bad};
+    rb->dispatch(*k, ranges, &n, 1);
+    Expected<std::vector<std::pair<std::string, double>>> rr = rb->run();
+    ASSERT_FALSE(rr.ok()) << bad.offset << " " << bad.bytes;
+    EXPECT_NE(rr.error().message.find("cannot bind"), std::string::npos) << rr.error().message;
+  }
+  Expected<gpu::Batch> cb = c->batch();
+  ASSERT_TRUE(cb.ok());
+  cb->copy(*one, 0, *two, 60, 16);
+  Expected<std::vector<std::pair<std::string, double>>> cr = cb->run();
+  ASSERT_FALSE(cr.ok());
+  EXPECT_NE(cr.error().message.find("outside its buffers"), std::string::npos)
+      << cr.error().message;
 }
 
 // Without a driver (the loader finds no ICD), creating a context says so.

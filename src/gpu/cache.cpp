@@ -48,6 +48,12 @@ Expected<Buffer*> Cache::table(Batch& batch, const std::string& role, const void
   return *device;
 }
 
+void Cache::release(const std::string& role) {
+  buffers_.erase(role);
+  memory_.erase(role);
+  tables_.erase(role);
+}
+
 std::uint64_t Cache::allocated(Memory where) const {
   std::uint64_t bytes = 0;
   for (const auto& [role, buffer] : buffers_)

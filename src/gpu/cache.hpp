@@ -34,6 +34,7 @@ class Cache {
   // options keeps only what it shares with the last one, so memory checks see what is really
   // allocated); with nothing listed, every buffer.
   void release_except(std::span<const std::string> keep);
+  void release(const std::string& role);
 
   // Bytes of the buffers held in `where`.
   std::uint64_t allocated(Memory where) const;

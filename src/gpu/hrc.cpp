@@ -44,12 +44,13 @@ Expected<std::vector<float>> cross_blur(const Context& c, int width, int height,
   return std::vector<float>(o, o + 3 * n);
 }
 
-std::uint64_t hrc_device_bytes(int W, int H, Storage storage) {
+std::uint64_t hrc_device_bytes(int W, int H, const HrcOptions& o) {
   const hrc::Sizes sz = hrc::plan(W, H);
   const int levels = int(sz.t.size()) - 1;
-  const std::uint64_t value = storage == Storage::f16 ? 2 : 4;           // a stored T or R value
-  std::uint64_t bytes = std::uint64_t(W) * H * (6 + 3) * sizeof(float);  // world, fluence
-  bytes += 6 * std::uint64_t(sz.pad) * sizeof(float);                    // view
+  const std::uint64_t value = o.storage == Storage::f16 ? 2 : 4;  // a stored T or R value
+  // The world planes, and the gather's own fluence when the blur writes the result.
+  std::uint64_t bytes = std::uint64_t(W) * H * (6 + (o.cross_blur ? 3 : 0)) * sizeof(float);
+  bytes += 6 * std::uint64_t(sz.pad) * sizeof(float);  // view
   bytes += 2 * 3 * std::uint64_t(std::max<std::size_t>(sz.r, 1)) * value;
   bytes += ((std::uint64_t(2) << levels) - 1) * sizeof(float);  // cone angles
   for (std::size_t t : sz.t) bytes += 4 * std::uint64_t(t) * value;

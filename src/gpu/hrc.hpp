@@ -26,7 +26,7 @@ Status record_hrc(Cache& cache, Batch& batch, int width, int height, Buffer& ste
                   const Rgb& environment, const HrcOptions& options, Buffer& fluence);
 
 // Device bytes record_hrc keeps, and the largest single buffer among them.
-std::uint64_t hrc_device_bytes(int width, int height, Storage storage);
+std::uint64_t hrc_device_bytes(int width, int height, const HrcOptions& options);
 std::uint64_t hrc_largest_buffer(int width, int height, Storage storage);
 
 }  // namespace penumbra::gpu

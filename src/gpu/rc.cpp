@@ -8,13 +8,14 @@
 
 namespace penumbra::gpu {
 
-std::uint64_t rc_device_bytes(const std::vector<rc::Cascade>& plan) {
+std::uint64_t rc_device_bytes(int W, int H, const std::vector<rc::Cascade>& plan) {
   std::uint64_t largest = 0, directions = 0;
   for (const rc::Cascade& c : plan) {
     largest = std::max<std::uint64_t>(largest, c.size());
     directions += std::uint64_t(c.directions);
   }
-  return 2 * largest * 4 * sizeof(float) + directions * 2 * sizeof(float);
+  const std::uint64_t weights = std::uint64_t(W) * H * 5 * sizeof(float);  // vec4 and norm
+  return 2 * largest * 4 * sizeof(float) + directions * 2 * sizeof(float) + weights;
 }
 
 namespace {
@@ -41,11 +42,11 @@ std::uint64_t rc_smallest_binding(const std::vector<rc::Cascade>& plan, int bran
 
 Status record_rc(Cache& cache, Batch& batch, int W, int H, Buffer& step, Buffer& emission,
                  const Rgb& env, const std::vector<rc::Cascade>& plan, const RcOptions& o,
-                 Buffer& fluence, std::uint64_t binding_limit) {
+                 Buffer& fluence, std::uint64_t binding_limit, std::uint64_t alignment) {
   if (o.extend) return Error{"GPU RC: interval extension runs on the CPU only"};
   Expected<const Kernel*> merge = cache.kernel("rc_merge", shaders::rc_merge(), 5, 100);
   if (!merge) return merge.error();
-  Expected<const Kernel*> gather = cache.kernel("rc_fluence", shaders::rc_fluence(), 4, 40);
+  Expected<const Kernel*> gather = cache.kernel("rc_fluence", shaders::rc_fluence(), 6, 44);
   if (!gather) return gather.error();
 
   // Every cascade's directions, one after the other (the CPU's float tables, so the rays match).
@@ -69,7 +70,8 @@ Status record_rc(Cache& cache, Batch& batch, int W, int H, Buffer& step, Buffer&
 
   // Directions per dispatch: a slab of cascade n and the upper directions it reads must each
   // fit one binding (offsets aligned down, the shader told where its slab starts).
-  const std::uint64_t align = std::max<std::uint64_t>(cache.context().info().offset_alignment, 1);
+  const std::uint64_t align =
+      std::max({alignment, cache.context().info().offset_alignment, std::uint64_t(1)});
   const std::uint64_t limit = binding_limit > align ? binding_limit - align : 0;
   // The range of `buffer` from element `first` for `count` elements, and where `first` lies in
   // it.
@@ -150,6 +152,13 @@ Status record_rc(Cache& cache, Batch& batch, int W, int H, Buffer& step, Buffer&
   const std::uint64_t per0 = per_direction(c0);
   const int slab0 = int(std::min<std::uint64_t>(c0.directions, limit / (per0 * kInterval)));
   if (slab0 < 1) return Error{"GPU RC: one direction of cascade 0 is more than one binding holds"};
+  // Each cell's visibility weights (a vec4) and normalisation, kept by the first slab for the
+  // others.
+  const std::size_t cells = std::size_t(W) * H;
+  Expected<Buffer*> weights = cache.buffer("rc weights", cells * 4 * sizeof(float));
+  if (!weights) return weights.error();
+  Expected<Buffer*> norms = cache.buffer("rc norms", cells * sizeof(float));
+  if (!norms) return norms.error();
   batch.mark("fluence");
   for (int k0 = 0; k0 < c0.directions; k0 += slab0) {
     const int count = std::min(slab0, c0.directions - k0);
@@ -158,6 +167,7 @@ Status record_rc(Cache& cache, Batch& batch, int W, int H, Buffer& step, Buffer&
       float cone;
       std::int32_t k0, first;
       std::uint32_t base;
+      std::int32_t keep;
     } push{W,
            H,
            c0.spacing,
@@ -167,10 +177,11 @@ Status record_rc(Cache& cache, Batch& batch, int W, int H, Buffer& step, Buffer&
            float(rc::kTwoPi / c0.directions),
            k0,
            k0 == 0 ? 1 : 0,
-           0};
-    static_assert(sizeof(push) == 40);
+           0,
+           slab0 < c0.directions ? 1 : 0};
+    static_assert(sizeof(push) == 44);
     const Batch::Range r0 = range(upper, std::uint64_t(k0) * per0, count * per0, push.base);
-    const Batch::Range bind[] = {{&step}, {&emission}, r0, {&fluence}};
+    const Batch::Range bind[] = {{&step}, {&emission}, r0, {&fluence}, {*weights}, {*norms}};
     batch.dispatch(**gather, bind, &push, (std::uint32_t(W) + 15) / 16,
                    (std::uint32_t(H) + 15) / 16);
   }

@@ -37,6 +37,7 @@ struct Solver::Impl {
   bool medium_valid = false;        // the step buffer matches held[] ...
   bool medium_jumps = false;        // ... and has distance-field jumps
   std::uint64_t binding_limit = 0;  // 0: the device's
+  std::uint64_t alignment = 0;      // of bound offsets, when more than the device's
 };
 
 Solver::Solver(std::shared_ptr<Context> context)
@@ -51,16 +52,17 @@ std::uint64_t Solver::device_bytes(int W, int H, const RenderOptions& o,
   std::uint64_t bytes = cells * sizeof(float) * (7 + 1 + 3);
   if (o.bounces > 1) bytes += cells * 3 * sizeof(float);  // the bounce's emission
   if (o.method == Method::rc) {
-    bytes += rc_device_bytes(plan);
+    bytes += rc_device_bytes(W, H, plan);
     if (o.distance_field) bytes += 2 * cells * sizeof(std::int32_t);  // seeds
   } else {
-    bytes += hrc_device_bytes(W, H, o.hrc.storage);
+    bytes += hrc_device_bytes(W, H, o.hrc);
   }
   return bytes;
 }
 
-void Solver::limit_binding(std::uint64_t bytes) {
+void Solver::limit_binding(std::uint64_t bytes, std::uint64_t alignment) {
   impl_->binding_limit = bytes;
+  impl_->alignment = alignment;
 }
 
 std::uint64_t Solver::allocated_bytes() const {
@@ -70,24 +72,33 @@ std::uint64_t Solver::allocated_bytes() const {
 Status Solver::check_memory(const DeviceInfo& info, int W, int H, const RenderOptions& o,
                             const std::vector<rc::Cascade>& plan) {
   const std::string grid = std::to_string(W) + "x" + std::to_string(H);
-  const std::string advice = std::string("; use a smaller grid") +
-                             (o.method == Method::rc ? ", a larger --probe-spacing" : "") +
-                             " or --device cpu";
-  // One buffer beyond what a kernel can bind would fail halfway through recording.
-  const std::uint64_t largest = std::max(
-      std::uint64_t(W) * H * 3 * sizeof(float),
-      o.method == Method::rc ? rc_smallest_binding(plan, o.rc.branching) + info.offset_alignment
-                             : hrc_largest_buffer(W, H, o.hrc.storage));
-  if (info.max_buffer_bytes > 0 && largest > info.max_buffer_bytes)
-    return Error{"device gpu: a " + grid + " grid needs a buffer of " +
-                 std::to_string(largest >> 20) + " MiB, more than " + info.name + " can bind (" +
-                 std::to_string(info.max_buffer_bytes >> 20) + " MiB)" +
-                 (o.method == Method::rc ? "; use fewer --directions" : "") + advice};
+  const std::uint64_t cells = std::uint64_t(W) * H;
+  // What must fit one binding (larger would fail halfway through recording), and what helps.
+  struct Binding {
+    std::uint64_t bytes;
+    const char* what;
+    const char* advice;
+  };
+  std::vector<Binding> bindings = {{cells * 3 * sizeof(float), "the fluence", ""}};
+  if (o.method == Method::rc) {
+    bindings.push_back({cells * 4 * sizeof(float), "the fluence's visibility weights", ""});
+    bindings.push_back({rc_smallest_binding(plan, o.rc.branching) + info.offset_alignment,
+                        "one direction of a cascade", ", a larger --probe-spacing"});
+  } else {
+    bindings.push_back({hrc_largest_buffer(W, H, o.hrc.storage), "HRC's largest buffer", ""});
+  }
+  for (const Binding& b : bindings)
+    if (info.max_buffer_bytes > 0 && b.bytes > info.max_buffer_bytes)
+      return Error{"device gpu: on a " + grid + " grid " + b.what + " needs " +
+                   std::to_string(b.bytes >> 20) + " MiB in one binding, more than " + info.name +
+                   " can bind (" + std::to_string(info.max_buffer_bytes >> 20) +
+                   " MiB); use a smaller grid" + b.advice + " or --device cpu"};
   const std::uint64_t need = device_bytes(W, H, o, plan);
   if (info.device_local_bytes == 0 || need <= info.device_local_bytes) return {};
   return Error{"device gpu: a " + grid + " grid needs " + std::to_string(need >> 20) +
                " MiB of GPU memory, more than " + info.name + " has (" +
-               std::to_string(info.device_local_bytes >> 20) + " MiB)" + advice};
+               std::to_string(info.device_local_bytes >> 20) + " MiB); use a smaller grid" +
+               (o.method == Method::rc ? ", a larger --probe-spacing" : "") + " or --device cpu"};
 }
 
 Expected<std::vector<float>> Solver::render(const Scene& scene, const RenderOptions& o,
@@ -120,6 +131,7 @@ Expected<std::vector<float>> Solver::render(const Scene& scene, const RenderOpti
     s.medium_valid = false;
   }
   cache.release_except(keep);
+  if (o.method == Method::hrc && !o.hrc.cross_blur) cache.release("hrc fluence");
   // What this render records is on the device only once its batches have run: until then (and
   // for good if it fails anywhere, recording included) nothing is trusted.
   struct Invalidate {
@@ -228,7 +240,7 @@ Expected<std::vector<float>> Solver::render(const Scene& scene, const RenderOpti
   auto solve = [&](Batch& b, Buffer& emission) -> Status {
     if (o.method == Method::rc)
       return record_rc(cache, b, W, H, **step, emission, scene.environment, plan, o.rc, **fluence,
-                       s.binding_limit ? s.binding_limit : info.max_buffer_bytes);
+                       s.binding_limit ? s.binding_limit : info.max_buffer_bytes, s.alignment);
     return record_hrc(cache, b, W, H, **step, emission, scene.environment, o.hrc, **fluence);
   };
   if (Status st = solve(*batch, *device[1]); !st) return st.error();

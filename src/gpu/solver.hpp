@@ -37,9 +37,10 @@ class Solver {
   // of grid, then only the rows that changed, plus any table that changed.
   std::uint64_t uploaded_bytes() const { return uploaded_; }
 
-  // Binds at most `bytes` of a buffer at once (0: the device's limit), to test on small grids
-  // the slabs that large cascades are merged in.
-  void limit_binding(std::uint64_t bytes);
+  // Binds at most `bytes` of a buffer at once (0: the device's limit), at offsets that are
+  // multiples of `alignment` (when more than the device's), to test on small grids the slabs
+  // that large cascades are merged in.
+  void limit_binding(std::uint64_t bytes, std::uint64_t alignment = 0);
 
   // Device-local bytes the solver holds now (after a render: what device_bytes estimated).
   std::uint64_t allocated_bytes() const;

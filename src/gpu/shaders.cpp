@@ -4,27 +4,38 @@
 namespace penumbra::gpu::shaders {
 namespace {
 
-const std::uint32_t kMedium[] = {
+const std::uint32_t k_medium[] = {
 #include "medium.comp.inc"
 };
-const std::uint32_t kJfaSeed[] = {
+const std::uint32_t k_jfa_seed[] = {
 #include "jfa_seed.comp.inc"
 };
-const std::uint32_t kJfaPass[] = {
+const std::uint32_t k_jfa_pass[] = {
 #include "jfa_pass.comp.inc"
 };
-const std::uint32_t kJfaDistance[] = {
+const std::uint32_t k_jfa_distance[] = {
 #include "jfa_distance.comp.inc"
 };
-const std::uint32_t kCrossBlur[] = {
+const std::uint32_t k_jfa_jump[] = {
+#include "jfa_jump.comp.inc"
+};
+const std::uint32_t k_cross_blur[] = {
 #include "cross_blur.comp.inc"
 };
-
 const std::uint32_t k_hrc_world[] = {
 #include "hrc_world.comp.inc"
 };
 const std::uint32_t k_hrc_view[] = {
 #include "hrc_view.comp.inc"
+};
+const std::uint32_t k_rc_merge[] = {
+#include "rc_merge.comp.inc"
+};
+const std::uint32_t k_rc_fluence[] = {
+#include "rc_fluence.comp.inc"
+};
+const std::uint32_t k_bounce[] = {
+#include "bounce.comp.inc"
 };
 const std::uint32_t k_hrc_trace[] = {
 #include "hrc_trace.comp.inc"
@@ -50,68 +61,35 @@ const std::uint32_t k_hrc_gather[] = {
 const std::uint32_t k_hrc_gather_f16[] = {
 #include "hrc_gather_f16.comp.inc"
 };
-const std::uint32_t k_jfa_jump[] = {
-#include "jfa_jump.comp.inc"
-};
-const std::uint32_t k_rc_merge[] = {
-#include "rc_merge.comp.inc"
-};
-const std::uint32_t k_rc_fluence[] = {
-#include "rc_fluence.comp.inc"
-};
-const std::uint32_t k_bounce[] = {
-#include "bounce.comp.inc"
-};
+
 }  // namespace
 
-std::span<const std::uint32_t> medium() {
-  return kMedium;
-}
-std::span<const std::uint32_t> jfa_seed() {
-  return kJfaSeed;
-}
-std::span<const std::uint32_t> jfa_pass() {
-  return kJfaPass;
-}
-std::span<const std::uint32_t> jfa_distance() {
-  return kJfaDistance;
-}
-std::span<const std::uint32_t> cross_blur() {
-  return kCrossBlur;
-}
+// One accessor per shader; HRC's T and R kernels choose their storage.
+#define PENUMBRA_SHADER(name)             \
+  std::span<const std::uint32_t> name() { \
+    return k_##name;                      \
+  }
+#define PENUMBRA_SHADER_F16(name)                 \
+  std::span<const std::uint32_t> name(bool f16) { \
+    if (f16) return k_##name##_f16;               \
+    return k_##name;                              \
+  }
+PENUMBRA_SHADER(medium)
+PENUMBRA_SHADER(jfa_seed)
+PENUMBRA_SHADER(jfa_pass)
+PENUMBRA_SHADER(jfa_distance)
+PENUMBRA_SHADER(jfa_jump)
+PENUMBRA_SHADER(cross_blur)
+PENUMBRA_SHADER(hrc_world)
+PENUMBRA_SHADER(hrc_view)
+PENUMBRA_SHADER(rc_merge)
+PENUMBRA_SHADER(rc_fluence)
+PENUMBRA_SHADER(bounce)
+PENUMBRA_SHADER_F16(hrc_trace)
+PENUMBRA_SHADER_F16(hrc_merge_up)
+PENUMBRA_SHADER_F16(hrc_merge_down)
+PENUMBRA_SHADER_F16(hrc_gather)
+#undef PENUMBRA_SHADER
+#undef PENUMBRA_SHADER_F16
 
-std::span<const std::uint32_t> hrc_world() {
-  return k_hrc_world;
-}
-std::span<const std::uint32_t> hrc_view() {
-  return k_hrc_view;
-}
-std::span<const std::uint32_t> hrc_trace(bool f16) {
-  if (f16) return k_hrc_trace_f16;
-  return k_hrc_trace;
-}
-std::span<const std::uint32_t> hrc_merge_up(bool f16) {
-  if (f16) return k_hrc_merge_up_f16;
-  return k_hrc_merge_up;
-}
-std::span<const std::uint32_t> hrc_merge_down(bool f16) {
-  if (f16) return k_hrc_merge_down_f16;
-  return k_hrc_merge_down;
-}
-std::span<const std::uint32_t> hrc_gather(bool f16) {
-  if (f16) return k_hrc_gather_f16;
-  return k_hrc_gather;
-}
-std::span<const std::uint32_t> jfa_jump() {
-  return k_jfa_jump;
-}
-std::span<const std::uint32_t> rc_merge() {
-  return k_rc_merge;
-}
-std::span<const std::uint32_t> rc_fluence() {
-  return k_rc_fluence;
-}
-std::span<const std::uint32_t> bounce() {
-  return k_bounce;
-}
 }  // namespace penumbra::gpu::shaders

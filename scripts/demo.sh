@@ -11,7 +11,7 @@ stage() {  # stage NAME COMMAND...
   shift
   local t0
   t0=$(now)
-  "$@"
+  "$@" || return
   awk -v n="$name" -v a="$t0" -v b="$(now)" 'BEGIN { printf "demo: %-28s %7.1f s\n", n, b - a }'
 }
 
@@ -23,5 +23,9 @@ echo "demo: rendering the built-in scene with radiance cascades:"
 stage "render" "$BUILD/bin/penumbra" render -o out/demo.png -o out/demo.exr
 echo "demo: the same scene with holographic radiance cascades:"
 stage "render (hrc)" "$BUILD/bin/penumbra" render --method hrc -o out/demo_hrc.png -o out/demo_hrc.exr
+echo "demo: HRC again on the GPU through Vulkan (Mesa's CPU driver where there is no GPU):"
+if ! stage "render (hrc, gpu)" "$BUILD/bin/penumbra" render --method hrc --device gpu -o out/demo_hrc_gpu.png; then
+  echo "demo: no Vulkan device here; the CPU renders above stand (docs/GPU.md)"
+fi
 echo "demo: open out/demo.png (display) or out/demo.exr (linear fluence); out/demo_hrc.* for HRC"
 echo "demo: paint lights and walls in a window: $BUILD/bin/penumbra paint (docs/PAINTER.md)"

@@ -17,6 +17,7 @@
 #include "gpu/vulkan.hpp"
 
 namespace penumbra {
+
 Status check_options(int width, int height, const RenderOptions& o) {
   auto bad = [](const std::string& what) { return Status(Error{what}); };
   if (width < 1 || height < 1 || width > kMaxGridSide || height > kMaxGridSide)
@@ -205,7 +206,7 @@ Expected<RenderResult> render_unchecked(const Scene& scene, const RenderOptions&
   if (!device) return device.error();
 
   rc::fill_directions(plan);
-  auto count_intervals = [&] {
+  auto finish = [&] {  // totals of time and traced intervals
     for (const StageTime& s : result.stages) result.time_ms += s.ms;
     if (options.method == Method::rc)
       result.intervals = rc::traced_intervals(plan, options.rc) * std::uint64_t(options.bounces);
@@ -219,9 +220,9 @@ Expected<RenderResult> render_unchecked(const Scene& scene, const RenderOptions&
     if (f) {
       result.fluence = ImageRgb(scene.width, scene.height, std::move(*f));
       result.device = solver.context().info().name;
-      result.gpu_memory_bytes = gpu::Solver::device_bytes(scene.width, scene.height, options, plan);
+      result.gpu_memory_bytes = solver.allocated_bytes();
       result.uploaded_bytes = solver.uploaded_bytes();
-      count_intervals();
+      finish();
       return result;
     }
     if (options.device != Device::auto_) return f.error();
@@ -285,7 +286,7 @@ Expected<RenderResult> render_unchecked(const Scene& scene, const RenderOptions&
     }
     result.fluence = ImageRgb(scene.width, scene.height, std::move(f));
   });
-  count_intervals();
+  finish();
   return result;
 }
 

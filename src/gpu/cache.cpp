@@ -20,23 +20,20 @@ Expected<Buffer*> Cache::buffer(const std::string& role, std::size_t bytes, Memo
                                 bool in_pieces) {
   bytes = std::max<std::size_t>(bytes, 4);
   auto it = buffers_.find(role);
-  if (it != buffers_.end() && it->second.bytes() == bytes && memory_[role] == where)
-    return &it->second;
-  if (it != buffers_.end()) {
-    buffers_.erase(it);  // freed before the new one is allocated: the two need not fit at once
-    tables_.erase(role);
-  }
+  if (it != buffers_.end() && it->second.buffer.bytes() == bytes && it->second.where == where)
+    return &it->second.buffer;
+  // The old buffer is freed before the new one is allocated: the two need not fit at once.
+  if (it != buffers_.end()) buffers_.erase(it);
   Expected<Buffer> b = context_.buffer(bytes, where, in_pieces);
   if (!b) return b.error();
-  memory_[role] = where;
-  return &buffers_.emplace(role, std::move(*b)).first->second;
+  return &buffers_.emplace(role, Held{std::move(*b), where, {}}).first->second.buffer;
 }
 
 Expected<Buffer*> Cache::table(Batch& batch, const std::string& role, const void* data,
                                std::size_t bytes) {
   Expected<Buffer*> device = buffer(role, bytes);
   if (!device) return device.error();
-  std::vector<unsigned char>& held = tables_[role];
+  std::vector<unsigned char>& held = buffers_.at(role).table;
   if (held.size() == bytes && std::memcmp(held.data(), data, bytes) == 0) return *device;
   Expected<Buffer*> staging = buffer(role + " staging", bytes, Memory::host);
   if (!staging) return staging.error();
@@ -50,28 +47,20 @@ Expected<Buffer*> Cache::table(Batch& batch, const std::string& role, const void
 
 void Cache::release(const std::string& role) {
   buffers_.erase(role);
-  memory_.erase(role);
-  tables_.erase(role);
 }
 
 std::uint64_t Cache::allocated(Memory where) const {
   std::uint64_t bytes = 0;
-  for (const auto& [role, buffer] : buffers_)
-    if (memory_.at(role) == where) bytes += buffer.bytes();
+  for (const auto& [role, held] : buffers_)
+    if (held.where == where) bytes += held.buffer.bytes();
   return bytes;
 }
 
 void Cache::release_except(std::span<const std::string> keep) {
-  for (auto it = buffers_.begin(); it != buffers_.end();) {
-    if (std::any_of(keep.begin(), keep.end(),
-                    [&](const std::string& k) { return it->first.starts_with(k); })) {
-      ++it;
-      continue;
-    }
-    tables_.erase(it->first);
-    memory_.erase(it->first);
-    it = buffers_.erase(it);
-  }
+  std::erase_if(buffers_, [&](const auto& entry) {
+    return std::none_of(keep.begin(), keep.end(),
+                        [&](const std::string& k) { return entry.first.starts_with(k); });
+  });
 }
 
 }  // namespace penumbra::gpu

@@ -29,7 +29,9 @@ class Cache {
                           std::size_t bytes);
 
   // After a batch that failed or was never run: no table is trusted to be on the device.
-  void forget_tables() { tables_.clear(); }
+  void forget_tables() {
+    for (auto& [role, held] : buffers_) held.table.clear();
+  }
   // Frees every buffer whose role does not start with one of `keep` (a render with other
   // options keeps only what it shares with the last one, so memory checks see what is really
   // allocated); with nothing listed, every buffer.
@@ -44,9 +46,12 @@ class Cache {
  private:
   const Context& context_;
   std::map<std::string, Kernel> kernels_;
-  std::map<std::string, Buffer> buffers_;  // node-based: pointers stay valid as roles are added
-  std::map<std::string, Memory> memory_;
-  std::map<std::string, std::vector<unsigned char>> tables_;
+  struct Held {
+    Buffer buffer;
+    Memory where;
+    std::vector<unsigned char> table;  // for a table: the bytes the device holds
+  };
+  std::map<std::string, Held> buffers_;  // node-based: pointers stay valid as roles are added
 };
 
 }  // namespace penumbra::gpu

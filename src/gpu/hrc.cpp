@@ -11,6 +11,27 @@
 
 namespace penumbra::gpu {
 
+namespace {
+
+// Eq. 21 as one timed pass: `tau` holds the transmittance over half a cell from element
+// tau_offset on.
+Status record_cross_blur(Cache& cache, Batch& batch, int W, int H, Buffer& tau,
+                         std::uint32_t tau_offset, Buffer& in, Buffer& out) {
+  struct {
+    std::int32_t w, h;
+    float step;
+    std::uint32_t tau_offset;
+  } push{W, H, hrc::kBlurOpacityStep, tau_offset};
+  Expected<const Kernel*> k = cache.kernel("cross_blur", shaders::cross_blur(), 3, sizeof(push));
+  if (!k) return k.error();
+  batch.mark("cross blur");
+  Buffer* b[] = {&tau, &in, &out};
+  batch.dispatch(**k, b, &push, (std::uint32_t(W) + 15) / 16, (std::uint32_t(H) + 15) / 16);
+  return {};
+}
+
+}  // namespace
+
 Expected<std::vector<float>> cross_blur(const Context& c, int width, int height,
                                         const std::vector<float>& tau_half,
                                         const std::vector<float>& fluence) {
@@ -18,29 +39,21 @@ Expected<std::vector<float>> cross_blur(const Context& c, int width, int height,
   if (tau_half.size() != n || fluence.size() != 3 * n)
     return Error{"cross blur: inputs do not match the " + std::to_string(width) + "x" +
                  std::to_string(height) + " grid"};
-  struct Push {
-    std::int32_t w, h;
-    float step;
-    std::uint32_t tau_offset;
-  } push{width, height, hrc::kBlurOpacityStep, 0};
-  Expected<Kernel> k = c.kernel("cross_blur", shaders::cross_blur(), 3, sizeof(Push));
-  if (!k) return k.error();
-  Expected<Buffer> tau = c.buffer(n * sizeof(float));
+  Cache cache(c);
+  Expected<Buffer*> tau = cache.buffer("tau", n * sizeof(float), Memory::host);
   if (!tau) return tau.error();
-  Expected<Buffer> in = c.buffer(3 * n * sizeof(float));
+  Expected<Buffer*> in = cache.buffer("in", 3 * n * sizeof(float), Memory::host);
   if (!in) return in.error();
-  Expected<Buffer> out = c.buffer(3 * n * sizeof(float));
+  Expected<Buffer*> out = cache.buffer("out", 3 * n * sizeof(float), Memory::host);
   if (!out) return out.error();
-  std::copy(tau_half.begin(), tau_half.end(), tau->as<float>());
-  std::copy(fluence.begin(), fluence.end(), in->as<float>());
+  std::copy(tau_half.begin(), tau_half.end(), (*tau)->as<float>());
+  std::copy(fluence.begin(), fluence.end(), (*in)->as<float>());
   Expected<Batch> batch = c.batch();
   if (!batch) return batch.error();
-  Buffer* buffers[] = {&*tau, &*in, &*out};
-  batch->mark("cross blur");
-  batch->dispatch(*k, buffers, &push, (std::uint32_t(width) + 15) / 16,
-                  (std::uint32_t(height) + 15) / 16);
+  if (Status st = record_cross_blur(cache, *batch, width, height, **tau, 0, **in, **out); !st)
+    return st.error();
   if (Expected<std::vector<std::pair<std::string, double>>> r = batch->run(); !r) return r.error();
-  const float* o = out->as<float>();
+  const float* o = (*out)->as<float>();
   return std::vector<float>(o, o + 3 * n);
 }
 
@@ -98,8 +111,7 @@ Status record_hrc(Cache& cache, Batch& batch, int W, int H, Buffer& step, Buffer
       {f16 ? "hrc_trace f16" : "hrc_trace", shaders::hrc_trace(f16), 4, 28},
       {f16 ? "hrc_merge_up f16" : "hrc_merge_up", shaders::hrc_merge_up(f16), 2, 20},
       {f16 ? "hrc_merge_down f16" : "hrc_merge_down", shaders::hrc_merge_down(f16), 5, 36},
-      {f16 ? "hrc_gather f16" : "hrc_gather", shaders::hrc_gather(f16), 3, 52},
-      {"cross_blur", shaders::cross_blur(), 3, 16}};
+      {f16 ? "hrc_gather f16" : "hrc_gather", shaders::hrc_gather(f16), 3, 52}};
   const Kernel* k[std::size(specs)];
   for (std::size_t i = 0; i < std::size(specs); ++i) {
     Expected<const Kernel*> kernel =
@@ -246,16 +258,8 @@ Status record_hrc(Cache& cache, Batch& batch, int W, int H, Buffer& step, Buffer
       batch.dispatch(*k[5], b, &push, groups(std::size_t(v.h), 64), groups(std::size_t(v.w), 4));
     }
   }
-  if (o.cross_blur) {
-    struct {
-      std::int32_t w, h;
-      float step;
-      std::uint32_t tau_offset;
-    } push{W, H, hrc::kBlurOpacityStep, 3 * cells};
-    batch.mark("cross blur");
-    Buffer* b[] = {*world, fluence, &fluence_out};  // the transmittance over half a cell: plane 3
-    batch.dispatch(*k[6], b, &push, groups(std::size_t(W), 16), groups(std::size_t(H), 16));
-  }
+  if (o.cross_blur)  // the transmittance over half a cell: the world's plane 3
+    return record_cross_blur(cache, batch, W, H, **world, 3 * cells, *fluence, fluence_out);
   return {};
 }
 

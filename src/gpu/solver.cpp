@@ -215,7 +215,12 @@ Expected<std::vector<float>> Solver::render(const Scene& scene, const RenderOpti
                   reinterpret_cast<const unsigned char*>(now.data()) + offset, bytes);
       batch->copy(**staging, offset, *device[a], offset, bytes);
       cache.uploaded += bytes;
-      s.held[a] = now;
+      // The held copy takes the same rows (all of them after a new grid or a failure).
+      std::vector<float>& held = s.held[a];
+      if (held.size() != now.size())
+        held = now;
+      else
+        std::memcpy(held.data() + first * row, now.data() + first * row, bytes);
     }
     // The medium (extinction and jumps) depends on opacity alone: new emission or albedo
     // keeps it.

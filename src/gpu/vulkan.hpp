@@ -84,7 +84,7 @@ class Kernel {
   std::string name_;
   int buffers_ = 0;
   std::uint32_t push_bytes_ = 0;
-  std::uint64_t module_ = 0, set_layout_ = 0, layout_ = 0, pipeline_ = 0, pool_ = 0;
+  std::uint64_t module_ = 0, set_layout_ = 0, layout_ = 0, pipeline_ = 0;
 };
 
 // Dispatches recorded into one command buffer, each followed by a barrier so that the next reads

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "penumbra/render.hpp"
+#include "penumbra/flatland/render.hpp"
 
 // `value` must outlive the parse; the help lists the names in the order given.
 template <class E>
@@ -17,12 +17,12 @@ CLI::Option* add_enum_option(CLI::App* app, const std::string& name, E& value,
   std::vector<std::string> list;
   std::map<std::string, E> names;
   for (E v : values) {
-    list.push_back(penumbra::to_string(v));
+    list.push_back(penumbra::flatland::to_string(v));
     names[list.back()] = v;
   }
   return app
       ->add_option_function<std::string>(
           name, [&value, names](const std::string& s) { value = names.at(s); }, help)
       ->check(CLI::IsMember(list))
-      ->default_str(penumbra::to_string(value));
+      ->default_str(penumbra::flatland::to_string(value));
 }

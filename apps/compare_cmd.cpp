@@ -53,8 +53,9 @@ penumbra::ImageRgb crop_image(const penumbra::ImageRgb& in, int x0, int y0, int 
   return out;
 }
 
-penumbra::Scene crop_scene(const penumbra::Scene& in, int x0, int y0, int w, int h) {
-  penumbra::Scene out;
+penumbra::flatland::Scene crop_scene(const penumbra::flatland::Scene& in, int x0, int y0, int w,
+                                     int h) {
+  penumbra::flatland::Scene out;
   out.width = w;
   out.height = h;
   out.environment = in.environment;
@@ -147,16 +148,17 @@ int compare(const CompareArgs& a) {
                                 ": expected X Y W H with W, H >= 1 inside the " + size_text(w, h) +
                                 " images");
   }
-  std::optional<penumbra::Scene> scene;
+  std::optional<penumbra::flatland::Scene> scene;
   std::vector<std::uint8_t> mask;
   if (!a.scene.empty()) {
-    penumbra::Expected<penumbra::SceneDesc> desc = penumbra::load_scene(a.scene);
+    penumbra::Expected<penumbra::flatland::SceneDesc> desc =
+        penumbra::flatland::load_scene(a.scene);
     if (!desc) return fail(kFailure, desc.error().message);
     // Checked before rasterising, which for a large scene takes a while.
     if (desc->width != w || desc->height != h)
       return fail(kFailure, a.scene + ": the scene is " + size_text(desc->width, desc->height) +
                                 " but the images are " + size_text(w, h));
-    penumbra::Expected<penumbra::Scene> built = penumbra::build_scene(*desc);
+    penumbra::Expected<penumbra::flatland::Scene> built = penumbra::flatland::build_scene(*desc);
     if (!built) return fail(kFailure, built.error().message);
     scene = std::move(*built);
   }
@@ -166,7 +168,7 @@ int compare(const CompareArgs& a) {
     *ref = crop_image(*ref, x0, y0, cw, ch);
     if (scene) scene = crop_scene(*scene, x0, y0, cw, ch);
   }
-  if (scene) mask = penumbra::non_opaque_cells(*scene);
+  if (scene) mask = penumbra::flatland::non_opaque_cells(*scene);
   const std::vector<std::uint8_t>* counted = scene ? &mask : nullptr;
 
   penumbra::Expected<penumbra::ErrorMetrics> m = penumbra::compare_images(*test, *ref, counted);
@@ -179,13 +181,13 @@ int compare(const CompareArgs& a) {
     pictures.emplace_back(a.heatmap, std::move(*p));
   }
   if (!a.montage.empty()) {
-    penumbra::MontageOptions o;
+    penumbra::flatland::MontageOptions o;
     o.test_label = "test: " + file_name(a.test);
     o.reference_label = "reference: " + file_name(a.reference);
     o.display.exposure = a.exposure;
     o.scene = scene ? &*scene : nullptr;
     penumbra::Expected<penumbra::ImageRgb8> p =
-        penumbra::comparison_montage(*test, *ref, counted, o);
+        penumbra::flatland::comparison_montage(*test, *ref, counted, o);
     if (!p) return fail(kFailure, a.montage + ": " + p.error().message);
     pictures.emplace_back(a.montage, std::move(*p));
   }

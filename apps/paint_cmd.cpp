@@ -33,13 +33,13 @@
 
 #include "cli_enums.hpp"
 #include "core/timer.hpp"
-#include "io/display.hpp"
+#include "flatland/paint/canvas.hpp"
 #include "io/image_io.hpp"
 #include "io/path_util.hpp"
-#include "paint/canvas.hpp"
 #include "penumbra/penumbra.hpp"
 
 using namespace penumbra;
+using namespace penumbra::flatland;
 
 namespace {
 
@@ -162,7 +162,7 @@ class Solver {
           f.device = r->device;
           f.stages = std::move(r->stages);
           watch.restart();
-          f.rgb = io::display_rgb8(r->fluence, scene.get(), {look.exposure});
+          f.rgb = display_picture(r->fluence, scene.get(), {look.exposure}).rgb;
           if (look.materials) show_materials(*scene, f.rgb);
           f.display_ms = watch.ms();
         } else {

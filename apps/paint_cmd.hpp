@@ -4,7 +4,7 @@
 #include <memory>
 #include <string>
 
-#include "penumbra/render.hpp"
+#include "penumbra/flatland/render.hpp"
 
 namespace CLI {
 class App;
@@ -12,17 +12,17 @@ class App;
 
 struct PaintArgs {
   PaintArgs() {
-    options.method = penumbra::Method::hrc;  // the fastest CPU method
-    options.pt.spp = 4;                      // a quick look, not a reference
+    options.method = penumbra::flatland::Method::hrc;  // the fastest CPU method
+    options.pt.spp = 4;                                // a quick look, not a reference
   }
-  penumbra::RenderOptions options;  // the panel's starting settings (method, device, ...)
-  std::string scene;                // empty: a blank canvas of `size`
-  std::string size = "256x256";     // cells, for a blank canvas
-  std::string replay;               // stroke file to paint at start
-  std::string screenshot;           // PNG of the window after the replay; then exit
-  std::string record;               // stroke file written at exit
-  std::string save;                 // scene file (JSON + PNG layers) written at exit
-  float zoom = 0;                   // window pixels per cell (0: fit about 800 pixels)
+  penumbra::flatland::RenderOptions options;  // the panel's starting settings (method, device, ...)
+  std::string scene;                          // empty: a blank canvas of `size`
+  std::string size = "256x256";               // cells, for a blank canvas
+  std::string replay;                         // stroke file to paint at start
+  std::string screenshot;                     // PNG of the window after the replay; then exit
+  std::string record;                         // stroke file written at exit
+  std::string save;                           // scene file (JSON + PNG layers) written at exit
+  float zoom = 0;                             // window pixels per cell (0: fit about 800 pixels)
   float emission_scale = 64;
   bool emission_scale_given = false;  // else a loaded painting keeps its own scale
   float exposure = 0;

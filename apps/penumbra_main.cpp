@@ -23,7 +23,7 @@
 
 namespace {
 
-using penumbra::MergeFix;
+using penumbra::flatland::MergeFix;
 
 constexpr int kUsage = 2;
 constexpr int kFailure = 1;
@@ -55,36 +55,36 @@ bool parse_size(const std::string& text, std::uint64_t& bytes) {
   return true;
 }
 
-nlohmann::json parameters_json(const penumbra::RenderOptions& o) {
+nlohmann::json parameters_json(const penumbra::flatland::RenderOptions& o) {
   nlohmann::json p = {{"bounces", o.bounces},
                       {"threads", o.threads},
                       {"distance_field", o.distance_field},
                       {"blocks", o.blocks},
                       {"max_memory", o.max_memory}};
-  if (o.method == penumbra::Method::pt) {
-    const penumbra::PtOptions& pt = o.pt;
+  if (o.method == penumbra::flatland::Method::pt) {
+    const penumbra::flatland::PtOptions& pt = o.pt;
     p.update({{"spp", pt.spp},
               {"time", pt.seconds},
               {"nee", pt.nee},
-              {"sampler", penumbra::to_string(pt.sampler)},
+              {"sampler", penumbra::flatland::to_string(pt.sampler)},
               {"seed", pt.seed}});
     return p;
   }
-  if (o.method == penumbra::Method::hrc) {
+  if (o.method == penumbra::flatland::Method::hrc) {
     p.erase("distance_field");
     p.erase("blocks");
-    p.update({{"storage", penumbra::to_string(o.hrc.storage)},
+    p.update({{"storage", penumbra::flatland::to_string(o.hrc.storage)},
               {"cross_blur", o.hrc.cross_blur},
               {"near_segment", o.hrc.near_segment}});
     return p;
   }
-  const penumbra::RcOptions& rc = o.rc;
+  const penumbra::flatland::RcOptions& rc = o.rc;
   p.update({{"probe_spacing", rc.probe_spacing},
             {"directions", rc.directions},
             {"branching", rc.branching},
             {"interval", rc.interval},
             {"cascades", rc.cascades},
-            {"fix", penumbra::to_string(rc.fix)},
+            {"fix", penumbra::flatland::to_string(rc.fix)},
             {"preaverage", rc.preaverage},
             {"extend", rc.extend}});
   if (rc.extend) p["extend_length"] = rc.extend_length;
@@ -103,7 +103,7 @@ extern "C" void on_interrupt(int) {
 }
 
 // A one-line progress bar with an estimate of the time left, redrawn in place.
-void draw_progress(const penumbra::RenderProgress& p) {
+void draw_progress(const penumbra::flatland::RenderProgress& p) {
   const int width = 30;
   const int filled = int(std::lround(std::clamp(p.fraction, 0.0, 1.0) * width));
   const double eta = p.fraction > 0 ? p.elapsed_s * (1 - p.fraction) / p.fraction : 0;
@@ -126,7 +126,7 @@ struct RenderArgs {
   float exposure = 0;
   bool json = false;
   bool quiet = false;
-  penumbra::RenderOptions options;
+  penumbra::flatland::RenderOptions options;
 };
 
 int run_render(const RenderArgs& a) {
@@ -141,7 +141,7 @@ int run_render(const RenderArgs& a) {
       std::cerr << "penumbra render: " << s.error().message << "\n";
       return kFailure;
     }
-  penumbra::RenderOptions options = a.options;
+  penumbra::flatland::RenderOptions options = a.options;
   if (!parse_size(a.max_memory, options.max_memory)) {
     std::cerr << "penumbra render: --max-memory: expected a size such as 512M or 8G, found '"
               << a.max_memory << "'\n";
@@ -153,28 +153,32 @@ int run_render(const RenderArgs& a) {
   }
 
   penumbra::Stopwatch load_watch;
-  penumbra::Expected<penumbra::SceneDesc> desc =
-      a.scene.empty() ? penumbra::Expected<penumbra::SceneDesc>(penumbra::default_scene())
-                      : penumbra::load_scene(a.scene);
+  penumbra::Expected<penumbra::flatland::SceneDesc> desc =
+      a.scene.empty()
+          ? penumbra::Expected<penumbra::flatland::SceneDesc>(penumbra::flatland::default_scene())
+          : penumbra::flatland::load_scene(a.scene);
   if (!desc) {
     std::cerr << "penumbra render: " << desc.error().message << "\n";
     return kFailure;
   }
   // Option values that cannot work for this grid are usage errors.
-  if (penumbra::Status s = penumbra::check_options(desc->width, desc->height, options); !s) {
+  if (penumbra::Status s = penumbra::flatland::check_options(desc->width, desc->height, options);
+      !s) {
     std::cerr << "penumbra render: " << s.error().message << "\n";
     return kUsage;
   }
   // Refuse up front, before the grid itself is allocated.
-  if (penumbra::Status s = penumbra::check_memory(desc->width, desc->height, options, true); !s) {
+  if (penumbra::Status s =
+          penumbra::flatland::check_memory(desc->width, desc->height, options, true);
+      !s) {
     std::cerr << "penumbra render: " << desc->source << ": " << s.error().message << "\n";
     return kFailure;
   }
   // Rasterising runs on the same number of threads as the method.
   tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
   penumbra::Stopwatch raster_watch;
-  penumbra::Expected<penumbra::Scene> scene =
-      arena.execute([&] { return penumbra::build_scene(*desc); });
+  penumbra::Expected<penumbra::flatland::Scene> scene =
+      arena.execute([&] { return penumbra::flatland::build_scene(*desc); });
   if (!scene) {
     std::cerr << "penumbra render: " << scene.error().message << "\n";
     return kFailure;
@@ -184,21 +188,23 @@ int run_render(const RenderArgs& a) {
 
   // Progressive methods report progress on a terminal and stop early on Ctrl-C.
   const bool progress = !a.quiet && isatty(STDERR_FILENO);
-  if (options.method == penumbra::Method::pt) {
+  if (options.method == penumbra::flatland::Method::pt) {
     if (progress) options.progress = draw_progress;
     options.cancel = &g_cancel;
     std::signal(SIGINT, on_interrupt);
   }
-  penumbra::Expected<penumbra::RenderResult> result = penumbra::render(*scene, options);
+  penumbra::Expected<penumbra::flatland::RenderResult> result =
+      penumbra::flatland::render(*scene, options);
   std::signal(SIGINT, SIG_DFL);
-  if (progress && options.method == penumbra::Method::pt) std::fprintf(stderr, "\n");
+  if (progress && options.method == penumbra::flatland::Method::pt) std::fprintf(stderr, "\n");
   if (!result) {
     std::cerr << "penumbra render: " << desc->source << ": " << result.error().message << "\n";
     return kFailure;
   }
   penumbra::Stopwatch write_watch;
   // All outputs or none; files already there stay untouched if any output fails.
-  if (penumbra::Status s = penumbra::write_images(a.outputs, result->fluence, *scene, {a.exposure});
+  if (penumbra::Status s =
+          penumbra::flatland::write_images(a.outputs, result->fluence, *scene, {a.exposure});
       !s) {
     std::cerr << "penumbra render: " << s.error().message << "\n";
     return kFailure;
@@ -207,8 +213,8 @@ int run_render(const RenderArgs& a) {
 
   if (a.json) {
     nlohmann::json stages = nlohmann::json::object();
-    for (const penumbra::StageTime& s : result->stages) stages[s.name] = s.ms;
-    nlohmann::json j = {{"method", penumbra::to_string(options.method)},
+    for (const penumbra::flatland::StageTime& s : result->stages) stages[s.name] = s.ms;
+    nlohmann::json j = {{"method", penumbra::flatland::to_string(options.method)},
                         {"device", result->device},
                         {"scene", desc->source},
                         {"width", scene->width},
@@ -230,23 +236,23 @@ int run_render(const RenderArgs& a) {
   } else if (!a.quiet) {
     std::printf("penumbra %s: %s, %dx%d cells, method %s on %s, ", penumbra::kVersion,
                 desc->source.c_str(), scene->width, scene->height,
-                penumbra::to_string(options.method), result->device.c_str());
-    if (options.method == penumbra::Method::pt)
+                penumbra::flatland::to_string(options.method), result->device.c_str());
+    if (options.method == penumbra::flatland::Method::pt)
       std::printf("%llu samples per cell, sampler %s%s\n", (unsigned long long)result->samples,
-                  penumbra::to_string(options.pt.sampler), options.pt.nee ? ", nee" : "");
-    else if (options.method == penumbra::Method::hrc)
-      std::printf("storage %s, cross blur %s\n", penumbra::to_string(options.hrc.storage),
+                  penumbra::flatland::to_string(options.pt.sampler), options.pt.nee ? ", nee" : "");
+    else if (options.method == penumbra::flatland::Method::hrc)
+      std::printf("storage %s, cross blur %s\n", penumbra::flatland::to_string(options.hrc.storage),
                   options.hrc.cross_blur ? "on" : "off");
     else
       std::printf("%d cascades, fix %s\n", result->options.rc.cascades,
-                  penumbra::to_string(options.rc.fix));
+                  penumbra::flatland::to_string(options.rc.fix));
     std::printf("  %-24s %9.1f ms\n", "load scene", load_ms);
     std::printf("  %-24s %9.1f ms\n", "rasterise", raster_ms);
-    for (const penumbra::StageTime& s : result->stages)
+    for (const penumbra::flatland::StageTime& s : result->stages)
       std::printf("  %-24s %9.1f ms\n", s.name.c_str(), s.ms);
     std::printf("  %-24s %9.1f ms  (computation)\n", "total", result->time_ms);
     std::printf("  %-24s %9.1f ms\n", "write outputs", write_ms);
-    std::printf(options.method == penumbra::Method::pt
+    std::printf(options.method == penumbra::flatland::Method::pt
                     ? "  working memory %.1f MiB, %.1f M rays traced (%.1f M/s)\n"
                     : "  working memory %.1f MiB, %.1f M intervals traced (%.1f M/s)\n",
                 double(result->memory_bytes) / (1 << 20), double(result->intervals) / 1e6,
@@ -280,8 +286,10 @@ int main(int argc, char** argv) {
                    "Output file: .png (display), .exr or .pfm (fluence); repeatable")
       ->required();
   add_enum_option(render, "--method", a.options.method,
-                  {penumbra::Method::rc, penumbra::Method::pt, penumbra::Method::hrc}, "Method");
-  penumbra::PtOptions& pt = a.options.pt;
+                  {penumbra::flatland::Method::rc, penumbra::flatland::Method::pt,
+                   penumbra::flatland::Method::hrc},
+                  "Method");
+  penumbra::flatland::PtOptions& pt = a.options.pt;
   CLI::Option* spp =
       render
           ->add_option("--spp", pt.spp, "pt: samples per cell (with --time: the most; 0: no limit)")
@@ -294,10 +302,10 @@ int main(int argc, char** argv) {
   render->add_flag("--nee", pt.nee,
                    "pt: next event estimation (aim at emitting regions, combined by MIS)");
   add_enum_option(render, "--sampler", pt.sampler,
-                  {penumbra::Sampler::r1, penumbra::Sampler::random},
+                  {penumbra::flatland::Sampler::r1, penumbra::flatland::Sampler::random},
                   "pt: direction sequence: r1 (low discrepancy), random");
   render->add_option("--seed", pt.seed, "pt: random seed")->capture_default_str();
-  penumbra::RcOptions& rc = a.options.rc;
+  penumbra::flatland::RcOptions& rc = a.options.rc;
   render->add_option("--probe-spacing", rc.probe_spacing, "Cascade-0 probe spacing s0 in cells")
       ->check(CLI::Range(1, 64))
       ->capture_default_str();
@@ -322,11 +330,12 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1.0f, 1.0e6f))
       ->capture_default_str();
   add_enum_option(render, "--device", a.options.device,
-                  {penumbra::Device::cpu, penumbra::Device::gpu, penumbra::Device::auto_},
+                  {penumbra::flatland::Device::cpu, penumbra::flatland::Device::gpu,
+                   penumbra::flatland::Device::auto_},
                   "cpu; gpu (Vulkan, a CPU driver such as lavapipe included); auto (a hardware "
                   "GPU when there is one and the method runs there, else the CPU)");
   add_enum_option(render, "--storage", a.options.hrc.storage,
-                  {penumbra::Storage::f32, penumbra::Storage::f16},
+                  {penumbra::flatland::Storage::f32, penumbra::flatland::Storage::f16},
                   "hrc: precision of T and R: f32, f16");
   bool no_cross_blur = false;
   render->add_flag("--no-cross-blur", no_cross_blur, "hrc: skip the final 1-cell cross blur");

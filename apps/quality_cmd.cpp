@@ -16,6 +16,7 @@
 
 namespace fs = std::filesystem;
 using namespace penumbra;
+using namespace penumbra::flatland;
 
 bool QualityCommand::parsed() const {
   return app->parsed();

@@ -3,9 +3,11 @@
 
 #include <benchmark/benchmark.h>
 
-#include "penumbra/render.hpp"
+#include "penumbra/flatland/render.hpp"
 
 namespace penumbra::bench {
+
+using namespace penumbra::flatland;
 
 // Times render() (its own computation time, not scene building) and reports cells/s, working
 // memory, intervals (rays for the path tracer) per second and the mean computation time.

@@ -6,9 +6,11 @@
 #include <cmath>
 #include <random>
 
-#include "penumbra/scene.hpp"
+#include "penumbra/flatland/scene.hpp"
 
 namespace penumbra::bench {
+
+using namespace penumbra::flatland;
 
 // `lights` small coloured disk lights (radius 2) scattered over a size x size grid, with a fixed
 // set of walls, so the geometry is the same whatever the number of lights.

@@ -7,14 +7,15 @@
 #include <memory>
 
 #include "bench_scenes.hpp"
+#include "flatland/gpu/distance.hpp"
 #include "flatland/medium.hpp"
-#include "gpu/distance.hpp"
-#include "penumbra/render.hpp"
-#include "penumbra/scene.hpp"
+#include "penumbra/flatland/render.hpp"
+#include "penumbra/flatland/scene.hpp"
 
 namespace {
 
 using namespace penumbra;
+using namespace penumbra::flatland;
 
 Medium lights_medium(int size) {
   return make_medium(*build_scene(bench::lights_scene(size, 102)));
@@ -27,7 +28,8 @@ void BM_JumpFloodCpu(benchmark::State& state) {
 BENCHMARK(BM_JumpFloodCpu)->Arg(512)->Arg(1024)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 void BM_JumpFloodGpu(benchmark::State& state) {
-  static Expected<std::shared_ptr<gpu::Context>> context = gpu::Context::create(true);
+  static Expected<std::shared_ptr<penumbra::gpu::Context>> context =
+      penumbra::gpu::Context::create(true);
   if (!context) {
     state.SkipWithError(context.error().message.c_str());
     return;
@@ -37,7 +39,7 @@ void BM_JumpFloodGpu(benchmark::State& state) {
   double gpu_ms = 0;
   for (auto _ : state) {
     std::vector<std::pair<std::string, double>> passes;
-    Expected<std::vector<float>> d = gpu::jump_flood_distance(**context, m, &passes);
+    Expected<std::vector<float>> d = flatland::gpu::jump_flood_distance(**context, m, &passes);
     if (!d) {
       state.SkipWithError(d.error().message.c_str());
       return;
@@ -53,7 +55,8 @@ BENCHMARK(BM_JumpFloodGpu)->Arg(512)->Arg(1024)->Unit(benchmark::kMillisecond)->
 // kernels, scene and buffers stay on the device between iterations as in the painter: gpu_ms
 // is the passes' GPU time, the wall figure adds the host's share (submission, read back).
 void render_gpu(benchmark::State& state, Method method) {
-  static Expected<std::shared_ptr<gpu::Context>> context = gpu::Context::create(true);
+  static Expected<std::shared_ptr<penumbra::gpu::Context>> context =
+      penumbra::gpu::Context::create(true);
   if (!context) {
     state.SkipWithError(context.error().message.c_str());
     return;

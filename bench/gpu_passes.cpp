@@ -18,11 +18,12 @@
 #include "bench_scenes.hpp"
 #include "core/timer.hpp"
 #include "flatland/hrc/hrc.hpp"
-#include "penumbra/render.hpp"
+#include "penumbra/flatland/render.hpp"
 
 namespace {
 
 using namespace penumbra;
+using namespace penumbra::flatland;
 
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());

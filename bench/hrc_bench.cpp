@@ -8,11 +8,12 @@
 #include "bench_scenes.hpp"
 #include "flatland/hrc/hrc.hpp"
 #include "flatland/medium.hpp"
-#include "penumbra/render.hpp"
+#include "penumbra/flatland/render.hpp"
 
 namespace {
 
 using namespace penumbra;
+using namespace penumbra::flatland;
 
 // Solves repeatedly on one workspace (the first, untimed solve allocates and touches it) and
 // reports the paper's split.

@@ -12,6 +12,7 @@
 namespace {
 
 using namespace penumbra;
+using namespace penumbra::flatland;
 
 // An example scene from scenes/ (the source tree's, so the benchmark runs from anywhere).
 Scene example(const char* name) {

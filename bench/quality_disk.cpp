@@ -18,6 +18,7 @@
 namespace {
 
 using namespace penumbra;
+using namespace penumbra::flatland;
 constexpr double kPi = std::numbers::pi;
 
 struct Disk {

@@ -4,11 +4,12 @@
 
 #include "bench_run.hpp"
 #include "bench_scenes.hpp"
-#include "penumbra/render.hpp"
+#include "penumbra/flatland/render.hpp"
 
 namespace {
 
 using namespace penumbra;
+using namespace penumbra::flatland;
 using bench::build;
 using bench::run;
 

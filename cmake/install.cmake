@@ -1,6 +1,7 @@
 # `make install` and a package config so that find_package(penumbra) works.
 include(CMakePackageConfigHelpers)
-install(TARGETS penumbra penumbra_cli EXPORT penumbraTargets
+install(TARGETS penumbra penumbra_core penumbra_flatland penumbra_analysis penumbra_cli
+  EXPORT penumbraTargets
   ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
   LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
   RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})

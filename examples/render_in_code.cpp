@@ -21,16 +21,16 @@ int fail(const std::string& what) {
   return 1;
 }
 
-penumbra::Shape disk_light(float x, float y, float radius, penumbra::Rgb radiance) {
-  penumbra::Shape s;
-  s.geometry = penumbra::Circle{{x, y}, radius};
+penumbra::flatland::Shape disk_light(float x, float y, float radius, penumbra::Rgb radiance) {
+  penumbra::flatland::Shape s;
+  s.geometry = penumbra::flatland::Circle{{x, y}, radius};
   s.material.emission = radiance;  // opacity defaults to 1: an opaque, glowing disk
   return s;
 }
 
-penumbra::Shape wall(float x, float y, float w, float h) {
-  penumbra::Shape s;
-  s.geometry = penumbra::Box{{x, y}, {w, h}, 0.0f};
+penumbra::flatland::Shape wall(float x, float y, float w, float h) {
+  penumbra::flatland::Shape s;
+  s.geometry = penumbra::flatland::Box{{x, y}, {w, h}, 0.0f};
   return s;  // default material: opaque and black, so it only casts shadows
 }
 
@@ -46,7 +46,7 @@ int main(int argc, char** argv) {
   const std::string output = argc > 1 ? argv[1] : "render_in_code.png";
 
   // 1. Describe the scene: the same document a JSON scene file holds (docs/scene-format.md).
-  penumbra::SceneDesc desc;
+  penumbra::flatland::SceneDesc desc;
   desc.width = kWidth;
   desc.height = kHeight;
   desc.environment = {0.02f, 0.02f, 0.03f};  // dim blue-grey light from outside the grid
@@ -59,19 +59,19 @@ int main(int argc, char** argv) {
   desc.shapes.push_back(wall(100, 95, 4, 50));  // covers y in [70, 120]
 
   // 2. Validate and rasterise it into cells.
-  penumbra::Expected<penumbra::Scene> scene = penumbra::build_scene(desc);
+  penumbra::Expected<penumbra::flatland::Scene> scene = penumbra::flatland::build_scene(desc);
   if (!scene) return fail(scene.error().message);
 
   // 3. Render with the default options: radiance cascades with the bilinear fix, all cores.
-  penumbra::Expected<penumbra::RenderResult> result =
-      penumbra::render(*scene, penumbra::RenderOptions{});
+  penumbra::Expected<penumbra::flatland::RenderResult> result =
+      penumbra::flatland::render(*scene, penumbra::flatland::RenderOptions{});
   if (!result) return fail(result.error().message);
   std::printf("method %s: %.1f ms, %.1f MiB of working memory, %d cascades\n",
-              penumbra::to_string(result->options.method), result->time_ms,
+              penumbra::flatland::to_string(result->options.method), result->time_ms,
               double(result->memory_bytes) / (1 << 20), result->options.rc.cascades);
 
   // 4. Write the fluence; the extension picks the format (PNG is tone-mapped for display).
-  if (penumbra::Status s = penumbra::write_image(output, result->fluence, *scene); !s)
+  if (penumbra::Status s = penumbra::flatland::write_image(output, result->fluence, *scene); !s)
     return fail(s.error().message);
   std::printf("wrote %s\n", output.c_str());
 

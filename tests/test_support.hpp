@@ -14,10 +14,12 @@
 #include <system_error>
 #include <vector>
 
-#include "penumbra/render.hpp"
-#include "penumbra/scene.hpp"
+#include "penumbra/flatland/render.hpp"
+#include "penumbra/flatland/scene.hpp"
 
 namespace penumbra::testing {
+
+using namespace penumbra::flatland;
 
 // A scene from a description the test expects to be valid (a failure is reported, and an empty
 // scene returned).

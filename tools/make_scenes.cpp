@@ -21,10 +21,10 @@
 
 #include "bench_scenes.hpp"
 #include "io/image_io.hpp"
+#include "penumbra/flatland/scene.hpp"
 #include "penumbra/io.hpp"
-#include "penumbra/scene.hpp"
 
-namespace penumbra {
+namespace penumbra::flatland {
 namespace {
 
 // ---------------------------------------------------------------------------------------------
@@ -493,7 +493,7 @@ int run(const std::filesystem::path& dir) {
 }
 
 }  // namespace
-}  // namespace penumbra
+}  // namespace penumbra::flatland
 
 int main(int argc, char** argv) {
   if (argc != 2) {
@@ -502,5 +502,5 @@ int main(int argc, char** argv) {
                  argv[0]);
     return 2;
   }
-  return penumbra::run(argv[1]);
+  return penumbra::flatland::run(argv[1]);
 }

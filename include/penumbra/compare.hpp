@@ -1,5 +1,6 @@
-// Comparing two linear images (a result against a reference): error metrics, an error heatmap
-// and a side-by-side montage. See docs/QUALITY.md, "Comparing two images".
+// Comparing two linear images (a result against a reference): error metrics and an error
+// heatmap, for images of any world (a 2D fluence grid, a 3D camera image); each world adds its
+// montage in its own compare.hpp. See docs/QUALITY.md, "Comparing two images".
 #pragma once
 
 #include <cstdint>
@@ -7,9 +8,9 @@
 #include <vector>
 
 #include "penumbra/error.hpp"
+#include "penumbra/flatland/scene.hpp"
 #include "penumbra/image.hpp"
 #include "penumbra/io.hpp"
-#include "penumbra/scene.hpp"
 
 namespace penumbra {
 
@@ -28,10 +29,6 @@ struct ErrorMetrics {
   double reference_mean = 0;  // sum REF / n
 };
 
-// A mask of the cells of `scene` that are not opaque (opacity < 1): 1 counted, 0 not. Cells
-// inside walls hold no meaningful fluence, so comparisons usually leave them out.
-std::vector<std::uint8_t> non_opaque_cells(const Scene& scene);
-
 // Refuses an image holding NaN or infinity; the message starts with `name` and gives the first
 // such cell.
 Status check_finite(const ImageRgb& image, const std::string& name);
@@ -44,7 +41,7 @@ Expected<ErrorMetrics> compare_images(const ImageRgb& test, const ImageRgb& ref,
 
 // Layout shared by the pictures: each cell is drawn as a `zoom` x `zoom` block, zoom =
 // ceil(256 / width) for images narrower than 256 cells (so the labels stay legible), else 1;
-// an image that would make a picture wider or taller than kMaxGridSide pixels is instead shrunk
+// an image that would make a picture wider or taller than 16384 pixels is instead shrunk
 // by an integer factor (box average of the displayed colours). Text (stb_easy_font) is drawn
 // at 2 pixels per font unit, and larger with wider panels, so a big picture stays legible when
 // viewed fitted to a screen.
@@ -56,21 +53,5 @@ Expected<ErrorMetrics> compare_images(const ImageRgb& test, const ImageRgb& ref,
 // with ticks at +S, 0 and -S (values printed with %+.3g). Refused as compare_images refuses.
 Expected<ImageRgb8> error_heatmap(const ImageRgb& test, const ImageRgb& ref,
                                   const std::vector<std::uint8_t>* mask = nullptr);
-
-struct MontageOptions {
-  std::string test_label = "test";            // above the test panel (a file name, say)
-  std::string reference_label = "reference";  // above the reference panel
-  DisplayOptions display;                     // exposure of the test and reference panels
-  const Scene* scene = nullptr;  // optional, of the images' size: its opaque cells show what they
-                                 // emit and reflect, as in write_image's PNG
-};
-
-// Three panels side by side: TEST and REF tone-mapped alike (as write_image's PNG), then the
-// error heatmap with its colour bar; a label above each panel and the metrics (RMSE, relative
-// RMSE, PSNR, bias, ...) below. Refused as compare_images refuses, and when the scene's size
-// differs from the images'.
-Expected<ImageRgb8> comparison_montage(const ImageRgb& test, const ImageRgb& ref,
-                                       const std::vector<std::uint8_t>* mask = nullptr,
-                                       const MontageOptions& options = {});
 
 }  // namespace penumbra

@@ -6,13 +6,9 @@
 #include <limits>
 #include <string>
 
-namespace penumbra {
+#include "penumbra/flatland/compare.hpp"
 
-std::vector<std::uint8_t> non_opaque_cells(const Scene& scene) {
-  std::vector<std::uint8_t> mask(scene.opacity.size());
-  for (std::size_t i = 0; i < mask.size(); ++i) mask[i] = scene.opacity[i] < 1.0f ? 1 : 0;
-  return mask;
-}
+namespace penumbra {
 
 Status check_finite(const ImageRgb& image, const std::string& name) {
   const float* p = image.data();
@@ -80,3 +76,13 @@ Expected<ErrorMetrics> compare_images(const ImageRgb& test, const ImageRgb& ref,
 }
 
 }  // namespace penumbra
+
+namespace penumbra::flatland {
+
+std::vector<std::uint8_t> non_opaque_cells(const Scene& scene) {
+  std::vector<std::uint8_t> mask(scene.opacity.size());
+  for (std::size_t i = 0; i < mask.size(); ++i) mask[i] = scene.opacity[i] < 1.0f ? 1 : 0;
+  return mask;
+}
+
+}  // namespace penumbra::flatland

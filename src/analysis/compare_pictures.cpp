@@ -9,8 +9,9 @@
 
 #include "analysis/pictures.hpp"
 #include "analysis/text.hpp"
-#include "io/display.hpp"
 #include "penumbra/compare.hpp"
+#include "penumbra/flatland/compare.hpp"
+#include "penumbra/flatland/io.hpp"
 
 namespace penumbra::analysis {
 namespace {
@@ -23,6 +24,7 @@ constexpr Colour kBackground{255, 255, 255};
 constexpr Colour kInk{25, 25, 25};
 constexpr Colour kFrame{150, 150, 150};
 constexpr const char* kBarTitle = "S = max abs";
+constexpr int kMaxPictureSide = 16384;  // pictures are shrunk to fit this a side
 
 // The layout for a given zoom; text and spacing scale with the panel width so that a large
 // picture, viewed fitted to a screen, stays legible.
@@ -54,7 +56,7 @@ PictureLayout layout_for(Zoom z, int w, int h, int panels, int metric_lines) {
 PictureLayout make_layout(int w, int h, int panels, int metric_lines) {
   auto fits = [&](Zoom z) {
     const PictureLayout l = layout_for(z, w, h, panels, metric_lines);
-    return l.width <= kMaxGridSide && l.height <= kMaxGridSide;
+    return l.width <= kMaxPictureSide && l.height <= kMaxPictureSide;
   };
   Zoom z;
   z.zoom = w < kMinPanel ? (kMinPanel + w - 1) / w : 1;
@@ -164,7 +166,7 @@ void draw_error_panel(ImageRgb8& p, const PictureLayout& l, const ImageRgb& test
   }
 }
 
-Status check_scene(const Scene* scene, const ImageRgb& image) {
+Status check_scene(const flatland::Scene* scene, const ImageRgb& image) {
   if (!scene) return {};
   const std::size_t cells = scene->cells();
   if (scene->width != image.width() || scene->height != image.height() ||
@@ -218,6 +220,12 @@ Expected<ImageRgb8> error_heatmap(const ImageRgb& test, const ImageRgb& ref,
   return p;
 }
 
+}  // namespace penumbra
+
+namespace penumbra::flatland {
+
+using namespace analysis;
+
 Expected<ImageRgb8> comparison_montage(const ImageRgb& test, const ImageRgb& ref,
                                        const std::vector<std::uint8_t>* mask,
                                        const MontageOptions& options) {
@@ -231,8 +239,7 @@ Expected<ImageRgb8> comparison_montage(const ImageRgb& test, const ImageRgb& ref
   const ImageRgb* shown[2] = {&test, &ref};
   const std::string* labels[2] = {&options.test_label, &options.reference_label};
   for (int i = 0; i < 2; ++i) {
-    const ImageRgb8 cells{ref.width(), ref.height(),
-                          io::display_rgb8(*shown[i], options.scene, options.display)};
+    const ImageRgb8 cells = flatland::display_picture(*shown[i], options.scene, options.display);
     place(p, l.panel_x[i], l.panel_y, resample(cells, l.zoom));
     draw_label(p, l.panel_x[i], l.margin, *labels[i], l.panel_w, l.text);
   }
@@ -254,4 +261,4 @@ Expected<ImageRgb8> comparison_montage(const ImageRgb& test, const ImageRgb& ref
   return p;
 }
 
-}  // namespace penumbra
+}  // namespace penumbra::flatland

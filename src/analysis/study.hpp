@@ -6,9 +6,11 @@
 #include <vector>
 
 #include "penumbra/compare.hpp"
-#include "penumbra/render.hpp"
+#include "penumbra/flatland/render.hpp"
 
 namespace penumbra::study {
+
+using namespace penumbra::flatland;  // the study renders 2D scenes
 
 // One configuration to run. Rows of the same `curve` (the path tracer at growing sample counts)
 // are drawn as one line; the others as single points.

@@ -2,7 +2,7 @@
 // transmittance, and the one place where two adjacent intervals are merged.
 #pragma once
 
-namespace penumbra {
+namespace penumbra::flatland {
 
 struct Interval {
   float r = 0, g = 0, b = 0;  // radiance L gathered along the segment, linear RGB
@@ -29,4 +29,4 @@ inline Interval zero_interval() {
   return {0, 0, 0, 0};
 }
 
-}  // namespace penumbra
+}  // namespace penumbra::flatland

@@ -5,7 +5,7 @@
 
 #include "core/parallel.hpp"
 
-namespace penumbra {
+namespace penumbra::flatland {
 
 float extinction(float opacity) {
   if (opacity >= 1.0f) return kOpaque;
@@ -133,4 +133,4 @@ void build_blocks(Medium& m) {
   });
 }
 
-}  // namespace penumbra
+}  // namespace penumbra::flatland

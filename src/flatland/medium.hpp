@@ -6,9 +6,9 @@
 #include <limits>
 #include <vector>
 
-#include "penumbra/scene.hpp"
+#include "penumbra/flatland/scene.hpp"
 
-namespace penumbra {
+namespace penumbra::flatland {
 
 inline constexpr float kOpaque = std::numeric_limits<float>::infinity();
 
@@ -65,4 +65,4 @@ std::uint64_t blocks_bytes(int width, int height);
 // Bytes build_distance_field allocates at its peak (the distances and two seed buffers).
 std::uint64_t distance_field_bytes(int width, int height);
 
-}  // namespace penumbra
+}  // namespace penumbra::flatland

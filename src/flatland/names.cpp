@@ -1,7 +1,7 @@
 // Names of methods and options as they appear on the command line and in --json output.
-#include "penumbra/render.hpp"
+#include "penumbra/flatland/render.hpp"
 
-namespace penumbra {
+namespace penumbra::flatland {
 
 const char* to_string(Method m) {
   switch (m) {
@@ -59,4 +59,4 @@ const char* to_string(Device d) {
   return "?";
 }
 
-}  // namespace penumbra
+}  // namespace penumbra::flatland

@@ -1,5 +1,5 @@
 // render(): the library's entry point for running a method on a scene.
-#include "penumbra/render.hpp"
+#include "penumbra/flatland/render.hpp"
 
 #include <tbb/task_arena.h>
 
@@ -9,14 +9,14 @@
 
 #include "core/parallel.hpp"
 #include "core/timer.hpp"
+#include "flatland/gpu/solver.hpp"
 #include "flatland/hrc/hrc.hpp"
 #include "flatland/medium.hpp"
 #include "flatland/pt/pt.hpp"
 #include "flatland/rc/rc.hpp"
-#include "gpu/solver.hpp"
 #include "gpu/vulkan.hpp"
 
-namespace penumbra {
+namespace penumbra::flatland {
 
 Status check_options(int width, int height, const RenderOptions& o) {
   auto bad = [](const std::string& what) { return Status(Error{what}); };
@@ -315,4 +315,4 @@ Expected<RenderResult> render(const Scene& scene, const RenderOptions& options) 
   return renderer.render(scene, options);
 }
 
-}  // namespace penumbra
+}  // namespace penumbra::flatland

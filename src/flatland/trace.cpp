@@ -1,6 +1,6 @@
 #include "flatland/trace.hpp"
 
-namespace penumbra {
+namespace penumbra::flatland {
 Interval trace_interval(const Medium& m, float ox, float oy, float dx, float dy, float ta, float tb,
                         bool skip_start) {
   Interval out = Interval::empty();
@@ -32,4 +32,4 @@ Interval trace_segment(const Medium& m, float ax, float ay, float bx, float by, 
   return trace_interval(m, ax, ay, vx / len, vy / len, 0.0f, len, skip_start);
 }
 
-}  // namespace penumbra
+}  // namespace penumbra::flatland

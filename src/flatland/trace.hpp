@@ -13,7 +13,7 @@
 #include "flatland/interval.hpp"
 #include "flatland/medium.hpp"
 
-namespace penumbra {
+namespace penumbra::flatland {
 
 namespace detail {
 
@@ -192,4 +192,4 @@ Interval trace_interval(const Medium& m, float ox, float oy, float dx, float dy,
 Interval trace_segment(const Medium& m, float ax, float ay, float bx, float by,
                        bool skip_start = false);
 
-}  // namespace penumbra
+}  // namespace penumbra::flatland

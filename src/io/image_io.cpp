@@ -35,7 +35,6 @@
 
 #include "io/path_util.hpp"
 #include "penumbra/io.hpp"
-#include "penumbra/scene.hpp"
 
 namespace penumbra::io {
 namespace {
@@ -81,9 +80,9 @@ Status check_size(const std::string& path, long long width, long long height, Ex
     return fail(path, "image has zero size (" + std::to_string(width) + " x " +
                           std::to_string(height) + ")");
   }
-  if (width > kMaxGridSide || height > kMaxGridSide) {
+  if (width > kMaxImageSide || height > kMaxImageSide) {
     return fail(path, "image too large (" + std::to_string(width) + " x " + std::to_string(height) +
-                          ", the limit is " + std::to_string(kMaxGridSide) + " per side)");
+                          ", the limit is " + std::to_string(kMaxImageSide) + " per side)");
   }
   if (e.width > 0 && (width != e.width || height != e.height)) {
     return fail(path, "the image is " + std::to_string(width) + "x" + std::to_string(height) +
@@ -378,7 +377,7 @@ bool write_bytes(std::FILE* f, const void* data, std::size_t n) {
 
 Status check_writable_size(const std::string& path, int width, int height) {
   if (width <= 0 || height <= 0) return fail(path, "cannot write an empty image");
-  if (width > kMaxGridSide || height > kMaxGridSide) {
+  if (width > kMaxImageSide || height > kMaxImageSide) {
     return fail(path, "image too large to write (" + std::to_string(width) + " x " +
                           std::to_string(height) + ")");
   }

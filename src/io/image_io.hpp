@@ -13,6 +13,9 @@
 
 namespace penumbra::io {
 
+// Largest width or height read or written (a 2D scene's grid has the same limit).
+inline constexpr int kMaxImageSide = 16384;
+
 // A decoded image file: interleaved channels, row 0 at the top.
 struct RawImage {
   int width = 0, height = 0, channels = 0;

@@ -6,8 +6,6 @@
 #include <cmath>
 #include <cstdint>
 
-#include "penumbra/scene.hpp"
-
 namespace penumbra::io {
 
 using nlohmann::json;
@@ -131,12 +129,12 @@ float JsonReader::number(const json& j, const std::string& path, Range r) const 
   return f;
 }
 
-int JsonReader::grid_side(const json& j, const std::string& path) const {
-  std::string what = "an integer in 1.." + std::to_string(kMaxGridSide);
+int JsonReader::integer(const json& j, const std::string& path, int lo, int hi) const {
+  std::string what = "an integer in " + std::to_string(lo) + ".." + std::to_string(hi);
   if (!j.is_number_integer()) expected(path, what, j);
-  bool ok = j.is_number_unsigned() ? j.get<std::uint64_t>() <= std::uint64_t(kMaxGridSide)
-                                   : j.get<std::int64_t>() <= kMaxGridSide;
-  if (!ok || j.get<std::int64_t>() < 1) expected(path, what, j);
+  bool ok = j.is_number_unsigned() ? j.get<std::uint64_t>() <= std::uint64_t(hi)
+                                   : j.get<std::int64_t>() <= hi;
+  if (!ok || j.get<std::int64_t>() < lo) expected(path, what, j);
   return static_cast<int>(j.get<std::int64_t>());
 }
 

@@ -50,7 +50,8 @@ class JsonReader {
                       const std::string& what) const;
   // A finite number that fits a float, in range as written and as a float.
   float number(const json& j, const std::string& path, Range r) const;
-  int grid_side(const json& j, const std::string& path) const;
+  // An integer in [lo, hi].
+  int integer(const json& j, const std::string& path, int lo, int hi) const;
   std::array<float, 2> point(const json& j, const std::string& path) const;
   Rgb rgb(const json& j, const std::string& path, Range r) const;
   std::string string(const json& j, const std::string& path, const std::string& what) const;

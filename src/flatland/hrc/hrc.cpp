@@ -34,7 +34,7 @@
 #include "flatland/interval.hpp"
 #include "flatland/trace.hpp"
 
-namespace penumbra::hrc {
+namespace penumbra::flatland::hrc {
 
 namespace {
 
@@ -895,4 +895,4 @@ void cross_blur(int W, int H, const float* tau_half, const float* f, float* out)
   });
 }
 
-}  // namespace penumbra::hrc
+}  // namespace penumbra::flatland::hrc

@@ -8,9 +8,9 @@
 #include <vector>
 
 #include "flatland/medium.hpp"
-#include "penumbra/render.hpp"
+#include "penumbra/flatland/render.hpp"
 
-namespace penumbra::hrc {
+namespace penumbra::flatland::hrc {
 
 // Number of cascades N = ceil(log2(w)) for a view w cells long in the gathering direction.
 int level_count(int w);
@@ -122,4 +122,4 @@ struct TracedCell {
 };
 std::vector<TracedCell> traced_cells(int n, int k);
 
-}  // namespace penumbra::hrc
+}  // namespace penumbra::flatland::hrc

@@ -12,7 +12,7 @@
 #include "core/timer.hpp"
 #include "flatland/trace.hpp"
 
-namespace penumbra::pt {
+namespace penumbra::flatland::pt {
 
 namespace {
 
@@ -364,4 +364,4 @@ std::vector<float> solve(const Medium& medium, const std::vector<float>& albedo,
   return fluence;
 }
 
-}  // namespace penumbra::pt
+}  // namespace penumbra::flatland::pt

@@ -7,9 +7,9 @@
 #include <vector>
 
 #include "flatland/medium.hpp"
-#include "penumbra/render.hpp"
+#include "penumbra/flatland/render.hpp"
 
-namespace penumbra::pt {
+namespace penumbra::flatland::pt {
 
 // Cells [x0, x1) x [y0, y1) that hold emitting cells, for next event estimation, and the mean
 // emitted luminance over the box (its emitting cells' luminance summed, over the box's area).
@@ -37,4 +37,4 @@ std::vector<float> solve(const Medium& medium, const std::vector<float>& albedo,
                          const Rgb& environment, const RenderOptions& options,
                          RenderResult& result);
 
-}  // namespace penumbra::pt
+}  // namespace penumbra::flatland::pt

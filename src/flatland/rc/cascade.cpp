@@ -6,7 +6,7 @@
 
 #include "flatland/interval.hpp"
 
-namespace penumbra::rc {
+namespace penumbra::flatland::rc {
 
 void ray_direction(int k, int count, float& dx, float& dy) {
   const double angle = kTwoPi * (double(k) + 0.5) / double(count);
@@ -65,4 +65,4 @@ std::uint64_t cascade_bytes(const std::vector<Cascade>& plan, const RcOptions& o
   return largest * buffers * sizeof(Interval);
 }
 
-}  // namespace penumbra::rc
+}  // namespace penumbra::flatland::rc

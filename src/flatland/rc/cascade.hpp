@@ -5,9 +5,9 @@
 #include <cstdint>
 #include <vector>
 
-#include "penumbra/render.hpp"
+#include "penumbra/flatland/render.hpp"
 
-namespace penumbra::rc {
+namespace penumbra::flatland::rc {
 
 inline constexpr double kTwoPi = 6.283185307179586;
 
@@ -57,4 +57,4 @@ void fill_directions(std::vector<Cascade>& plan);
 // Bytes of cascade storage the method keeps alive at once.
 std::uint64_t cascade_bytes(const std::vector<Cascade>& plan, const RcOptions& options);
 
-}  // namespace penumbra::rc
+}  // namespace penumbra::flatland::rc

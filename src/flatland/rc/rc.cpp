@@ -11,7 +11,7 @@
 #include "flatland/interval.hpp"
 #include "flatland/trace.hpp"
 
-namespace penumbra::rc {
+namespace penumbra::flatland::rc {
 
 namespace {
 
@@ -266,4 +266,4 @@ std::vector<float> solve(const Medium& medium, const Rgb& environment,
   return f;
 }
 
-}  // namespace penumbra::rc
+}  // namespace penumbra::flatland::rc

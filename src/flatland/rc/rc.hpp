@@ -5,9 +5,9 @@
 
 #include "flatland/medium.hpp"
 #include "flatland/rc/cascade.hpp"
-#include "penumbra/render.hpp"
+#include "penumbra/flatland/render.hpp"
 
-namespace penumbra::rc {
+namespace penumbra::flatland::rc {
 
 // Ray intervals one solve traces: per probe and direction, one (the top cascade, vanilla and
 // nearest merges), or one per child ray and upper probe (the bilinear fix); four times that
@@ -20,4 +20,4 @@ std::vector<float> solve(const Medium& medium, const Rgb& environment,
                          const std::vector<Cascade>& plan, const RcOptions& options,
                          std::vector<StageTime>& stages);
 
-}  // namespace penumbra::rc
+}  // namespace penumbra::flatland::rc

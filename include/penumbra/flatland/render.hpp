@@ -1,0 +1,170 @@
+// Running a method on a scene: options in, fluence and timings out.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "penumbra/error.hpp"
+#include "penumbra/flatland/scene.hpp"
+#include "penumbra/image.hpp"
+
+namespace penumbra::flatland {
+
+enum class Method {
+  rc,   // radiance cascades (seed 001, seed 002)
+  pt,   // the reference path tracer: converges to the exact fluence of the cell grid
+  hrc,  // holographic radiance cascades (seed 004)
+};
+
+// How a ray of cascade n continues into cascade n+1 when merging.
+enum class MergeFix {
+  bilinear,  // "bilinear fix": trace to each of the 4 upper probes, merge, then weight
+  none,      // "vanilla": merge with the bilinear interpolation of the 4 upper probes
+  nearest,   // merge with the nearest upper probe only (blocky; for teaching)
+};
+
+// Flatland radiance cascades (seed 001 sections 2-3, seed 002). See docs/METHODS.md.
+struct RcOptions {
+  int probe_spacing = 1;  // s0: cascade-0 probe spacing in cells; cascade n uses s0 * 2^n
+  int directions = 4;     // Q0: directions of a cascade-0 probe
+  int branching = 4;      // angular branching per cascade: 4 or 2
+  float interval = 4.0f;  // t0: length of the cascade-0 interval [0, t0], in cells
+  int cascades = 0;       // 0: enough that the last interval reaches past the grid diagonal
+  MergeFix fix = MergeFix::bilinear;
+  bool preaverage = false;  // trace a 2x2 sub-probe neighbourhood and store the average
+  bool extend = false;      // build long intervals by extending a short traced one (eq. 16)
+  float extend_length = 8;  // length traced before extension doubles it, in cells
+};
+
+// Precision of stored intervals.
+enum class Storage {
+  f32,  // 32-bit floats
+  f16,  // 16-bit floats (half the memory; radiance above kHalfMaxRadiance is refused)
+};
+
+// Holographic radiance cascades (seed 004 section 4). See docs/METHODS.md.
+struct HrcOptions {
+  Storage storage = Storage::f32;  // of the acceleration structure T and the cascades R
+  bool cross_blur = true;          // the final 1-cell cross blur (eq. 21)
+  // Merge the transport from a cell's centre to the probe the paper reads, R_0([x+1, y]), in
+  // front of it (off: the paper's formula, which leaves a cell's own medium out of its fluence).
+  bool near_segment = true;
+};
+
+// Where the path tracer's directions come from.
+enum class Sampler {
+  r1,      // golden-ratio (R1) sequence with a per-cell random rotation (Cranley-Patterson)
+  random,  // independent uniform numbers per cell and sample (error falls as 1/sqrt(spp))
+};
+
+// The reference path tracer (seed 004 section 5). See docs/METHODS.md.
+struct PtOptions {
+  int spp = 64;        // samples (directions) per cell; with `seconds`, the most to take
+                       // (0: no limit)
+  double seconds = 0;  // > 0: add samples until this much time has passed
+  bool nee = false;    // next event estimation: also aim at emitting regions, combined by MIS
+  Sampler sampler = Sampler::r1;
+  std::uint64_t seed = 0;  // changes every random number; same seed, same result
+};
+
+// Reported between passes of progressive methods.
+struct RenderProgress {
+  std::uint64_t samples = 0;  // samples per cell taken so far
+  std::uint64_t target = 0;   // samples per cell asked for (0: until the time is up)
+  double elapsed_s = 0;
+  double fraction = 0;  // of the work asked for (samples or time), 0..1
+};
+
+// Where a method runs.
+enum class Device {
+  cpu,    // this machine's cores
+  gpu,    // Vulkan compute on the best device, a CPU driver (lavapipe) included; an error if none
+  auto_,  // a hardware GPU when there is one and the method runs there, the CPU otherwise
+};
+
+struct RenderOptions {
+  Method method = Method::rc;
+  // The GPU runs RC (no interval extension) and HRC, any bounces (docs/GPU.md).
+  Device device = Device::cpu;
+  RcOptions rc;
+  PtOptions pt;
+  HrcOptions hrc;
+  int bounces = 1;  // 1: direct light only; N: N-1 more diffuse bounces
+  int threads = 0;  // 0: all hardware threads
+  // rc and pt (hrc traces only rays a few cells long and builds neither):
+  bool distance_field = true;  // jump over empty space (same answer, faster); off: plain DDA
+  bool blocks = true;          // skip empty 8x8 blocks (two-level DDA; same answer, faster)
+  std::uint64_t max_memory = std::uint64_t(8) << 30;  // refuse work whose memory need is larger
+  // Progressive methods (pt) call this from the calling thread between passes.
+  std::function<void(const RenderProgress&)> progress;
+  // When set to true, progressive methods stop after the current pass and return what they have
+  // (RenderResult::cancelled); others ignore it.
+  const std::atomic<bool>* cancel = nullptr;
+};
+
+struct StageTime {
+  std::string name;
+  double ms = 0;
+};
+
+struct RenderResult {
+  ImageRgb fluence;                    // linear RGB fluence at every cell centre
+  std::vector<StageTime> stages;       // in the order they ran
+  double time_ms = 0;                  // computation only, no file I/O
+  std::uint64_t memory_bytes = 0;      // peak working memory of the method (not the scene)
+  std::uint64_t intervals = 0;         // ray intervals traced (all bounces; pt: rays)
+  std::uint64_t samples = 0;           // pt: samples per cell in the result
+  bool cancelled = false;              // pt: stopped early through RenderOptions::cancel
+  RenderOptions options;               // the options used, with derived values filled in
+  std::string device = "cpu";          // what ran it: "cpu", or the GPU's name
+  std::uint64_t gpu_memory_bytes = 0;  // on a GPU: device memory the render keeps allocated
+  std::uint64_t uploaded_bytes = 0;    // on a GPU: bytes copied to it (only what changed)
+};
+
+// Checks options against a grid size: ranges, combinations, and hierarchies too deep to build.
+Status check_options(int width, int height, const RenderOptions& options);
+
+// Working memory the method would need, known before anything is allocated (the largest value
+// when the options are invalid).
+std::uint64_t estimate_memory(const Scene& scene, const RenderOptions& options);
+std::uint64_t estimate_memory(int width, int height, const RenderOptions& options);
+
+// Bytes of a rasterised Scene of this size (emission, opacity, albedo).
+std::uint64_t scene_bytes(int width, int height);
+
+// Refuses, before anything is allocated, work whose memory need exceeds options.max_memory: the
+// method's working memory, plus the rasterised scene when `with_scene` (a program that has not
+// built the scene yet).
+Status check_memory(int width, int height, const RenderOptions& options, bool with_scene);
+
+// Runs the method. Refuses up front (Error, nothing allocated) when options are invalid or the
+// memory estimate exceeds options.max_memory.
+Expected<RenderResult> render(const Scene& scene, const RenderOptions& options);
+
+// Renders again and again with the same buffers: a program that renders every frame (the
+// painter) keeps one, so that only its first frame allocates and first touches the working
+// memory. Same results as render(); it holds its memory until destroyed. One thread at a time.
+class Renderer {
+ public:
+  Renderer();
+  ~Renderer();
+  Renderer(Renderer&&) noexcept;
+  Renderer& operator=(Renderer&&) noexcept;
+  Expected<RenderResult> render(const Scene& scene, const RenderOptions& options);
+  struct State;
+
+ private:
+  std::unique_ptr<State> state_;
+};
+
+const char* to_string(Method m);
+const char* to_string(MergeFix f);
+const char* to_string(Sampler s);
+const char* to_string(Storage s);
+const char* to_string(Device d);
+
+}  // namespace penumbra::flatland

@@ -33,6 +33,7 @@
 
 #include "cli_enums.hpp"
 #include "core/timer.hpp"
+#include "field_flags.hpp"
 #include "flatland/paint/canvas.hpp"
 #include "io/image_io.hpp"
 #include "io/path_util.hpp"
@@ -166,7 +167,7 @@ class Solver {
           if (look.materials) show_materials(*scene, f.rgb);
           f.display_ms = watch.ms();
         } else {
-          f.error = r.error().message;
+          f.error = with_flags(r.error().message);
         }
       } catch (const std::exception& e) {
         f.rgb.clear();
@@ -338,7 +339,8 @@ void Painter::submit() {
     return;
   if (options_version_ != submitted_options_)
     if (Status m = painter_memory(canvas_.width(), canvas_.height(), options_); !m) {
-      message_ = m.error().message;  // the solver goes on showing the last accepted settings
+      message_ =
+          with_flags(m.error().message);  // the solver goes on showing the last accepted settings
       return;
     }
   submitted_scene_ = canvas_.version();
@@ -379,7 +381,7 @@ void Painter::handle_input() {
       painting_ = true;
       recorded_.push_back({brush_, {{cx, cy}}});
     } else {
-      message_ = s.error().message;
+      message_ = with_flags(s.error().message);
     }
   } else if (painting_ && ImGui::IsMouseDown(ImGuiMouseButton_Left)) {
     auto& last = recorded_.back().points.back();
@@ -415,7 +417,7 @@ void Painter::handle_input() {
   const bool s_down = ctrl && key_s;
   if (s_down && !save_down_) {
     Status saved = canvas_.save(file_);
-    message_ = saved ? "saved " + file_ : saved.error().message;
+    message_ = saved ? "saved " + file_ : with_flags(saved.error().message);
   }
   save_down_ = s_down;
   const bool q_down = ctrl && key_q;
@@ -533,7 +535,7 @@ void Painter::draw_panel() {
     ImGui::InputText("scene file", &file_);
     if (ImGui::Button("Save")) {
       Status s = canvas_.save(file_);
-      message_ = s ? "saved " + file_ : s.error().message;
+      message_ = s ? "saved " + file_ : with_flags(s.error().message);
     }
     ImGui::SameLine();
     if (ImGui::Button("Load")) {
@@ -548,7 +550,7 @@ void Painter::draw_panel() {
         replace_canvas(std::move(*c));
         message_ = "loaded " + file_;
       } else {
-        message_ = c.error().message;
+        message_ = with_flags(c.error().message);
       }
     }
     ImGui::TextDisabled("emission scale %g", canvas_.emission_scale());
@@ -589,7 +591,7 @@ int Painter::write_outputs(const std::vector<unsigned char>* shot, int shot_w, i
     return io::stage_text(paths[i], paint::strokes_json(record));
   });
   if (!s) {
-    std::cerr << "penumbra paint: " << s.error().message << "; nothing written\n";
+    std::cerr << "penumbra paint: " << with_flags(s.error().message) << "; nothing written\n";
     return kFailure;
   }
   return 0;
@@ -657,7 +659,7 @@ int Painter::run() {
     if (replayed_ < replay_.size()) {
       const std::string where = args_.replay + ": strokes[" + std::to_string(replayed_) + "]";
       if (Status s = canvas_.apply(replay_[replayed_], where); !s) {
-        std::cerr << "penumbra paint: " << s.error().message << "\n";
+        std::cerr << "penumbra paint: " << with_flags(s.error().message) << "\n";
         status = kFailure;
         break;
       }
@@ -828,37 +830,37 @@ int run_paint(const PaintArgs& a) {
                   : Expected<paint::Canvas>(desc.error());
   }
   if (!canvas) {
-    std::cerr << "penumbra paint: " << canvas.error().message << "\n";
+    std::cerr << "penumbra paint: " << with_flags(canvas.error().message) << "\n";
     return kFailure;
   }
   // Memory: the method's, plus the painter's copies of the canvas (the canvas, the stroke's
   // starting cells, the solver's two) and its undo steps.
   const RenderOptions& probe = a.options;
   if (Status s = check_options(canvas->width(), canvas->height(), probe); !s) {
-    std::cerr << "penumbra paint: " << s.error().message << "\n";
+    std::cerr << "penumbra paint: " << with_flags(s.error().message) << "\n";
     return kUsage;
   }
   const int w = canvas->width(), h = canvas->height();
   if (Status s = check_memory(w, h, probe, false); !s) {
-    std::cerr << "penumbra paint: " << s.error().message << "\n";
+    std::cerr << "penumbra paint: " << with_flags(s.error().message) << "\n";
     return kFailure;
   }
   if (Status s = painter_memory(w, h, probe); !s) {
-    std::cerr << "penumbra paint: " << s.error().message << "\n";
+    std::cerr << "penumbra paint: " << with_flags(s.error().message) << "\n";
     return kFailure;
   }
   std::vector<paint::Stroke> strokes;
   if (!a.replay.empty()) {
     Expected<paint::StrokeFile> r = paint::load_strokes(a.replay);
     if (!r) {
-      std::cerr << "penumbra paint: " << r.error().message << "\n";
+      std::cerr << "penumbra paint: " << with_flags(r.error().message) << "\n";
       return kFailure;
     }
     for (std::size_t i = 0; i < r->strokes.size(); ++i)
       if (Status s =
               canvas->check(r->strokes[i].brush, a.replay + ": strokes[" + std::to_string(i) + "]");
           !s) {
-        std::cerr << "penumbra paint: " << s.error().message << "\n";
+        std::cerr << "penumbra paint: " << with_flags(s.error().message) << "\n";
         return kFailure;
       }
     if (r->width > 0 && (r->width != w || r->height != h))
@@ -877,7 +879,7 @@ int run_paint(const PaintArgs& a) {
   if (!a.save.empty()) {
     Expected<std::vector<std::string>> saved = paint::Canvas::save_paths(a.save);
     if (!saved) {
-      std::cerr << "penumbra paint: --save: " << saved.error().message << "\n";
+      std::cerr << "penumbra paint: --save: " << with_flags(saved.error().message) << "\n";
       return kUsage;
     }
     for (const std::string& p : *saved) outputs.push_back({"--save", p});
@@ -885,7 +887,8 @@ int run_paint(const PaintArgs& a) {
   if (!a.record.empty()) outputs.push_back({"--record", a.record});
   for (std::size_t i = 0; i < outputs.size(); ++i) {
     if (Status s = check_output(outputs[i].second); !s) {
-      std::cerr << "penumbra paint: " << outputs[i].first << ": " << s.error().message << "\n";
+      std::cerr << "penumbra paint: " << outputs[i].first << ": " << with_flags(s.error().message)
+                << "\n";
       return kFailure;
     }
     auto canonical = [](const std::string& p) {

@@ -17,6 +17,7 @@
 #include "cli_enums.hpp"
 #include "compare_cmd.hpp"
 #include "core/timer.hpp"
+#include "field_flags.hpp"
 #include "paint_cmd.hpp"
 #include "penumbra/penumbra.hpp"
 #include "quality_cmd.hpp"
@@ -138,7 +139,7 @@ int run_render(const RenderArgs& a) {
   // Refuse unwritable outputs before spending time on the render.
   for (const std::string& out : a.outputs)
     if (penumbra::Status s = penumbra::check_output(out); !s) {
-      std::cerr << "penumbra render: " << s.error().message << "\n";
+      std::cerr << "penumbra render: " << with_flags(s.error().message) << "\n";
       return kFailure;
     }
   penumbra::flatland::RenderOptions options = a.options;
@@ -158,20 +159,21 @@ int run_render(const RenderArgs& a) {
           ? penumbra::Expected<penumbra::flatland::SceneDesc>(penumbra::flatland::default_scene())
           : penumbra::flatland::load_scene(a.scene);
   if (!desc) {
-    std::cerr << "penumbra render: " << desc.error().message << "\n";
+    std::cerr << "penumbra render: " << with_flags(desc.error().message) << "\n";
     return kFailure;
   }
   // Option values that cannot work for this grid are usage errors.
   if (penumbra::Status s = penumbra::flatland::check_options(desc->width, desc->height, options);
       !s) {
-    std::cerr << "penumbra render: " << s.error().message << "\n";
+    std::cerr << "penumbra render: " << with_flags(s.error().message) << "\n";
     return kUsage;
   }
   // Refuse up front, before the grid itself is allocated.
   if (penumbra::Status s =
           penumbra::flatland::check_memory(desc->width, desc->height, options, true);
       !s) {
-    std::cerr << "penumbra render: " << desc->source << ": " << s.error().message << "\n";
+    std::cerr << "penumbra render: " << desc->source << ": " << with_flags(s.error().message)
+              << "\n";
     return kFailure;
   }
   // Rasterising runs on the same number of threads as the method.
@@ -180,7 +182,7 @@ int run_render(const RenderArgs& a) {
   penumbra::Expected<penumbra::flatland::Scene> scene =
       arena.execute([&] { return penumbra::flatland::build_scene(*desc); });
   if (!scene) {
-    std::cerr << "penumbra render: " << scene.error().message << "\n";
+    std::cerr << "penumbra render: " << with_flags(scene.error().message) << "\n";
     return kFailure;
   }
   const double raster_ms = raster_watch.ms();
@@ -198,7 +200,8 @@ int run_render(const RenderArgs& a) {
   std::signal(SIGINT, SIG_DFL);
   if (progress && options.method == penumbra::flatland::Method::pt) std::fprintf(stderr, "\n");
   if (!result) {
-    std::cerr << "penumbra render: " << desc->source << ": " << result.error().message << "\n";
+    std::cerr << "penumbra render: " << desc->source << ": " << with_flags(result.error().message)
+              << "\n";
     return kFailure;
   }
   penumbra::Stopwatch write_watch;
@@ -206,7 +209,7 @@ int run_render(const RenderArgs& a) {
   if (penumbra::Status s =
           penumbra::flatland::write_images(a.outputs, result->fluence, *scene, {a.exposure});
       !s) {
-    std::cerr << "penumbra render: " << s.error().message << "\n";
+    std::cerr << "penumbra render: " << with_flags(s.error().message) << "\n";
     return kFailure;
   }
   const double write_ms = write_watch.ms();

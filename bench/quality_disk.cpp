@@ -6,10 +6,10 @@
 //   build/bin/penumbra_quality docs/images > table.md
 #include <cmath>
 #include <cstdio>
-#include <numbers>
 #include <string>
 #include <vector>
 
+#include "core/math.hpp"
 #include "core/parallel.hpp"
 #include "flatland/trace.hpp"
 #include "io/image_io.hpp"
@@ -19,7 +19,6 @@ namespace {
 
 using namespace penumbra;
 using namespace penumbra::flatland;
-constexpr double kPi = std::numbers::pi;
 
 struct Disk {
   int n = 256;

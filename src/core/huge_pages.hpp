@@ -6,8 +6,13 @@
 
 #include <sys/mman.h>
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <cstdlib>
+#include <memory>
+#include <new>
+#include <type_traits>
 #include <vector>
 
 namespace penumbra {
@@ -27,5 +32,34 @@ void reserve_huge(std::vector<T>& v, std::size_t n) {
   v.reserve(n);
   advise_huge_pages(v.data(), n * sizeof(T));
 }
+
+// An uninitialised array that only grows (a solver's workspace keeps one per buffer, so its
+// steady state allocates nothing). Large ones are aligned to and
+// advised as 2 MiB pages: a first solve then takes 512 times fewer page faults (they cost more
+// than the arithmetic in a virtual machine), and the merges' strided columns fewer TLB misses.
+struct FreeDeleter {
+  void operator()(void* p) const { std::free(p); }
+};
+
+template <class T>
+struct HugeArray {
+  std::unique_ptr<T, FreeDeleter> p;
+  std::size_t n = 0;
+  T* ensure(std::size_t m) {
+    static_assert(std::is_trivially_default_constructible_v<T>);
+    if (n >= m) return p.get();
+    p.reset();
+    constexpr std::size_t kHuge = std::size_t(2) << 20;
+    const std::size_t bytes = std::max<std::size_t>(m * sizeof(T), 1);
+    const std::size_t align = bytes >= 2 * kHuge ? kHuge : 64;
+    void* mem = std::aligned_alloc(align, (bytes + align - 1) / align * align);
+    if (!mem) throw std::bad_alloc();
+    if (align == kHuge) madvise(mem, (bytes + align - 1) / align * align, MADV_HUGEPAGE);
+    p.reset(static_cast<T*>(mem));
+    n = m;
+    return p.get();
+  }
+  void release() { p.reset(), n = 0; }
+};
 
 }  // namespace penumbra

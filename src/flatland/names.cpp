@@ -1,18 +1,12 @@
 // Names of methods and options as they appear on the command line and in --json output.
+#include "flatland/method.hpp"
 #include "penumbra/flatland/render.hpp"
 
 namespace penumbra::flatland {
 
 const char* to_string(Method m) {
-  switch (m) {
-    case Method::rc:
-      return "rc";
-    case Method::pt:
-      return "pt";
-    case Method::hrc:
-      return "hrc";
-  }
-  return "?";
+  if (int(m) < 0 || std::size_t(m) >= method_table().size()) return "?";
+  return entry(m).name;
 }
 
 const char* to_string(MergeFix f) {

@@ -7,102 +7,24 @@
 #include <limits>
 #include <string>
 
+#include "core/math.hpp"
 #include "core/parallel.hpp"
 #include "core/timer.hpp"
+#include "flatland/gpu/method.hpp"
 #include "flatland/gpu/solver.hpp"
-#include "flatland/hrc/hrc.hpp"
 #include "flatland/medium.hpp"
-#include "flatland/pt/pt.hpp"
-#include "flatland/rc/rc.hpp"
+#include "flatland/method.hpp"
 #include "gpu/vulkan.hpp"
 
 namespace penumbra::flatland {
 
 Status check_options(int width, int height, const RenderOptions& o) {
-  auto bad = [](const std::string& what) { return Status(Error{what}); };
-  if (width < 1 || height < 1 || width > kMaxGridSide || height > kMaxGridSide)
-    return bad("grid: expected 1..16384 cells a side, found " + std::to_string(width) + "x" +
-               std::to_string(height));
-  if (o.bounces < 1 || o.bounces > 64)
-    return bad("bounces: expected 1..64, found " + std::to_string(o.bounces));
-  if (o.threads < 0) return bad("threads: expected >= 0, found " + std::to_string(o.threads));
-  if (o.device == Device::gpu) {
-    if (o.method == Method::pt)
-      return bad("device gpu: the path tracer runs on the CPU only (docs/GPU.md)");
-    if (o.method == Method::rc && o.rc.extend)
-      return bad("device gpu: interval extension runs on the CPU only; drop --extend");
-  }
-  if (o.method == Method::pt) {
-    const PtOptions& pt = o.pt;
-    if (pt.spp < 0) return bad("spp: expected >= 0, found " + std::to_string(pt.spp));
-    if (!(pt.seconds >= 0) || !std::isfinite(pt.seconds))
-      return bad("time: expected a number of seconds >= 0, found " + std::to_string(pt.seconds));
-    if (pt.spp == 0 && pt.seconds == 0) return bad("spp: 0 (no limit) needs a time limit (--time)");
-    return {};
-  }
-  if (o.method == Method::hrc) return {};
-  const RcOptions& rc = o.rc;
-  if (rc.probe_spacing < 1 || rc.probe_spacing > 64)
-    return bad("probe spacing: expected 1..64 cells, found " + std::to_string(rc.probe_spacing));
-  if (rc.directions < 1 || rc.directions > 64)
-    return bad("directions: expected 1..64, found " + std::to_string(rc.directions));
-  if (rc.branching != 2 && rc.branching != 4)
-    return bad("branching: expected 2 or 4, found " + std::to_string(rc.branching));
-  if (!(rc.interval > 0.0f) || !std::isfinite(rc.interval))
-    return bad("interval t0: expected a number > 0, found " + std::to_string(rc.interval));
-  if (rc.cascades < 0 || rc.cascades > 16)
-    return bad("cascades: expected 0 (automatic) or 1..16, found " + std::to_string(rc.cascades));
-  if (rc.extend) {
-    if (rc.fix == MergeFix::bilinear)
-      return bad(
-          "extend: interval extension builds each probe's own interval, which the bilinear "
-          "fix does not use; choose --fix none or nearest");
-    if (rc.preaverage) return bad("extend: cannot be combined with pre-averaging");
-    if (!(rc.extend_length >= 1.0f) || !std::isfinite(rc.extend_length))
-      return bad("extend length: expected a number >= 1, found " +
-                 std::to_string(rc.extend_length));
-  }
-  // The derived count grows as t0 shrinks; spacing s0 * 2^n and Q0 * b^n must stay sane.
-  const int count =
-      rc.cascades > 0 ? rc.cascades : rc::cascade_count(width, height, rc.interval, rc.branching);
-  if (count > 16)
-    return bad("interval t0: " + std::to_string(rc.interval) + " needs " + std::to_string(count) +
-               " cascades to reach the grid diagonal, more than 16; use a larger --interval");
-  const std::int64_t top = rc::top_directions(rc.directions, rc.branching, count - 1);
-  if (top > rc::kMaxDirections)
-    return bad("cascades: " + std::to_string(count) + " cascades give the top probes " +
-               std::to_string(top) + " directions, more than " +
-               std::to_string(rc::kMaxDirections) + "; use fewer cascades or directions");
-  for (const rc::Cascade& c : rc::plan_cascades(width, height, rc))
-    // Kernels index rows of (direction, probe row) with int.
-    if (std::int64_t(c.directions) * c.probes_y > std::numeric_limits<int>::max())
-      return bad("cascade " + std::to_string(c.n) + " is too large (" +
-                 std::to_string(c.directions) + " directions x " + std::to_string(c.probes_y) +
-                 " probe rows); use fewer directions or a larger --probe-spacing");
+  Expected<Plan> plan = make_plan(width, height, o);
+  if (!plan) return plan.error();
   return {};
 }
 
 namespace {
-
-std::uint64_t estimate(int width, int height, const RenderOptions& o,
-                       const std::vector<rc::Cascade>& plan) {
-  const std::uint64_t cells = std::uint64_t(width) * height;
-  // On the GPU the host holds a copy of what the device's scene holds, and the fluence.
-  if (o.device == Device::gpu) return cells * (7 + 3) * sizeof(float);
-  std::uint64_t bytes = cells * (sizeof(Cell) + sizeof(float));  // medium: emission and step
-  if (o.method == Method::hrc) {
-    bytes += hrc::working_bytes(width, height, o.hrc);
-    if (o.bounces > 1) bytes += cells * 3 * sizeof(float);  // the previous bounce's fluence
-    return bytes;
-  }
-  if (o.distance_field) bytes += distance_field_bytes(width, height);
-  if (o.blocks) bytes += blocks_bytes(width, height);
-  if (o.method == Method::pt) return bytes + pt::working_bytes(width, height, o.pt);
-  bytes += rc::cascade_bytes(plan, o.rc);                 // cascades
-  bytes += cells * 3 * sizeof(float);                     // fluence
-  if (o.bounces > 1) bytes += cells * 3 * sizeof(float);  // the previous bounce's fluence
-  return bytes;
-}
 
 std::string human_bytes(std::uint64_t b) {
   const char* unit[] = {"B", "KiB", "MiB", "GiB", "TiB"};
@@ -116,10 +38,27 @@ std::string human_bytes(std::uint64_t b) {
 
 }  // namespace
 
+namespace {
+
+// Refuses a plan whose memory need exceeds its options.max_memory: the method's working memory,
+// plus the rasterised scene when `with_scene` (a program that has not built the scene yet).
+Status check_plan_memory(const Plan& plan, bool with_scene) {
+  const RenderOptions& o = plan.options;
+  const std::uint64_t need =
+      working_bytes(plan) + (with_scene ? scene_bytes(plan.width, plan.height) : 0);
+  if (need <= o.max_memory) return {};
+  return Error{"a " + std::to_string(plan.width) + "x" + std::to_string(plan.height) +
+               " grid needs " + human_bytes(need) + " of " +
+               (with_scene ? "scene and working memory" : "working memory") + ", more than the " +
+               human_bytes(o.max_memory) + " limit (raise `max_memory`" +
+               entry(o.method).memory_advice(o) + ")"};
+}
+
+}  // namespace
+
 std::uint64_t estimate_memory(int width, int height, const RenderOptions& options) {
-  if (!check_options(width, height, options)) return ~std::uint64_t(0);
-  if (options.method != Method::rc) return estimate(width, height, options, {});
-  return estimate(width, height, options, rc::plan_cascades(width, height, options.rc));
+  Expected<Plan> plan = make_plan(width, height, options);
+  return plan ? working_bytes(*plan) : ~std::uint64_t(0);
 }
 
 std::uint64_t estimate_memory(const Scene& scene, const RenderOptions& options) {
@@ -127,17 +66,13 @@ std::uint64_t estimate_memory(const Scene& scene, const RenderOptions& options) 
 }
 
 Status check_memory(int width, int height, const RenderOptions& options, bool with_scene) {
-  const std::uint64_t need =
-      estimate_memory(width, height, options) + (with_scene ? scene_bytes(width, height) : 0);
-  if (need <= options.max_memory) return {};
-  return Error{"a " + std::to_string(width) + "x" + std::to_string(height) + " grid needs " +
-               human_bytes(need) + " of " +
-               (with_scene ? "scene and working memory" : "working memory") + ", more than the " +
-               human_bytes(options.max_memory) + " limit (raise it with --max-memory" +
-               (options.method == Method::rc ? ", or use a larger --probe-spacing)"
-                : options.method == Method::hrc && options.hrc.storage == Storage::f32
-                    ? ", or use --storage f16)"
-                    : ")")};
+  Expected<Plan> plan = make_plan(width, height, options);
+  if (!plan) {  // as estimate_memory: invalid options need more than any limit
+    if (~std::uint64_t(0) <= options.max_memory) return {};
+    return Error{"a " + std::to_string(width) + "x" + std::to_string(height) +
+                 " grid: " + plan.error().message};
+  }
+  return check_plan_memory(*plan, with_scene);
 }
 
 std::uint64_t scene_bytes(int width, int height) {
@@ -168,9 +103,8 @@ Expected<gpu::Solver*> gpu_for(const RenderOptions& o, Renderer::State& state) {
     }
     return state.gpu.get();
   }
-  RenderOptions as_gpu = o;
-  as_gpu.device = Device::gpu;
-  if (!check_options(1, 1, as_gpu)) return static_cast<gpu::Solver*>(nullptr);  // not ported
+  const MethodEntry& m = entry(o.method);
+  if (!m.gpu || !gpu::supports(*m.gpu, o)) return static_cast<gpu::Solver*>(nullptr);  // not ported
   if (!state.gpu && !state.gpu_tried) {
     state.gpu_tried = true;
     Expected<std::shared_ptr<gpu::Context>> c = gpu::Context::create(false);
@@ -189,34 +123,30 @@ Expected<RenderResult> render_unchecked(const Scene& scene, const RenderOptions&
   if (scene.width < 1 || scene.height < 1 || scene.cells() != scene.opacity.size() ||
       scene.emission.size() != 3 * scene.cells() || scene.albedo.size() != 3 * scene.cells())
     return Error{"scene: inconsistent grid (build it with build_scene)"};
-  if (Status s = check_options(scene.width, scene.height, options); !s) return s.error();
+  // Everything derived from the grid and options, once.
+  Expected<Plan> planned = make_plan(scene.width, scene.height, options);
+  if (!planned) return planned.error();
+  Plan& plan = *planned;
+  const MethodEntry& method = entry(options.method);
+  if (Status s = check_plan_memory(plan, false); !s) return s.error();
+  if (method.check_scene)
+    if (Status s = method.check_scene(scene, options); !s) return s.error();
   RenderResult result;
-  result.options = options;
-  std::vector<rc::Cascade> plan;
-  if (options.method == Method::rc) {
-    plan = rc::plan_cascades(scene.width, scene.height, options.rc);
-    result.options.rc.cascades = int(plan.size());
-  }
-  if (Status s = check_memory(scene.width, scene.height, options, false); !s) return s.error();
-  if (options.method == Method::hrc)
-    if (Status s = hrc::check_scene(scene, options.hrc); !s) return s.error();
-  result.memory_bytes = estimate(scene.width, scene.height, options, plan);
+  result.options = plan.options;
+  result.memory_bytes = working_bytes(plan);
 
   Expected<gpu::Solver*> device = gpu_for(options, state);
   if (!device) return device.error();
 
-  rc::fill_directions(plan);
+  rc::fill_directions(plan.cascades);
   auto finish = [&] {  // totals of time and traced intervals
     for (const StageTime& s : result.stages) result.time_ms += s.ms;
-    if (options.method == Method::rc)
-      result.intervals = rc::traced_intervals(plan, options.rc) * std::uint64_t(options.bounces);
-    if (options.method == Method::hrc)
-      result.intervals =
-          hrc::traced_intervals(scene.width, scene.height) * std::uint64_t(options.bounces);
+    if (method.intervals)
+      result.intervals = method.intervals(plan) * std::uint64_t(options.bounces);
   };
   if (*device) {  // the whole render on the GPU: the stages are its pass times
     gpu::Solver& solver = **device;
-    Expected<std::vector<float>> f = solver.render(scene, options, plan, result.stages);
+    Expected<std::vector<float>> f = solver.render(scene, plan, result.stages);
     if (f) {
       result.fluence = ImageRgb(scene.width, scene.height, std::move(*f));
       result.device = solver.context().info().name;
@@ -236,37 +166,22 @@ Expected<RenderResult> render_unchecked(const Scene& scene, const RenderOptions&
     Medium& medium = state.medium;
     fill_medium(scene, medium);
     result.stages.push_back({"medium", watch.ms()});
-    // HRC traces only rays a few cells long: empty-space skipping would not pay for itself.
-    const bool skipping = options.method != Method::hrc;
-    if (skipping && options.distance_field) {
+    if (method.skips_empty_space && options.distance_field) {
       watch.restart();
       build_distance_field(medium);
       result.stages.push_back({"distance field", watch.ms()});
     }
-    if (skipping && options.blocks) {
+    if (method.skips_empty_space && options.blocks) {
       watch.restart();
       build_blocks(medium);
       result.stages.push_back({"blocks", watch.ms()});
     }
-    if (options.method == Method::pt) {
-      std::vector<float> f = pt::solve(medium, scene.albedo, scene.environment, options, result);
-      result.fluence = ImageRgb(scene.width, scene.height, std::move(f));
-      return;
-    }
-
-    hrc::Workspace& workspace = state.workspace;
-    auto solve = [&](std::vector<StageTime>& stages) {
-      if (options.method == Method::rc)
-        return rc::solve(medium, scene.environment, plan, options.rc, stages);
-      std::vector<float> f;
-      hrc::solve(medium, scene.environment, options.hrc, workspace, f, stages);
-      return f;
-    };
-    std::vector<float> f = solve(result.stages);
+    CpuSolve solve{scene, plan, medium, state.workspace, result};
+    std::vector<float> f = method.solve(solve, result.stages);
     // More bounces: diffuse re-emission albedo * F / 2pi added to the scene's own emission.
-    for (int bounce = 2; bounce <= options.bounces; ++bounce) {
+    for (int bounce = 2; !method.bounces_itself && bounce <= options.bounces; ++bounce) {
       watch.restart();
-      const float k = float(1.0 / (2.0 * 3.14159265358979323846));
+      const float k = float(1.0 / kTwoPi);
       parallel_for(scene.height, [&](int y) {
         for (int x = 0; x < scene.width; ++x) {
           const std::size_t i = scene.index(x, y);
@@ -280,7 +195,7 @@ Expected<RenderResult> render_unchecked(const Scene& scene, const RenderOptions&
       });
       result.stages.push_back({"bounce " + std::to_string(bounce) + " emission", watch.ms()});
       std::vector<StageTime> inner;
-      f = solve(inner);
+      f = method.solve(solve, inner);
       for (StageTime& s : inner)
         result.stages.push_back({"bounce " + std::to_string(bounce) + " " + s.name, s.ms});
     }

@@ -1,9 +1,9 @@
 // Writing 2D results: linear PFM/EXR, and the display PNG of fluence with the scene's emitters.
 #include <cmath>
-#include <numbers>
 #include <string>
 #include <vector>
 
+#include "core/math.hpp"
 #include "core/parallel.hpp"
 #include "core/tone_map.hpp"
 #include "io/image_io.hpp"
@@ -16,7 +16,7 @@ namespace {
 std::vector<unsigned char> display_rgb8(const ImageRgb& fluence, const Scene* scene,
                                         const DisplayOptions& display) {
   const float gain = std::exp2(display.exposure);
-  const float inv_two_pi = 1.0f / (2.0f * std::numbers::pi_v<float>);
+  const float inv_two_pi = 1.0f / (2.0f * float(kPi));
   const std::size_t cells = std::size_t(fluence.width()) * fluence.height();
   std::vector<unsigned char> rgb(cells * 3);
   const float* f = fluence.data();

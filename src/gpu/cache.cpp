@@ -16,26 +16,28 @@ Expected<const Kernel*> Cache::kernel(const std::string& name, std::span<const s
   return &it->second;
 }
 
-Expected<Buffer*> Cache::buffer(const std::string& role, std::size_t bytes, Memory where,
-                                bool in_pieces) {
+Expected<Buffer*> Cache::buffer(Owner owner, const std::string& role, std::size_t bytes,
+                                Memory where, bool in_pieces) {
   bytes = std::max<std::size_t>(bytes, 4);
   auto it = buffers_.find(role);
-  if (it != buffers_.end() && it->second.buffer.bytes() == bytes && it->second.where == where)
+  if (it != buffers_.end() && it->second.buffer.bytes() == bytes && it->second.where == where) {
+    it->second.owner = owner;
     return &it->second.buffer;
+  }
   // The old buffer is freed before the new one is allocated: the two need not fit at once.
   if (it != buffers_.end()) buffers_.erase(it);
   Expected<Buffer> b = context_.buffer(bytes, where, in_pieces);
   if (!b) return b.error();
-  return &buffers_.emplace(role, Held{std::move(*b), where, {}}).first->second.buffer;
+  return &buffers_.emplace(role, Held{std::move(*b), owner, where, {}}).first->second.buffer;
 }
 
-Expected<Buffer*> Cache::table(Batch& batch, const std::string& role, const void* data,
+Expected<Buffer*> Cache::table(Batch& batch, Owner owner, const std::string& role, const void* data,
                                std::size_t bytes) {
-  Expected<Buffer*> device = buffer(role, bytes);
+  Expected<Buffer*> device = buffer(owner, role, bytes);
   if (!device) return device.error();
   std::vector<unsigned char>& held = buffers_.at(role).table;
   if (held.size() == bytes && std::memcmp(held.data(), data, bytes) == 0) return *device;
-  Expected<Buffer*> staging = buffer(role + " staging", bytes, Memory::host);
+  Expected<Buffer*> staging = buffer(owner, role + " staging", bytes, Memory::host);
   if (!staging) return staging.error();
   std::memcpy((*staging)->data(), data, bytes);
   batch.copy(**staging, 0, **device, 0, bytes);
@@ -45,10 +47,6 @@ Expected<Buffer*> Cache::table(Batch& batch, const std::string& role, const void
   return *device;
 }
 
-void Cache::release(const std::string& role) {
-  buffers_.erase(role);
-}
-
 std::uint64_t Cache::allocated(Memory where) const {
   std::uint64_t bytes = 0;
   for (const auto& [role, held] : buffers_)
@@ -56,10 +54,9 @@ std::uint64_t Cache::allocated(Memory where) const {
   return bytes;
 }
 
-void Cache::release_except(std::span<const std::string> keep) {
+void Cache::release_except(std::span<const Owner> keep) {
   std::erase_if(buffers_, [&](const auto& entry) {
-    return std::none_of(keep.begin(), keep.end(),
-                        [&](const std::string& k) { return entry.first.starts_with(k); });
+    return std::find(keep.begin(), keep.end(), entry.second.owner) == keep.end();
   });
 }
 

@@ -381,7 +381,7 @@ Expected<Buffer> Context::buffer(std::size_t bytes, Memory where, bool in_pieces
   if (bytes > info_.max_buffer_bytes && !in_pieces)
     return Error{"Vulkan: a buffer of " + std::to_string(bytes >> 20) + " MiB is larger than " +
                  info_.name + " can bind (" + std::to_string(info_.max_buffer_bytes >> 20) +
-                 " MiB); use a smaller grid or --device cpu"};
+                 " MiB); use a smaller grid or `device` cpu"};
   if (bytes > heap)
     return Error{"Vulkan: a buffer of " + std::to_string(bytes >> 20) + " MiB is larger than " +
                  info_.name + "'s memory heap (" + std::to_string(heap >> 20) + " MiB)"};

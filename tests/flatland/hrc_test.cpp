@@ -1,22 +1,21 @@
 // Holographic radiance cascades (seed 004) against closed forms, the path tracer and radiance
 // cascades, and against itself (rotations, threads, storage).
+#include "flatland/hrc/hrc.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#include <numbers>
 #include <vector>
 
-#include "flatland/hrc/hrc.hpp"
+#include "core/math.hpp"
 #include "penumbra/flatland/render.hpp"
 #include "penumbra/flatland/scene.hpp"
 #include "test_support.hpp"
 
 namespace penumbra::flatland {
 namespace {
-
-constexpr double kPi = std::numbers::pi;
 
 Scene build(const SceneDesc& d) {
   return testing::build_valid(d);

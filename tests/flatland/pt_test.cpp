@@ -1,22 +1,21 @@
 // The reference path tracer against closed forms and against itself: it is the ground truth the
 // other methods are measured by, so these tests check that it converges to the exact answer.
+#include "flatland/pt/pt.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
-#include <numbers>
 #include <vector>
 
+#include "core/math.hpp"
 #include "flatland/medium.hpp"
-#include "flatland/pt/pt.hpp"
 #include "penumbra/flatland/render.hpp"
 #include "penumbra/flatland/scene.hpp"
 #include "test_support.hpp"
 
 namespace penumbra::flatland {
 namespace {
-
-constexpr double kPi = std::numbers::pi;
 
 Scene build(const SceneDesc& d) {
   return testing::build_valid(d);

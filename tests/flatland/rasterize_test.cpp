@@ -3,15 +3,13 @@
 #include <tbb/task_arena.h>
 
 #include <cmath>
-#include <numbers>
 #include <vector>
 
+#include "core/math.hpp"
 #include "penumbra/flatland/scene.hpp"
 
 namespace penumbra::flatland {
 namespace {
-
-constexpr double kPi = std::numbers::pi;
 
 SceneDesc grid(int w, int h) {
   SceneDesc d;

@@ -4,17 +4,15 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <numbers>
 #include <vector>
 
+#include "core/math.hpp"
 #include "penumbra/flatland/render.hpp"
 #include "penumbra/flatland/scene.hpp"
 #include "test_support.hpp"
 
 namespace penumbra::flatland {
 namespace {
-
-constexpr double kPi = std::numbers::pi;
 
 Scene build(const SceneDesc& d) {
   return testing::build_valid(d);

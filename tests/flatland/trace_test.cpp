@@ -1,14 +1,16 @@
 // Tracing primitives: interval merge algebra, exact cell transport against closed forms, the
 // jump-flooding distance field, and the agreement of distance-field jumps with plain DDA.
+#include "flatland/trace.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <random>
 
+#include "core/math.hpp"
 #include "flatland/interval.hpp"
 #include "flatland/medium.hpp"
 #include "flatland/rc/cascade.hpp"
-#include "flatland/trace.hpp"
 #include "penumbra/flatland/scene.hpp"
 
 namespace penumbra::flatland {
@@ -72,7 +74,7 @@ TEST(FlatlandTrace, OneIntervalEqualsTwoMergedHalves) {
   std::mt19937 rng(2);
   std::uniform_real_distribution<float> u(0, 1);
   for (int i = 0; i < 2000; ++i) {
-    const float ox = 64 * u(rng), oy = 48 * u(rng), a = 6.2831853f * u(rng);
+    const float ox = 64 * u(rng), oy = 48 * u(rng), a = float(kTwoPi) * u(rng);
     const float dx = std::cos(a), dy = std::sin(a);
     const float t0 = 10 * u(rng), t2 = t0 + 60 * u(rng), t1 = t0 + (t2 - t0) * u(rng);
     const Interval whole = trace_interval(m, ox, oy, dx, dy, t0, t2);
@@ -161,8 +163,8 @@ TEST(FlatlandTrace, SkippingEmptySpaceGivesTheSameAnswerAsPlainDda) {
   std::mt19937 rng(5);
   std::uniform_real_distribution<float> u(0, 1);
   for (int i = 0; i < 20000; ++i) {
-    float ox = 96 * u(rng), oy = 80 * u(rng), a = 6.2831853f * u(rng);
-    if (i % 4 == 0) a = 1.5707963f * float(i % 16 / 4);               // axis-aligned rays
+    float ox = 96 * u(rng), oy = 80 * u(rng), a = float(kTwoPi) * u(rng);
+    if (i % 4 == 0) a = float(kPi / 2) * float(i % 16 / 4);           // axis-aligned rays
     if (i % 8 == 1) ox = std::floor(ox), oy = std::floor(oy) + 0.5f;  // starts on boundaries
     float dx = i % 4 == 0 ? std::round(std::cos(a)) : std::cos(a);
     float dy = i % 4 == 0 ? std::round(std::sin(a)) : std::sin(a);
@@ -232,7 +234,7 @@ TEST(FlatlandTrace, CascadeGeometry) {
   for (int b : {2, 4}) {
     float dx, dy;
     rc::ray_direction(0, 4, dx, dy);
-    EXPECT_NEAR(std::atan2(dy, dx), 3.14159265 / 4, 1e-6);
+    EXPECT_NEAR(std::atan2(dy, dx), kPi / 4, 1e-6);
     for (int k = 0; k < 8; ++k) {
       double mean = 0;
       for (int c = 0; c < b; ++c) {

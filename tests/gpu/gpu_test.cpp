@@ -14,6 +14,7 @@
 #include "flatland/gpu/solver.hpp"
 #include "flatland/hrc/hrc.hpp"
 #include "flatland/medium.hpp"
+#include "flatland/method.hpp"
 #include "flatland/rc/cascade.hpp"
 #include "gpu/vulkan.hpp"
 #include "penumbra/flatland/render.hpp"
@@ -24,6 +25,15 @@ namespace {
 
 using namespace penumbra;
 using namespace penumbra::flatland;
+
+// The plan render() would make, for calling the GPU solver directly (RC's directions filled).
+Plan plan_of(int w, int h, const RenderOptions& o, bool fill = true) {
+  Expected<Plan> p = make_plan(w, h, o);
+  EXPECT_TRUE(p.ok()) << (p.ok() ? "" : p.error().message);
+  if (!p.ok()) return {};
+  if (fill) rc::fill_directions(p->cascades);
+  return *p;
+}
 
 std::shared_ptr<penumbra::gpu::Context> context() {
   Expected<std::shared_ptr<penumbra::gpu::Context>> c = penumbra::gpu::Context::create(true);
@@ -243,7 +253,7 @@ TEST(Gpu, HrcSolveMatchesTheCpu) {
     ro.hrc = o;
     std::vector<StageTime> passes;
     flatland::gpu::Solver solver(c);
-    Expected<std::vector<float>> gpu = solver.render(s, ro, {}, passes);
+    Expected<std::vector<float>> gpu = solver.render(s, plan_of(s.width, s.height, ro), passes);
     ASSERT_TRUE(gpu.ok()) << gpu.error().message;
     ASSERT_EQ(gpu->size(), cpu.size());
     double err = 0, ref = 0;
@@ -480,16 +490,11 @@ TEST(Gpu, DeviceMemoryIsWhatTheEstimateSays) {
   add("hrc, no blur", [](RenderOptions& o) { o.method = Method::hrc, o.hrc.cross_blur = false; });
   add("rc, plain DDA", [](RenderOptions& o) { o.method = Method::rc, o.distance_field = false; });
   for (const Case& k : cases) {
-    std::vector<rc::Cascade> plan;
-    if (k.o.method == Method::rc) {
-      plan = rc::plan_cascades(s.width, s.height, k.o.rc);
-      rc::fill_directions(plan);
-    }
+    const Plan plan = plan_of(s.width, s.height, k.o);
     std::vector<StageTime> stages;
-    Expected<std::vector<float>> f = solver.render(s, k.o, plan, stages);
+    Expected<std::vector<float>> f = solver.render(s, plan, stages);
     ASSERT_TRUE(f.ok()) << k.name << ": " << f.error().message;
-    const std::uint64_t estimate =
-        flatland::gpu::Solver::device_bytes(s.width, s.height, k.o, plan);
+    const std::uint64_t estimate = flatland::gpu::Solver::device_bytes(plan);
     const std::uint64_t held = solver.allocated_bytes();
     EXPECT_EQ(held, estimate) << k.name;
   }
@@ -515,15 +520,14 @@ TEST(Gpu, LargeCascadesAreMergedInSlabs) {
       o.rc.fix = fix;
       o.rc.directions = k.directions;
       o.rc.branching = k.branching;
-      std::vector<rc::Cascade> plan = rc::plan_cascades(s.width, s.height, o.rc);
-      rc::fill_directions(plan);
+      const Plan plan = plan_of(s.width, s.height, o);
       const std::uint64_t direction = std::uint64_t(k.w) * k.h * 16;  // of cascade 0
       const std::uint64_t align = std::max<std::uint64_t>(k.alignment, c->info().offset_alignment);
       flatland::gpu::Solver whole(c), slabs(c);
       slabs.limit_binding(2 * direction + align, k.alignment);  // two directions of cascade 0
       std::vector<StageTime> stages;
-      Expected<std::vector<float>> a = whole.render(s, o, plan, stages);
-      Expected<std::vector<float>> b = slabs.render(s, o, plan, stages);
+      Expected<std::vector<float>> a = whole.render(s, plan, stages);
+      Expected<std::vector<float>> b = slabs.render(s, plan, stages);
       ASSERT_TRUE(a.ok()) << a.error().message;
       ASSERT_TRUE(b.ok()) << b.error().message;
       double err = 0, ref = 0;
@@ -534,7 +538,7 @@ TEST(Gpu, LargeCascadesAreMergedInSlabs) {
       EXPECT_LT(std::sqrt(err / ref), 1e-6) << k.w << "x" << k.h << " " << to_string(fix);
       EXPECT_NE(*a, *b) << "the slabs were not used";  // the fluence's sums differ in order
       slabs.limit_binding(direction / 2);              // not even one direction: refused, not wrong
-      Expected<std::vector<float>> none = slabs.render(s, o, plan, stages);
+      Expected<std::vector<float>> none = slabs.render(s, plan, stages);
       ASSERT_FALSE(none.ok());
       EXPECT_NE(none.error().message.find("one binding"), std::string::npos)
           << none.error().message;
@@ -551,19 +555,18 @@ TEST(Gpu, FailedRenderLeavesNoStaleState) {
   RenderOptions o;
   o.method = Method::rc;
   o.device = Device::gpu;
-  std::vector<rc::Cascade> plan = rc::plan_cascades(s.width, s.height, o.rc);
-  rc::fill_directions(plan);
+  const Plan plan = plan_of(s.width, s.height, o);
   flatland::gpu::Solver kept(c);
   std::vector<StageTime> stages;
-  ASSERT_TRUE(kept.render(s, o, plan, stages).ok());
+  ASSERT_TRUE(kept.render(s, plan, stages).ok());
   s.opacity[s.index(30, 20)] = 1;  // an edit: its row is recorded for upload, then the render fails
   kept.limit_binding(1024);
-  ASSERT_FALSE(kept.render(s, o, plan, stages).ok());
+  ASSERT_FALSE(kept.render(s, plan, stages).ok());
   kept.limit_binding(0);
-  Expected<std::vector<float>> after = kept.render(s, o, plan, stages);
+  Expected<std::vector<float>> after = kept.render(s, plan, stages);
   ASSERT_TRUE(after.ok()) << after.error().message;
   flatland::gpu::Solver fresh(c);
-  Expected<std::vector<float>> expected = fresh.render(s, o, plan, stages);
+  Expected<std::vector<float>> expected = fresh.render(s, plan, stages);
   ASSERT_TRUE(expected.ok()) << expected.error().message;
   EXPECT_EQ(*after, *expected);
   EXPECT_GE(kept.uploaded_bytes(), std::uint64_t(64) * 48 * 7 * sizeof(float));
@@ -578,17 +581,14 @@ TEST(Gpu, RefusesWorkLargerThanTheDevice) {
   RenderOptions o;
   o.method = Method::rc;
   o.device = Device::gpu;
-  const std::vector<rc::Cascade> plan = rc::plan_cascades(4096, 4096, o.rc);
-  Status st = flatland::gpu::Solver::check_memory(small, 4096, 4096, o, plan);
+  Status st = flatland::gpu::Solver::check_memory(small, plan_of(4096, 4096, o, false));
   ASSERT_FALSE(st.ok());
   EXPECT_NE(st.error().message.find("4096x4096 grid needs"), std::string::npos)
       << st.error().message;
   EXPECT_NE(st.error().message.find("a small GPU"), std::string::npos);
-  EXPECT_TRUE(
-      flatland::gpu::Solver::check_memory(small, 256, 256, o, rc::plan_cascades(256, 256, o.rc))
-          .ok());
+  EXPECT_TRUE(flatland::gpu::Solver::check_memory(small, plan_of(256, 256, o, false)).ok());
   o.method = Method::hrc;
-  EXPECT_FALSE(flatland::gpu::Solver::check_memory(small, 4096, 4096, o, {}).ok());
+  EXPECT_FALSE(flatland::gpu::Solver::check_memory(small, plan_of(4096, 4096, o, false)).ok());
 }
 
 }  // namespace

@@ -10,11 +10,11 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
-#include <numbers>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "core/math.hpp"
 #include "penumbra/flatland/io.hpp"
 #include "penumbra/flatland/scene.hpp"
 #include "penumbra/io.hpp"
@@ -26,7 +26,7 @@ namespace {
 namespace fs = std::filesystem;
 using Bytes = std::vector<unsigned char>;
 
-constexpr float kTwoPi = 2.0f * std::numbers::pi_v<float>;
+constexpr float kTwoPiF = float(kTwoPi);
 
 class ImageIo : public ::testing::Test {
  protected:
@@ -389,19 +389,19 @@ constexpr int kByteOf1 = 232;
 
 TEST_F(ImageIo, WriteImagePngShowsToneMappedMeanRadiance) {
   const std::string p = path("grey.png");
-  ASSERT_TRUE(write_image(p, uniform(3, 2, kTwoPi * 0.18f), empty_scene(3, 2)).ok());
+  ASSERT_TRUE(write_image(p, uniform(3, 2, kTwoPiF * 0.18f), empty_scene(3, 2)).ok());
   EXPECT_EQ(png_bytes(p), std::vector<int>(18, kByteOf018));
 
   // Half the light and one stop of exposure look the same.
   const std::string q = path("exposed.png");
   ASSERT_TRUE(
-      write_image(q, uniform(3, 2, kTwoPi * 0.09f), empty_scene(3, 2), {.exposure = 1}).ok());
+      write_image(q, uniform(3, 2, kTwoPiF * 0.09f), empty_scene(3, 2), {.exposure = 1}).ok());
   EXPECT_EQ(png_bytes(q), std::vector<int>(18, kByteOf018));
 }
 
 TEST_F(ImageIo, WriteImagePngRowZeroIsTop) {
   ImageRgb f(1, 2);
-  f.set(0, 0, {kTwoPi, kTwoPi, kTwoPi});  // mean radiance 1
+  f.set(0, 0, {kTwoPiF, kTwoPiF, kTwoPiF});  // mean radiance 1
   f.set(0, 1, {0, 0, 0});
   const std::string p = path("rows.png");
   ASSERT_TRUE(write_image(p, f, empty_scene(1, 2)).ok());
@@ -417,8 +417,8 @@ TEST_F(ImageIo, WriteImagePngCompositesEmittersAndLitWalls) {
   // Cell 1: opaque wall, albedo 0.5, lit by mean radiance 0.36: reflects 0.18.
   s.opacity[1] = 1;
   s.albedo[3] = s.albedo[4] = s.albedo[5] = 0.5f;
-  ImageRgb f = uniform(3, 1, kTwoPi * 0.18f);
-  f.set(1, 0, {kTwoPi * 0.36f, kTwoPi * 0.36f, kTwoPi * 0.36f});
+  ImageRgb f = uniform(3, 1, kTwoPiF * 0.18f);
+  f.set(1, 0, {kTwoPiF * 0.36f, kTwoPiF * 0.36f, kTwoPiF * 0.36f});
   const std::string p = path("emit.png");
   ASSERT_TRUE(write_image(p, f, s).ok());
   EXPECT_EQ(png_bytes(p), (std::vector<int>{kByteOf1, 0, kByteOf018,                //

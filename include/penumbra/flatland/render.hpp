@@ -161,6 +161,16 @@ class Renderer {
   std::unique_ptr<State> state_;
 };
 
+// A method as the command line lists it: its name, a line of help, and whether it has a GPU port.
+struct MethodInfo {
+  Method method;
+  const char* name;
+  const char* summary;
+  bool gpu;
+};
+// Every method, in the order of the Method enum (the dispatcher's table, docs/ARCHITECTURE.md).
+std::vector<MethodInfo> methods();
+
 const char* to_string(Method m);
 const char* to_string(MergeFix f);
 const char* to_string(Sampler s);

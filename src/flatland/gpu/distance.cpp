@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cstdint>
 
+#include "flatland/gpu/owners.hpp"
 #include "flatland/gpu/shaders.hpp"
 
 namespace penumbra::flatland::gpu {
@@ -20,9 +21,9 @@ Expected<Buffer*> record_seeds(Cache& cache, Batch& batch, int w, int h, Buffer&
   Expected<const Kernel*> pass =
       cache.kernel("jfa_pass", shaders::jfa_pass(), 2, 3 * sizeof(std::int32_t));
   if (!pass) return pass.error();
-  Expected<Buffer*> a = cache.buffer("jfa seeds a", n * sizeof(std::int32_t));
+  Expected<Buffer*> a = cache.buffer(kJumps, "jfa seeds a", n * sizeof(std::int32_t));
   if (!a) return a.error();
-  Expected<Buffer*> b = cache.buffer("jfa seeds b", n * sizeof(std::int32_t));
+  Expected<Buffer*> b = cache.buffer(kJumps, "jfa seeds b", n * sizeof(std::int32_t));
   if (!b) return b.error();
   const std::uint32_t gx = (std::uint32_t(w) + 15) / 16, gy = (std::uint32_t(h) + 15) / 16;
   Buffer* seeding[] = {&step, *a};
@@ -51,9 +52,9 @@ Expected<std::vector<float>> jump_flood_distance(
   Expected<const Kernel*> finish =
       cache.kernel("jfa_distance", shaders::jfa_distance(), 2, 2 * sizeof(std::int32_t));
   if (!finish) return finish.error();
-  Expected<Buffer*> step = cache.buffer("step", n * sizeof(float), Memory::host);
+  Expected<Buffer*> step = cache.buffer(kScratch, "step", n * sizeof(float), Memory::host);
   if (!step) return step.error();
-  Expected<Buffer*> out = cache.buffer("distance", n * sizeof(float), Memory::host);
+  Expected<Buffer*> out = cache.buffer(kScratch, "distance", n * sizeof(float), Memory::host);
   if (!out) return out.error();
   std::copy(m.step.begin(), m.step.end(), (*step)->as<float>());
   Expected<Batch> batch = c.batch(std::uint32_t(jump_flood_steps(w, h).size() + 2));

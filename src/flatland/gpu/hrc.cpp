@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdint>
 
+#include "flatland/gpu/owners.hpp"
 #include "flatland/gpu/shaders.hpp"
 #include "flatland/hrc/hrc.hpp"
 
@@ -40,11 +41,11 @@ Expected<std::vector<float>> cross_blur(const Context& c, int width, int height,
     return Error{"cross blur: inputs do not match the " + std::to_string(width) + "x" +
                  std::to_string(height) + " grid"};
   Cache cache(c);
-  Expected<Buffer*> tau = cache.buffer("tau", n * sizeof(float), Memory::host);
+  Expected<Buffer*> tau = cache.buffer(kScratch, "tau", n * sizeof(float), Memory::host);
   if (!tau) return tau.error();
-  Expected<Buffer*> in = cache.buffer("in", 3 * n * sizeof(float), Memory::host);
+  Expected<Buffer*> in = cache.buffer(kScratch, "in", 3 * n * sizeof(float), Memory::host);
   if (!in) return in.error();
-  Expected<Buffer*> out = cache.buffer("out", 3 * n * sizeof(float), Memory::host);
+  Expected<Buffer*> out = cache.buffer(kScratch, "out", 3 * n * sizeof(float), Memory::host);
   if (!out) return out.error();
   std::copy(tau_half.begin(), tau_half.end(), (*tau)->as<float>());
   std::copy(fluence.begin(), fluence.end(), (*in)->as<float>());
@@ -87,8 +88,8 @@ Status record_hrc(Cache& cache, Batch& batch, int W, int H, Buffer& step, Buffer
                   const Rgb& env, const HrcOptions& o, Buffer& fluence_out) {
   const bool f16 = o.storage == Storage::f16;
   if (f16 && !cache.context().info().storage_f16)
-    return Error{"device gpu: " + cache.context().info().name +
-                 " cannot store 16-bit floats (storageBuffer16BitAccess); drop --storage f16"};
+    return Error{"`device` gpu: " + cache.context().info().name +
+                 " cannot store 16-bit floats (storageBuffer16BitAccess); drop `hrc.storage` f16"};
   const std::size_t value = f16 ? 2 : 4;  // bytes of one stored T or R value
   const int pad = hrc::kPad;
   const std::uint32_t cells = std::uint32_t(std::size_t(W) * H);
@@ -120,7 +121,7 @@ Status record_hrc(Cache& cache, Batch& batch, int W, int H, Buffer& step, Buffer
     k[i] = *kernel;
   }
   auto make = [&](const std::string& role, std::size_t values, std::size_t bytes = 4) {
-    return cache.buffer("hrc " + role, std::max<std::size_t>(values, 1) * bytes);
+    return cache.buffer(kHrc, "hrc " + role, std::max<std::size_t>(values, 1) * bytes);
   };
   Expected<Buffer*> world = make("world", 6 * std::size_t(cells)),
                     view = make("view", 6 * view_cells), r0 = make("r0", 3 * r_size, value),
@@ -129,7 +130,7 @@ Status record_hrc(Cache& cache, Batch& batch, int W, int H, Buffer& step, Buffer
     if (!*b) return b->error();
   Buffer* fluence = &fluence_out;
   if (o.cross_blur) {  // the gather writes a buffer of its own, the blur writes fluence_out
-    Expected<Buffer*> f = make("fluence", 3 * std::size_t(cells));
+    Expected<Buffer*> f = cache.buffer(kHrcBlur, "hrc fluence", 3 * std::size_t(cells) * 4);
     if (!f) return f.error();
     fluence = *f;
   }
@@ -156,11 +157,11 @@ Status record_hrc(Cache& cache, Batch& batch, int W, int H, Buffer& step, Buffer
         cells_of.push_back(tc.squared ? 1 : 0);
       }
     }
-    Expected<Buffer*> pb = cache.table(batch, "hrc pattern " + std::to_string(n), cells_of.data(),
-                                       cells_of.size() * 4);
+    Expected<Buffer*> pb = cache.table(batch, kHrc, "hrc pattern " + std::to_string(n),
+                                       cells_of.data(), cells_of.size() * 4);
     if (!pb) return pb.error();
-    Expected<Buffer*> rb = cache.table(batch, "hrc range " + std::to_string(n), ranges_of.data(),
-                                       ranges_of.size() * 4);
+    Expected<Buffer*> rb = cache.table(batch, kHrc, "hrc range " + std::to_string(n),
+                                       ranges_of.data(), ranges_of.size() * 4);
     if (!rb) return rb.error();
     pattern[n] = *pb;
     range[n] = *rb;
@@ -169,7 +170,7 @@ Status record_hrc(Cache& cache, Batch& batch, int W, int H, Buffer& step, Buffer
   for (int lv = 0; lv <= levels; ++lv)
     for (int a = 0; a < (1 << lv); ++a)
       ang[std::size_t((1 << lv) - 1 + a)] = hrc::cone_angle(lv, a);
-  Expected<Buffer*> angles = cache.table(batch, "hrc angles", ang.data(), ang.size() * 4);
+  Expected<Buffer*> angles = cache.table(batch, kHrc, "hrc angles", ang.data(), ang.size() * 4);
   if (!angles) return angles.error();
 
   auto groups = [](std::size_t n, std::uint32_t size) {

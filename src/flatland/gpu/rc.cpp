@@ -4,6 +4,8 @@
 #include <cstdint>
 #include <string>
 
+#include "core/math.hpp"
+#include "flatland/gpu/owners.hpp"
 #include "flatland/gpu/shaders.hpp"
 
 namespace penumbra::flatland::gpu {
@@ -61,11 +63,13 @@ Status record_rc(Cache& cache, Batch& batch, int W, int H, Buffer& step, Buffer&
     }
     largest = std::max(largest, c.size());
   }
-  Expected<Buffer*> table = cache.table(batch, "rc directions", dirs.data(), dirs.size() * 4);
+  Expected<Buffer*> table = cache.table(batch, kRc, "rc directions", dirs.data(), dirs.size() * 4);
   if (!table) return table.error();
-  Expected<Buffer*> a = cache.buffer("rc cascade a", largest * kInterval, Memory::device, true);
+  Expected<Buffer*> a =
+      cache.buffer(kRc, "rc cascade a", largest * kInterval, Memory::device, true);
   if (!a) return a.error();
-  Expected<Buffer*> b = cache.buffer("rc cascade b", largest * kInterval, Memory::device, true);
+  Expected<Buffer*> b =
+      cache.buffer(kRc, "rc cascade b", largest * kInterval, Memory::device, true);
   if (!b) return b.error();
 
   // Directions per dispatch: a slab of cascade n and the upper directions it reads must each
@@ -155,9 +159,9 @@ Status record_rc(Cache& cache, Batch& batch, int W, int H, Buffer& step, Buffer&
   // Each cell's visibility weights (a vec4) and normalisation, kept by the first slab for the
   // others.
   const std::size_t cells = std::size_t(W) * H;
-  Expected<Buffer*> weights = cache.buffer("rc weights", cells * 4 * sizeof(float));
+  Expected<Buffer*> weights = cache.buffer(kRc, "rc weights", cells * 4 * sizeof(float));
   if (!weights) return weights.error();
-  Expected<Buffer*> norms = cache.buffer("rc norms", cells * sizeof(float));
+  Expected<Buffer*> norms = cache.buffer(kRc, "rc norms", cells * sizeof(float));
   if (!norms) return norms.error();
   batch.mark("fluence");
   for (int k0 = 0; k0 < c0.directions; k0 += slab0) {
@@ -174,7 +178,7 @@ Status record_rc(Cache& cache, Batch& batch, int W, int H, Buffer& step, Buffer&
            c0.probes_x,
            c0.probes_y,
            count,
-           float(rc::kTwoPi / c0.directions),
+           float(kTwoPi / c0.directions),
            k0,
            k0 == 0 ? 1 : 0,
            0,

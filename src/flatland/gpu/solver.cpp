@@ -8,8 +8,8 @@
 #include "core/huge_pages.hpp"
 #include "core/timer.hpp"
 #include "flatland/gpu/distance.hpp"
-#include "flatland/gpu/hrc.hpp"
-#include "flatland/gpu/rc.hpp"
+#include "flatland/gpu/method.hpp"
+#include "flatland/gpu/owners.hpp"
 #include "flatland/gpu/shaders.hpp"
 #include "gpu/cache.hpp"
 
@@ -44,20 +44,13 @@ Solver::Solver(std::shared_ptr<Context> context)
     : context_(std::move(context)), impl_(std::make_unique<Impl>(*context_)) {}
 Solver::~Solver() = default;
 
-std::uint64_t Solver::device_bytes(int W, int H, const RenderOptions& o,
-                                   const std::vector<rc::Cascade>& plan) {
-  const std::uint64_t cells = std::uint64_t(W) * H;
+std::uint64_t Solver::device_bytes(const Plan& plan) {
+  const std::uint64_t cells = plan.cells();
   // Device-local: the scene arrays, step and fluence (the staging copies and the read-back
   // buffer are host memory).
   std::uint64_t bytes = cells * sizeof(float) * (7 + 1 + 3);
-  if (o.bounces > 1) bytes += cells * 3 * sizeof(float);  // the bounce's emission
-  if (o.method == Method::rc) {
-    bytes += rc_device_bytes(W, H, plan);
-    if (o.distance_field) bytes += 2 * cells * sizeof(std::int32_t);  // seeds
-  } else {
-    bytes += hrc_device_bytes(W, H, o.hrc);
-  }
-  return bytes;
+  if (plan.options.bounces > 1) bytes += cells * 3 * sizeof(float);  // the bounce's emission
+  return bytes + entry(plan.options.method).gpu->device_bytes(plan);
 }
 
 void Solver::limit_binding(std::uint64_t bytes, std::uint64_t alignment) {
@@ -69,69 +62,55 @@ std::uint64_t Solver::allocated_bytes() const {
   return impl_->cache.allocated(Memory::device);
 }
 
-Status Solver::check_memory(const DeviceInfo& info, int W, int H, const RenderOptions& o,
-                            const std::vector<rc::Cascade>& plan) {
-  const std::string grid = std::to_string(W) + "x" + std::to_string(H);
-  const std::uint64_t cells = std::uint64_t(W) * H;
+Status Solver::check_memory(const DeviceInfo& info, const Plan& plan) {
+  const MethodPasses& m = *entry(plan.options.method).gpu;
+  const std::string grid = std::to_string(plan.width) + "x" + std::to_string(plan.height);
   // What must fit one binding (larger would fail halfway through recording), and what helps.
-  struct Binding {
-    std::uint64_t bytes;
-    const char* what;
-    const char* advice;
-  };
-  std::vector<Binding> bindings = {{cells * 3 * sizeof(float), "the fluence", ""}};
-  if (o.method == Method::rc) {
-    bindings.push_back({cells * 4 * sizeof(float), "the fluence's visibility weights", ""});
-    bindings.push_back({rc_smallest_binding(plan, o.rc.branching) + info.offset_alignment,
-                        "one direction of a cascade", ", a larger --probe-spacing"});
-  } else {
-    bindings.push_back({hrc_largest_buffer(W, H, o.hrc.storage), "HRC's largest buffer", ""});
-  }
+  std::vector<Binding> bindings = {{plan.cells() * 3 * sizeof(float), "the fluence", ""}};
+  m.bindings(plan, info, bindings);
   for (const Binding& b : bindings)
     if (info.max_buffer_bytes > 0 && b.bytes > info.max_buffer_bytes)
-      return Error{"device gpu: on a " + grid + " grid " + b.what + " needs " +
+      return Error{"`device` gpu: on a " + grid + " grid " + b.what + " needs " +
                    std::to_string(b.bytes >> 20) + " MiB in one binding, more than " + info.name +
                    " can bind (" + std::to_string(info.max_buffer_bytes >> 20) +
-                   " MiB); use a smaller grid" + b.advice + " or --device cpu"};
-  const std::uint64_t need = device_bytes(W, H, o, plan);
+                   " MiB); use a smaller grid" + b.advice + " or `device` cpu"};
+  const std::uint64_t need = device_bytes(plan);
   if (info.device_local_bytes == 0 || need <= info.device_local_bytes) return {};
-  return Error{"device gpu: a " + grid + " grid needs " + std::to_string(need >> 20) +
+  return Error{"`device` gpu: a " + grid + " grid needs " + std::to_string(need >> 20) +
                " MiB of GPU memory, more than " + info.name + " has (" +
                std::to_string(info.device_local_bytes >> 20) + " MiB); use a smaller grid" +
-               (o.method == Method::rc ? ", a larger --probe-spacing" : "") + " or --device cpu"};
+               m.grid_advice + " or `device` cpu"};
 }
 
-Expected<std::vector<float>> Solver::render(const Scene& scene, const RenderOptions& o,
-                                            const std::vector<rc::Cascade>& plan,
+Expected<std::vector<float>> Solver::render(const Scene& scene, const Plan& plan,
                                             std::vector<StageTime>& stages) {
   Stopwatch call;
   Impl& s = *impl_;
   Cache& cache = s.cache;
   cache.uploaded = 0;
   uploaded_ = 0;
+  const RenderOptions& o = plan.options;
   const int W = scene.width, H = scene.height;
   const std::size_t cells = std::size_t(W) * H;
-  if (o.method != Method::rc && o.method != Method::hrc)
+  const MethodPasses* method = entry(o.method).gpu;
+  if (!method)
     return Error{std::string("GPU: ") + to_string(o.method) + " does not run on the GPU"};
   const DeviceInfo& info = context_->info();
-  if (Status st = check_memory(info, W, H, o, plan); !st) return st.error();
+  if (Status st = check_memory(info, plan); !st) return st.error();
   // Buffers of other options (the other method, seeds without the distance field, a bounce's
-  // emission) are freed, so what is allocated is what check_memory counted; a new grid frees
-  // everything.
-  std::vector<std::string> keep;
+  // emission, the blur's input) are freed, so what is allocated is what check_memory counted; a
+  // new grid frees everything.
+  std::vector<Owner> keep;
   if (W == s.width && H == s.height) {
-    keep = {"opacity", "emission", "albedo", "step", "fluence", "read back"};
-    if (o.bounces > 1) keep.push_back("bounce emission");
-    if (o.method == Method::rc) keep.push_back("rc ");
-    if (o.method == Method::rc && o.distance_field) keep.push_back("jfa ");
-    if (o.method == Method::hrc) keep.push_back("hrc ");
+    keep.push_back(kSceneBuffers);
+    if (o.bounces > 1) keep.push_back(kBounce);
+    method->owners(o, keep);
   } else {
     for (std::vector<float>& h : s.held) h.clear();
     s.width = W, s.height = H;
     s.medium_valid = false;
   }
   cache.release_except(keep);
-  if (o.method == Method::hrc && !o.hrc.cross_blur) cache.release("hrc fluence");
   // What this render records is on the device only once its batches have run: until then (and
   // for good if it fails anywhere, recording included) nothing is trusted.
   struct Invalidate {
@@ -157,21 +136,23 @@ Expected<std::vector<float>> Solver::render(const Scene& scene, const RenderOpti
 
   Buffer* device[3];
   for (int a = 0; a < 3; ++a) {
-    Expected<Buffer*> b = cache.buffer(kArrays[a].role, cells * kArrays[a].floats * sizeof(float));
+    Expected<Buffer*> b =
+        cache.buffer(kSceneBuffers, kArrays[a].role, cells * kArrays[a].floats * sizeof(float));
     if (!b) return b.error();
     device[a] = *b;
   }
-  Expected<Buffer*> step = cache.buffer("step", cells * sizeof(float));
+  Expected<Buffer*> step = cache.buffer(kSceneBuffers, "step", cells * sizeof(float));
   if (!step) return step.error();
-  Expected<Buffer*> fluence = cache.buffer("fluence", cells * 3 * sizeof(float));
+  Expected<Buffer*> fluence = cache.buffer(kSceneBuffers, "fluence", cells * 3 * sizeof(float));
   if (!fluence) return fluence.error();
   Buffer* bounce_emission = device[1];  // unused with one bounce
   if (o.bounces > 1) {
-    Expected<Buffer*> b = cache.buffer("bounce emission", cells * 3 * sizeof(float));
+    Expected<Buffer*> b = cache.buffer(kBounce, "bounce emission", cells * 3 * sizeof(float));
     if (!b) return b.error();
     bounce_emission = *b;
   }
-  Expected<Buffer*> readback = cache.buffer("read back", cells * 3 * sizeof(float), Memory::host);
+  Expected<Buffer*> readback =
+      cache.buffer(kSceneBuffers, "read back", cells * 3 * sizeof(float), Memory::host);
   if (!readback) return readback.error();
 
   std::optional<Batch> batch;
@@ -206,8 +187,9 @@ Expected<std::vector<float>> Solver::render(const Scene& scene, const RenderOpti
     for (int a = 0; a < 3; ++a) {
       const std::vector<float>& now = scene.*kArrays[a].member;
       const std::size_t row = std::size_t(W) * kArrays[a].floats;
-      Expected<Buffer*> staging = cache.buffer(std::string(kArrays[a].role) + " staging",
-                                               now.size() * sizeof(float), Memory::host);
+      Expected<Buffer*> staging =
+          cache.buffer(kSceneBuffers, std::string(kArrays[a].role) + " staging",
+                       now.size() * sizeof(float), Memory::host);
       if (!staging) return staging.error();
       const std::size_t offset = first * row * sizeof(float);
       const std::size_t bytes = std::size_t(last - first + 1) * row * sizeof(float);
@@ -226,7 +208,7 @@ Expected<std::vector<float>> Solver::render(const Scene& scene, const RenderOpti
     // keeps it.
     if (opacity_changed) s.medium_valid = false;
   }
-  const bool jumps = o.method == Method::rc && o.distance_field;
+  const bool jumps = method->jumps(o);
   if (!s.medium_valid || s.medium_jumps != jumps) {
     Expected<const Kernel*> medium =
         cache.kernel("medium", shaders::medium(), 2, sizeof(std::uint32_t));
@@ -242,13 +224,11 @@ Expected<std::vector<float>> Solver::render(const Scene& scene, const RenderOpti
     s.medium_jumps = jumps;
   }
 
-  auto solve = [&](Batch& b, Buffer& emission) -> Status {
-    if (o.method == Method::rc)
-      return record_rc(cache, b, W, H, **step, emission, scene.environment, plan, o.rc, **fluence,
-                       s.binding_limit ? s.binding_limit : info.max_buffer_bytes, s.alignment);
-    return record_hrc(cache, b, W, H, **step, emission, scene.environment, o.hrc, **fluence);
-  };
-  if (Status st = solve(*batch, *device[1]); !st) return st.error();
+  GpuSolve solve{cache,      plan,
+                 **step,     scene.environment,
+                 **fluence,  s.binding_limit ? s.binding_limit : info.max_buffer_bytes,
+                 s.alignment};
+  if (Status st = method->record(solve, *batch, *device[1]); !st) return st.error();
   std::string prefix;  // of the batch being recorded
   for (int bounce = 2; bounce <= o.bounces; ++bounce) {
     if (Status st = run(*batch, prefix); !st) return st.error();
@@ -261,7 +241,7 @@ Expected<std::vector<float>> Solver::render(const Scene& scene, const RenderOpti
     batch->mark("emission");
     const Groups g = groups_1d(3 * cells, 256, info);
     batch->dispatch(**k, bind, &values, g.x, g.y);
-    if (Status st = solve(*batch, *bounce_emission); !st) return st.error();
+    if (Status st = method->record(solve, *batch, *bounce_emission); !st) return st.error();
   }
   if (o.bounces > 1) {  // the read back is not part of the last bounce
     if (Status st = run(*batch, prefix); !st) return st.error();

@@ -8,7 +8,7 @@
 #include <memory>
 #include <vector>
 
-#include "flatland/rc/cascade.hpp"
+#include "flatland/method.hpp"
 #include "gpu/vulkan.hpp"
 #include "penumbra/flatland/render.hpp"
 #include "penumbra/flatland/scene.hpp"
@@ -26,13 +26,12 @@ class Solver {
 
   const Context& context() const { return *context_; }
 
-  // Fluence at every cell centre (3 floats per cell), for options that passed check_options
-  // with Device::gpu; `plan` is RC's hierarchy with its directions filled (empty for HRC).
+  // Fluence at every cell centre (3 floats per cell) for a plan of a method with a GPU port
+  // (RC's hierarchy with its directions filled).
   // Appended to `stages`: the GPU time of each pass from timestamp queries (named "gpu ...",
   // later bounces "bounce n gpu ...", a method's passes summed where it repeats them), then
   // "setup and transfers" for the host's share of the call.
-  Expected<std::vector<float>> render(const Scene& scene, const RenderOptions& options,
-                                      const std::vector<rc::Cascade>& plan,
+  Expected<std::vector<float>> render(const Scene& scene, const Plan& plan,
                                       std::vector<StageTime>& stages);
 
   // Bytes the last render copied to the GPU: the whole scene the first time and after a change
@@ -48,11 +47,9 @@ class Solver {
   std::uint64_t allocated_bytes() const;
 
   // Device-local memory a render needs (all of it stays allocated between renders).
-  static std::uint64_t device_bytes(int width, int height, const RenderOptions& options,
-                                    const std::vector<rc::Cascade>& plan);
+  static std::uint64_t device_bytes(const Plan& plan);
   // Refuses, before anything is allocated, a render that needs more than the device's memory.
-  static Status check_memory(const DeviceInfo& device, int width, int height,
-                             const RenderOptions& options, const std::vector<rc::Cascade>& plan);
+  static Status check_memory(const DeviceInfo& device, const Plan& plan);
 
  private:
   struct Impl;

@@ -13,10 +13,6 @@
 // loops.
 #include "flatland/hrc/hrc.hpp"
 
-#include <Imath/half.h>
-#include <immintrin.h>
-#include <sys/mman.h>
-
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -28,7 +24,9 @@
 #include <type_traits>
 #include <utility>
 
+#include "core/half.hpp"
 #include "core/huge_pages.hpp"
+#include "core/math.hpp"
 #include "core/parallel.hpp"
 #include "core/timer.hpp"
 #include "flatland/interval.hpp"
@@ -37,15 +35,6 @@
 namespace penumbra::flatland::hrc {
 
 namespace {
-
-using Half = Imath::half;
-
-inline float load(float v) {
-  return v;
-}
-inline float load(Half v) {
-  return float(v);
-}
 
 struct Rad {
   float r, g, b;
@@ -83,38 +72,10 @@ std::uint64_t bytes_of(const Sizes& s, int width, int height, bool blur) {
   return b;
 }
 
-// An uninitialised array that only grows (see Workspace). Large ones are aligned to and
-// advised as 2 MiB pages: a first solve then takes 512 times fewer page faults (they cost more
-// than the arithmetic in a virtual machine), and the merges' strided columns fewer TLB misses.
-struct FreeDeleter {
-  void operator()(void* p) const { std::free(p); }
-};
-
-template <class T>
-struct Array {
-  std::unique_ptr<T, FreeDeleter> p;
-  std::size_t n = 0;
-  T* ensure(std::size_t m) {
-    static_assert(std::is_trivially_default_constructible_v<T>);
-    if (n >= m) return p.get();
-    p.reset();
-    constexpr std::size_t kHuge = std::size_t(2) << 20;
-    const std::size_t bytes = std::max<std::size_t>(m * sizeof(T), 1);
-    const std::size_t align = bytes >= 2 * kHuge ? kHuge : 64;
-    void* mem = std::aligned_alloc(align, (bytes + align - 1) / align * align);
-    if (!mem) throw std::bad_alloc();
-    if (align == kHuge) madvise(mem, (bytes + align - 1) / align * align, MADV_HUGEPAGE);
-    p.reset(static_cast<T*>(mem));
-    n = m;
-    return p.get();
-  }
-  void release() { p.reset(), n = 0; }
-};
-
 template <class S>
 struct Buffers {
-  std::vector<Array<S>> t;
-  Array<S> r[2];
+  std::vector<HugeArray<S>> t;
+  HugeArray<S> r[2];
   void release() {
     t.clear();
     r[0].release(), r[1].release();
@@ -284,44 +245,6 @@ inline void put_t(S* col, int y, int h, const Interval& v) {
 template <class S>
 inline void put_r(S* col, int y, int h, float r, float g, float b) {
   col[y] = S(r), col[h + y] = S(g), col[2 * h + y] = S(b);
-}
-
-// Half precision: conversions of runs of values, 8 at a time with F16C where the CPU has it
-// (every x86-64 CPU since 2012; the build targets the baseline, so it is chosen at run time),
-// otherwise through Imath's tables. Both round to nearest even: the same bits.
-[[gnu::target("f16c,avx")]] void to_float_f16c(const Half* s, float* d, int n) {
-  int i = 0;
-  for (; i + 8 <= n; i += 8)
-    _mm256_storeu_ps(d + i,
-                     _mm256_cvtph_ps(_mm_loadu_si128(reinterpret_cast<const __m128i*>(s + i))));
-  for (; i < n; ++i) d[i] = float(s[i]);
-}
-
-[[gnu::target("f16c,avx")]] void to_half_f16c(const float* s, Half* d, int n) {
-  int i = 0;
-  for (; i + 8 <= n; i += 8)
-    _mm_storeu_si128(reinterpret_cast<__m128i*>(d + i),
-                     _mm256_cvtps_ph(_mm256_loadu_ps(s + i), _MM_FROUND_TO_NEAREST_INT));
-  for (; i < n; ++i) d[i] = Half(s[i]);
-}
-
-// Initialised before main, so the CPU model is initialised here rather than assumed.
-// PENUMBRA_NO_F16C=1 forces the tables (the tests compare the two).
-const bool kHasF16c = [] {
-  __builtin_cpu_init();
-  const char* off = std::getenv("PENUMBRA_NO_F16C");
-  return !(off && *off && *off != '0') && __builtin_cpu_supports("f16c") &&
-         __builtin_cpu_supports("avx");
-}();
-
-void to_float(const Half* s, float* d, int n) {
-  if (kHasF16c) return to_float_f16c(s, d, n);
-  for (int i = 0; i < n; ++i) d[i] = float(s[i]);
-}
-
-void to_half(const float* s, Half* d, int n) {
-  if (kHasF16c) return to_half_f16c(s, d, n);
-  for (int i = 0; i < n; ++i) d[i] = Half(s[i]);
 }
 
 // A read of a merge: column `col` (null: outside the grid) at row shift dy, and the column to
@@ -661,7 +584,7 @@ inline Interval near_segment(const ViewPlanes& vp, std::size_t own) {
 
 template <class S>
 void solve_with(const Medium& m, const Rgb& env, const HrcOptions& o, Buffers<S>& buf,
-                Array<float>& planes, std::vector<float>& blurred, std::vector<float>& f,
+                HugeArray<float>& planes, std::vector<float>& blurred, std::vector<float>& f,
                 std::vector<StageTime>& stages) {
   const int W = m.width, H = m.height;
   const std::size_t cells = std::size_t(W) * H;
@@ -682,7 +605,7 @@ void solve_with(const Medium& m, const Rgb& env, const HrcOptions& o, Buffers<S>
   Stopwatch watch;
   build_world(m, world);
   double ms_view = watch.ms(), ms_trace = 0, ms_up = 0, ms_down = 0;
-  const float quarter = 1.57079633f;  // A_0: a quadrant, pi / 2
+  const float quarter = float(kPi / 2);  // A_0: a quadrant
   for (int d = 0; d < 4; ++d) {
     const View& view = sz.views[d & 1];
     watch.restart();
@@ -826,7 +749,7 @@ Status check_scene(const Scene& scene, const HrcOptions& options) {
   if (brightest <= kHalfMaxRadiance) return {};
   return Error{"storage f16: the brightest emission, " + std::to_string(brightest) +
                ", is more than half precision holds (" + std::to_string(kHalfMaxRadiance) +
-               "); use --storage f32"};
+               "); use `hrc.storage` f32"};
 }
 
 std::uint64_t traced_intervals(int width, int height) {
@@ -841,7 +764,7 @@ std::uint64_t traced_intervals(int width, int height) {
 struct Workspace::Impl {
   Buffers<float> f32;
   Buffers<Half> f16;
-  Array<float> planes;
+  HugeArray<float> planes;
   std::vector<float> blurred;
 };
 

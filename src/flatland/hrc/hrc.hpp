@@ -7,6 +7,7 @@
 #include <memory>
 #include <vector>
 
+#include "core/math.hpp"
 #include "flatland/medium.hpp"
 #include "penumbra/flatland/render.hpp"
 
@@ -34,7 +35,7 @@ std::uint64_t traced_intervals(int width, int height);
 
 // Largest emitted radiance half-precision storage holds without overflowing (the angular fluence
 // of a quadrant is at most pi/2 times the brightest radiance).
-inline constexpr float kHalfMaxRadiance = 65504.0f / 1.5707964f;
+inline constexpr float kHalfMaxRadiance = 65504.0f / float(kPi / 2);
 
 // Refuses a scene the storage cannot hold: in f16, emission above kHalfMaxRadiance (every stored
 // value is at most the brightest radiance times pi/2, and a bounce re-emits no more than the

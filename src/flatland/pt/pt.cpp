@@ -8,6 +8,7 @@
 #include <numeric>
 #include <string>
 
+#include "core/math.hpp"
 #include "core/parallel.hpp"
 #include "core/timer.hpp"
 #include "flatland/trace.hpp"
@@ -16,7 +17,6 @@ namespace penumbra::flatland::pt {
 
 namespace {
 
-constexpr double kTwoPi = 6.283185307179586476925;
 constexpr float kInf = std::numeric_limits<float>::infinity();
 
 // splitmix64's finaliser: a strong 64-bit mix, so hashed keys give independent-looking numbers.

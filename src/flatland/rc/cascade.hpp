@@ -5,11 +5,10 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/math.hpp"
 #include "penumbra/flatland/render.hpp"
 
 namespace penumbra::flatland::rc {
-
-inline constexpr double kTwoPi = 6.283185307179586;
 
 // Cascade n: probes every s0 * 2^n cells, Q0 * b^n directions, interval [t_n, t_{n+1}].
 struct Cascade {

@@ -12,6 +12,7 @@
 #include <type_traits>
 #include <variant>
 
+#include "core/math.hpp"
 #include "core/parallel.hpp"
 #include "penumbra/flatland/scene.hpp"
 
@@ -54,7 +55,7 @@ struct BoxGeom {
   explicit BoxGeom(const Box& b)
       : cx(b.center[0]), cy(b.center[1]), hw(b.size[0] / 2.0), hh(b.size[1] / 2.0) {
     // The box's local x axis is (cos, sin) in y-down coordinates: +x turning towards +y.
-    double a = double(b.angle) * (3.14159265358979323846 / 180.0);
+    double a = double(b.angle) * (kPi / 180.0);
     cs = std::cos(a);
     sn = std::sin(a);
   }

@@ -148,6 +148,8 @@ std::vector<SceneDesc> cases() {
       {Circle{{kMax, -kMax}, kMax}, {}},
       {Segment{{0.1f, -0.1f}, {1.0f / 3, 16777216.0f}, 1e-7f}, {}},
       {Box{{123456789.0f, -1e10f}, {1e-40f, 3.4e38f}, 1e-7f}, {}},
+      // Its shortest text, read as a double and rounded to float, is the next float up.
+      {Circle{{7.038531e-26f, -7.038531e-26f}, 7.038531e-26f}, {{7.038531e-26f, 0, 0}, 1, {}}},
       {Polygon{odd_points(500)}, {{1, 2, 3}, 0.25f, {0.5f, 0.5f, 0.5f}}},
   };
   out.push_back(odd);

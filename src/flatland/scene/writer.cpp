@@ -22,7 +22,13 @@ namespace {
 std::string num(float v) {
   if (v == 0 && std::signbit(v)) return "-0.0";
   char buf[32];
-  const auto r = std::to_chars(buf, buf + sizeof buf, v);
+  auto r = std::to_chars(buf, buf + sizeof buf, v);
+  // The reader parses a double and rounds it to float. Rounding twice moves one float pair
+  // (+-7.038531e-26, found by trying every float) a step away; the double's text does not.
+  double back = 0;
+  std::from_chars(buf, r.ptr, back);
+  if (std::bit_cast<std::uint32_t>(static_cast<float>(back)) != std::bit_cast<std::uint32_t>(v))
+    r = std::to_chars(buf, buf + sizeof buf, static_cast<double>(v));
   return std::string(buf, r.ptr);
 }
 

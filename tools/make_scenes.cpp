@@ -5,18 +5,13 @@
 // <random> distributions, and no transcendental functions (whose last bit may vary between
 // math libraries), so `git diff` after regenerating shows nothing.
 #include <algorithm>
-#include <array>
-#include <charconv>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
-#include <initializer_list>
 #include <string>
-#include <string_view>
 #include <system_error>
 #include <utility>
-#include <variant>
 #include <vector>
 
 #include "bench_scenes.hpp"
@@ -28,12 +23,7 @@ namespace penumbra::flatland {
 namespace {
 
 // ---------------------------------------------------------------------------------------------
-// Scene files
-
-struct LayerFiles {
-  std::string emission, opacity, albedo;  // relative to the scene file; empty: none
-  float emission_scale = 1;
-};
+// Scene files, written by the library's scene_json
 
 struct SceneFile {
   std::string name;  // file name without ".json"
@@ -41,99 +31,6 @@ struct SceneFile {
   SceneDesc desc;  // its `layers` are not written: `files` names them
   LayerFiles files;
 };
-
-// Shortest text that reads back as the same float, so a scene file loads to exactly the
-// SceneDesc it was written from.
-std::string num(float v) {
-  char buf[32];
-  const auto r = std::to_chars(buf, buf + sizeof buf, v);
-  return std::string(buf, r.ptr);
-}
-
-// Joins pieces of text. (GCC 12 warns falsely, -Wrestrict, on "literal" + std::string&&.)
-std::string cat(std::initializer_list<std::string_view> parts) {
-  std::string s;
-  for (std::string_view p : parts) s += p;
-  return s;
-}
-
-std::string point(std::array<float, 2> p) {
-  return cat({"[", num(p[0]), ", ", num(p[1]), "]"});
-}
-std::string rgb(Rgb c) {
-  return cat({"[", num(c.r), ", ", num(c.g), ", ", num(c.b), "]"});
-}
-bool is_black(Rgb c) {
-  return c.r == 0 && c.g == 0 && c.b == 0;
-}
-
-std::string geometry_json(const Circle& c) {
-  return cat(
-      {R"("type": "circle", "center": )", point(c.center), R"(, "radius": )", num(c.radius)});
-}
-std::string geometry_json(const Box& b) {
-  return cat({R"("type": "box", "center": )", point(b.center), R"(, "size": )", point(b.size),
-              b.angle != 0 ? R"(, "angle": )" : "", b.angle != 0 ? num(b.angle) : ""});
-}
-std::string geometry_json(const Segment& g) {
-  return cat({R"("type": "segment", "a": )", point(g.a), R"(, "b": )", point(g.b), R"(, "width": )",
-              num(g.width)});
-}
-std::string geometry_json(const Polygon& p) {
-  std::string s = R"("type": "polygon", "points": [)";
-  for (std::size_t i = 0; i < p.points.size(); ++i) s += cat({i ? ", " : "", point(p.points[i])});
-  return s + "]";
-}
-
-// One shape a line; material fields only where they differ from the format's defaults.
-std::string shape_json(const Shape& shape) {
-  std::string s = "{ ";
-  s += std::visit([](const auto& g) { return geometry_json(g); }, shape.geometry);
-  const Material& m = shape.material;
-  if (!is_black(m.emission)) s += cat({R"(, "emission": )", rgb(m.emission)});
-  if (m.opacity != 1) s += cat({R"(, "opacity": )", num(m.opacity)});
-  if (!is_black(m.albedo)) s += cat({R"(, "albedo": )", rgb(m.albedo)});
-  return s + " }";
-}
-
-// A JSON string; the texts here are plain, only quotes and backslashes need escaping.
-std::string json_string(std::string_view text) {
-  std::string s = "\"";
-  for (char ch : text) {
-    if (ch == '"' || ch == '\\') s += '\\';
-    s += ch;
-  }
-  return s + "\"";
-}
-
-std::string scene_json(const SceneFile& f) {
-  const SceneDesc& d = f.desc;
-  std::string s = cat({"{\n  \"penumbra\": 1,\n  \"description\": ", json_string(f.description),
-                       ",\n  \"width\": ", std::to_string(d.width), ",\n  \"height\": ",
-                       std::to_string(d.height), ",\n  \"environment\": ", rgb(d.environment)});
-  std::vector<std::string> layers;
-  if (!f.files.emission.empty())
-    layers.push_back(cat({R"("emission": )", json_string(f.files.emission)}));
-  if (!f.files.opacity.empty())
-    layers.push_back(cat({R"("opacity": )", json_string(f.files.opacity)}));
-  if (!f.files.albedo.empty())
-    layers.push_back(cat({R"("albedo": )", json_string(f.files.albedo)}));
-  if (f.files.emission_scale != 1)
-    layers.push_back(cat({R"("emission_scale": )", num(f.files.emission_scale)}));
-  if (!layers.empty()) {
-    s += ",\n  \"layers\": {\n";
-    for (std::size_t i = 0; i < layers.size(); ++i)
-      s += cat({"    ", layers[i], i + 1 < layers.size() ? ",\n" : "\n"});
-    s += "  }";
-  }
-  if (!d.shapes.empty()) {
-    s += ",\n  \"shapes\": [\n";
-    for (std::size_t i = 0; i < d.shapes.size(); ++i)
-      s += cat({"    ", shape_json(d.shapes[i]), i + 1 < d.shapes.size() ? ",\n" : "\n"});
-    s += "  ]";
-  }
-  return s + "\n}\n";
-}
 
 // A size x size scene file without layers or shapes yet.
 SceneFile square_scene(std::string name, int size, Rgb environment, std::string description) {
@@ -454,7 +351,8 @@ int run(const std::filesystem::path& dir) {
   std::vector<std::pair<std::string, std::string>> texts;
   std::vector<std::pair<std::string, ImageRgb8>> pictures;
   auto scene = [&](const SceneFile& f) {
-    texts.emplace_back((dir / (f.name + ".json")).string(), scene_json(f));
+    texts.emplace_back((dir / (f.name + ".json")).string(),
+                       scene_json(f.desc, f.files, f.description));
   };
   auto layer = [&](const std::string& name, const Plane& r, const Plane& g, const Plane& b) {
     pictures.emplace_back((dir / name).string(), picture(r, g, b));

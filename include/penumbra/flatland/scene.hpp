@@ -89,4 +89,22 @@ Expected<Scene> build_scene(const SceneDesc& desc);
 // The built-in scene that `penumbra render` draws when no file is given.
 SceneDesc default_scene();
 
+// The image layers a written scene file names: paths as written in the file, relative to it
+// (empty: none), and the `emission_scale` written beside them.
+struct LayerFiles {
+  std::string emission, opacity, albedo;
+  float emission_scale = 1;
+};
+
+// Writes `desc` as a version-1 document: one key a line, one shape a line, numbers as the
+// shortest text that reads back as the same float, so parse_scene(scene_json(d)) gives back d's
+// width, height, environment and shapes bit for bit (-0 is written "-0.0"). Material fields and
+// `angle` are written only where they differ from the format's defaults. `layers` is written
+// from `layers` alone: a SceneDesc's decoded images are not written (the caller writes the
+// image files). `description`, when not empty, is written as the ignored "description" key.
+// The caller validates `desc` first: a value validate() refuses (NaN, infinity) is not valid
+// JSON and is written as it is.
+std::string scene_json(const SceneDesc& desc, const LayerFiles& layers = {},
+                       const std::string& description = "");
+
 }  // namespace penumbra::flatland

@@ -355,18 +355,12 @@ Expected<std::vector<std::string>> Canvas::save_paths(const std::string& path) {
 Expected<io::StagedFile> Canvas::stage_save(const std::vector<std::string>& paths,
                                             std::size_t k) const {
   if (k == 0) {
-    const Rgb& env = scene_.environment;
     auto name = [&](std::size_t i) { return std::filesystem::path(paths[i]).filename().string(); };
-    const json doc = {{"penumbra", 1},
-                      {"width", scene_.width},
-                      {"height", scene_.height},
-                      {"environment", {env.r, env.g, env.b}},
-                      {"layers",
-                       {{"emission", name(1)},
-                        {"opacity", name(2)},
-                        {"albedo", name(3)},
-                        {"emission_scale", emission_scale_}}}};
-    return io::stage_text(paths[0], doc.dump(2) + "\n");
+    SceneDesc desc;
+    desc.width = scene_.width;
+    desc.height = scene_.height;
+    desc.environment = scene_.environment;
+    return io::stage_text(paths[0], scene_json(desc, {name(1), name(2), name(3), emission_scale_}));
   }
   const std::size_t n = scene_.cells();
   const int channels = k == 2 ? 1 : 3;

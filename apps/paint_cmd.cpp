@@ -16,7 +16,6 @@
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <atomic>
-#include <charconv>
 #include <cmath>
 #include <condition_variable>
 #include <csignal>
@@ -36,6 +35,7 @@
 #include "flatland/paint/canvas.hpp"
 #include "io/image_io.hpp"
 #include "io/path_util.hpp"
+#include "parse.hpp"
 #include "penumbra/penumbra.hpp"
 
 using namespace penumbra;
@@ -202,15 +202,6 @@ class Solver {
 };
 
 // ---- the window -----------------------------------------------------------------------------
-
-// "WxH" with positive integers (no signs, no spaces, no overflow).
-bool parse_size(const std::string& text, int& w, int& h) {
-  const char* end = text.data() + text.size();
-  auto [p, ec] = std::from_chars(text.data(), end, w);
-  if (ec != std::errc() || p == end || *p != 'x') return false;
-  auto [q, ec2] = std::from_chars(p + 1, end, h);
-  return ec2 == std::errc() && q == end && w > 0 && h > 0 && text[0] != '-' && p[1] != '-';
-}
 
 double median(std::vector<double> v) {
   if (v.empty()) return 0;
@@ -816,7 +807,7 @@ int run_paint(const PaintArgs& a) {
   Expected<paint::Canvas> canvas = Error{""};
   if (a.scene.empty()) {
     int w = 0, h = 0;
-    if (!parse_size(a.size, w, h)) {
+    if (!parse_grid_size(a.size, w, h)) {
       std::cerr << "penumbra paint: --size: expected WxH such as 256x256, found '" << a.size
                 << "'\n";
       return kUsage;

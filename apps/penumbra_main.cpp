@@ -18,6 +18,7 @@
 #include "compare_cmd.hpp"
 #include "core/timer.hpp"
 #include "paint_cmd.hpp"
+#include "parse.hpp"
 #include "penumbra/penumbra.hpp"
 #include "quality_cmd.hpp"
 
@@ -28,32 +29,6 @@ using penumbra::flatland::MergeFix;
 constexpr int kUsage = 2;
 constexpr int kFailure = 1;
 constexpr int kInterrupted = 130;  // the shell's code for SIGINT; the output is still written
-
-// "512M", "8G", "1.5GiB", or a plain number of bytes.
-bool parse_size(const std::string& text, std::uint64_t& bytes) {
-  std::size_t used = 0;
-  double v = 0;
-  try {
-    v = std::stod(text, &used);
-  } catch (...) {
-    return false;
-  }
-  std::string unit = text.substr(used);
-  double scale = 1;
-  if (unit == "" || unit == "B")
-    scale = 1;
-  else if (unit == "K" || unit == "KiB")
-    scale = 1024.0;
-  else if (unit == "M" || unit == "MiB")
-    scale = 1024.0 * 1024;
-  else if (unit == "G" || unit == "GiB")
-    scale = 1024.0 * 1024 * 1024;
-  else
-    return false;
-  if (!(v > 0) || !std::isfinite(v) || v * scale >= 18446744073709551615.0) return false;
-  bytes = std::uint64_t(v * scale);
-  return true;
-}
 
 nlohmann::json parameters_json(const penumbra::flatland::RenderOptions& o) {
   nlohmann::json p = {{"bounces", o.bounces},
@@ -142,7 +117,7 @@ int run_render(const RenderArgs& a) {
       return kFailure;
     }
   penumbra::flatland::RenderOptions options = a.options;
-  if (!parse_size(a.max_memory, options.max_memory)) {
+  if (!parse_bytes(a.max_memory, options.max_memory)) {
     std::cerr << "penumbra render: --max-memory: expected a size such as 512M or 8G, found '"
               << a.max_memory << "'\n";
     return kUsage;

@@ -30,13 +30,13 @@
 #include <thread>
 #include <vector>
 
-#include "cli_enums.hpp"
 #include "core/timer.hpp"
 #include "flatland/paint/canvas.hpp"
 #include "io/image_io.hpp"
 #include "io/path_util.hpp"
 #include "parse.hpp"
 #include "penumbra/penumbra.hpp"
+#include "render_options.hpp"
 
 using namespace penumbra;
 using namespace penumbra::flatland;
@@ -760,10 +760,18 @@ std::unique_ptr<PaintCommand> add_paint_command(CLI::App& app) {
   CLI::App* c = cmd->app;
   c->add_option("scene", a.scene, "Scene file to start from (JSON, format 1)");
   c->add_option("--size", a.size, "Grid of a blank canvas, WxH cells")->capture_default_str();
-  add_enum_option(c, "--method", a.options.method, {Method::hrc, Method::rc, Method::pt},
-                  "Method (switchable in the window)");
-  add_enum_option(c, "--device", a.options.device, {Device::cpu, Device::gpu, Device::auto_},
-                  "Where the solver runs: cpu, gpu (Vulkan; HRC, one bounce, f32), auto");
+  // The render options the window can change too, in two calls to keep the help in its order;
+  // paint says its own help and allows fewer bounces.
+  RenderOptionSet first, second;
+  first.method = first.device = true;
+  first.methods = {Method::hrc, Method::rc, Method::pt};
+  first.method_help = "Method (switchable in the window)";
+  first.device_help = "Where the solver runs: cpu, gpu (Vulkan; HRC, one bounce, f32), auto";
+  second.storage = second.bounces = second.threads = true;
+  second.max_bounces = 8;
+  second.bounces_help = "Diffuse bounces";
+  second.threads_help = "Solver threads (0: all cores)";
+  add_render_options(c, a.options, a.flags, first);
   c->add_option("--replay", a.replay, "Stroke file to paint, one stroke per window frame");
   c->add_option("--screenshot", a.screenshot,
                 "Save the window as PNG once the solver shows the final canvas, then exit");
@@ -779,14 +787,7 @@ std::unique_ptr<PaintCommand> add_paint_command(CLI::App& app) {
       ->check(CLI::Range(1e-3f, 1e9f))
       ->each([&a](const std::string&) { a.emission_scale_given = true; })
       ->capture_default_str();
-  add_enum_option(c, "--storage", a.options.hrc.storage, {Storage::f32, Storage::f16},
-                  "hrc: precision of T and R: f32, f16");
-  c->add_option("--bounces", a.options.bounces, "Diffuse bounces")
-      ->check(CLI::Range(1, 8))
-      ->capture_default_str();
-  c->add_option("--threads", a.options.threads, "Solver threads (0: all cores)")
-      ->check(CLI::Range(0, 1024))
-      ->capture_default_str();
+  add_render_options(c, a.options, a.flags, second);
   c->add_option("--exposure", a.exposure, "Display exposure in EV")->capture_default_str();
   c->add_option("--frames", a.frames,
                 "Solve continuously and exit after this many solver frames (measurement)")
@@ -798,7 +799,9 @@ std::unique_ptr<PaintCommand> add_paint_command(CLI::App& app) {
   return cmd;
 }
 
-int run_paint(const PaintArgs& a) {
+int run_paint(const PaintArgs& args) {
+  PaintArgs a = args;  // the painter starts from the finished options
+  finish_render_options(a.options, a.flags);
   if (!std::isfinite(a.exposure)) {
     std::cerr << "penumbra paint: --exposure: expected a finite number of EV\n";
     return kUsage;

@@ -14,17 +14,15 @@
 #include <string>
 #include <vector>
 
-#include "cli_enums.hpp"
 #include "compare_cmd.hpp"
 #include "core/timer.hpp"
 #include "paint_cmd.hpp"
 #include "parse.hpp"
 #include "penumbra/penumbra.hpp"
 #include "quality_cmd.hpp"
+#include "render_options.hpp"
 
 namespace {
-
-using penumbra::flatland::MergeFix;
 
 constexpr int kUsage = 2;
 constexpr int kFailure = 1;
@@ -102,6 +100,7 @@ struct RenderArgs {
   bool json = false;
   bool quiet = false;
   penumbra::flatland::RenderOptions options;
+  RenderOptionFlags flags;
 };
 
 int run_render(const RenderArgs& a) {
@@ -260,74 +259,10 @@ int main(int argc, char** argv) {
       ->add_option("-o,--output", a.outputs,
                    "Output file: .png (display), .exr or .pfm (fluence); repeatable")
       ->required();
-  add_enum_option(render, "--method", a.options.method,
-                  {penumbra::flatland::Method::rc, penumbra::flatland::Method::pt,
-                   penumbra::flatland::Method::hrc},
-                  "Method");
-  penumbra::flatland::PtOptions& pt = a.options.pt;
-  CLI::Option* spp =
-      render
-          ->add_option("--spp", pt.spp, "pt: samples per cell (with --time: the most; 0: no limit)")
-          ->check(CLI::Range(0, 1 << 30))
-          ->capture_default_str();
-  CLI::Option* time =
-      render
-          ->add_option("--time", pt.seconds, "pt: add samples until this many seconds have passed")
-          ->check(CLI::NonNegativeNumber);
-  render->add_flag("--nee", pt.nee,
-                   "pt: next event estimation (aim at emitting regions, combined by MIS)");
-  add_enum_option(render, "--sampler", pt.sampler,
-                  {penumbra::flatland::Sampler::r1, penumbra::flatland::Sampler::random},
-                  "pt: direction sequence: r1 (low discrepancy), random");
-  render->add_option("--seed", pt.seed, "pt: random seed")->capture_default_str();
-  penumbra::flatland::RcOptions& rc = a.options.rc;
-  render->add_option("--probe-spacing", rc.probe_spacing, "Cascade-0 probe spacing s0 in cells")
-      ->check(CLI::Range(1, 64))
-      ->capture_default_str();
-  render->add_option("--directions", rc.directions, "Directions Q0 of a cascade-0 probe")
-      ->check(CLI::Range(1, 64))
-      ->capture_default_str();
-  render->add_option("--branching", rc.branching, "Angular branching per cascade")
-      ->check(CLI::IsMember({2, 4}))
-      ->capture_default_str();
-  render->add_option("--interval", rc.interval, "Cascade-0 interval length t0 in cells")
-      ->check(CLI::PositiveNumber)
-      ->capture_default_str();
-  render->add_option("--cascades", rc.cascades, "Number of cascades (0: reach the grid diagonal)")
-      ->check(CLI::Range(0, 16))
-      ->capture_default_str();
-  add_enum_option(render, "--fix", rc.fix, {MergeFix::bilinear, MergeFix::none, MergeFix::nearest},
-                  "Merge: bilinear (fix), none (vanilla), nearest");
-  render->add_flag("--preaverage", rc.preaverage,
-                   "Trace a 2x2 sub-probe neighbourhood and store the average");
-  render->add_flag("--extend", rc.extend, "Build long intervals by extending a short traced one");
-  render->add_option("--extend-length", rc.extend_length, "Traced length before extension, cells")
-      ->check(CLI::Range(1.0f, 1.0e6f))
-      ->capture_default_str();
-  add_enum_option(render, "--device", a.options.device,
-                  {penumbra::flatland::Device::cpu, penumbra::flatland::Device::gpu,
-                   penumbra::flatland::Device::auto_},
-                  "cpu; gpu (Vulkan, a CPU driver such as lavapipe included); auto (a hardware "
-                  "GPU when there is one and the method runs there, else the CPU)");
-  add_enum_option(render, "--storage", a.options.hrc.storage,
-                  {penumbra::flatland::Storage::f32, penumbra::flatland::Storage::f16},
-                  "hrc: precision of T and R: f32, f16");
-  bool no_cross_blur = false;
-  render->add_flag("--no-cross-blur", no_cross_blur, "hrc: skip the final 1-cell cross blur");
-  bool no_near_segment = false;
-  render->add_flag("--no-near-segment", no_near_segment,
-                   "hrc: read R_0([x+1, y]) alone, as the paper (a cell's own medium left out)");
-  render->add_option("--bounces", a.options.bounces, "Diffuse bounces (1: direct light only)")
-      ->check(CLI::Range(1, 64))
-      ->capture_default_str();
-  render->add_option("--threads", a.options.threads, "Worker threads (0: all cores)")
-      ->check(CLI::Range(0, 1024))
-      ->capture_default_str();
-  bool no_distance_field = false;
-  render->add_flag("--no-distance-field", no_distance_field,
-                   "Step every cell (plain DDA) instead of jumping over empty space");
-  bool no_blocks = false;
-  render->add_flag("--no-blocks", no_blocks, "Do not skip empty 8x8 blocks (two-level DDA)");
+  RenderOptionSet all;
+  all.method = all.pt = all.rc = all.device = all.storage = all.hrc = true;
+  all.bounces = all.threads = all.traversal = true;
+  add_render_options(render, a.options, a.flags, all);
   render->add_option("--max-memory", a.max_memory, "Refuse work needing more working memory")
       ->capture_default_str();
   render->add_option("--exposure", a.exposure, "PNG exposure in EV")->capture_default_str();
@@ -345,12 +280,7 @@ int main(int argc, char** argv) {
     app.exit(e);
     return kUsage;
   }
-  a.options.distance_field = !no_distance_field;
-  a.options.blocks = !no_blocks;
-  a.options.hrc.cross_blur = !no_cross_blur;
-  a.options.hrc.near_segment = !no_near_segment;
-  // --time alone runs until the time is up; with --spp too, whichever comes first.
-  if (time->count() > 0 && spp->count() == 0) a.options.pt.spp = 0;
+  finish_render_options(a.options, a.flags);
   if (render->parsed()) {
     try {
       return run_render(a);

@@ -1,26 +1,24 @@
-// penumbra: the command line. A thin front end over libpenumbra.
-// Exit codes: 0 success, 1 bad input or runtime failure, 2 usage error.
+// `penumbra render`: load or build a scene, render it with one method, write the images, and
+// report timings (a table, or JSON).
+#include "render_cmd.hpp"
+
 #include <tbb/task_arena.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <iostream>
-#include <map>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
-#include "compare_cmd.hpp"
 #include "core/timer.hpp"
-#include "paint_cmd.hpp"
 #include "parse.hpp"
 #include "penumbra/penumbra.hpp"
-#include "quality_cmd.hpp"
-#include "render_options.hpp"
 
 namespace {
 
@@ -92,18 +90,7 @@ void draw_progress(const penumbra::flatland::RenderProgress& p) {
   std::fflush(stderr);
 }
 
-struct RenderArgs {
-  std::string scene;
-  std::vector<std::string> outputs;
-  std::string max_memory = "8G";
-  float exposure = 0;
-  bool json = false;
-  bool quiet = false;
-  penumbra::flatland::RenderOptions options;
-  RenderOptionFlags flags;
-};
-
-int run_render(const RenderArgs& a) {
+int render_scene(const RenderArgs& a) {
   for (const std::string& out : a.outputs)
     if (!penumbra::is_supported_output(out)) {
       std::cerr << "penumbra render: " << out << ": unknown output type (use .png, .exr or .pfm)\n";
@@ -116,6 +103,7 @@ int run_render(const RenderArgs& a) {
       return kFailure;
     }
   penumbra::flatland::RenderOptions options = a.options;
+  finish_render_options(options, a.flags);
   if (!parse_bytes(a.max_memory, options.max_memory)) {
     std::cerr << "penumbra render: --max-memory: expected a size such as 512M or 8G, found '"
               << a.max_memory << "'\n";
@@ -247,13 +235,15 @@ int run_render(const RenderArgs& a) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  CLI::App app{"Penumbra: global illumination with radiance cascades."};
-  app.set_version_flag("--version", std::string("penumbra ") + penumbra::kVersion);
-  app.require_subcommand(1);
+bool RenderCommand::parsed() const {
+  return app->parsed();
+}
 
-  RenderArgs a;
+std::unique_ptr<RenderCommand> add_render_command(CLI::App& app) {
+  auto cmd = std::make_unique<RenderCommand>();
+  RenderArgs& a = cmd->args;
   CLI::App* render = app.add_subcommand("render", "Render a 2D scene file (or the built-in scene)");
+  cmd->app = render;
   render->add_option("scene", a.scene, "Scene file (JSON, format 1); omitted: the built-in scene");
   render
       ->add_option("-o,--output", a.outputs,
@@ -268,29 +258,14 @@ int main(int argc, char** argv) {
   render->add_option("--exposure", a.exposure, "PNG exposure in EV")->capture_default_str();
   render->add_flag("--json", a.json, "Print one JSON object with timings, memory and parameters");
   render->add_flag("-q,--quiet", a.quiet, "Print nothing on success");
-  const std::unique_ptr<CompareCommand> compare = add_compare_command(app);
-  const std::unique_ptr<QualityCommand> quality = add_quality_command(app);
-  const std::unique_ptr<PaintCommand> paint = add_paint_command(app);
+  return cmd;
+}
 
+int run_render(const RenderArgs& a) {
   try {
-    app.parse(argc, argv);
-  } catch (const CLI::Success& e) {
-    return app.exit(e);  // --help, --version
-  } catch (const CLI::ParseError& e) {
-    app.exit(e);
-    return kUsage;
+    return render_scene(a);
+  } catch (const std::exception& e) {  // the library reports errors as values; this is a bug
+    std::cerr << "penumbra render: internal error: " << e.what() << "\n";
+    return kFailure;
   }
-  finish_render_options(a.options, a.flags);
-  if (render->parsed()) {
-    try {
-      return run_render(a);
-    } catch (const std::exception& e) {  // the library reports errors as values; this is a bug
-      std::cerr << "penumbra render: internal error: " << e.what() << "\n";
-      return kFailure;
-    }
-  }
-  if (compare->parsed()) return run_compare(compare->args);
-  if (quality->parsed()) return run_quality(quality->args);
-  if (paint->parsed()) return run_paint(paint->args);
-  return kUsage;
 }

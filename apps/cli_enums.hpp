@@ -3,7 +3,6 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
-#include <initializer_list>
 #include <map>
 #include <string>
 #include <vector>
@@ -13,7 +12,7 @@
 // `value` must outlive the parse; the help lists the names in the order given.
 template <class E>
 CLI::Option* add_enum_option(CLI::App* app, const std::string& name, E& value,
-                             std::initializer_list<E> values, const std::string& help) {
+                             const std::vector<E>& values, const std::string& help) {
   std::vector<std::string> list;
   std::map<std::string, E> names;
   for (E v : values) {

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "penumbra/flatland/render.hpp"
+#include "render_options.hpp"
 
 namespace CLI {
 class App;
@@ -16,6 +17,7 @@ struct PaintArgs {
     options.pt.spp = 4;                                // a quick look, not a reference
   }
   penumbra::flatland::RenderOptions options;  // the panel's starting settings (method, device, ...)
+  RenderOptionFlags flags;                    // applied to `options` by run_paint
   std::string scene;                          // empty: a blank canvas of `size`
   std::string size = "256x256";               // cells, for a blank canvas
   std::string replay;                         // stroke file to paint at start

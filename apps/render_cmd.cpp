@@ -1,60 +1,31 @@
-// penumbra: the command line. A thin front end over libpenumbra.
-// Exit codes: 0 success, 1 bad input or runtime failure, 2 usage error.
+// `penumbra render`: load or build a scene, render it with one method, write the images, and
+// report timings (a table, or JSON).
+#include "field_flags.hpp"
+#include "render_cmd.hpp"
+
 #include <tbb/task_arena.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <iostream>
-#include <map>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
-#include "cli_enums.hpp"
-#include "compare_cmd.hpp"
 #include "core/timer.hpp"
-#include "field_flags.hpp"
-#include "paint_cmd.hpp"
+#include "parse.hpp"
 #include "penumbra/penumbra.hpp"
-#include "quality_cmd.hpp"
 
 namespace {
-
-using penumbra::flatland::MergeFix;
 
 constexpr int kUsage = 2;
 constexpr int kFailure = 1;
 constexpr int kInterrupted = 130;  // the shell's code for SIGINT; the output is still written
-
-// "512M", "8G", "1.5GiB", or a plain number of bytes.
-bool parse_size(const std::string& text, std::uint64_t& bytes) {
-  std::size_t used = 0;
-  double v = 0;
-  try {
-    v = std::stod(text, &used);
-  } catch (...) {
-    return false;
-  }
-  std::string unit = text.substr(used);
-  double scale = 1;
-  if (unit == "" || unit == "B")
-    scale = 1;
-  else if (unit == "K" || unit == "KiB")
-    scale = 1024.0;
-  else if (unit == "M" || unit == "MiB")
-    scale = 1024.0 * 1024;
-  else if (unit == "G" || unit == "GiB")
-    scale = 1024.0 * 1024 * 1024;
-  else
-    return false;
-  if (!(v > 0) || !std::isfinite(v) || v * scale >= 18446744073709551615.0) return false;
-  bytes = std::uint64_t(v * scale);
-  return true;
-}
 
 nlohmann::json parameters_json(const penumbra::flatland::RenderOptions& o) {
   nlohmann::json p = {{"bounces", o.bounces},
@@ -120,17 +91,7 @@ void draw_progress(const penumbra::flatland::RenderProgress& p) {
   std::fflush(stderr);
 }
 
-struct RenderArgs {
-  std::string scene;
-  std::vector<std::string> outputs;
-  std::string max_memory = "8G";
-  float exposure = 0;
-  bool json = false;
-  bool quiet = false;
-  penumbra::flatland::RenderOptions options;
-};
-
-int run_render(const RenderArgs& a) {
+int render_scene(const RenderArgs& a) {
   for (const std::string& out : a.outputs)
     if (!penumbra::is_supported_output(out)) {
       std::cerr << "penumbra render: " << out << ": unknown output type (use .png, .exr or .pfm)\n";
@@ -143,7 +104,8 @@ int run_render(const RenderArgs& a) {
       return kFailure;
     }
   penumbra::flatland::RenderOptions options = a.options;
-  if (!parse_size(a.max_memory, options.max_memory)) {
+  finish_render_options(options, a.flags);
+  if (!parse_bytes(a.max_memory, options.max_memory)) {
     std::cerr << "penumbra render: --max-memory: expected a size such as 512M or 8G, found '"
               << a.max_memory << "'\n";
     return kUsage;
@@ -172,8 +134,7 @@ int run_render(const RenderArgs& a) {
   if (penumbra::Status s =
           penumbra::flatland::check_memory(desc->width, desc->height, options, true);
       !s) {
-    std::cerr << "penumbra render: " << desc->source << ": " << with_flags(s.error().message)
-              << "\n";
+    std::cerr << "penumbra render: " << desc->source << ": " << with_flags(s.error().message) << "\n";
     return kFailure;
   }
   // Rasterising runs on the same number of threads as the method.
@@ -200,8 +161,7 @@ int run_render(const RenderArgs& a) {
   std::signal(SIGINT, SIG_DFL);
   if (progress && options.method == penumbra::flatland::Method::pt) std::fprintf(stderr, "\n");
   if (!result) {
-    std::cerr << "penumbra render: " << desc->source << ": " << with_flags(result.error().message)
-              << "\n";
+    std::cerr << "penumbra render: " << desc->source << ": " << with_flags(result.error().message) << "\n";
     return kFailure;
   }
   penumbra::Stopwatch write_watch;
@@ -276,119 +236,37 @@ int run_render(const RenderArgs& a) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  CLI::App app{"Penumbra: global illumination with radiance cascades."};
-  app.set_version_flag("--version", std::string("penumbra ") + penumbra::kVersion);
-  app.require_subcommand(1);
+bool RenderCommand::parsed() const {
+  return app->parsed();
+}
 
-  RenderArgs a;
+std::unique_ptr<RenderCommand> add_render_command(CLI::App& app) {
+  auto cmd = std::make_unique<RenderCommand>();
+  RenderArgs& a = cmd->args;
   CLI::App* render = app.add_subcommand("render", "Render a 2D scene file (or the built-in scene)");
+  cmd->app = render;
   render->add_option("scene", a.scene, "Scene file (JSON, format 1); omitted: the built-in scene");
   render
       ->add_option("-o,--output", a.outputs,
                    "Output file: .png (display), .exr or .pfm (fluence); repeatable")
       ->required();
-  add_enum_option(render, "--method", a.options.method,
-                  {penumbra::flatland::Method::rc, penumbra::flatland::Method::pt,
-                   penumbra::flatland::Method::hrc},
-                  "Method");
-  penumbra::flatland::PtOptions& pt = a.options.pt;
-  CLI::Option* spp =
-      render
-          ->add_option("--spp", pt.spp, "pt: samples per cell (with --time: the most; 0: no limit)")
-          ->check(CLI::Range(0, 1 << 30))
-          ->capture_default_str();
-  CLI::Option* time =
-      render
-          ->add_option("--time", pt.seconds, "pt: add samples until this many seconds have passed")
-          ->check(CLI::NonNegativeNumber);
-  render->add_flag("--nee", pt.nee,
-                   "pt: next event estimation (aim at emitting regions, combined by MIS)");
-  add_enum_option(render, "--sampler", pt.sampler,
-                  {penumbra::flatland::Sampler::r1, penumbra::flatland::Sampler::random},
-                  "pt: direction sequence: r1 (low discrepancy), random");
-  render->add_option("--seed", pt.seed, "pt: random seed")->capture_default_str();
-  penumbra::flatland::RcOptions& rc = a.options.rc;
-  render->add_option("--probe-spacing", rc.probe_spacing, "Cascade-0 probe spacing s0 in cells")
-      ->check(CLI::Range(1, 64))
-      ->capture_default_str();
-  render->add_option("--directions", rc.directions, "Directions Q0 of a cascade-0 probe")
-      ->check(CLI::Range(1, 64))
-      ->capture_default_str();
-  render->add_option("--branching", rc.branching, "Angular branching per cascade")
-      ->check(CLI::IsMember({2, 4}))
-      ->capture_default_str();
-  render->add_option("--interval", rc.interval, "Cascade-0 interval length t0 in cells")
-      ->check(CLI::PositiveNumber)
-      ->capture_default_str();
-  render->add_option("--cascades", rc.cascades, "Number of cascades (0: reach the grid diagonal)")
-      ->check(CLI::Range(0, 16))
-      ->capture_default_str();
-  add_enum_option(render, "--fix", rc.fix, {MergeFix::bilinear, MergeFix::none, MergeFix::nearest},
-                  "Merge: bilinear (fix), none (vanilla), nearest");
-  render->add_flag("--preaverage", rc.preaverage,
-                   "Trace a 2x2 sub-probe neighbourhood and store the average");
-  render->add_flag("--extend", rc.extend, "Build long intervals by extending a short traced one");
-  render->add_option("--extend-length", rc.extend_length, "Traced length before extension, cells")
-      ->check(CLI::Range(1.0f, 1.0e6f))
-      ->capture_default_str();
-  add_enum_option(render, "--device", a.options.device,
-                  {penumbra::flatland::Device::cpu, penumbra::flatland::Device::gpu,
-                   penumbra::flatland::Device::auto_},
-                  "cpu; gpu (Vulkan, a CPU driver such as lavapipe included); auto (a hardware "
-                  "GPU when there is one and the method runs there, else the CPU)");
-  add_enum_option(render, "--storage", a.options.hrc.storage,
-                  {penumbra::flatland::Storage::f32, penumbra::flatland::Storage::f16},
-                  "hrc: precision of T and R: f32, f16");
-  bool no_cross_blur = false;
-  render->add_flag("--no-cross-blur", no_cross_blur, "hrc: skip the final 1-cell cross blur");
-  bool no_near_segment = false;
-  render->add_flag("--no-near-segment", no_near_segment,
-                   "hrc: read R_0([x+1, y]) alone, as the paper (a cell's own medium left out)");
-  render->add_option("--bounces", a.options.bounces, "Diffuse bounces (1: direct light only)")
-      ->check(CLI::Range(1, 64))
-      ->capture_default_str();
-  render->add_option("--threads", a.options.threads, "Worker threads (0: all cores)")
-      ->check(CLI::Range(0, 1024))
-      ->capture_default_str();
-  bool no_distance_field = false;
-  render->add_flag("--no-distance-field", no_distance_field,
-                   "Step every cell (plain DDA) instead of jumping over empty space");
-  bool no_blocks = false;
-  render->add_flag("--no-blocks", no_blocks, "Do not skip empty 8x8 blocks (two-level DDA)");
+  RenderOptionSet all;
+  all.method = all.pt = all.rc = all.device = all.storage = all.hrc = true;
+  all.bounces = all.threads = all.traversal = true;
+  add_render_options(render, a.options, a.flags, all);
   render->add_option("--max-memory", a.max_memory, "Refuse work needing more working memory")
       ->capture_default_str();
   render->add_option("--exposure", a.exposure, "PNG exposure in EV")->capture_default_str();
   render->add_flag("--json", a.json, "Print one JSON object with timings, memory and parameters");
   render->add_flag("-q,--quiet", a.quiet, "Print nothing on success");
-  const std::unique_ptr<CompareCommand> compare = add_compare_command(app);
-  const std::unique_ptr<QualityCommand> quality = add_quality_command(app);
-  const std::unique_ptr<PaintCommand> paint = add_paint_command(app);
+  return cmd;
+}
 
+int run_render(const RenderArgs& a) {
   try {
-    app.parse(argc, argv);
-  } catch (const CLI::Success& e) {
-    return app.exit(e);  // --help, --version
-  } catch (const CLI::ParseError& e) {
-    app.exit(e);
-    return kUsage;
+    return render_scene(a);
+  } catch (const std::exception& e) {  // the library reports errors as values; this is a bug
+    std::cerr << "penumbra render: internal error: " << e.what() << "\n";
+    return kFailure;
   }
-  a.options.distance_field = !no_distance_field;
-  a.options.blocks = !no_blocks;
-  a.options.hrc.cross_blur = !no_cross_blur;
-  a.options.hrc.near_segment = !no_near_segment;
-  // --time alone runs until the time is up; with --spp too, whichever comes first.
-  if (time->count() > 0 && spp->count() == 0) a.options.pt.spp = 0;
-  if (render->parsed()) {
-    try {
-      return run_render(a);
-    } catch (const std::exception& e) {  // the library reports errors as values; this is a bug
-      std::cerr << "penumbra render: internal error: " << e.what() << "\n";
-      return kFailure;
-    }
-  }
-  if (compare->parsed()) return run_compare(compare->args);
-  if (quality->parsed()) return run_quality(quality->args);
-  if (paint->parsed()) return run_paint(paint->args);
-  return kUsage;
 }

@@ -1,0 +1,99 @@
+#include "render_options.hpp"
+
+#include <CLI/CLI.hpp>
+
+#include "cli_enums.hpp"
+
+using namespace penumbra::flatland;
+
+void add_render_options(CLI::App* app, RenderOptions& options, RenderOptionFlags& flags,
+                        const RenderOptionSet& which) {
+  if (which.method)
+    std::vector<penumbra::flatland::Method> list = which.methods;
+    std::string help = which.method_help;
+    if (list.empty()) {  // the method table: names and help from the library
+      help += ":";
+      for (const penumbra::flatland::MethodInfo& m : penumbra::flatland::methods()) {
+        list.push_back(m.method);
+        help += std::string(list.size() > 1 ? ";" : "") + " " + m.name + ", " + m.summary +
+                (m.gpu ? "" : " (CPU only)");
+      }
+    }
+    add_enum_option(app, "--method", options.method, list, help);
+  if (which.pt) {
+    PtOptions& pt = options.pt;
+    flags.spp = app->add_option("--spp", pt.spp,
+                                "pt: samples per cell (with --time: the most; 0: no limit)")
+                    ->check(CLI::Range(0, 1 << 30))
+                    ->capture_default_str();
+    flags.time =
+        app->add_option("--time", pt.seconds, "pt: add samples until this many seconds have passed")
+            ->check(CLI::NonNegativeNumber);
+    app->add_flag("--nee", pt.nee,
+                  "pt: next event estimation (aim at emitting regions, combined by MIS)");
+    add_enum_option(app, "--sampler", pt.sampler, {Sampler::r1, Sampler::random},
+                    "pt: direction sequence: r1 (low discrepancy), random");
+    app->add_option("--seed", pt.seed, "pt: random seed")->capture_default_str();
+  }
+  if (which.rc) {
+    RcOptions& rc = options.rc;
+    app->add_option("--probe-spacing", rc.probe_spacing, "Cascade-0 probe spacing s0 in cells")
+        ->check(CLI::Range(1, 64))
+        ->capture_default_str();
+    app->add_option("--directions", rc.directions, "Directions Q0 of a cascade-0 probe")
+        ->check(CLI::Range(1, 64))
+        ->capture_default_str();
+    app->add_option("--branching", rc.branching, "Angular branching per cascade")
+        ->check(CLI::IsMember({2, 4}))
+        ->capture_default_str();
+    app->add_option("--interval", rc.interval, "Cascade-0 interval length t0 in cells")
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str();
+    app->add_option("--cascades", rc.cascades, "Number of cascades (0: reach the grid diagonal)")
+        ->check(CLI::Range(0, 16))
+        ->capture_default_str();
+    add_enum_option(app, "--fix", rc.fix, {MergeFix::bilinear, MergeFix::none, MergeFix::nearest},
+                    "Merge: bilinear (fix), none (vanilla), nearest");
+    app->add_flag("--preaverage", rc.preaverage,
+                  "Trace a 2x2 sub-probe neighbourhood and store the average");
+    app->add_flag("--extend", rc.extend, "Build long intervals by extending a short traced one");
+    app->add_option("--extend-length", rc.extend_length, "Traced length before extension, cells")
+        ->check(CLI::Range(1.0f, 1.0e6f))
+        ->capture_default_str();
+  }
+  if (which.device)
+    add_enum_option(app, "--device", options.device, {Device::cpu, Device::gpu, Device::auto_},
+                    which.device_help);
+  if (which.storage)
+    add_enum_option(app, "--storage", options.hrc.storage, {Storage::f32, Storage::f16},
+                    "hrc: precision of T and R: f32, f16");
+  if (which.hrc) {
+    app->add_flag("--no-cross-blur", flags.no_cross_blur, "hrc: skip the final 1-cell cross blur");
+    app->add_flag("--no-near-segment", flags.no_near_segment,
+                  "hrc: read R_0([x+1, y]) alone, as the paper (a cell's own medium left out)");
+  }
+  if (which.bounces)
+    app->add_option("--bounces", options.bounces, which.bounces_help)
+        ->check(CLI::Range(1, which.max_bounces))
+        ->capture_default_str();
+  if (which.threads)
+    app->add_option("--threads", options.threads, which.threads_help)
+        ->check(CLI::Range(0, 1024))
+        ->capture_default_str();
+  if (which.traversal) {
+    app->add_flag("--no-distance-field", flags.no_distance_field,
+                  "Step every cell (plain DDA) instead of jumping over empty space");
+    app->add_flag("--no-blocks", flags.no_blocks, "Do not skip empty 8x8 blocks (two-level DDA)");
+  }
+}
+
+void finish_render_options(RenderOptions& options, const RenderOptionFlags& flags) {
+  // Only what was asked for changes: a command that never registered a flag keeps the default.
+  if (flags.no_distance_field) options.distance_field = false;
+  if (flags.no_blocks) options.blocks = false;
+  if (flags.no_cross_blur) options.hrc.cross_blur = false;
+  if (flags.no_near_segment) options.hrc.near_segment = false;
+  // --time alone runs until the time is up; with --spp too, whichever comes first.
+  if (flags.time && flags.spp && flags.time->count() > 0 && flags.spp->count() == 0)
+    options.pt.spp = 0;
+}

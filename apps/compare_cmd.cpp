@@ -1,5 +1,4 @@
 // `penumbra compare TEST REF [--scene SCENE] [--json] [--heatmap OUT.png] [--montage OUT.png]`
-#include "field_flags.hpp"
 #include "compare_cmd.hpp"
 
 #include <CLI/CLI.hpp>
@@ -13,6 +12,7 @@
 #include <utility>
 #include <vector>
 
+#include "field_flags.hpp"
 #include "io/path_util.hpp"
 #include "penumbra/penumbra.hpp"
 

@@ -1,6 +1,5 @@
 // `penumbra paint`: draw lights, walls and fog with a brush and watch the global illumination.
 // This file checks the options and the files; the window is paint/window.cpp.
-#include "field_flags.hpp"
 #include "paint_cmd.hpp"
 
 #include <CLI/CLI.hpp>
@@ -11,6 +10,7 @@
 #include <utility>
 #include <vector>
 
+#include "field_flags.hpp"
 #include "flatland/paint/canvas.hpp"
 #include "io/path_util.hpp"
 #include "paint/window.hpp"
@@ -158,7 +158,8 @@ int run_paint(const PaintArgs& args) {
   if (!a.record.empty()) outputs.push_back({"--record", a.record});
   for (std::size_t i = 0; i < outputs.size(); ++i) {
     if (Status s = check_output(outputs[i].second); !s) {
-      std::cerr << "penumbra paint: " << outputs[i].first << ": " << with_flags(s.error().message) << "\n";
+      std::cerr << "penumbra paint: " << outputs[i].first << ": " << with_flags(s.error().message)
+                << "\n";
       return kFailure;
     }
     auto canonical = [](const std::string& p) {

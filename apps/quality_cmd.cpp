@@ -10,8 +10,8 @@
 #include <iostream>
 #include <tuple>
 
-#include "field_flags.hpp"
 #include "analysis/study.hpp"
+#include "field_flags.hpp"
 #include "io/image_io.hpp"
 #include "penumbra/penumbra.hpp"
 
@@ -136,7 +136,8 @@ int run_quality(const QualityArgs& a) {
     Expected<RenderResult> r = render(*scene, o);
     if (isatty(STDERR_FILENO)) std::fprintf(stderr, "\n");
     if (!r) return fail(a.scene + ": " + with_flags(r.error().message));
-    if (Status s = io::write_pfm(ref.path, r->fluence); !s) return fail(with_flags(s.error().message));
+    if (Status s = io::write_pfm(ref.path, r->fluence); !s)
+      return fail(with_flags(s.error().message));
     ref.time_ms = r->time_ms;
     reference = std::move(r->fluence);
     std::printf("reference: %s (%.1f s)\n", ref.path.c_str(), ref.time_ms / 1e3);
@@ -197,7 +198,8 @@ int run_quality(const QualityArgs& a) {
   if (!a.doc.empty()) {
     Expected<std::string> text = spliced_doc(doc_section(table, a.doc, out, section));
     if (!text) return fail(with_flags(text.error().message));
-    if (Status s = io::write_text_files({{a.doc, *text}}); !s) return fail(with_flags(s.error().message));
+    if (Status s = io::write_text_files({{a.doc, *text}}); !s)
+      return fail(with_flags(s.error().message));
     std::printf("updated %s\n", a.doc.c_str());
   }
   return 0;

@@ -1,6 +1,5 @@
 // `penumbra render`: load or build a scene, render it with one method, write the images, and
 // report timings (a table, or JSON).
-#include "field_flags.hpp"
 #include "render_cmd.hpp"
 
 #include <tbb/task_arena.h>
@@ -18,6 +17,7 @@
 #include <vector>
 
 #include "core/timer.hpp"
+#include "field_flags.hpp"
 #include "parse.hpp"
 #include "penumbra/penumbra.hpp"
 
@@ -134,7 +134,8 @@ int render_scene(const RenderArgs& a) {
   if (penumbra::Status s =
           penumbra::flatland::check_memory(desc->width, desc->height, options, true);
       !s) {
-    std::cerr << "penumbra render: " << desc->source << ": " << with_flags(s.error().message) << "\n";
+    std::cerr << "penumbra render: " << desc->source << ": " << with_flags(s.error().message)
+              << "\n";
     return kFailure;
   }
   // Rasterising runs on the same number of threads as the method.
@@ -161,7 +162,8 @@ int render_scene(const RenderArgs& a) {
   std::signal(SIGINT, SIG_DFL);
   if (progress && options.method == penumbra::flatland::Method::pt) std::fprintf(stderr, "\n");
   if (!result) {
-    std::cerr << "penumbra render: " << desc->source << ": " << with_flags(result.error().message) << "\n";
+    std::cerr << "penumbra render: " << desc->source << ": " << with_flags(result.error().message)
+              << "\n";
     return kFailure;
   }
   penumbra::Stopwatch write_watch;

@@ -8,7 +8,7 @@ using namespace penumbra::flatland;
 
 void add_render_options(CLI::App* app, RenderOptions& options, RenderOptionFlags& flags,
                         const RenderOptionSet& which) {
-  if (which.method)
+  if (which.method) {
     std::vector<penumbra::flatland::Method> list = which.methods;
     std::string help = which.method_help;
     if (list.empty()) {  // the method table: names and help from the library
@@ -20,6 +20,7 @@ void add_render_options(CLI::App* app, RenderOptions& options, RenderOptionFlags
       }
     }
     add_enum_option(app, "--method", options.method, list, help);
+  }
   if (which.pt) {
     PtOptions& pt = options.pt;
     flags.spp = app->add_option("--spp", pt.spp,

@@ -1,8 +1,9 @@
 // Two threads: the UI thread owns the window, the canvas and Dear ImGui; the worker renders the
 // latest canvas. The UI never waits for the worker, so the window stays responsive when a frame
 // is slow.
-#include "field_flags.hpp"
 #include "paint/window.hpp"
+
+#include "field_flags.hpp"
 
 #define GLFW_INCLUDE_NONE
 #include <GL/gl.h>
@@ -116,7 +117,8 @@ void Painter::submit() {
     return;
   if (options_version_ != submitted_options_)
     if (Status m = painter_memory(canvas_.width(), canvas_.height(), options_); !m) {
-      message_ = with_flags(m.error().message);  // the worker goes on showing the last accepted settings
+      message_ =
+          with_flags(m.error().message);  // the worker goes on showing the last accepted settings
       return;
     }
   submitted_scene_ = canvas_.version();

@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <utility>
 
-#include "field_flags.hpp"
 #include "core/timer.hpp"
+#include "field_flags.hpp"
 
 using namespace penumbra;
 using namespace penumbra::flatland;

@@ -12,7 +12,6 @@
 #include <utility>
 #include <vector>
 
-#include "field_flags.hpp"
 #include "io/path_util.hpp"
 #include "penumbra/penumbra.hpp"
 
@@ -127,12 +126,12 @@ int compare(const CompareArgs& a) {
   // Refuse unwritable outputs before reading anything.
   for (const std::string& out : outputs)
     if (penumbra::Status s = penumbra::check_output(out); !s)
-      return fail(kFailure, with_flags(s.error().message));
+      return fail(kFailure, s.error().message);
 
   penumbra::Expected<penumbra::ImageRgb> test = read_linear(a.test);
-  if (!test) return fail(kFailure, with_flags(test.error().message));
+  if (!test) return fail(kFailure, test.error().message);
   penumbra::Expected<penumbra::ImageRgb> ref = read_linear(a.reference);
-  if (!ref) return fail(kFailure, with_flags(ref.error().message));
+  if (!ref) return fail(kFailure, ref.error().message);
   const int w = ref->width(), h = ref->height();
   if (test->width() != w || test->height() != h)
     return fail(kFailure, a.test + ": the image is " + size_text(test->width(), test->height()) +
@@ -154,13 +153,13 @@ int compare(const CompareArgs& a) {
   if (!a.scene.empty()) {
     penumbra::Expected<penumbra::flatland::SceneDesc> desc =
         penumbra::flatland::load_scene(a.scene);
-    if (!desc) return fail(kFailure, with_flags(desc.error().message));
+    if (!desc) return fail(kFailure, desc.error().message);
     // Checked before rasterising, which for a large scene takes a while.
     if (desc->width != w || desc->height != h)
       return fail(kFailure, a.scene + ": the scene is " + size_text(desc->width, desc->height) +
                                 " but the images are " + size_text(w, h));
     penumbra::Expected<penumbra::flatland::Scene> built = penumbra::flatland::build_scene(*desc);
-    if (!built) return fail(kFailure, with_flags(built.error().message));
+    if (!built) return fail(kFailure, built.error().message);
     scene = std::move(*built);
   }
   if (cropped) {
@@ -173,12 +172,12 @@ int compare(const CompareArgs& a) {
   const std::vector<std::uint8_t>* counted = scene ? &mask : nullptr;
 
   penumbra::Expected<penumbra::ErrorMetrics> m = penumbra::compare_images(*test, *ref, counted);
-  if (!m) return fail(kFailure, (scene ? a.scene + ": " : "") + with_flags(m.error().message));
+  if (!m) return fail(kFailure, (scene ? a.scene + ": " : "") + m.error().message);
 
   std::vector<std::pair<std::string, penumbra::ImageRgb8>> pictures;
   if (!a.heatmap.empty()) {
     penumbra::Expected<penumbra::ImageRgb8> p = penumbra::error_heatmap(*test, *ref, counted);
-    if (!p) return fail(kFailure, a.heatmap + ": " + with_flags(p.error().message));
+    if (!p) return fail(kFailure, a.heatmap + ": " + p.error().message);
     pictures.emplace_back(a.heatmap, std::move(*p));
   }
   if (!a.montage.empty()) {
@@ -189,12 +188,12 @@ int compare(const CompareArgs& a) {
     o.scene = scene ? &*scene : nullptr;
     penumbra::Expected<penumbra::ImageRgb8> p =
         penumbra::flatland::comparison_montage(*test, *ref, counted, o);
-    if (!p) return fail(kFailure, a.montage + ": " + with_flags(p.error().message));
+    if (!p) return fail(kFailure, a.montage + ": " + p.error().message);
     pictures.emplace_back(a.montage, std::move(*p));
   }
   // Both pictures or neither.
   if (penumbra::Status s = penumbra::write_pictures(pictures); !s)
-    return fail(kFailure, with_flags(s.error().message));
+    return fail(kFailure, s.error().message);
 
   if (a.json) {
     nlohmann::json j = {

@@ -10,7 +10,6 @@
 #include <utility>
 #include <vector>
 
-#include "field_flags.hpp"
 #include "flatland/paint/canvas.hpp"
 #include "io/path_util.hpp"
 #include "paint/window.hpp"
@@ -101,7 +100,7 @@ int run_paint(const PaintArgs& args) {
                   : Expected<paint::Canvas>(desc.error());
   }
   if (!canvas) {
-    std::cerr << "penumbra paint: " << with_flags(canvas.error().message) << "\n";
+    std::cerr << "penumbra paint: " << canvas.error().message << "\n";
     return kFailure;
   }
   // Memory: the method's, plus the painter's copies of the canvas (the canvas, the stroke's
@@ -117,21 +116,21 @@ int run_paint(const PaintArgs& args) {
     return kFailure;
   }
   if (Status s = painter::painter_memory(w, h, probe); !s) {
-    std::cerr << "penumbra paint: " << with_flags(s.error().message) << "\n";
+    std::cerr << "penumbra paint: " << s.error().message << "\n";
     return kFailure;
   }
   std::vector<paint::Stroke> strokes;
   if (!a.replay.empty()) {
     Expected<paint::StrokeFile> r = paint::load_strokes(a.replay);
     if (!r) {
-      std::cerr << "penumbra paint: " << with_flags(r.error().message) << "\n";
+      std::cerr << "penumbra paint: " << r.error().message << "\n";
       return kFailure;
     }
     for (std::size_t i = 0; i < r->strokes.size(); ++i)
       if (Status s =
               canvas->check(r->strokes[i].brush, a.replay + ": strokes[" + std::to_string(i) + "]");
           !s) {
-        std::cerr << "penumbra paint: " << with_flags(s.error().message) << "\n";
+        std::cerr << "penumbra paint: " << s.error().message << "\n";
         return kFailure;
       }
     if (r->width > 0 && (r->width != w || r->height != h))
@@ -150,7 +149,7 @@ int run_paint(const PaintArgs& args) {
   if (!a.save.empty()) {
     Expected<std::vector<std::string>> saved = paint::Canvas::save_paths(a.save);
     if (!saved) {
-      std::cerr << "penumbra paint: --save: " << with_flags(saved.error().message) << "\n";
+      std::cerr << "penumbra paint: --save: " << saved.error().message << "\n";
       return kUsage;
     }
     for (const std::string& p : *saved) outputs.push_back({"--save", p});
@@ -158,8 +157,7 @@ int run_paint(const PaintArgs& args) {
   if (!a.record.empty()) outputs.push_back({"--record", a.record});
   for (std::size_t i = 0; i < outputs.size(); ++i) {
     if (Status s = check_output(outputs[i].second); !s) {
-      std::cerr << "penumbra paint: " << outputs[i].first << ": " << with_flags(s.error().message)
-                << "\n";
+      std::cerr << "penumbra paint: " << outputs[i].first << ": " << s.error().message << "\n";
       return kFailure;
     }
     auto canonical = [](const std::string& p) {

@@ -11,9 +11,9 @@
 #include <tuple>
 
 #include "analysis/study.hpp"
-#include "field_flags.hpp"
 #include "io/image_io.hpp"
 #include "penumbra/penumbra.hpp"
+#include "render_options.hpp"
 
 namespace fs = std::filesystem;
 using namespace penumbra;
@@ -78,13 +78,13 @@ std::string doc_section(const std::string& table, const fs::path& doc, const fs:
 
 int run_quality(const QualityArgs& a) {
   Expected<SceneDesc> desc = load_scene(a.scene);
-  if (!desc) return fail(with_flags(desc.error().message));
+  if (!desc) return fail(desc.error().message);
   RenderOptions probe;
   probe.threads = a.threads;
   if (Status s = check_memory(desc->width, desc->height, probe, true); !s)
     return fail(a.scene + ": " + with_flags(s.error().message));
   Expected<Scene> scene = build_scene(*desc);
-  if (!scene) return fail(with_flags(scene.error().message));
+  if (!scene) return fail(scene.error().message);
   // The document is checked before the minutes of rendering, and read again at the end so that
   // edits made meanwhile are kept.
   const std::string section = fs::path(a.scene).stem().string();
@@ -92,11 +92,11 @@ int run_quality(const QualityArgs& a) {
     Expected<std::string> text = io::read_text(a.doc);
     if (!text) return text;
     Expected<std::string> spliced = study::splice_section(*text, section, body);
-    if (!spliced) return Error{a.doc + ": " + with_flags(spliced.error().message)};
+    if (!spliced) return Error{a.doc + ": " + spliced.error().message};
     return spliced;
   };
   if (!a.doc.empty())
-    if (Expected<std::string> d = spliced_doc(""); !d) return fail(with_flags(d.error().message));
+    if (Expected<std::string> d = spliced_doc(""); !d) return fail(d.error().message);
   std::error_code ec;
   const std::string cache = a.cache.empty() ? (fs::path(a.out) / "cache").string() : a.cache;
   for (const std::string& dir : {a.out, cache})
@@ -136,8 +136,7 @@ int run_quality(const QualityArgs& a) {
     Expected<RenderResult> r = render(*scene, o);
     if (isatty(STDERR_FILENO)) std::fprintf(stderr, "\n");
     if (!r) return fail(a.scene + ": " + with_flags(r.error().message));
-    if (Status s = io::write_pfm(ref.path, r->fluence); !s)
-      return fail(with_flags(s.error().message));
+    if (Status s = io::write_pfm(ref.path, r->fluence); !s) return fail(s.error().message);
     ref.time_ms = r->time_ms;
     reference = std::move(r->fluence);
     std::printf("reference: %s (%.1f s)\n", ref.path.c_str(), ref.time_ms / 1e3);
@@ -152,7 +151,7 @@ int run_quality(const QualityArgs& a) {
     Expected<RenderResult> r = render(*scene, o);
     if (!r) return fail(a.scene + ": " + run.label + ": " + with_flags(r.error().message));
     Expected<ErrorMetrics> m = compare_images(r->fluence, reference, &mask);
-    if (!m) return fail(run.label + ": " + with_flags(m.error().message));
+    if (!m) return fail(run.label + ": " + m.error().message);
     study::Row row{run, r->time_ms, r->samples, *m};
     if (run.label == "rc (defaults)") rc_default = std::move(*r);
     if (run.label == "hrc (defaults)") hrc_default = std::move(*r);
@@ -175,7 +174,7 @@ int run_quality(const QualityArgs& a) {
       {(out / "quality.csv").string(), study::to_csv(rows)},
       {(out / "quality.md").string(), table},
       {(out / "quality.svg").string(), study::to_svg(rows, title)}};
-  if (Status s = io::write_text_files(files); !s) return fail(with_flags(s.error().message));
+  if (Status s = io::write_text_files(files); !s) return fail(s.error().message);
   for (const auto& [path, text] : files) std::printf("wrote %s\n", path.c_str());
   // Pictures to look at: the plot, and the default cascades against the reference.
   std::vector<std::pair<std::string, ImageRgb8>> pictures = {
@@ -189,17 +188,16 @@ int run_quality(const QualityArgs& a) {
     mo.reference_label = "path tracer + NEE, " + std::to_string(a.reference_spp) + " spp";
     mo.scene = &*scene;
     Expected<ImageRgb8> montage = comparison_montage(result->fluence, reference, &mask, mo);
-    if (!montage) return fail(with_flags(montage.error().message));
+    if (!montage) return fail(montage.error().message);
     pictures.push_back({(out / file).string(), std::move(*montage)});
   }
-  if (Status s = write_pictures(pictures); !s) return fail(with_flags(s.error().message));
+  if (Status s = write_pictures(pictures); !s) return fail(s.error().message);
   for (const auto& [path, picture] : pictures) std::printf("wrote %s\n", path.c_str());
   // The document last, once everything it links to is there.
   if (!a.doc.empty()) {
     Expected<std::string> text = spliced_doc(doc_section(table, a.doc, out, section));
-    if (!text) return fail(with_flags(text.error().message));
-    if (Status s = io::write_text_files({{a.doc, *text}}); !s)
-      return fail(with_flags(s.error().message));
+    if (!text) return fail(text.error().message);
+    if (Status s = io::write_text_files({{a.doc, *text}}); !s) return fail(s.error().message);
     std::printf("updated %s\n", a.doc.c_str());
   }
   return 0;

@@ -17,9 +17,9 @@
 #include <vector>
 
 #include "core/timer.hpp"
-#include "field_flags.hpp"
 #include "parse.hpp"
 #include "penumbra/penumbra.hpp"
+#include "render_options.hpp"
 
 namespace {
 
@@ -100,7 +100,7 @@ int render_scene(const RenderArgs& a) {
   // Refuse unwritable outputs before spending time on the render.
   for (const std::string& out : a.outputs)
     if (penumbra::Status s = penumbra::check_output(out); !s) {
-      std::cerr << "penumbra render: " << with_flags(s.error().message) << "\n";
+      std::cerr << "penumbra render: " << s.error().message << "\n";
       return kFailure;
     }
   penumbra::flatland::RenderOptions options = a.options;
@@ -121,7 +121,7 @@ int render_scene(const RenderArgs& a) {
           ? penumbra::Expected<penumbra::flatland::SceneDesc>(penumbra::flatland::default_scene())
           : penumbra::flatland::load_scene(a.scene);
   if (!desc) {
-    std::cerr << "penumbra render: " << with_flags(desc.error().message) << "\n";
+    std::cerr << "penumbra render: " << desc.error().message << "\n";
     return kFailure;
   }
   // Option values that cannot work for this grid are usage errors.
@@ -144,7 +144,7 @@ int render_scene(const RenderArgs& a) {
   penumbra::Expected<penumbra::flatland::Scene> scene =
       arena.execute([&] { return penumbra::flatland::build_scene(*desc); });
   if (!scene) {
-    std::cerr << "penumbra render: " << with_flags(scene.error().message) << "\n";
+    std::cerr << "penumbra render: " << scene.error().message << "\n";
     return kFailure;
   }
   const double raster_ms = raster_watch.ms();
@@ -171,7 +171,7 @@ int render_scene(const RenderArgs& a) {
   if (penumbra::Status s =
           penumbra::flatland::write_images(a.outputs, result->fluence, *scene, {a.exposure});
       !s) {
-    std::cerr << "penumbra render: " << with_flags(s.error().message) << "\n";
+    std::cerr << "penumbra render: " << s.error().message << "\n";
     return kFailure;
   }
   const double write_ms = write_watch.ms();

@@ -1,6 +1,7 @@
 #include "render_options.hpp"
 
 #include <CLI/CLI.hpp>
+#include <utility>
 
 #include "cli_enums.hpp"
 
@@ -97,4 +98,39 @@ void finish_render_options(RenderOptions& options, const RenderOptionFlags& flag
   // --time alone runs until the time is up; with --spp too, whichever comes first.
   if (flags.time && flags.spp && flags.time->count() > 0 && flags.spp->count() == 0)
     options.pt.spp = 0;
+}
+
+std::string with_flags(std::string message) {
+  // Beside add_render_options, so that a flag and its field are renamed together.
+  static const std::pair<const char*, const char*> kFlags[] = {
+      {"`method`", "--method"},
+      {"`device`", "--device"},
+      {"`bounces`", "--bounces"},
+      {"`threads`", "--threads"},
+      {"`max_memory`", "--max-memory"},
+      {"`distance_field`", "--no-distance-field"},
+      {"`blocks`", "--no-blocks"},
+      {"`rc.probe_spacing`", "--probe-spacing"},
+      {"`rc.directions`", "--directions"},
+      {"`rc.branching`", "--branching"},
+      {"`rc.interval`", "--interval"},
+      {"`rc.cascades`", "--cascades"},
+      {"`rc.fix`", "--fix"},
+      {"`rc.preaverage`", "--preaverage"},
+      {"`rc.extend_length`", "--extend-length"},
+      {"`rc.extend`", "--extend"},
+      {"`hrc.storage`", "--storage"},
+      {"`hrc.cross_blur`", "--no-cross-blur"},
+      {"`hrc.near_segment`", "--no-near-segment"},
+      {"`pt.spp`", "--spp"},
+      {"`pt.seconds`", "--time"},
+      {"`pt.nee`", "--nee"},
+      {"`pt.sampler`", "--sampler"},
+      {"`pt.seed`", "--seed"},
+  };
+  for (const auto& [field, flag] : kFlags)
+    for (std::size_t at = message.find(field); at != std::string::npos;
+         at = message.find(field, at))
+      message.replace(at, std::string(field).size(), flag);
+  return message;
 }

@@ -57,3 +57,7 @@ void add_render_options(CLI::App* app, penumbra::flatland::RenderOptions& option
 // After the parse: the "not" flags, and --time without --spp meaning no sample limit.
 void finish_render_options(penumbra::flatland::RenderOptions& options,
                            const RenderOptionFlags& flags);
+
+// The library names options by their RenderOptions field in messages (`rc.probe_spacing`); the
+// command line shows `message` with each such field replaced by the flag registered above for it.
+std::string with_flags(std::string message);

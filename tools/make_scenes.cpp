@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "bench_scenes.hpp"
+#include "core/tone_map.hpp"
 #include "io/image_io.hpp"
 #include "penumbra/flatland/scene.hpp"
 #include "penumbra/io.hpp"
@@ -105,17 +106,13 @@ struct Plane {
   float& at(int x, int y) { return v[std::size_t(y) * width + x]; }
 };
 
-unsigned char to_byte(float v) {
-  return (unsigned char)std::lround(std::clamp(v, 0.0f, 1.0f) * 255);
-}
-
 // Three planes as an 8-bit RGB picture (values in [0, 1], stored as they are).
 ImageRgb8 picture(const Plane& r, const Plane& g, const Plane& b) {
   ImageRgb8 p{r.width, r.height, std::vector<unsigned char>(r.v.size() * 3)};
   for (std::size_t i = 0; i < r.v.size(); ++i) {
-    p.rgb[3 * i] = to_byte(r.v[i]);
-    p.rgb[3 * i + 1] = to_byte(g.v[i]);
-    p.rgb[3 * i + 2] = to_byte(b.v[i]);
+    p.rgb[3 * i] = to_byte(std::clamp(r.v[i], 0.0f, 1.0f));
+    p.rgb[3 * i + 1] = to_byte(std::clamp(g.v[i], 0.0f, 1.0f));
+    p.rgb[3 * i + 2] = to_byte(std::clamp(b.v[i], 0.0f, 1.0f));
   }
   return p;
 }

@@ -6,7 +6,6 @@
 #include <cmath>
 #include <thread>
 
-#include "field_flags.hpp"
 #include "paint/window.hpp"
 
 using namespace penumbra;
@@ -124,7 +123,7 @@ void Painter::draw_panel() {
     ImGui::InputText("scene file", &file_);
     if (ImGui::Button("Save")) {
       Status s = canvas_.save(file_);
-      message_ = s ? "saved " + file_ : with_flags(s.error().message);
+      message_ = s ? "saved " + file_ : s.error().message;
     }
     ImGui::SameLine();
     if (ImGui::Button("Load")) {
@@ -139,7 +138,7 @@ void Painter::draw_panel() {
         replace_canvas(std::move(*c));
         message_ = "loaded " + file_;
       } else {
-        message_ = with_flags(c.error().message);
+        message_ = c.error().message;
       }
     }
     ImGui::TextDisabled("emission scale %g", canvas_.emission_scale());

@@ -3,8 +3,6 @@
 // is slow.
 #include "paint/window.hpp"
 
-#include "field_flags.hpp"
-
 #define GLFW_INCLUDE_NONE
 #include <GL/gl.h>
 #include <GLFW/glfw3.h>
@@ -117,8 +115,7 @@ void Painter::submit() {
     return;
   if (options_version_ != submitted_options_)
     if (Status m = painter_memory(canvas_.width(), canvas_.height(), options_); !m) {
-      message_ =
-          with_flags(m.error().message);  // the worker goes on showing the last accepted settings
+      message_ = m.error().message;  // the worker goes on showing the last accepted settings
       return;
     }
   submitted_scene_ = canvas_.version();
@@ -159,7 +156,7 @@ void Painter::handle_input() {
       painting_ = true;
       recorded_.push_back({brush_, {{cx, cy}}});
     } else {
-      message_ = with_flags(s.error().message);
+      message_ = s.error().message;
     }
   } else if (painting_ && ImGui::IsMouseDown(ImGuiMouseButton_Left)) {
     auto& last = recorded_.back().points.back();
@@ -195,7 +192,7 @@ void Painter::handle_input() {
   const bool s_down = ctrl && key_s;
   if (s_down && !save_down_) {
     Status saved = canvas_.save(file_);
-    message_ = saved ? "saved " + file_ : with_flags(saved.error().message);
+    message_ = saved ? "saved " + file_ : saved.error().message;
   }
   save_down_ = s_down;
   const bool q_down = ctrl && key_q;
@@ -235,7 +232,7 @@ int Painter::write_outputs(const std::vector<unsigned char>* shot, int shot_w, i
     return io::stage_text(paths[i], paint::strokes_json(record));
   });
   if (!s) {
-    std::cerr << "penumbra paint: " << with_flags(s.error().message) << "; nothing written\n";
+    std::cerr << "penumbra paint: " << s.error().message << "; nothing written\n";
     return kFailure;
   }
   return 0;
@@ -303,7 +300,7 @@ int Painter::run() {
     if (replayed_ < replay_.size()) {
       const std::string where = args_.replay + ": strokes[" + std::to_string(replayed_) + "]";
       if (Status s = canvas_.apply(replay_[replayed_], where); !s) {
-        std::cerr << "penumbra paint: " << with_flags(s.error().message) << "\n";
+        std::cerr << "penumbra paint: " << s.error().message << "\n";
         status = kFailure;
         break;
       }

@@ -4,7 +4,7 @@
 #include <utility>
 
 #include "core/timer.hpp"
-#include "field_flags.hpp"
+#include "render_options.hpp"
 
 using namespace penumbra;
 using namespace penumbra::flatland;

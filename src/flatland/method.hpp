@@ -50,7 +50,7 @@ struct MethodEntry {
   // once per bounce with the previous bounce's re-emission.
   bool bounces_itself;
   // Ranges and combinations of the method's own options for the plan's grid; fills derived
-  // values. Messages name options by their field (`rc.interval`).
+  // values. Messages name options by their field (`rc.interval`). Null: no options of its own.
   Status (*check)(Plan& plan);
   // CPU working memory beyond the medium, its skipping structures and the bounce buffers.
   std::uint64_t (*working_bytes)(const Plan& plan);

@@ -3,8 +3,7 @@
 
 #include <tbb/task_arena.h>
 
-#include <cmath>
-#include <limits>
+#include <cstdio>
 #include <string>
 
 #include "core/math.hpp"
@@ -36,16 +35,12 @@ std::string human_bytes(std::uint64_t b) {
   return buf;
 }
 
-}  // namespace
-
-namespace {
-
-// Refuses a plan whose memory need exceeds its options.max_memory: the method's working memory,
-// plus the rasterised scene when `with_scene` (a program that has not built the scene yet).
-Status check_plan_memory(const Plan& plan, bool with_scene) {
+// Refuses a plan whose memory need exceeds its options.max_memory: `working` (the plan's
+// working_bytes), plus the rasterised scene when `with_scene` (a program that has not built the
+// scene yet).
+Status check_plan_memory(const Plan& plan, std::uint64_t working, bool with_scene) {
   const RenderOptions& o = plan.options;
-  const std::uint64_t need =
-      working_bytes(plan) + (with_scene ? scene_bytes(plan.width, plan.height) : 0);
+  const std::uint64_t need = working + (with_scene ? scene_bytes(plan.width, plan.height) : 0);
   if (need <= o.max_memory) return {};
   return Error{"a " + std::to_string(plan.width) + "x" + std::to_string(plan.height) +
                " grid needs " + human_bytes(need) + " of " +
@@ -67,12 +62,8 @@ std::uint64_t estimate_memory(const Scene& scene, const RenderOptions& options) 
 
 Status check_memory(int width, int height, const RenderOptions& options, bool with_scene) {
   Expected<Plan> plan = make_plan(width, height, options);
-  if (!plan) {  // as estimate_memory: invalid options need more than any limit
-    if (~std::uint64_t(0) <= options.max_memory) return {};
-    return Error{"a " + std::to_string(width) + "x" + std::to_string(height) +
-                 " grid: " + plan.error().message};
-  }
-  return check_plan_memory(*plan, with_scene);
+  if (!plan) return plan.error();  // invalid options: no memory need can be known
+  return check_plan_memory(*plan, working_bytes(*plan), with_scene);
 }
 
 std::uint64_t scene_bytes(int width, int height) {
@@ -114,10 +105,6 @@ Expected<gpu::Solver*> gpu_for(const RenderOptions& o, Renderer::State& state) {
   return state.gpu.get();
 }
 
-}  // namespace
-
-namespace {
-
 Expected<RenderResult> render_unchecked(const Scene& scene, const RenderOptions& options,
                                         Renderer::State& state) {
   if (scene.width < 1 || scene.height < 1 || scene.cells() != scene.opacity.size() ||
@@ -128,12 +115,12 @@ Expected<RenderResult> render_unchecked(const Scene& scene, const RenderOptions&
   if (!planned) return planned.error();
   Plan& plan = *planned;
   const MethodEntry& method = entry(options.method);
-  if (Status s = check_plan_memory(plan, false); !s) return s.error();
-  if (method.check_scene)
-    if (Status s = method.check_scene(scene, options); !s) return s.error();
   RenderResult result;
   result.options = plan.options;
   result.memory_bytes = working_bytes(plan);
+  if (Status s = check_plan_memory(plan, result.memory_bytes, false); !s) return s.error();
+  if (method.check_scene)
+    if (Status s = method.check_scene(scene, options); !s) return s.error();
 
   Expected<gpu::Solver*> device = gpu_for(options, state);
   if (!device) return device.error();

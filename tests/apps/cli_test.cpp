@@ -406,6 +406,30 @@ TEST_F(Cli, ExtendNeedsAFixOtherThanBilinear) {
   EXPECT_NE(r.err.find("bilinear"), std::string::npos) << r.err;
 }
 
+// The library names options by field (`rc.fix`); the command line shows its flags instead.
+TEST_F(Cli, OptionMessagesNameTheFlags) {
+  struct Case {
+    std::vector<std::string> args;
+    std::string flag;
+  };
+  const Case cases[] = {
+      {{"--extend"}, "--fix"},
+      {{"--extend", "--fix", "none", "--preaverage"}, "--preaverage"},
+      {{"--cascades", "16", "--directions", "64"}, "--directions"},
+      {{"--max-memory", "1K"}, "--max-memory"},
+      {{"--method", "pt", "--spp", "0"}, "--time"},
+      {{"--method", "pt", "--device", "gpu"}, "path tracer"},
+  };
+  for (const Case& c : cases) {
+    std::vector<std::string> args = {"render", scene_, "-o", out("x.png")};
+    args.insert(args.end(), c.args.begin(), c.args.end());
+    const Result r = run(args);
+    EXPECT_NE(r.status, 0) << c.flag;
+    EXPECT_NE(r.err.find(c.flag), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find('`'), std::string::npos) << "a field name left in: " << r.err;
+  }
+}
+
 // A failed run leaves files that were there before untouched.
 TEST_F(Cli, FailedRunKeepsExistingOutputs) {
   const std::string keep = out("keep.pfm");

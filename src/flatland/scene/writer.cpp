@@ -12,6 +12,7 @@
 #include <variant>
 #include <vector>
 
+#include "io/json_reader.hpp"
 #include "penumbra/flatland/scene.hpp"
 
 namespace penumbra::flatland {
@@ -21,15 +22,14 @@ namespace {
 // negative zero gets a fraction to keep its sign.
 std::string num(float v) {
   if (v == 0 && std::signbit(v)) return "-0.0";
-  char buf[32];
-  auto r = std::to_chars(buf, buf + sizeof buf, v);
+  const std::string text = io::format_number(v);
   // The reader parses a double and rounds it to float. Rounding twice moves one float pair
   // (+-7.038531e-26, found by trying every float) a step away; the double's text does not.
   double back = 0;
-  std::from_chars(buf, r.ptr, back);
+  std::from_chars(text.data(), text.data() + text.size(), back);
   if (std::bit_cast<std::uint32_t>(static_cast<float>(back)) != std::bit_cast<std::uint32_t>(v))
-    r = std::to_chars(buf, buf + sizeof buf, static_cast<double>(v));
-  return std::string(buf, r.ptr);
+    return io::format_number(static_cast<double>(v));
+  return text;
 }
 
 // Joins pieces of text. (GCC 12 warns falsely, -Wrestrict, on "literal" + std::string&&.)

@@ -1,8 +1,11 @@
 // Options whose values are the library's enums, named on the command line as to_string() names
-// them, so that the parser, the help and the reports agree.
+// them, so that the parser, the help and the reports agree; ranges of real numbers printed as a
+// person writes them.
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <charconv>
+#include <cmath>
 #include <map>
 #include <string>
 #include <vector>
@@ -24,4 +27,23 @@ CLI::Option* add_enum_option(CLI::App* app, const std::string& name, E& value,
           name, [&value, names](const std::string& s) { value = names.at(s); }, help)
       ->check(CLI::IsMember(list))
       ->default_str(penumbra::flatland::to_string(value));
+}
+
+// CLI::Range for real numbers, which prints its bounds as "1000000000.000000": this one says
+// "Value 3e38 not in range 0.001 to 1e+09" (shortest round-trip spelling).
+inline CLI::Validator real_range(double lo, double hi) {
+  auto spell = [](double v) {
+    char buf[32];
+    return std::string(buf, std::to_chars(buf, buf + sizeof buf, v).ptr);
+  };
+  const std::string bounds = spell(lo) + " to " + spell(hi);
+  return CLI::Validator(
+      [lo, hi, bounds](std::string& text) -> std::string {
+        double v = 0;
+        if (!CLI::detail::lexical_cast(text, v) || std::isnan(v))
+          return "Value " + text + " is not a number";
+        if (v < lo || v > hi) return "Value " + text + " not in range " + bounds;
+        return {};
+      },
+      "NUMBER in [" + bounds + "]");
 }

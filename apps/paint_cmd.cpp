@@ -10,6 +10,7 @@
 #include <utility>
 #include <vector>
 
+#include "cli_enums.hpp"
 #include "flatland/paint/canvas.hpp"
 #include "io/path_util.hpp"
 #include "paint/window.hpp"
@@ -57,12 +58,12 @@ std::unique_ptr<PaintCommand> add_paint_command(CLI::App& app) {
   c->add_option("--save", a.save,
                 "Write the painting as a scene file (JSON + 16-bit PNG layers) at exit");
   c->add_option("--zoom", a.zoom, "Window pixels per cell (0: fit about 800 pixels)")
-      ->check(CLI::Range(0.0f, 64.0f))
+      ->check(real_range(0, 64))
       ->capture_default_str();
   c->add_option("--emission-scale", a.emission_scale,
                 "Brightest radiance the canvas holds (the saved emission_scale); a scene's "
                 "brightest cell raises it")
-      ->check(CLI::Range(1e-3f, 1e9f))
+      ->check(real_range(1e-3, 1e9))
       ->each([&a](const std::string&) { a.emission_scale_given = true; })
       ->capture_default_str();
   add_render_options(c, a.options, a.flags, second);

@@ -81,6 +81,8 @@ int run_quality(const QualityArgs& a) {
   if (!desc) return fail(desc.error().message);
   RenderOptions probe;
   probe.threads = a.threads;
+  probe.bounces = a.bounces;
+  if (Status s = check_brightness(*desc, probe); !s) return fail(s.error().message);
   if (Status s = check_memory(desc->width, desc->height, probe, true); !s)
     return fail(a.scene + ": " + with_flags(s.error().message));
   Expected<Scene> scene = build_scene(*desc);

@@ -130,6 +130,11 @@ int render_scene(const RenderArgs& a) {
     std::cerr << "penumbra render: " << with_flags(s.error().message) << "\n";
     return kUsage;
   }
+  // A scene whose fluence a float cannot hold names its brightest value.
+  if (penumbra::Status s = penumbra::flatland::check_brightness(*desc, options); !s) {
+    std::cerr << "penumbra render: " << s.error().message << "\n";
+    return kFailure;
+  }
   // Refuse up front, before the grid itself is allocated.
   if (penumbra::Status s =
           penumbra::flatland::check_memory(desc->width, desc->height, options, true);

@@ -60,7 +60,7 @@ void add_render_options(CLI::App* app, RenderOptions& options, RenderOptionFlags
                   "Trace a 2x2 sub-probe neighbourhood and store the average");
     app->add_flag("--extend", rc.extend, "Build long intervals by extending a short traced one");
     app->add_option("--extend-length", rc.extend_length, "Traced length before extension, cells")
-        ->check(CLI::Range(1.0f, 1.0e6f))
+        ->check(real_range(1, 1e6))
         ->capture_default_str();
   }
   if (which.device)

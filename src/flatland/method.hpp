@@ -38,6 +38,11 @@ namespace gpu {
 struct MethodPasses;  // flatland/gpu/method.hpp
 }
 
+// The largest radiance (the brightest emission times bounces + 1) a method computes with as it
+// is: far inside the float range, so that sums on the way (a path tracer's samples, the merges)
+// cannot overflow. Brighter scenes are rendered at a power-of-two fraction of their light.
+inline constexpr double kLargestRadiance = 0x1p64;
+
 struct MethodEntry {
   Method method;
   const char* name;     // as to_string(), the command line and --json name it
@@ -56,8 +61,9 @@ struct MethodEntry {
   std::uint64_t (*working_bytes)(const Plan& plan);
   // What helps when the memory need is too large (", or use a larger `rc.probe_spacing`").
   const char* (*memory_advice)(const RenderOptions& options);
-  // Refuses a scene the method cannot represent; null: any scene.
-  Status (*check_scene)(const Scene& scene, const RenderOptions& options);
+  // The largest radiance the method's storage holds (HRC's f16 buffers); the dispatcher renders a
+  // brighter scene at a power-of-two fraction of its light. Null: floats (kLargestRadiance).
+  double (*largest_radiance)(const RenderOptions& options);
   // Fluence at every cell centre (3 floats per cell); stage times appended to `stages`.
   std::vector<float> (*solve)(CpuSolve& solve, std::vector<StageTime>& stages);
   // Intervals one solve traces; null when the solve counts them itself (pt's rays).

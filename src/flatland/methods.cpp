@@ -8,6 +8,7 @@
 #include "flatland/method.hpp"
 #include "flatland/pt/pt.hpp"
 #include "flatland/rc/rc.hpp"
+#include "io/json_reader.hpp"
 
 namespace penumbra::flatland {
 namespace {
@@ -28,7 +29,7 @@ Status rc_check(Plan& p) {
   if (rc.branching != 2 && rc.branching != 4)
     return bad("`rc.branching`: expected 2 or 4, found " + std::to_string(rc.branching));
   if (!(rc.interval > 0.0f) || !std::isfinite(rc.interval))
-    return bad("`rc.interval` t0: expected a number > 0, found " + std::to_string(rc.interval));
+    return bad("`rc.interval` t0: expected a number > 0, found " + io::format_number(rc.interval));
   if (rc.cascades < 0 || rc.cascades > 16)
     return bad("`rc.cascades`: expected 0 (automatic) or 1..16, found " +
                std::to_string(rc.cascades));
@@ -40,14 +41,14 @@ Status rc_check(Plan& p) {
     if (rc.preaverage) return bad("`rc.extend`: cannot be combined with `rc.preaverage`");
     if (!(rc.extend_length >= 1.0f) || !std::isfinite(rc.extend_length))
       return bad("`rc.extend_length`: expected a number >= 1, found " +
-                 std::to_string(rc.extend_length));
+                 io::format_number(rc.extend_length));
   }
   // The derived count grows as t0 shrinks; spacing s0 * 2^n and Q0 * b^n must stay sane.
   const int count = rc.cascades > 0
                         ? rc.cascades
                         : rc::cascade_count(p.width, p.height, rc.interval, rc.branching);
   if (count > 16)
-    return bad("`rc.interval` t0: " + std::to_string(rc.interval) + " needs " +
+    return bad("`rc.interval` t0: " + io::format_number(rc.interval) + " needs " +
                std::to_string(count) +
                " cascades to reach the grid diagonal, more than 16; use a larger `rc.interval`");
   const std::int64_t top = rc::top_directions(rc.directions, rc.branching, count - 1);
@@ -92,8 +93,8 @@ const char* hrc_advice(const RenderOptions& o) {
   return o.hrc.storage == Storage::f32 ? ", or use `hrc.storage` f16" : "";
 }
 
-Status hrc_scene(const Scene& scene, const RenderOptions& o) {
-  return hrc::check_scene(scene, o.hrc);
+double hrc_largest_radiance(const RenderOptions& o) {
+  return o.hrc.storage == Storage::f16 ? hrc::kHalfMaxRadiance : kLargestRadiance;
 }
 
 std::vector<float> hrc_solve(CpuSolve& s, std::vector<StageTime>& stages) {
@@ -113,7 +114,7 @@ Status pt_check(Plan& p) {
   if (pt.spp < 0) return bad("`pt.spp`: expected >= 0, found " + std::to_string(pt.spp));
   if (!(pt.seconds >= 0) || !std::isfinite(pt.seconds))
     return bad("`pt.seconds`: expected a number of seconds >= 0, found " +
-               std::to_string(pt.seconds));
+               io::format_number(pt.seconds));
   if (pt.spp == 0 && pt.seconds == 0)
     return bad("`pt.spp`: 0 (no limit) needs a time limit (`pt.seconds`)");
   return {};
@@ -140,7 +141,7 @@ const MethodEntry kMethods[] = {
      no_advice, nullptr, pt_solve, nullptr, nullptr},
     {Method::hrc, "hrc", "holographic radiance cascades",
      "holographic radiance cascades (seed 004)", false, false, nullptr, hrc_bytes, hrc_advice,
-     hrc_scene, hrc_solve, hrc_intervals, &gpu::kHrcPasses},
+     hrc_largest_radiance, hrc_solve, hrc_intervals, &gpu::kHrcPasses},
 };
 
 }  // namespace

@@ -3,6 +3,8 @@
 
 #include <tbb/task_arena.h>
 
+#include <cfloat>
+#include <cmath>
 #include <cstdio>
 #include <string>
 
@@ -14,6 +16,7 @@
 #include "flatland/medium.hpp"
 #include "flatland/method.hpp"
 #include "gpu/vulkan.hpp"
+#include "io/json_reader.hpp"
 
 namespace penumbra::flatland {
 
@@ -70,6 +73,91 @@ std::uint64_t scene_bytes(int width, int height) {
   return std::uint64_t(width) * height * 7 * sizeof(float);
 }
 
+// ---- Brightness ---------------------------------------------------------------------------
+// Radiance is at most the brightest emission or environment L times (bounces + 1) (albedo is at
+// most 1, so each bounce re-emits no more than the light it received), and fluence at most 2 pi
+// times that. A scene whose bound passes the float range is refused; every method is linear in
+// the light, so a scene too bright for the storage is rendered at 2^-k of its light and the
+// result scaled back by 2^k, which only moves exponents and so is exact.
+
+namespace {
+
+struct Brightest {
+  double value = 0;   // the largest magnitude
+  std::string where;  // what holds it, for messages
+};
+
+double fluence_bound(double radiance, int bounces) {
+  return kTwoPi * radiance * (bounces + 1.0);
+}
+
+Status too_bright(const std::string& where, double value, int bounces) {
+  return Error{where + ": " + io::format_number(float(value)) +  // values are floats
+               " is too bright to render: the fluence can reach 2 pi x " +
+               io::format_rounded(value) + " x " + std::to_string(bounces + 1) +
+               " (bounces + 1) = " + io::format_rounded(fluence_bound(value, bounces)) +
+               ", more than a float holds (" + io::format_rounded(FLT_MAX) +
+               "); scale the scene's emission and environment down"};
+}
+
+void consider(Brightest& b, const Rgb& c, const std::string& where) {
+  for (float v : {c.r, c.g, c.b})
+    if (std::fabs(v) > b.value) b = {std::fabs(v), where};
+}
+
+// The brightest emission or environment of a rasterised scene; an error for a value that is not
+// finite (a Scene built by hand).
+Expected<Brightest> brightest(const Scene& scene) {
+  Brightest b;
+  const Rgb& env = scene.environment;
+  if (!std::isfinite(env.r) || !std::isfinite(env.g) || !std::isfinite(env.b))
+    return Error{"scene: the environment is not finite"};
+  consider(b, env, "scene: the environment");
+  std::size_t at = 0;
+  float largest = 0;
+  for (std::size_t i = 0; i < scene.emission.size(); ++i) {
+    const float v = std::fabs(scene.emission[i]);
+    if (!(v <= FLT_MAX)) {  // also NaN
+      return Error{"scene: the emission of cell (" + std::to_string(i / 3 % scene.width) + ", " +
+                   std::to_string(i / 3 / scene.width) + ") is not finite"};
+    }
+    if (v > largest) largest = v, at = i / 3;
+  }
+  if (largest > b.value)
+    b = {largest, "scene: the emission of cell (" + std::to_string(at % scene.width) + ", " +
+                      std::to_string(at / scene.width) + ")"};
+  return b;
+}
+
+// The power of two the light is divided by so that the radiance bound fits the method's storage.
+int light_exponent(double radiance, const RenderOptions& o) {
+  const MethodEntry& m = entry(o.method);
+  const double largest = m.largest_radiance ? m.largest_radiance(o) : kLargestRadiance;
+  const double bound = radiance * (o.bounces + 1.0);
+  if (bound <= largest) return 0;
+  int k = int(std::ceil(std::log2(bound / largest)));
+  while (std::ldexp(bound, -k) > largest) ++k;  // log2's rounding
+  return k;
+}
+
+}  // namespace
+
+Status check_brightness(const SceneDesc& desc, const RenderOptions& options) {
+  Brightest b;
+  consider(b, desc.environment, "environment");
+  for (std::size_t i = 0; i < desc.shapes.size(); ++i)
+    consider(b, desc.shapes[i].material.emission, "shapes[" + std::to_string(i) + "].emission");
+  if (const auto& layer = desc.layers.emission) {
+    const float* p = layer->data();
+    for (std::size_t i = 0; i < std::size_t(layer->width()) * layer->height() * 3; ++i)
+      if (std::fabs(p[i]) > b.value)
+        b = {std::fabs(p[i]), "layers.emission: pixel (" + std::to_string(i / 3 % layer->width()) +
+                                  ", " + std::to_string(i / 3 / layer->width()) + ")"};
+  }
+  if (fluence_bound(b.value, options.bounces) <= FLT_MAX) return {};
+  return too_bright(desc.source + ": " + b.where, b.value, options.bounces);
+}
+
 // What a Renderer keeps between renders: the packed medium, HRC's buffers, and the GPU solver
 // (its kernels, scene and buffers stay on the device).
 struct Renderer::State {
@@ -115,32 +203,60 @@ Expected<RenderResult> render_unchecked(const Scene& scene, const RenderOptions&
   if (!planned) return planned.error();
   Plan& plan = *planned;
   const MethodEntry& method = entry(options.method);
+  Expected<Brightest> light = brightest(scene);
+  if (!light) return light.error();
+  if (fluence_bound(light->value, options.bounces) > FLT_MAX)
+    return too_bright(light->where, light->value, options.bounces).error();
+  const int exponent = light_exponent(light->value, options);
   RenderResult result;
   result.options = plan.options;
-  result.memory_bytes = working_bytes(plan);
+  // A scene rendered at a fraction of its light is a copy.
+  result.memory_bytes =
+      working_bytes(plan) + (exponent ? scene_bytes(scene.width, scene.height) : 0);
   if (Status s = check_plan_memory(plan, result.memory_bytes, false); !s) return s.error();
-  if (method.check_scene)
-    if (Status s = method.check_scene(scene, options); !s) return s.error();
+  Scene dimmed;
+  if (exponent) {
+    dimmed = scene;
+    for (float& v : dimmed.emission) v = std::ldexp(v, -exponent);
+    for (float* v : {&dimmed.environment.r, &dimmed.environment.g, &dimmed.environment.b})
+      *v = std::ldexp(*v, -exponent);
+  }
+  const Scene& lit = exponent ? dimmed : scene;
 
   Expected<gpu::Solver*> device = gpu_for(options, state);
   if (!device) return device.error();
 
   rc::fill_directions(plan.cascades);
-  auto finish = [&] {  // totals of time and traced intervals
+  // Totals of time and traced intervals; the light scaled back; nothing that is not finite
+  // leaves (the bound above should make this unreachable).
+  auto finish = [&]() -> Expected<RenderResult> {
     for (const StageTime& s : result.stages) result.time_ms += s.ms;
     if (method.intervals)
       result.intervals = method.intervals(plan) * std::uint64_t(options.bounces);
+    float* f = result.fluence.data();
+    const std::size_t n = scene.cells() * 3;
+    if (exponent)
+      parallel_for(scene.height, [&](int y) {
+        for (std::size_t i = std::size_t(y) * scene.width * 3; i < (y + 1) * scene.width * 3ull;
+             ++i)
+          f[i] = std::ldexp(f[i], exponent);
+      });
+    for (std::size_t i = 0; i < n; ++i)
+      if (!std::isfinite(f[i]))
+        return Error{std::string(method.title) + " gave a value that is not finite at cell (" +
+                     std::to_string(i / 3 % scene.width) + ", " +
+                     std::to_string(i / 3 / scene.width) + ")"};
+    return std::move(result);
   };
   if (*device) {  // the whole render on the GPU: the stages are its pass times
     gpu::Solver& solver = **device;
-    Expected<std::vector<float>> f = solver.render(scene, plan, result.stages);
+    Expected<std::vector<float>> f = solver.render(lit, plan, result.stages);
     if (f) {
       result.fluence = ImageRgb(scene.width, scene.height, std::move(*f));
       result.device = solver.context().info().name;
       result.gpu_memory_bytes = solver.allocated_bytes();
       result.uploaded_bytes = solver.uploaded_bytes();
-      finish();
-      return result;
+      return finish();
     }
     if (options.device != Device::auto_) return f.error();
     result.stages.clear();  // auto: the CPU does it instead
@@ -151,7 +267,7 @@ Expected<RenderResult> render_unchecked(const Scene& scene, const RenderOptions&
   arena.execute([&] {
     Stopwatch watch;
     Medium& medium = state.medium;
-    fill_medium(scene, medium);
+    fill_medium(lit, medium);
     result.stages.push_back({"medium", watch.ms()});
     if (method.skips_empty_space && options.distance_field) {
       watch.restart();
@@ -163,7 +279,7 @@ Expected<RenderResult> render_unchecked(const Scene& scene, const RenderOptions&
       build_blocks(medium);
       result.stages.push_back({"blocks", watch.ms()});
     }
-    CpuSolve solve{scene, plan, medium, state.workspace, result};
+    CpuSolve solve{lit, plan, medium, state.workspace, result};
     std::vector<float> f = method.solve(solve, result.stages);
     // More bounces: diffuse re-emission albedo * F / 2pi added to the scene's own emission.
     for (int bounce = 2; !method.bounces_itself && bounce <= options.bounces; ++bounce) {
@@ -172,7 +288,7 @@ Expected<RenderResult> render_unchecked(const Scene& scene, const RenderOptions&
       parallel_for(scene.height, [&](int y) {
         for (int x = 0; x < scene.width; ++x) {
           const std::size_t i = scene.index(x, y);
-          const float* le = &scene.emission[3 * i];
+          const float* le = &lit.emission[3 * i];
           const float* rho = &scene.albedo[3 * i];
           Cell& c = medium.cells[i];
           c.r = le[0] + rho[0] * f[3 * i] * k;
@@ -188,8 +304,7 @@ Expected<RenderResult> render_unchecked(const Scene& scene, const RenderOptions&
     }
     result.fluence = ImageRgb(scene.width, scene.height, std::move(f));
   });
-  finish();
-  return result;
+  return finish();
 }
 
 }  // namespace

@@ -23,6 +23,13 @@ struct JsonFailure {
 // Shortest text that reads back as the same number ("-0.1", "16385", "inf", "nan").
 std::string format_number(float v);
 std::string format_number(double v);
+// A computed quantity as a person reads it: three significant digits ("3.4e+38", "41700").
+std::string format_rounded(double v);
+
+// Parses JSON text of `file`. A syntax error throws JsonFailure "file: line L, column C: invalid
+// JSON: ..."; a number beyond the double range "file: path: expected a finite number, found
+// 1e999 (out of range)".
+nlohmann::json parse_json(std::string_view text, const std::string& file);
 
 // What a JSON value is, for "found ..." in messages.
 std::string describe(const nlohmann::json& j);

@@ -377,7 +377,11 @@ TEST(PaintStrokes, ErrorsNameTheFileAndJsonPath) {
       {R"({"strokes": [{"tool": "wall", "size": 3, "points": [[1, 1]]}]})", "strokes[0].size"},
       {R"({"strokes": 3})", "strokes"},
       {R"({"lines": []})", "lines"},
-      {R"({"strokes": [)", "not valid JSON"},
+      // The scene loader's wording: line and column, no library exception text.
+      {"{\"strokes\": [\n  {\"tool\": \"wall\",, }]}",
+       "bad.json: line 2, column 19: invalid JSON: "},
+      {R"({"strokes": [{"tool": "light", "intensity": 1e999, "points": [[1, 1]]}]})",
+       "bad.json: strokes[0].intensity: expected a finite number, found 1e999 (out of range)"},
       {R"({"size": [0, 4], "strokes": []})", "size"},
       {R"({"size": [4], "strokes": []})", "size"},
       {R"({"size": [4.5, 4], "strokes": []})", "size"},
@@ -387,6 +391,7 @@ TEST(PaintStrokes, ErrorsNameTheFileAndJsonPath) {
     ASSERT_FALSE(s.ok()) << text;
     EXPECT_EQ(s.error().message.rfind("bad.json: ", 0), 0u) << s.error().message;
     EXPECT_NE(s.error().message.find(path), std::string::npos) << s.error().message;
+    EXPECT_EQ(s.error().message.find("[json.exception"), std::string::npos) << s.error().message;
   }
   Expected<paint::StrokeFile> missing = paint::load_strokes("/nonexistent/strokes.json");
   ASSERT_FALSE(missing.ok());

@@ -43,7 +43,7 @@ struct RcOptions {
 // Precision of stored intervals.
 enum class Storage {
   f32,  // 32-bit floats
-  f16,  // 16-bit floats (half the memory; radiance above kHalfMaxRadiance is refused)
+  f16,  // 16-bit floats (half the memory; brighter scenes are rendered at a scaled light)
 };
 
 // Holographic radiance cascades (seed 004 section 4). See docs/METHODS.md.
@@ -141,8 +141,16 @@ std::uint64_t scene_bytes(int width, int height);
 // built the scene yet).
 Status check_memory(int width, int height, const RenderOptions& options, bool with_scene);
 
-// Runs the method. Refuses up front (Error, nothing allocated) when options are invalid or the
-// memory estimate exceeds options.max_memory.
+// Refuses a scene whose fluence a float cannot hold: radiance is at most the brightest emission
+// or environment L times (bounces + 1), fluence at most 2 pi times that. The message names the
+// file and the JSON path of the brightest value. render() checks a rasterised scene the same way
+// (naming the cell), and renders a scene too bright for a method's storage at a power-of-two
+// fraction of its light, scaling the result back exactly.
+Status check_brightness(const SceneDesc& desc, const RenderOptions& options);
+
+// Runs the method. Refuses up front (Error, nothing allocated) when options are invalid, the
+// memory estimate exceeds options.max_memory, or the scene is too bright (check_brightness); never
+// returns a fluence that is not finite.
 Expected<RenderResult> render(const Scene& scene, const RenderOptions& options);
 
 // Renders again and again with the same buffers: a program that renders every frame (the

@@ -742,16 +742,6 @@ std::uint64_t paper_bytes(int width, int height, const HrcOptions& o) {
   return std::uint64_t((n + 3 + std::ldexp(1.0, -n)) * four_n * (vr + vt) + 2 * four_n * vr);
 }
 
-Status check_scene(const Scene& scene, const HrcOptions& options) {
-  if (options.storage != Storage::f16) return {};
-  float brightest = 0;
-  for (float e : scene.emission) brightest = std::max(brightest, e);
-  if (brightest <= kHalfMaxRadiance) return {};
-  return Error{"storage f16: the brightest emission, " + std::to_string(brightest) +
-               ", is more than half precision holds (" + std::to_string(kHalfMaxRadiance) +
-               "); use `hrc.storage` f32"};
-}
-
 std::uint64_t traced_intervals(int width, int height) {
   std::uint64_t total = 0;
   for (int d = 0; d < 4; ++d) {

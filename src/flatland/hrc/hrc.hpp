@@ -33,14 +33,10 @@ std::uint64_t paper_bytes(int width, int height, const HrcOptions& options);
 // Intervals traced through the cells (T_0..T_2 of the four quadrants); everything else is merged.
 std::uint64_t traced_intervals(int width, int height);
 
-// Largest emitted radiance half-precision storage holds without overflowing (the angular fluence
-// of a quadrant is at most pi/2 times the brightest radiance).
+// Largest radiance half-precision storage holds without overflowing (the angular fluence of a
+// quadrant is at most pi/2 times the brightest radiance). The dispatcher renders brighter scenes
+// at a power-of-two fraction of their light (render.cpp).
 inline constexpr float kHalfMaxRadiance = 65504.0f / float(kPi / 2);
-
-// Refuses a scene the storage cannot hold: in f16, emission above kHalfMaxRadiance (every stored
-// value is at most the brightest radiance times pi/2, and a bounce re-emits no more than the
-// light it received).
-Status check_scene(const Scene& scene, const HrcOptions& options);
 
 // The buffers of a solve, kept from one solve to the next of the same grid (bounces, the
 // benchmarks, interactive use), so that the steady state allocates nothing. Buffers are not

@@ -431,13 +431,8 @@ class StrokeReader : public io::JsonReader {
 }  // namespace
 
 Expected<StrokeFile> parse_strokes(std::string_view text, const std::string& path) {
-  json doc;
   try {
-    doc = json::parse(text);
-  } catch (const json::parse_error& e) {
-    return Error{path + ": not valid JSON: " + e.what()};
-  }
-  try {
+    const json doc = io::parse_json(text, path);
     const StrokeReader r(path);
     if (!doc.is_object()) r.expected("(document)", "an object with \"strokes\"", doc);
     r.check_keys(doc, "", {"strokes", "size"});

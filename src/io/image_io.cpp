@@ -20,6 +20,7 @@
 #include <cerrno>
 #include <charconv>
 #include <cmath>
+#include <csignal>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
@@ -29,6 +30,7 @@
 #include <iterator>
 #include <limits>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <utility>
 #include <vector>
@@ -336,6 +338,78 @@ class MemoryOStream : public Imf::OStream {
 
 // ---- Atomic writing ----------------------------------------------------------------------
 
+// Staged files are removed when SIGINT or SIGTERM ends the process while they exist: their
+// names sit in fixed slots that a signal handler can read without allocating or locking, and
+// while any is staged, a signal whose disposition is the default one goes to a handler that
+// unlinks them (unlink is async-signal-safe), then dies of the signal as it would have. A
+// program with its own handler (the path tracer's Ctrl-C, the painter) keeps it and finishes
+// the writing itself. SIGKILL cannot be caught: docs/RELIABILITY.md says what it leaves.
+namespace staging {
+
+constexpr int kSlots = 64;  // staged files at once; beyond that they are not cleaned up
+constexpr std::size_t kPathBytes = 4096;
+enum : int { kFree, kFilling, kReady };
+struct Slot {
+  std::atomic<int> state{kFree};
+  char path[kPathBytes];
+};
+Slot slots[kSlots];
+constexpr int kSignals[] = {SIGINT, SIGTERM};
+std::mutex mutex;  // guards `staged` and the handlers' installation
+int staged = 0;
+struct sigaction previous[2];
+bool installed[2] = {false, false};
+
+extern "C" void remove_staged_and_die(int sig) {
+  for (Slot& s : slots)
+    if (s.state.load(std::memory_order_acquire) == kReady) ::unlink(s.path);
+  ::signal(sig, SIG_DFL);
+  ::raise(sig);
+}
+
+// Takes a slot for `temp` (-1: none free or the name too long).
+int hold(const std::string& temp) {
+  int slot = -1;
+  if (temp.size() < kPathBytes)
+    for (int i = 0; i < kSlots && slot < 0; ++i) {
+      int expected = kFree;
+      if (slots[i].state.compare_exchange_strong(expected, kFilling)) slot = i;
+    }
+  if (slot < 0) return -1;
+  std::memcpy(slots[slot].path, temp.c_str(), temp.size() + 1);
+  slots[slot].state.store(kReady, std::memory_order_release);
+  std::lock_guard<std::mutex> lock(mutex);
+  if (staged++ == 0)
+    for (int k = 0; k < 2; ++k) {
+      struct sigaction now {};
+      ::sigaction(kSignals[k], nullptr, &now);
+      installed[k] = now.sa_handler == SIG_DFL && !(now.sa_flags & SA_SIGINFO);
+      if (!installed[k]) continue;
+      struct sigaction ours {};
+      ours.sa_handler = remove_staged_and_die;
+      sigemptyset(&ours.sa_mask);
+      ::sigaction(kSignals[k], &ours, &previous[k]);
+    }
+  return slot;
+}
+
+void release(int slot) {
+  if (slot < 0) return;
+  std::lock_guard<std::mutex> lock(mutex);
+  slots[slot].state.store(kFree, std::memory_order_release);
+  if (--staged == 0)
+    for (int k = 0; k < 2; ++k) {
+      if (!installed[k]) continue;
+      struct sigaction now {};
+      ::sigaction(kSignals[k], nullptr, &now);
+      // A program that installed its own handler meanwhile keeps it.
+      if (now.sa_handler == remove_staged_and_die) ::sigaction(kSignals[k], &previous[k], nullptr);
+      installed[k] = false;
+    }
+}
+
+}  // namespace staging
+
 std::string temp_name(const std::string& path) {
   // pid plus a counter: unique across processes and across threads of this one.
   static std::atomic<unsigned> counter{0};
@@ -346,10 +420,16 @@ std::string temp_name(const std::string& path) {
 // `path` yet. On failure the temporary file is removed.
 template <class Fill>
 Expected<StagedFile> stage(const std::string& path, Fill&& fill) {
+  if (Status s = check_output(path); !s) return s.error();
   const std::string tmp = temp_name(path);
+  const int slot = staging::hold(tmp);  // before the file exists, so a signal never misses it
   errno = 0;
   std::FILE* f = std::fopen(tmp.c_str(), "wb");
-  if (!f) return fail(path, "cannot create file: " + errno_text(errno));
+  if (!f) {
+    const int err = errno;
+    staging::release(slot);
+    return fail(path, "cannot create file: " + errno_text(err));
+  }
   errno = 0;
   bool ok = fill(f) && std::ferror(f) == 0;
   int err = errno;
@@ -361,9 +441,10 @@ Expected<StagedFile> stage(const std::string& path, Fill&& fill) {
   }
   if (!ok) {
     std::remove(tmp.c_str());
+    staging::release(slot);
     return fail(path, "cannot write: " + errno_text(err));
   }
-  return StagedFile{tmp, path};
+  return StagedFile{tmp, path, slot};
 }
 
 Status publish_staged(Expected<StagedFile> staged) {
@@ -391,13 +472,16 @@ Status publish(const StagedFile& file) {
   if (std::rename(file.temp.c_str(), file.target.c_str()) != 0) {
     const int err = errno;
     std::remove(file.temp.c_str());
+    staging::release(file.slot);
     return fail(file.target, "cannot rename temporary file into place: " + errno_text(err));
   }
+  staging::release(file.slot);
   return {};
 }
 
 void discard(const StagedFile& file) {
   std::remove(file.temp.c_str());
+  staging::release(file.slot);
 }
 
 Status write_all(const std::vector<std::string>& paths,

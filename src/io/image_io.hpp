@@ -33,8 +33,11 @@ float linear_to_srgb(float v);
 
 // A file written under a temporary name beside its target, not yet in place: writing several
 // outputs all or nothing stages them all, then publishes them.
+// While staged, a temporary file is removed if SIGINT or SIGTERM ends the process (unless the
+// program handles those signals itself); every StagedFile must be published or discarded.
 struct StagedFile {
   std::string temp, target;
+  int slot = -1;  // its place in the signal handler's list (-1: not listed)
 };
 Expected<StagedFile> stage_pfm(const std::string& path, const ImageRgb& image);
 Expected<StagedFile> stage_exr(const std::string& path, const ImageRgb& image);

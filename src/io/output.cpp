@@ -1,4 +1,8 @@
 // The public file functions that know no scene: pictures out, linear RGB in, output checks.
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cstdio>
 #include <filesystem>
 #include <string>
 #include <system_error>
@@ -25,6 +29,20 @@ Status check_output(const std::string& path) {
                  std::make_error_code(std::errc::no_such_file_or_directory).message()};
   if (std::filesystem::is_directory(target, ec))
     return Error{path + ": " + std::make_error_code(std::errc::is_a_directory).message()};
+  // Outputs are renamed into place, which needs only the directory's permission: a file the
+  // user could not write is refused here, as cp would refuse it. Root may write any file, so
+  // for root a file with no write permission bit at all counts as protected.
+  struct stat st {};
+  if (::stat(path.c_str(), &st) == 0 && S_ISREG(st.st_mode)) {
+    const bool protected_file = ::geteuid() == 0 ? (st.st_mode & (S_IWUSR | S_IWGRP | S_IWOTH)) == 0
+                                                 : ::access(path.c_str(), W_OK) != 0;
+    if (protected_file) {
+      char mode[8];
+      std::snprintf(mode, sizeof mode, "%04o", unsigned(st.st_mode & 07777));
+      return Error{path + ": the file is write-protected (mode " + mode +
+                   "); not replacing it (make it writable or remove it first)"};
+    }
+  }
   return {};
 }
 

@@ -1,10 +1,16 @@
 // The command line, run as a user runs it: exit codes, messages, outputs and the JSON report.
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
+#include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "penumbra/version.hpp"
@@ -290,6 +296,14 @@ TEST_F(Cli, UnknownExtensionAmongGoodOnesWritesNothing) {
   expect_failure(run({"render", scene_, "-o", out("x.png"), "-o", out("x.bmp")}), 2);
 }
 
+// Bounds of real-valued options read as a person writes them, not "1000000.000000".
+TEST_F(Cli, RealRangesPrintReadableBounds) {
+  const Result r =
+      run({"render", scene_, "--extend", "--extend-length", "0.5", "-o", out("x.png")});
+  expect_failure(r, 2);
+  EXPECT_NE(r.err.find("Value 0.5 not in range 1 to 1e+06"), std::string::npos) << r.err;
+}
+
 TEST_F(Cli, BranchingThreeIsAUsageError) {
   const Result r = run({"render", scene_, "--branching", "3", "-o", out("x.png")});
   expect_failure(r, 2);
@@ -323,6 +337,102 @@ TEST_F(Cli, BadSceneNamesFileAndJsonPath) {
   expect_failure(r, 1);
   EXPECT_NE(r.err.find("bad_radius.json"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("shapes[0].radius"), std::string::npos) << r.err;
+}
+
+// Emission 3e38 is finite, so the format allows it, but its fluence is not: every method used to
+// write infinities or NaN and exit 0 (the fuzzing report of issue 16).
+TEST_F(Cli, SceneTooBrightForFloatsIsRefusedNamingTheValue) {
+  const std::string light = write("light.json", R"({
+    "penumbra": 1, "width": 64, "height": 64,
+    "shapes": [ { "type": "circle", "center": [32, 32], "radius": 4, "emission": [3e38, 0, 0] } ]
+  })");
+  const std::string sky = write("sky.json", R"({
+    "penumbra": 1, "width": 64, "height": 64, "environment": [0, 3e38, 0] })");
+  for (const char* method : {"rc", "hrc", "pt"}) {
+    Result r = run({"render", light, "--method", method, "--spp", "4", "-o", out("x.pfm")});
+    expect_failure(r, 1);
+    EXPECT_NE(r.err.find("light.json: shapes[0].emission: 3e+38 is too bright to render"),
+              std::string::npos)
+        << r.err;
+    r = run({"render", sky, "--method", method, "--spp", "4", "-o", out("x.pfm")});
+    expect_failure(r, 1);
+    EXPECT_NE(r.err.find("sky.json: environment: 3e+38 is too bright"), std::string::npos) << r.err;
+  }
+}
+
+// Outputs are renamed into place, which only needs the directory's permission: a read-only file
+// the user keeps was silently replaced. Refused up front, as cp refuses it; nothing is written.
+TEST_F(Cli, WriteProtectedOutputIsNotReplaced) {
+  const fs::path kept = dir_ / "kept";
+  fs::create_directories(kept);
+  const std::string ro = (kept / "ro.pfm").string();
+  std::ofstream(ro) << "mine";
+  ASSERT_EQ(::chmod(ro.c_str(), 0444), 0);
+  const Result r = run({"render", scene_, "-o", out("first.png"), "-o", ro});
+  expect_failure(r, 1);
+  EXPECT_NE(r.err.find(ro + ": the file is write-protected (mode 0444); not replacing it"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(slurp(ro), "mine");
+  // A writable file is replaced as before.
+  ASSERT_EQ(::chmod(ro.c_str(), 0644), 0);
+  EXPECT_EQ(run({"render", scene_, "-q", "-o", ro}).status, 0);
+  EXPECT_NE(slurp(ro), "mine");
+}
+
+// SIGINT or SIGTERM while outputs are being written (a large image takes a while) used to leave
+// "x.pfm.tmp.<pid>.0" beside the targets. The staged files are removed and the process still
+// dies of the signal. The signal is sent as soon as a temporary file shows up.
+TEST_F(Cli, SignalWhileWritingLeavesNoTemporaryFile) {
+  const std::string big = write("big.json", R"({"penumbra": 1, "width": 2048, "height": 2048,
+      "environment": [0.1, 0.1, 0.1]})");
+  for (int sig : {SIGTERM, SIGINT}) {
+    const fs::path where = dir_ / ("signal" + std::to_string(sig));
+    fs::create_directories(where);
+    const std::vector<std::string> args = {PENUMBRA_CLI,
+                                           "render",
+                                           big,
+                                           "-q",
+                                           "--method",
+                                           "rc",
+                                           "--probe-spacing",
+                                           "4",
+                                           "-o",
+                                           (where / "a.pfm").string(),
+                                           "-o",
+                                           (where / "a.exr").string(),
+                                           "-o",
+                                           (where / "a.png").string()};
+    const pid_t pid = ::fork();
+    ASSERT_GE(pid, 0);
+    if (pid == 0) {
+      std::vector<char*> argv;
+      for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+      argv.push_back(nullptr);
+      ::execv(argv[0], argv.data());
+      ::_exit(127);
+    }
+    auto staged = [&] {
+      std::error_code ec;
+      for (const auto& e : fs::directory_iterator(where, ec))
+        if (e.path().filename().string().find(".tmp.") != std::string::npos) return true;
+      return false;
+    };
+    bool seen = false;
+    const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(120);
+    while (!seen && std::chrono::steady_clock::now() < give_up) {
+      int st = 0;
+      if (::waitpid(pid, &st, WNOHANG) == pid) break;  // finished before we saw anything
+      seen = staged();
+      if (!seen) std::this_thread::sleep_for(std::chrono::microseconds(200));
+    }
+    ASSERT_TRUE(seen) << "no temporary file seen while writing; signal " << sig;
+    ::kill(pid, sig);
+    int status = 0;
+    ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+    EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == sig) << "status " << status;
+    EXPECT_FALSE(staged()) << "signal " << sig;
+  }
 }
 
 TEST_F(Cli, MissingSceneFileNamesIt) {

@@ -17,11 +17,14 @@ struct DisplayOptions {
 
 // Writes 8-bit pictures (heatmaps, montages) as PNG files (.png names only), all or nothing:
 // every file is first written under a temporary name beside its target, and they are renamed
-// into place only when all of them succeeded.
+// into place only when all of them succeeded. SIGINT or SIGTERM meanwhile removes the temporary
+// files (unless the program handles those signals itself).
 Status write_pictures(const std::vector<std::pair<std::string, ImageRgb8>>& files);
 
-// Whether `path` can be written at all: its folder exists and it is not a folder itself. Lets a
-// program refuse before it spends time computing.
+// Whether `path` can be written at all: its folder exists, it is not a folder itself, and it is
+// not a file the user could not write (mode 0444; for root, a file with no write bit), which
+// would otherwise be silently renamed over. Lets a program refuse before it spends time
+// computing; every writer checks it again.
 Status check_output(const std::string& path);
 
 // True when a result can be written to `path`: .pfm, .exr or .png (case-insensitive).

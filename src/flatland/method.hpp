@@ -38,7 +38,7 @@ namespace gpu {
 struct MethodPasses;  // flatland/gpu/method.hpp
 }
 
-// The largest radiance (the brightest emission times bounces + 1) a method computes with as it
+// The largest radiance (the brightest emission times the bounces) a method computes with as it
 // is: far inside the float range, so that sums on the way (a path tracer's samples, the merges)
 // cannot overflow. Brighter scenes are rendered at a power-of-two fraction of their light.
 inline constexpr double kLargestRadiance = 0x1p64;

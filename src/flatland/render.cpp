@@ -74,11 +74,11 @@ std::uint64_t scene_bytes(int width, int height) {
 }
 
 // ---- Brightness ---------------------------------------------------------------------------
-// Radiance is at most the brightest emission or environment L times (bounces + 1) (albedo is at
-// most 1, so each bounce re-emits no more than the light it received), and fluence at most 2 pi
-// times that. A scene whose bound passes the float range is refused; every method is linear in
-// the light, so a scene too bright for the storage is rendered at 2^-k of its light and the
-// result scaled back by 2^k, which only moves exponents and so is exact.
+// Radiance is at most the brightest emission or environment L times the bounces (the light of
+// each bounce: albedo is at most 1, so a bounce re-emits no more than the light it received), and
+// fluence at most 2 pi times that. A scene whose bound passes the float range is refused; every
+// method is linear in the light, so a scene too bright for the storage is rendered at 2^-k of its
+// light and the result scaled back by 2^k, which only moves exponents and so is exact.
 
 namespace {
 
@@ -88,16 +88,16 @@ struct Brightest {
 };
 
 double fluence_bound(double radiance, int bounces) {
-  return kTwoPi * radiance * (bounces + 1.0);
+  return kTwoPi * radiance * bounces;
 }
 
 Status too_bright(const std::string& where, double value, int bounces) {
   return Error{where + ": " + io::format_number(float(value)) +  // values are floats
                " is too bright to render: the fluence can reach 2 pi x " +
-               io::format_rounded(value) + " x " + std::to_string(bounces + 1) +
-               " (bounces + 1) = " + io::format_rounded(fluence_bound(value, bounces)) +
-               ", more than a float holds (" + io::format_rounded(FLT_MAX) +
-               "); scale the scene's emission and environment down"};
+               io::format_rounded(value) + " x " + std::to_string(bounces) +
+               (bounces == 1 ? " bounce" : " bounces") + " = " +
+               io::format_rounded(fluence_bound(value, bounces)) + ", more than a float holds (" +
+               io::format_rounded(FLT_MAX) + "); scale the scene's emission and environment down"};
 }
 
 void consider(Brightest& b, const Rgb& c, const std::string& where) {
@@ -133,7 +133,7 @@ Expected<Brightest> brightest(const Scene& scene) {
 int light_exponent(double radiance, const RenderOptions& o) {
   const MethodEntry& m = entry(o.method);
   const double largest = m.largest_radiance ? m.largest_radiance(o) : kLargestRadiance;
-  const double bound = radiance * (o.bounces + 1.0);
+  const double bound = radiance * o.bounces;
   if (bound <= largest) return 0;
   int k = int(std::ceil(std::log2(bound / largest)));
   while (std::ldexp(bound, -k) > largest) ++k;  // log2's rounding

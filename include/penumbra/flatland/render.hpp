@@ -142,7 +142,7 @@ std::uint64_t scene_bytes(int width, int height);
 Status check_memory(int width, int height, const RenderOptions& options, bool with_scene);
 
 // Refuses a scene whose fluence a float cannot hold: radiance is at most the brightest emission
-// or environment L times (bounces + 1), fluence at most 2 pi times that. The message names the
+// or environment L times the bounces, fluence at most 2 pi times that. The message names the
 // file and the JSON path of the brightest value. render() checks a rasterised scene the same way
 // (naming the cell), and renders a scene too bright for a method's storage at a power-of-two
 // fraction of its light, scaling the result back exactly.

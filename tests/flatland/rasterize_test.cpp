@@ -12,6 +12,7 @@
 #include <limits>
 #include <random>
 #include <string>
+#include <variant>
 #include <vector>
 
 #include "core/math.hpp"
@@ -161,6 +162,115 @@ std::vector<float> coverage(const Points& pts, int w, int h) {
 }
 
 }  // namespace brute
+
+// The other shapes as they were drawn before runs and sample rows: each cell alone, each of an
+// edge cell's 16x16 samples tested.
+struct BruteDisk {
+  double cx, cy, r;
+  double distance(double x, double y) const { return std::hypot(x - cx, y - cy) - r; }
+  bool inside(double x, double y) const {
+    double dx = x - cx, dy = y - cy;
+    return dx * dx + dy * dy < r * r;
+  }
+  std::array<double, 4> bounds() const { return {cx - r, cy - r, cx + r, cy + r}; }
+};
+
+struct BruteBox {
+  double cx, cy, hw, hh, cs, sn;
+  void local(double x, double y, double& u, double& v) const {
+    double dx = x - cx, dy = y - cy;
+    u = dx * cs + dy * sn;
+    v = -dx * sn + dy * cs;
+  }
+  double distance(double x, double y) const {
+    double u, v;
+    local(x, y, u, v);
+    double qx = std::fabs(u) - hw, qy = std::fabs(v) - hh;
+    return std::sqrt(std::max(qx, 0.0) * std::max(qx, 0.0) +
+                     std::max(qy, 0.0) * std::max(qy, 0.0)) +
+           std::min(std::max(qx, qy), 0.0);
+  }
+  bool inside(double x, double y) const {
+    double u, v;
+    local(x, y, u, v);
+    return std::fabs(u) < hw && std::fabs(v) < hh;
+  }
+  std::array<double, 4> bounds() const {
+    double ex = std::fabs(cs) * hw + std::fabs(sn) * hh;
+    double ey = std::fabs(sn) * hw + std::fabs(cs) * hh;
+    return {cx - ex, cy - ey, cx + ex, cy + ey};
+  }
+};
+
+struct BruteCapsule {
+  double ax, ay, bx, by, r;
+  double distance(double x, double y) const {
+    return brute::segment_distance(x, y, ax, ay, bx, by) - r;
+  }
+  bool inside(double x, double y) const {
+    return brute::segment_distance(x, y, ax, ay, bx, by) < r;
+  }
+  std::array<double, 4> bounds() const {
+    return {std::min(ax, bx) - r, std::min(ay, by) - r, std::max(ax, bx) + r, std::max(ay, by) + r};
+  }
+};
+
+// Blends shape g over s as build_scene did, cell by cell.
+template <class G>
+void brute_draw(Scene& s, const G& g, const Material& m) {
+  const double half_diagonal = 0.70710678118654752440;
+  const auto b = g.bounds();
+  const int i0 = int(std::clamp(std::floor(b[0]), 0.0, double(s.width)));
+  const int i1 = int(std::clamp(std::ceil(b[2]), 0.0, double(s.width)));
+  const int j0 = int(std::clamp(std::floor(b[1]), 0.0, double(s.height)));
+  const int j1 = int(std::clamp(std::ceil(b[3]), 0.0, double(s.height)));
+  for (int j = j0; j < j1; ++j) {
+    for (int i = i0; i < i1; ++i) {
+      float c;
+      const double d = g.distance(i + 0.5, j + 0.5);
+      if (d <= -half_diagonal) {
+        c = 1;
+      } else if (d >= half_diagonal) {
+        c = 0;
+      } else {
+        int hits = 0;
+        for (int sy = 0; sy < 16; ++sy) {
+          double y = j + (sy + 0.5) / 16;
+          for (int sx = 0; sx < 16; ++sx) hits += g.inside(i + (sx + 0.5) / 16, y);
+        }
+        c = float(hits) / float(16 * 16);
+      }
+      if (c > 0) blend(s, s.index(i, j), blend_fraction(c, m), m);
+    }
+  }
+}
+
+void brute_draw(Scene& s, const Shape& shape) {
+  const Material& m = shape.material;
+  if (const auto* c = std::get_if<Circle>(&shape.geometry)) {
+    brute_draw(s, BruteDisk{c->center[0], c->center[1], c->radius}, m);
+  } else if (const auto* b = std::get_if<Box>(&shape.geometry)) {
+    const double a = double(b->angle) * (kPi / 180.0);
+    brute_draw(s,
+               BruteBox{b->center[0], b->center[1], b->size[0] / 2.0, b->size[1] / 2.0, std::cos(a),
+                        std::sin(a)},
+               m);
+  } else if (const auto* g = std::get_if<Segment>(&shape.geometry)) {
+    brute_draw(s, BruteCapsule{g->a[0], g->a[1], g->b[0], g->b[1], g->width / 2.0}, m);
+  }
+}
+
+// Expects build_scene to give the scene that drawing its shapes one by one, cell by cell, gives.
+void expect_scene_matches_brute_force(const SceneDesc& d, const std::string& what) {
+  const Scene s = build_ok(d);
+  SceneDesc bare = d;
+  bare.shapes.clear();
+  Scene want = build_ok(bare);
+  for (const Shape& shape : d.shapes) brute_draw(want, shape);
+  EXPECT_EQ(s.opacity, want.opacity) << what;
+  EXPECT_EQ(s.emission, want.emission) << what;
+  EXPECT_EQ(s.albedo, want.albedo) << what;
+}
 
 // Expects the fill's coverage to equal the brute-force one in every cell.
 void expect_matches_brute_force(const brute::Points& pts, int w, int h, const std::string& what) {
@@ -323,6 +433,28 @@ TEST(Rasterize, SceneDrawsPolygonsWithTheirCoverage) {
   EXPECT_EQ(s.opacity, want.opacity);
   EXPECT_EQ(s.emission, want.emission);
   EXPECT_EQ(s.albedo, want.albedo);
+}
+
+TEST(Rasterize, CirclesMatchBruteForce) {
+  // Centres and radii anywhere, on the sample lattice (samples exactly on the circle), tiny,
+  // huge and mostly outside; each alone on a grid so that every cell's coverage is compared.
+  std::mt19937 rng(300);
+  std::uniform_real_distribution<double> u(-6, 46), radius(0.01, 14);
+  std::uniform_int_distribution<int> lattice(-64, 40 * 32), lattice_radius(1, 320);
+  std::vector<Circle> circles;
+  for (int k = 0; k < 60; ++k)
+    circles.push_back({{float(u(rng)), float(u(rng))}, float(radius(rng))});
+  for (int k = 0; k < 60; ++k)
+    circles.push_back({{lattice(rng) / 32.0f, lattice(rng) / 32.0f}, lattice_radius(rng) / 32.0f});
+  circles.push_back({{20.25f, 17.5f}, 0.001f});
+  circles.push_back({{20.0f, 17.0f}, 0.5f});
+  circles.push_back({{-1e5f, 16.3f}, 1e5f + 21.7f});
+  circles.push_back({{16.1f, 1e6f}, 1e6f - 15.2f});
+  for (std::size_t k = 0; k < circles.size(); ++k) {
+    SceneDesc d = grid(40, 33);
+    d.shapes.push_back({circles[k], Material{{}, 0.5f, {}}});
+    expect_scene_matches_brute_force(d, "circle " + std::to_string(k));
+  }
 }
 
 TEST(Rasterize, PolygonUsesEvenOddRule) {

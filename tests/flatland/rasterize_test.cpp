@@ -457,6 +457,51 @@ TEST(Rasterize, CirclesMatchBruteForce) {
   }
 }
 
+TEST(Rasterize, ManyShapesMatchBruteForceInOrder) {
+  // Overlapping circles, boxes and segments of every size with polygons between them: each cell
+  // must take the shapes in scene order, whichever band of rows draws them.
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> pos(-10, 110), size(0.2, 30), unit(0, 1);
+  SceneDesc d = grid(100, 90);
+  for (int k = 0; k < 400; ++k) {
+    const Material m{{float(4 * unit(rng)), 0, float(unit(rng))},
+                     k % 3 ? float(unit(rng)) : 1.0f,
+                     {float(unit(rng)), 0.5f, 0}};
+    const std::array<float, 2> c{float(pos(rng)), float(pos(rng))};
+    const float sz = float(size(rng) * (k % 10 ? 0.2 : 1));
+    switch (k % 4) {
+      case 0:
+        d.shapes.push_back({Circle{c, sz}, m});
+        break;
+      case 1:
+        d.shapes.push_back({Box{c, {sz, float(size(rng))}, float(360 * unit(rng))}, m});
+        break;
+      case 2:
+        d.shapes.push_back({Segment{c, {float(pos(rng)), float(pos(rng))}, sz}, m});
+        break;
+      default:
+        d.shapes.push_back({Circle{c, sz * 0.1f}, m});
+        break;
+    }
+    if (k % 97 == 0) d.shapes.push_back({Polygon{random_points(rng, 6, -5, 105)}, m});
+  }
+  // The polygons are compared apart; here the reference draws them with the same fill.
+  const Scene s = build_ok(d);
+  Scene want = build_ok(grid(100, 90));
+  for (const Shape& shape : d.shapes) {
+    if (const auto* p = std::get_if<Polygon>(&shape.geometry)) {
+      const std::vector<float> cov = brute::coverage(p->points, 100, 90);
+      for (std::size_t k = 0; k < cov.size(); ++k)
+        if (cov[k] > 0) blend(want, k, blend_fraction(cov[k], shape.material), shape.material);
+    } else {
+      brute_draw(want, shape);
+    }
+  }
+  EXPECT_EQ(s.opacity, want.opacity);
+  EXPECT_EQ(s.emission, want.emission);
+  EXPECT_EQ(s.albedo, want.albedo);
+}
+
 TEST(Rasterize, PolygonUsesEvenOddRule) {
   // A pentagram: its inner pentagon is crossed twice, so it is outside under even-odd.
   std::vector<std::array<float, 2>> pts;

@@ -248,20 +248,79 @@ void cell_range(double a, double b, int n, int& lo, int& hi) {
   hi = int(std::clamp(std::ceil(b), 0.0, double(n)));
 }
 
-template <class Geom>
-void draw(Scene& s, const Geom& g, const Material& m) {
-  const Bounds b = g.bounds();
+// A shape's cells [i0, i1) x [j0, j1): its bounding box clipped to the grid.
+struct CellBox {
   int i0, i1, j0, j1;
-  cell_range(b.x0, b.x1, s.width, i0, i1);
-  cell_range(b.y0, b.y1, s.height, j0, j1);
-  if (i0 >= i1 || j0 >= j1) return;
-  // Rows are independent and each cell is computed alone, so results do not depend on threads.
-  parallel_for(j1 - j0, [&](int r) {
-    const int j = j0 + r;
-    RowSamples<Geom> row(g, i0, i1, j);
-    for (int i = i0; i < i1; ++i) {
+  bool empty() const { return i0 >= i1 || j0 >= j1; }
+};
+
+CellBox cell_box(const Bounds& b, int width, int height) {
+  CellBox c;
+  cell_range(b.x0, b.x1, width, c.i0, c.i1);
+  cell_range(b.y0, b.y1, height, c.j0, c.j1);
+  return c;
+}
+
+// Calls f with the geometry of a circle, box or segment.
+template <class F>
+void with_geom(const Shape& shape, const F& f) {
+  std::visit(
+      [&](const auto& geom) {
+        using T = std::decay_t<decltype(geom)>;
+        if constexpr (std::is_same_v<T, Circle>) {
+          f(DiskGeom(geom));
+        } else if constexpr (std::is_same_v<T, Box>) {
+          f(BoxGeom(geom));
+        } else if constexpr (std::is_same_v<T, Segment>) {
+          f(CapsuleGeom(geom));
+        }
+      },
+      shape.geometry);
+}
+
+// Draws rows [ja, jb) of a shape whose cells are `box`.
+template <class Geom>
+void draw_rows(Scene& s, const Geom& g, const Material& m, const CellBox& box, int ja, int jb) {
+  for (int j = ja; j < jb; ++j) {
+    RowSamples<Geom> row(g, box.i0, box.i1, j);
+    for (int i = box.i0; i < box.i1; ++i) {
       const float c = coverage(g, i, j, row);
       if (c > 0) blend(s, s.index(i, j), blend_fraction(c, m), m);
+    }
+  }
+}
+
+constexpr int kBandRows = 8;
+
+// Draws shapes [first, last), none a polygon. The grid's rows are split into bands drawn in
+// parallel, each drawing its rows of every shape that reaches it, in scene order: a cell still
+// takes its shapes in order and is computed alone, so results do not depend on threads, and a
+// small shape costs no parallel dispatch of its own (scenes of many small shapes used to).
+void draw_run(Scene& s, const std::vector<Shape>& shapes, std::size_t first, std::size_t last) {
+  const int bands = (s.height + kBandRows - 1) / kBandRows;
+  std::vector<CellBox> boxes(last - first);
+  // The shapes reaching each band, in order: items[start[b] .. start[b + 1]).
+  std::vector<std::size_t> start(bands + 1, 0);
+  for (std::size_t k = 0; k < boxes.size(); ++k) {
+    with_geom(shapes[first + k],
+              [&](const auto& g) { boxes[k] = cell_box(g.bounds(), s.width, s.height); });
+    if (boxes[k].empty()) continue;
+    for (int b = boxes[k].j0 / kBandRows; b <= (boxes[k].j1 - 1) / kBandRows; ++b) ++start[b + 1];
+  }
+  for (int b = 0; b < bands; ++b) start[b + 1] += start[b];
+  std::vector<std::size_t> items(start[bands]), fill(start.begin(), start.end() - 1);
+  for (std::size_t k = 0; k < boxes.size(); ++k) {
+    if (boxes[k].empty()) continue;
+    for (int b = boxes[k].j0 / kBandRows; b <= (boxes[k].j1 - 1) / kBandRows; ++b)
+      items[fill[b]++] = k;
+  }
+  parallel_for(bands, [&](int b) {
+    for (std::size_t t = start[b]; t < start[b + 1]; ++t) {
+      const std::size_t k = items[t];
+      const CellBox& box = boxes[k];
+      const Shape& shape = shapes[first + k];
+      const int ja = std::max(box.j0, b * kBandRows), jb = std::min(box.j1, (b + 1) * kBandRows);
+      with_geom(shape, [&](const auto& g) { draw_rows(s, g, shape.material, box, ja, jb); });
     }
   });
 }
@@ -520,23 +579,21 @@ Expected<Scene> build_scene_unchecked(const SceneDesc& desc) {
     }
   }
 
-  for (const Shape& shape : desc.shapes) {
-    std::visit(
-        [&](const auto& geom) {
-          using T = std::decay_t<decltype(geom)>;
-          if constexpr (std::is_same_v<T, Circle>) {
-            draw(s, DiskGeom(geom), shape.material);
-          } else if constexpr (std::is_same_v<T, Box>) {
-            draw(s, BoxGeom(geom), shape.material);
-          } else if constexpr (std::is_same_v<T, Segment>) {
-            draw(s, CapsuleGeom(geom), shape.material);
-          } else {
-            fill_polygon(geom, s.width, s.height, nullptr, [&](int i, int j, float c) {
-              blend(s, s.index(i, j), blend_fraction(c, shape.material), shape.material);
-            });
-          }
-        },
-        shape.geometry);
+  // Polygons one by one, the shapes between them in runs.
+  const std::vector<Shape>& shapes = desc.shapes;
+  for (std::size_t k = 0; k < shapes.size();) {
+    if (const auto* p = std::get_if<Polygon>(&shapes[k].geometry)) {
+      const Material& m = shapes[k].material;
+      fill_polygon(*p, s.width, s.height, nullptr, [&](int i, int j, float c) {
+        blend(s, s.index(i, j), blend_fraction(c, m), m);
+      });
+      ++k;
+      continue;
+    }
+    std::size_t last = k + 1;
+    while (last < shapes.size() && !std::holds_alternative<Polygon>(shapes[last].geometry)) ++last;
+    draw_run(s, shapes, k, last);
+    k = last;
   }
   return s;
 }

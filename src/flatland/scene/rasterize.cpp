@@ -4,8 +4,10 @@
 // classified by the signed distance from its centre to the shape boundary: a cell lies within
 // sqrt(2)/2 of its centre, so beyond that distance it is fully inside or outside, and only
 // boundary cells are supersampled (16x16 points, exact inside tests). Polygons get the same
-// classes and samples from a scanline fill (PolygonFill below), in time proportional to their
-// cells and edges rather than their product.
+// classes and samples from a scanline fill (PolygonFill), in time proportional to their cells
+// and edges rather than their product; disks count a row's samples by its inside run
+// (RowSamples); the shapes between polygons are drawn by bands of rows (draw_run). Every cell's
+// result is that of the plain per-cell, per-sample test. Cost laws: docs/scene-format.md.
 #include "flatland/scene/rasterize.hpp"
 
 #include <algorithm>

@@ -1,8 +1,18 @@
-// Rasterising scenes: coverage areas against closed forms, blending, layers, the default scene.
+// Rasterising scenes: coverage areas against closed forms, the polygon fill against the
+// brute-force test it replaced, blending, layers, the default scene.
+#include "flatland/scene/rasterize.hpp"
+
 #include <gtest/gtest.h>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdint>
+#include <limits>
+#include <random>
+#include <string>
+#include <variant>
 #include <vector>
 
 #include "core/math.hpp"
@@ -80,6 +90,416 @@ TEST(Rasterize, ConcavePolygonArea) {
       {10.2f, 10.1f}, {50.3f, 10.6f}, {50.1f, 50.4f}, {30.2f, 25.5f}, {10.4f, 50.2f}};
   double expected = shoelace(pts);
   EXPECT_NEAR(drawn_area(64, 64, opaque(Polygon{pts})), expected, 0.005 * expected);
+}
+
+// The brute-force polygon coverage the scanline fill replaced, kept as the reference it must
+// match exactly: every cell's signed distance to every edge, then 16x16 samples, each tested
+// against every edge, in cells within sqrt(2)/2 of the boundary.
+namespace brute {
+
+using Points = std::vector<std::array<float, 2>>;
+
+double segment_distance(double px, double py, double ax, double ay, double bx, double by) {
+  double dx = bx - ax, dy = by - ay;
+  double len2 = dx * dx + dy * dy;
+  double t = len2 > 0 ? std::clamp(((px - ax) * dx + (py - ay) * dy) / len2, 0.0, 1.0) : 0.0;
+  double ex = px - ax - t * dx, ey = py - ay - t * dy;
+  return std::sqrt(ex * ex + ey * ey);
+}
+
+bool inside(const Points& pts, double x, double y) {
+  bool in = false;
+  const std::size_t n = pts.size();
+  for (std::size_t i = 0, j = n - 1; i < n; j = i++) {
+    double xi = pts[i][0], yi = pts[i][1], xj = pts[j][0], yj = pts[j][1];
+    if ((yi > y) != (yj > y) && x < xj + (y - yj) * (xi - xj) / (yi - yj)) in = !in;
+  }
+  return in;
+}
+
+double distance(const Points& pts, double x, double y) {
+  double d = std::numeric_limits<double>::infinity();
+  const std::size_t n = pts.size();
+  for (std::size_t i = 0, j = n - 1; i < n; j = i++)
+    d = std::min(d, segment_distance(x, y, pts[j][0], pts[j][1], pts[i][0], pts[i][1]));
+  return inside(pts, x, y) ? -d : d;
+}
+
+std::vector<float> coverage(const Points& pts, int w, int h) {
+  const double half_diagonal = 0.70710678118654752440;
+  double x0 = pts[0][0], y0 = pts[0][1], x1 = x0, y1 = y0;
+  for (const auto& p : pts) {
+    x0 = std::min(x0, double(p[0]));
+    y0 = std::min(y0, double(p[1]));
+    x1 = std::max(x1, double(p[0]));
+    y1 = std::max(y1, double(p[1]));
+  }
+  const int i0 = int(std::clamp(std::floor(x0), 0.0, double(w)));
+  const int i1 = int(std::clamp(std::ceil(x1), 0.0, double(w)));
+  const int j0 = int(std::clamp(std::floor(y0), 0.0, double(h)));
+  const int j1 = int(std::clamp(std::ceil(y1), 0.0, double(h)));
+  std::vector<float> cov(std::size_t(w) * h, 0.0f);
+  for (int j = j0; j < j1; ++j) {
+    for (int i = i0; i < i1; ++i) {
+      float c;
+      const double d = distance(pts, i + 0.5, j + 0.5);
+      if (d <= -half_diagonal) {
+        c = 1;
+      } else if (d >= half_diagonal) {
+        c = 0;
+      } else {
+        int hits = 0;
+        for (int sy = 0; sy < 16; ++sy) {
+          double y = j + (sy + 0.5) / 16;
+          for (int sx = 0; sx < 16; ++sx) hits += inside(pts, i + (sx + 0.5) / 16, y);
+        }
+        c = float(hits) / float(16 * 16);
+      }
+      cov[std::size_t(j) * w + i] = c;
+    }
+  }
+  return cov;
+}
+
+}  // namespace brute
+
+// The other shapes as they were drawn before runs and sample rows: each cell alone, each of an
+// edge cell's 16x16 samples tested.
+struct BruteDisk {
+  double cx, cy, r;
+  double distance(double x, double y) const { return std::hypot(x - cx, y - cy) - r; }
+  bool inside(double x, double y) const {
+    double dx = x - cx, dy = y - cy;
+    return dx * dx + dy * dy < r * r;
+  }
+  std::array<double, 4> bounds() const { return {cx - r, cy - r, cx + r, cy + r}; }
+};
+
+struct BruteBox {
+  double cx, cy, hw, hh, cs, sn;
+  void local(double x, double y, double& u, double& v) const {
+    double dx = x - cx, dy = y - cy;
+    u = dx * cs + dy * sn;
+    v = -dx * sn + dy * cs;
+  }
+  double distance(double x, double y) const {
+    double u, v;
+    local(x, y, u, v);
+    double qx = std::fabs(u) - hw, qy = std::fabs(v) - hh;
+    return std::sqrt(std::max(qx, 0.0) * std::max(qx, 0.0) +
+                     std::max(qy, 0.0) * std::max(qy, 0.0)) +
+           std::min(std::max(qx, qy), 0.0);
+  }
+  bool inside(double x, double y) const {
+    double u, v;
+    local(x, y, u, v);
+    return std::fabs(u) < hw && std::fabs(v) < hh;
+  }
+  std::array<double, 4> bounds() const {
+    double ex = std::fabs(cs) * hw + std::fabs(sn) * hh;
+    double ey = std::fabs(sn) * hw + std::fabs(cs) * hh;
+    return {cx - ex, cy - ey, cx + ex, cy + ey};
+  }
+};
+
+struct BruteCapsule {
+  double ax, ay, bx, by, r;
+  double distance(double x, double y) const {
+    return brute::segment_distance(x, y, ax, ay, bx, by) - r;
+  }
+  bool inside(double x, double y) const {
+    return brute::segment_distance(x, y, ax, ay, bx, by) < r;
+  }
+  std::array<double, 4> bounds() const {
+    return {std::min(ax, bx) - r, std::min(ay, by) - r, std::max(ax, bx) + r, std::max(ay, by) + r};
+  }
+};
+
+// Blends shape g over s as build_scene did, cell by cell.
+template <class G>
+void brute_draw(Scene& s, const G& g, const Material& m) {
+  const double half_diagonal = 0.70710678118654752440;
+  const auto b = g.bounds();
+  const int i0 = int(std::clamp(std::floor(b[0]), 0.0, double(s.width)));
+  const int i1 = int(std::clamp(std::ceil(b[2]), 0.0, double(s.width)));
+  const int j0 = int(std::clamp(std::floor(b[1]), 0.0, double(s.height)));
+  const int j1 = int(std::clamp(std::ceil(b[3]), 0.0, double(s.height)));
+  for (int j = j0; j < j1; ++j) {
+    for (int i = i0; i < i1; ++i) {
+      float c;
+      const double d = g.distance(i + 0.5, j + 0.5);
+      if (d <= -half_diagonal) {
+        c = 1;
+      } else if (d >= half_diagonal) {
+        c = 0;
+      } else {
+        int hits = 0;
+        for (int sy = 0; sy < 16; ++sy) {
+          double y = j + (sy + 0.5) / 16;
+          for (int sx = 0; sx < 16; ++sx) hits += g.inside(i + (sx + 0.5) / 16, y);
+        }
+        c = float(hits) / float(16 * 16);
+      }
+      if (c > 0) blend(s, s.index(i, j), blend_fraction(c, m), m);
+    }
+  }
+}
+
+void brute_draw(Scene& s, const Shape& shape) {
+  const Material& m = shape.material;
+  if (const auto* c = std::get_if<Circle>(&shape.geometry)) {
+    brute_draw(s, BruteDisk{c->center[0], c->center[1], c->radius}, m);
+  } else if (const auto* b = std::get_if<Box>(&shape.geometry)) {
+    const double a = double(b->angle) * (kPi / 180.0);
+    brute_draw(s,
+               BruteBox{b->center[0], b->center[1], b->size[0] / 2.0, b->size[1] / 2.0, std::cos(a),
+                        std::sin(a)},
+               m);
+  } else if (const auto* g = std::get_if<Segment>(&shape.geometry)) {
+    brute_draw(s, BruteCapsule{g->a[0], g->a[1], g->b[0], g->b[1], g->width / 2.0}, m);
+  }
+}
+
+// Expects build_scene to give the scene that drawing its shapes one by one, cell by cell, gives.
+void expect_scene_matches_brute_force(const SceneDesc& d, const std::string& what) {
+  const Scene s = build_ok(d);
+  SceneDesc bare = d;
+  bare.shapes.clear();
+  Scene want = build_ok(bare);
+  for (const Shape& shape : d.shapes) brute_draw(want, shape);
+  EXPECT_EQ(s.opacity, want.opacity) << what;
+  EXPECT_EQ(s.emission, want.emission) << what;
+  EXPECT_EQ(s.albedo, want.albedo) << what;
+}
+
+// Expects the fill's coverage to equal the brute-force one in every cell.
+void expect_matches_brute_force(const brute::Points& pts, int w, int h, const std::string& what) {
+  const std::vector<float> want = brute::coverage(pts, w, h);
+  const std::vector<float> got = polygon_coverage(Polygon{pts}, w, h);
+  ASSERT_EQ(got.size(), want.size());
+  int wrong = 0;
+  for (std::size_t k = 0; k < got.size(); ++k) {
+    if (got[k] == want[k]) continue;
+    if (++wrong <= 3)
+      ADD_FAILURE() << what << ": cell (" << k % w << ", " << k / w << ") has " << got[k]
+                    << ", brute force " << want[k];
+  }
+  EXPECT_EQ(wrong, 0) << what;
+}
+
+brute::Points random_points(std::mt19937& rng, int n, double lo, double hi) {
+  std::uniform_real_distribution<double> u(lo, hi);
+  brute::Points pts(n);
+  for (auto& p : pts) p = {float(u(rng)), float(u(rng))};
+  return pts;
+}
+
+TEST(Rasterize, PolygonFillMatchesBruteForceOnRandomPolygons) {
+  std::mt19937 rng(16);
+  for (int k = 0; k < 40; ++k) {
+    // Self-crossing in general; some reach past the grid on every side.
+    const int n = 3 + k % 13 * 3;
+    expect_matches_brute_force(random_points(rng, n, -8, 56), 48, 40,
+                               "random " + std::to_string(k));
+  }
+  // Many edges: every cell is an edge cell and rows hold dozens of crossings.
+  expect_matches_brute_force(random_points(rng, 400, -2, 34), 32, 32, "400 points");
+}
+
+TEST(Rasterize, PolygonFillMatchesBruteForceOnLatticePoints) {
+  // Points on the 1/32 lattice of sample positions and cell centres, so that crossings and
+  // vertices fall exactly on samples, centres and cell borders, and edges run along sample rows.
+  std::mt19937 rng(32);
+  std::uniform_int_distribution<int> u(-32, 24 * 32);
+  for (int k = 0; k < 30; ++k) {
+    brute::Points pts(3 + k % 7);
+    for (auto& p : pts) p = {u(rng) / 32.0f, u(rng) / 32.0f};
+    expect_matches_brute_force(pts, 24, 20, "lattice " + std::to_string(k));
+  }
+  // Whole and half cells: edges through cell centres and along cell borders.
+  std::uniform_int_distribution<int> v(-2, 40);
+  for (int k = 0; k < 30; ++k) {
+    brute::Points pts(3 + k % 5);
+    for (auto& p : pts) p = {v(rng) / 2.0f, v(rng) / 2.0f};
+    expect_matches_brute_force(pts, 20, 20, "half cells " + std::to_string(k));
+  }
+}
+
+TEST(Rasterize, PolygonFillMatchesBruteForceOnDegenerateEdges) {
+  const std::vector<std::pair<std::string, brute::Points>> cases = {
+      {"horizontal edges",
+       {{2.3f, 5.5f}, {20.7f, 5.5f}, {20.7f, 14.0f}, {8.1f, 14.0f}, {8.1f, 9.5f}}},
+      {"repeated points",
+       {{3.2f, 3.1f}, {3.2f, 3.1f}, {18.4f, 6.6f}, {18.4f, 6.6f}, {9.9f, 17.2f}}},
+      {"collinear", {{2.5f, 2.5f}, {10.5f, 10.5f}, {18.5f, 18.5f}}},
+      {"all one point", {{7.3f, 8.4f}, {7.3f, 8.4f}, {7.3f, 8.4f}}},
+      {"spike", {{4.1f, 4.2f}, {16.3f, 10.1f}, {4.1f, 4.2f}, {6.2f, 15.5f}}},
+      {"edge back and forth", {{2.0f, 2.0f}, {18.0f, 9.0f}, {2.0f, 2.0f}, {18.0f, 9.0f}}},
+      {"tiny", {{10.31f, 10.42f}, {10.39f, 10.44f}, {10.35f, 10.49f}}},
+      {"thinner than a sample", {{1.1f, 7.51f}, {19.2f, 7.52f}, {19.2f, 7.53f}, {1.1f, 7.54f}}},
+      {"vertical sliver", {{9.5f, 1.2f}, {9.5001f, 1.2f}, {9.5001f, 18.7f}, {9.5f, 18.7f}}},
+  };
+  for (const auto& [what, pts] : cases) expect_matches_brute_force(pts, 20, 20, what);
+}
+
+TEST(Rasterize, PolygonFillMatchesBruteForceOnHugeAndOutsidePolygons) {
+  // Far larger than the grid: edges cross it with extreme slopes, some cells are inside.
+  expect_matches_brute_force({{-1e6f, -3e5f}, {2e6f, 17.3f}, {-4e5f, 1e6f}}, 32, 24, "huge");
+  expect_matches_brute_force({{-1e30f, 5.2f}, {1e30f, 9.7f}, {3e29f, -1e30f}}, 32, 24, "1e30");
+  expect_matches_brute_force(
+      {{-50.5f, -40.2f}, {90.3f, -35.1f}, {85.2f, 70.8f}, {15.7f, 12.3f}, {-45.1f, 66.6f}}, 32, 24,
+      "around the grid");
+  // Beside the grid: covers nothing, though its box may overlap the grid.
+  expect_matches_brute_force({{-9.2f, 3.1f}, {-0.8f, 5.5f}, {-4.4f, 30.2f}}, 32, 24, "left");
+  expect_matches_brute_force({{35.2f, -3.1f}, {60.8f, 5.5f}, {-40.4f, -0.2f}}, 32, 24, "above");
+  expect_matches_brute_force({{1.5f, 1.5f}, {1e7f, 2.5f}, {2.5f, 1e7f}}, 32, 24, "long thin");
+}
+
+TEST(Rasterize, PolygonFillIndependentOfThreadCount) {
+  std::mt19937 rng(5);
+  const Polygon p{random_points(rng, 3000, -4, 260)};
+  const std::vector<float> many = polygon_coverage(p, 256, 256);
+  std::vector<float> one;
+  tbb::task_arena(1).execute([&] { one = polygon_coverage(p, 256, 256); });
+  EXPECT_EQ(one, many);
+}
+
+TEST(Rasterize, PolygonWorkIsCellsPlusEdgesTimesRows) {
+  // 100k points across a 64^2 grid: every cell is an edge cell. The brute-force test did
+  // cells x points x (2 + 256) edge tests here, minutes of work.
+  const int n = 100000, side = 64;
+  std::mt19937 rng(100);
+  const Polygon p{random_points(rng, n, -2, side + 2)};
+  PolygonWork work;
+  const std::vector<float> cov = polygon_coverage(p, side, side, &work);
+
+  // The cost law: per edge, its rows (17 crossing rows each: 16 of samples, 1 of centres) and
+  // the cells within sqrt(2)/2 of it; per cell, 17 row sweeps.
+  double edge_rows = 0, edge_cells = 0;
+  for (std::size_t i = 0, j = n - 1; i < std::size_t(n); j = i++) {
+    const auto &a = p.points[i], &b = p.points[j];
+    const double rows = std::fabs(double(a[1]) - b[1]) + 3;
+    edge_rows += std::min(rows, double(side));
+    edge_cells += 6 * (std::fabs(double(a[0]) - b[0]) + rows);
+  }
+  const double cells = double(side) * side;
+  EXPECT_LE(work.crossing_tests, 17 * edge_rows);
+  EXPECT_LE(work.distance_tests, edge_cells);
+  EXPECT_LE(work.cell_visits, 17 * cells);
+  EXPECT_LE(work.edge_visits, 32.0 * n + edge_rows);
+  const double total =
+      double(work.crossing_tests + work.distance_tests + work.cell_visits + work.edge_visits);
+  EXPECT_LT(total * 4, cells * n);
+  // It did the work: every cell is partly covered.
+  for (float c : cov) EXPECT_TRUE(c > 0 && c < 1);
+}
+
+TEST(Rasterize, RegularPolygonAreaIsAnalytic) {
+  for (int n : {5, 12, 1000}) {
+    const double r = 21.3, cx = 32.37, cy = 30.81;
+    std::vector<std::array<float, 2>> pts;
+    for (int k = 0; k < n; ++k) {
+      const double t = 2 * kPi * k / n + 0.1;
+      pts.push_back({float(cx + r * std::cos(t)), float(cy + r * std::sin(t))});
+    }
+    const double area = n / 2.0 * r * r * std::sin(2 * kPi / n);
+    double sum = 0;
+    for (float c : polygon_coverage(Polygon{pts}, 64, 64)) sum += c;
+    EXPECT_NEAR(sum, area, 1e-3 * area) << n << " sides";
+  }
+}
+
+TEST(Rasterize, SceneDrawsPolygonsWithTheirCoverage) {
+  // Polygons over a layer and a box: each cell blends the material by the brute-force coverage.
+  SceneDesc d = grid(40, 32);
+  d.layers.opacity = std::vector<float>(40 * 32, 0.25f);
+  d.shapes.push_back({Box{{20, 16}, {30, 20}, 10}, Material{{1, 0, 0}, 0.5f, {0.3f, 0.3f, 0.3f}}});
+  const brute::Points star = {
+      {20.2f, 1.3f}, {27.1f, 28.8f}, {3.4f, 11.7f}, {36.6f, 11.2f}, {12.9f, 29.4f}};
+  const brute::Points outside = {{-10.3f, 20.1f}, {15.2f, 25.6f}, {8.8f, 45.3f}};
+  const Material glow{{2, 3, 4}, 1, {0.1f, 0.2f, 0.3f}}, fog{{}, 0.3f, {0.5f, 0.5f, 0.5f}};
+  d.shapes.push_back({Polygon{star}, glow});
+  d.shapes.push_back({Polygon{outside}, fog});
+  const Scene s = build_ok(d);
+
+  SceneDesc base = d;
+  base.shapes.resize(1);
+  Scene want = build_ok(base);
+  for (const auto& [pts, m] : {std::pair{star, glow}, std::pair{outside, fog}}) {
+    const std::vector<float> cov = brute::coverage(pts, 40, 32);
+    for (std::size_t k = 0; k < cov.size(); ++k)
+      if (cov[k] > 0) blend(want, k, blend_fraction(cov[k], m), m);
+  }
+  EXPECT_EQ(s.opacity, want.opacity);
+  EXPECT_EQ(s.emission, want.emission);
+  EXPECT_EQ(s.albedo, want.albedo);
+}
+
+TEST(Rasterize, CirclesMatchBruteForce) {
+  // Centres and radii anywhere, on the sample lattice (samples exactly on the circle), tiny,
+  // huge and mostly outside; each alone on a grid so that every cell's coverage is compared.
+  std::mt19937 rng(300);
+  std::uniform_real_distribution<double> u(-6, 46), radius(0.01, 14);
+  std::uniform_int_distribution<int> lattice(-64, 40 * 32), lattice_radius(1, 320);
+  std::vector<Circle> circles;
+  for (int k = 0; k < 60; ++k)
+    circles.push_back({{float(u(rng)), float(u(rng))}, float(radius(rng))});
+  for (int k = 0; k < 60; ++k)
+    circles.push_back({{lattice(rng) / 32.0f, lattice(rng) / 32.0f}, lattice_radius(rng) / 32.0f});
+  circles.push_back({{20.25f, 17.5f}, 0.001f});
+  circles.push_back({{20.0f, 17.0f}, 0.5f});
+  circles.push_back({{-1e5f, 16.3f}, 1e5f + 21.7f});
+  circles.push_back({{16.1f, 1e6f}, 1e6f - 15.2f});
+  for (std::size_t k = 0; k < circles.size(); ++k) {
+    SceneDesc d = grid(40, 33);
+    d.shapes.push_back({circles[k], Material{{}, 0.5f, {}}});
+    expect_scene_matches_brute_force(d, "circle " + std::to_string(k));
+  }
+}
+
+TEST(Rasterize, ManyShapesMatchBruteForceInOrder) {
+  // Overlapping circles, boxes and segments of every size with polygons between them: each cell
+  // must take the shapes in scene order, whichever band of rows draws them.
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> pos(-10, 110), size(0.2, 30), unit(0, 1);
+  SceneDesc d = grid(100, 90);
+  for (int k = 0; k < 400; ++k) {
+    const Material m{{float(4 * unit(rng)), 0, float(unit(rng))},
+                     k % 3 ? float(unit(rng)) : 1.0f,
+                     {float(unit(rng)), 0.5f, 0}};
+    const std::array<float, 2> c{float(pos(rng)), float(pos(rng))};
+    const float sz = float(size(rng) * (k % 10 ? 0.2 : 1));
+    switch (k % 4) {
+      case 0:
+        d.shapes.push_back({Circle{c, sz}, m});
+        break;
+      case 1:
+        d.shapes.push_back({Box{c, {sz, float(size(rng))}, float(360 * unit(rng))}, m});
+        break;
+      case 2:
+        d.shapes.push_back({Segment{c, {float(pos(rng)), float(pos(rng))}, sz}, m});
+        break;
+      default:
+        d.shapes.push_back({Circle{c, sz * 0.1f}, m});
+        break;
+    }
+    if (k % 97 == 0) d.shapes.push_back({Polygon{random_points(rng, 6, -5, 105)}, m});
+  }
+  // The polygons are compared apart; here the reference draws them with the same fill.
+  const Scene s = build_ok(d);
+  Scene want = build_ok(grid(100, 90));
+  for (const Shape& shape : d.shapes) {
+    if (const auto* p = std::get_if<Polygon>(&shape.geometry)) {
+      const std::vector<float> cov = brute::coverage(p->points, 100, 90);
+      for (std::size_t k = 0; k < cov.size(); ++k)
+        if (cov[k] > 0) blend(want, k, blend_fraction(cov[k], shape.material), shape.material);
+    } else {
+      brute_draw(want, shape);
+    }
+  }
+  EXPECT_EQ(s.opacity, want.opacity);
+  EXPECT_EQ(s.emission, want.emission);
+  EXPECT_EQ(s.albedo, want.albedo);
 }
 
 TEST(Rasterize, PolygonUsesEvenOddRule) {

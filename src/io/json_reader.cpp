@@ -5,6 +5,10 @@
 #include <charconv>
 #include <cmath>
 #include <cstdint>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
 
 namespace penumbra::io {
 
@@ -12,6 +16,112 @@ using nlohmann::json;
 
 void fail(const std::string& file, const std::string& path, const std::string& what) {
   throw JsonFailure{file + ": " + path + ": " + what};
+}
+
+namespace {
+
+// Line and column (1-based) of a byte offset, for JSON syntax errors.
+std::pair<std::size_t, std::size_t> line_column(std::string_view text, std::size_t offset) {
+  offset = std::min(offset, text.size());
+  std::size_t line = 1, line_start = 0;
+  for (std::size_t i = 0; i < offset; ++i) {
+    if (text[i] == '\n') {
+      ++line;
+      line_start = i + 1;
+    }
+  }
+  return {line, offset - line_start + 1};
+}
+
+// A SAX pass that only tracks the JSON path, to name the value nlohmann refuses as out of
+// range (it rejects 1e999 while parsing, before any value reaches the walk).
+class PathTracker {
+ public:
+  bool null() { return value(); }
+  bool boolean(bool) { return value(); }
+  bool number_integer(json::number_integer_t) { return value(); }
+  bool number_unsigned(json::number_unsigned_t) { return value(); }
+  bool number_float(json::number_float_t, const std::string&) { return value(); }
+  bool string(std::string&) { return value(); }
+  bool binary(json::binary_t&) { return value(); }
+  bool start_object(std::size_t) { return push(false); }
+  bool key(std::string& k) {
+    stack_.back().key = k;
+    return true;
+  }
+  bool end_object() { return pop(); }
+  bool start_array(std::size_t) { return push(true); }
+  bool end_array() { return pop(); }
+  bool parse_error(std::size_t, const std::string& token, const nlohmann::detail::exception&) {
+    error_path_ = path();
+    token_ = token;
+    return false;
+  }
+
+  const std::string& error_path() const { return error_path_; }
+  const std::string& token() const { return token_; }
+
+ private:
+  struct Frame {
+    bool array;
+    std::size_t index = 0;
+    std::string key;
+  };
+  bool value() {
+    if (!stack_.empty() && stack_.back().array) ++stack_.back().index;
+    return true;
+  }
+  bool push(bool array) {
+    stack_.push_back({array, 0, {}});
+    return true;
+  }
+  bool pop() {
+    stack_.pop_back();
+    return value();
+  }
+  std::string path() const {
+    std::string p;
+    for (const Frame& f : stack_) {
+      // Appended piece by piece: GCC 12 warns falsely (-Wrestrict) on "literal" + std::string
+      // once this is inlined into the SAX callbacks.
+      if (f.array) {
+        p += '[';
+        p += std::to_string(f.index);
+        p += ']';
+      } else {
+        if (!p.empty()) p += '.';
+        p += f.key;
+      }
+    }
+    return p.empty() ? "(document)" : p;
+  }
+
+  std::vector<Frame> stack_;
+  std::string error_path_, token_;
+};
+
+}  // namespace
+
+json parse_json(std::string_view text, const std::string& file) {
+  try {
+    return json::parse(text.begin(), text.end());
+  } catch (const json::out_of_range&) {
+    // nlohmann refuses numbers beyond double range (1e999) while parsing: find their path.
+    PathTracker tracker;
+    json::sax_parse(text.begin(), text.end(), &tracker);
+    throw JsonFailure{file + ": " + tracker.error_path() + ": expected a finite number, found " +
+                      (tracker.token().empty() ? "a number out of range" : tracker.token()) +
+                      " (out of range)"};
+  } catch (const json::parse_error& e) {
+    // nlohmann's byte is the 1-based index of the last character read (the offending one).
+    auto [line, column] = line_column(text, e.byte > 0 ? e.byte - 1 : 0);
+    std::string detail = e.what();
+    // Drop nlohmann's "[json.exception...] parse error at line L, column C: " prefix.
+    if (auto colon = detail.find(": "); colon != std::string::npos)
+      detail = detail.substr(colon + 2);
+    throw JsonFailure{file + ": line " + std::to_string(line) + ", column " +
+                      std::to_string(column) + ": invalid JSON: " + detail};
+  }
 }
 
 std::string format_number(float v) {

@@ -20,6 +20,10 @@ struct JsonFailure {
 
 [[noreturn]] void fail(const std::string& file, const std::string& path, const std::string& what);
 
+// Parses a whole document of `file`. A syntax error is named by line and column; a number
+// beyond double range (1e999, which nlohmann refuses while parsing) by its JSON path.
+nlohmann::json parse_json(std::string_view text, const std::string& file);
+
 // Shortest text that reads back as the same number ("-0.1", "16385", "inf", "nan").
 std::string format_number(float v);
 std::string format_number(double v);

@@ -431,13 +431,10 @@ class StrokeReader : public io::JsonReader {
 }  // namespace
 
 Expected<StrokeFile> parse_strokes(std::string_view text, const std::string& path) {
-  json doc;
   try {
-    doc = json::parse(text);
-  } catch (const json::parse_error& e) {
-    return Error{path + ": not valid JSON: " + e.what()};
-  }
-  try {
+    // The scene loader's parse: it also names a number out of range (1e999), which
+    // nlohmann throws as out_of_range, not parse_error.
+    const json doc = io::parse_json(text, path);
     const StrokeReader r(path);
     if (!doc.is_object()) r.expected("(document)", "an object with \"strokes\"", doc);
     r.check_keys(doc, "", {"strokes", "size"});
@@ -456,6 +453,8 @@ Expected<StrokeFile> parse_strokes(std::string_view text, const std::string& pat
     return out;
   } catch (const io::JsonFailure& e) {
     return Error{e.message};
+  } catch (const std::exception& e) {  // e.g. allocation failure: still no throw across the API
+    return Error{path + ": " + e.what()};
   }
 }
 

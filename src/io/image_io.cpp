@@ -269,6 +269,9 @@ Expected<RawImage> read_exr(const std::string& path, Expect e) {
     const long long width = static_cast<long long>(dw.max.x) - dw.min.x + 1;
     const long long height = static_cast<long long>(dw.max.y) - dw.min.y + 1;
     if (Status s = check_size(path, width, height, e); !s) return s.error();
+    // Every block of pixels must be in the file before the pixels are allocated, so that a
+    // few kilobytes claiming 16384^2 cannot ask for gigabytes (as for PFM above).
+    if (!file.isComplete()) return fail(path, "truncated or damaged EXR (pixel data missing)");
 
     const Imf::ChannelList& list = file.header().channels();
     std::vector<std::string> names;

@@ -296,6 +296,28 @@ TEST_F(ImageIo, TruncatedOrGarbageExrIsAnError) {
 
 // ---- PNG ----
 
+// An 8x8 EXR whose header claims 16384^2, padded so that OpenEXR opens it: refused before its
+// pixels (3 GiB of floats) are allocated. Found by fuzzing the readers (docs/RELIABILITY.md).
+TEST_F(ImageIo, ExrClaimingAHugeSizeIsRefusedBeforeAllocating) {
+  const std::string p = path("huge.exr");
+  ASSERT_TRUE(io::write_exr(p, awkward_image(8, 8)).ok());
+  Bytes b = read_bytes(p);
+  for (const std::string name : {"dataWindow", "displayWindow"}) {
+    const std::string key = name + std::string("\0box2i\0", 7);
+    auto at = std::search(b.begin(), b.end(), key.begin(), key.end());
+    ASSERT_NE(at, b.end()) << name;
+    // After the name and type: the attribute's size (4 bytes), then xmin, ymin, xmax, ymax.
+    const std::size_t off = std::size_t(at - b.begin()) + key.size() + 4;
+    const std::int32_t box[4] = {0, 0, 16383, 16383};
+    std::memcpy(b.data() + off, box, sizeof box);
+  }
+  b.resize(b.size() + 9000, 0);  // room for the 1024 offsets of 16384 lines
+  write_bytes(p, b);
+  auto r = io::read_image(p);
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.error().message, p + ": truncated or damaged EXR (pixel data missing)");
+}
+
 TEST_F(ImageIo, Png8RoundTripKeepsValues) {
   const std::vector<unsigned char> rgb = {0,   1,   2,  127, 128, 129,  // row 0
                                           254, 255, 17, 200, 64,  3};   // row 1

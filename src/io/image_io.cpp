@@ -115,6 +115,34 @@ Expected<std::vector<unsigned char>> read_all(const std::string& path) {
   return bytes;
 }
 
+// stb_image sizes a PNG's buffers from its header, before reading the pixel data, and in int.
+// So, before stb sees it: the filtered rows the header promises must fit in what the file can
+// hold (deflate expands at most 1032 times), and both they and the decoded pixels must fit in
+// an int (a 16-bit RGBA image of 16384^2 overflows stb's sizes). stbi_info has checked that the
+// file starts with a whole IHDR chunk: bit depth at byte 24, colour type at byte 25.
+Status check_png_data_size(const std::string& path, const std::vector<unsigned char>& file, int w,
+                           int h, int out_channels, bool sixteen) {
+  const unsigned bit_depth = file[24], colour_type = file[25];
+  unsigned samples = 1;  // grey (0) and palette (3)
+  if (colour_type == 2) samples = 3;
+  if (colour_type == 4) samples = 2;
+  if (colour_type == 6) samples = 4;
+  const std::uint64_t row_bytes = (std::uint64_t(w) * samples * bit_depth + 7) / 8;
+  const std::uint64_t filtered = std::uint64_t(h) * (1 + row_bytes);
+  const std::uint64_t decoded = std::uint64_t(w) * h * out_channels * (sixteen ? 2 : 1);
+  constexpr std::uint64_t kIntMax = std::numeric_limits<int>::max();
+  if (filtered > kIntMax || decoded > kIntMax) {
+    return fail(path, "PNG too large to decode (" + std::to_string(w) + " x " + std::to_string(h) +
+                          ", " + std::to_string(decoded) + " bytes of pixels; the limit is 2 GiB)");
+  }
+  if (filtered > 1032 * std::uint64_t(file.size())) {
+    return fail(path, "truncated PNG (a " + std::to_string(file.size()) +
+                          "-byte file cannot hold " + std::to_string(w) + " x " +
+                          std::to_string(h) + " pixels)");
+  }
+  return {};
+}
+
 Expected<RawImage> read_png(const std::string& path, Expect e) {
   auto bytes = read_all(path);
   if (!bytes) return bytes.error();
@@ -135,9 +163,10 @@ Expected<RawImage> read_png(const std::string& path, Expect e) {
   }
   // Checked before decoding so a hostile header cannot ask for gigabytes.
   if (Status s = check_size(path, w, h, e); !s) return s.error();
+  const bool sixteen = stbi_is_16_bit_from_memory(data, len) != 0;
+  if (Status s = check_png_data_size(path, *bytes, w, h, comp, sixteen); !s) return s.error();
 
   RawImage img;
-  const bool sixteen = stbi_is_16_bit_from_memory(data, len) != 0;
   if (sixteen) {
     std::unique_ptr<stbi_us, void (*)(void*)> px(
         stbi_load_16_from_memory(data, len, &img.width, &img.height, &img.channels, 0),

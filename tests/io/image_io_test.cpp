@@ -318,6 +318,45 @@ TEST_F(ImageIo, ExrClaimingAHugeSizeIsRefusedBeforeAllocating) {
   EXPECT_EQ(r.error().message, p + ": truncated or damaged EXR (pixel data missing)");
 }
 
+// A 69-byte PNG whose header claims 16384^2 pixels: refused from its header, before stb sizes
+// its buffers from it (16-bit RGBA overflowed stb's int sizes; 8-bit RGB would allocate 768 MiB
+// before finding the data short). Found by fuzzing the readers (docs/RELIABILITY.md).
+TEST_F(ImageIo, PngClaimingAHugeSizeIsRefusedFromItsHeader) {
+  auto chunk = [](Bytes& png, const char* type, const Bytes& data) {
+    auto be32 = [&](std::uint32_t v) {
+      for (int s = 24; s >= 0; s -= 8) png.push_back(static_cast<unsigned char>(v >> s));
+    };
+    be32(static_cast<std::uint32_t>(data.size()));
+    Bytes typed(type, type + 4);
+    typed.insert(typed.end(), data.begin(), data.end());
+    png.insert(png.end(), typed.begin(), typed.end());
+    // The chunk's CRC-32 over its type and data.
+    std::uint32_t crc = 0xffffffffu;
+    for (unsigned char c : typed) {
+      crc ^= c;
+      for (int k = 0; k < 8; ++k) crc = (crc >> 1) ^ (0xedb88320u & (0u - (crc & 1u)));
+    }
+    be32(crc ^ 0xffffffffu);
+  };
+  // zlib stream of 100 zero bytes.
+  const Bytes idat = {0x78, 0x9c, 0x63, 0x60, 0xa0, 0x3d, 0x00, 0x00, 0x00, 0x64, 0x00, 0x01};
+  const std::pair<int, const char*> cases[] = {{16 * 256 + 6, "PNG too large to decode"},
+                                               {8 * 256 + 2, "truncated PNG"}};
+  for (const auto& [depth_and_type, want] : cases) {
+    Bytes png = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+    chunk(png, "IHDR",
+          {0, 0, 0x40, 0, 0, 0, 0x40, 0, static_cast<unsigned char>(depth_and_type >> 8),
+           static_cast<unsigned char>(depth_and_type & 0xff), 0, 0, 0});
+    chunk(png, "IDAT", idat);
+    chunk(png, "IEND", {});
+    const std::string p = path("huge.png");
+    write_bytes(p, png);
+    auto r = io::read_image(p);
+    ASSERT_FALSE(r.ok()) << want;
+    EXPECT_TRUE(starts_with(r.error().message, p + ": " + want)) << r.error().message;
+  }
+}
+
 TEST_F(ImageIo, Png8RoundTripKeepsValues) {
   const std::vector<unsigned char> rgb = {0,   1,   2,  127, 128, 129,  // row 0
                                           254, 255, 17, 200, 64,  3};   // row 1

@@ -318,6 +318,24 @@ TEST_F(ImageIo, ExrClaimingAHugeSizeIsRefusedBeforeAllocating) {
   EXPECT_EQ(r.error().message, p + ": truncated or damaged EXR (pixel data missing)");
 }
 
+// An EXR whose data window is wider than the limit: refused from the header read alone, before
+// OpenEXR opens the file and sizes its line buffers for 131072 columns. Found by the image
+// fuzzer (docs/RELIABILITY.md).
+TEST_F(ImageIo, ExrWiderThanTheLimitIsRefusedFromItsHeader) {
+  const std::string p = path("wide.exr");
+  ASSERT_TRUE(io::write_exr(p, awkward_image(8, 8)).ok());
+  Bytes b = read_bytes(p);
+  const std::string key("dataWindow\0box2i\0", 17);
+  auto at = std::search(b.begin(), b.end(), key.begin(), key.end());
+  ASSERT_NE(at, b.end());
+  const std::int32_t box[4] = {0, 0, 131071, 7};
+  std::memcpy(b.data() + (at - b.begin()) + key.size() + 4, box, sizeof box);
+  write_bytes(p, b);
+  auto r = io::read_image(p);
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.error().message, p + ": image too large (131072 x 8, the limit is 16384 per side)");
+}
+
 // A 69-byte PNG whose header claims 16384^2 pixels: refused from its header, before stb sizes
 // its buffers from it (16-bit RGBA overflowed stb's int sizes; 8-bit RGB would allocate 768 MiB
 // before finding the data short). Found by fuzzing the readers (docs/RELIABILITY.md).

@@ -307,8 +307,9 @@ Status check_exr_header(const std::string& path, Expect e) {
   char head[8];
   in.read(head, sizeof head);
   if (!Imf::isImfMagic(head)) return fail(path, "not an EXR file (bad magic number)");
-  int version = 0;  // little-endian in the file
-  for (int i = 7; i >= 4; --i) version = version * 256 + static_cast<unsigned char>(head[i]);
+  std::uint32_t bits = 0;  // little-endian in the file; unsigned, so high bits cannot overflow
+  for (int i = 7; i >= 4; --i) bits = bits << 8 | static_cast<unsigned char>(head[i]);
+  int version = std::bit_cast<int>(bits);
   Imf::Header header;
   header.readFrom(in, version);  // the first part's header in a multi-part file
   const Imath::Box2i& dw = header.dataWindow();

@@ -336,6 +336,19 @@ TEST_F(ImageIo, ExrWiderThanTheLimitIsRefusedFromItsHeader) {
   EXPECT_EQ(r.error().message, p + ": image too large (131072 x 8, the limit is 16384 per side)");
 }
 
+// An EXR whose version field has every flag set is an error, read without overflowing (the
+// header check once assembled the field in a signed int: UBSan, found by the image fuzzer).
+TEST_F(ImageIo, ExrWithEveryVersionFlagIsAnError) {
+  const std::string p = path("flags.exr");
+  ASSERT_TRUE(io::write_exr(p, awkward_image(8, 8)).ok());
+  Bytes b = read_bytes(p);
+  for (int i = 4; i < 8; ++i) b[i] = 0xff;
+  write_bytes(p, b);
+  auto r = io::read_image(p);
+  ASSERT_FALSE(r.ok());
+  EXPECT_TRUE(starts_with(r.error().message, p + ": ")) << r.error().message;
+}
+
 // A 69-byte PNG whose header claims 16384^2 pixels: refused from its header, before stb sizes
 // its buffers from it (16-bit RGBA overflowed stb's int sizes; 8-bit RGB would allocate 768 MiB
 // before finding the data short). Found by fuzzing the readers (docs/RELIABILITY.md).

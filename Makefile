@@ -4,8 +4,14 @@ WERROR   ?= OFF
 JOBS     ?= $(shell nproc)
 PREFIX   ?= /usr/local
 CMAKE_FLAGS = -DCMAKE_BUILD_TYPE=Release -DPENUMBRA_WERROR=$(WERROR) -DCMAKE_INSTALL_PREFIX=$(PREFIX)
+# The sanitizer build (docs/RELIABILITY.md): ASan + UBSan, no benchmarks (no test runs them).
+ASAN_BUILD ?= build-asan
+ASAN_FLAGS = -DCMAKE_BUILD_TYPE=Release -DPENUMBRA_WERROR=$(WERROR) -DPENUMBRA_SANITIZE=ON \
+             -DPENUMBRA_BUILD_BENCH=OFF
+FUZZ_SECONDS ?= 60
 
-.PHONY: all deps configure build demo test bench quality install format clean
+.PHONY: all deps configure build demo test bench quality install format clean \
+        build-sanitize test-sanitize fuzz
 
 all: build
 
@@ -24,6 +30,20 @@ demo:
 test: build
 	@cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
 
+build-sanitize: deps
+	@cmake -S . -B $(ASAN_BUILD) $(ASAN_FLAGS) > $(ASAN_BUILD).configure.log 2>&1 || (cat $(ASAN_BUILD).configure.log; exit 1)
+	@cmake --build $(ASAN_BUILD) -j $(JOBS)
+
+# Every test under ASan + UBSan; ctest passes LSAN_OPTIONS (tests/lsan.supp) to each test.
+# UBSan aborts on any report (-fno-sanitize-recover); these options add the stack.
+test-sanitize: build-sanitize
+	@cd $(ASAN_BUILD) && UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
+	  ctest --output-on-failure -j $(JOBS)
+
+# Each libFuzzer target for FUZZ_SECONDS (scripts/fuzz.sh; clang, build dir build-fuzz).
+fuzz: deps
+	@JOBS=$(JOBS) WERROR=$(WERROR) bash scripts/fuzz.sh $(FUZZ_SECONDS)
+
 bench: build
 	@$(BUILD)/bin/penumbra_bench --benchmark_counters_tabular=true
 
@@ -41,4 +61,5 @@ format:
 	@clang-format -i $$(git ls-files '*.cpp' '*.hpp')
 
 clean:
-	@rm -rf $(BUILD) $(BUILD).configure.log out
+	@rm -rf $(BUILD) $(BUILD).configure.log out $(ASAN_BUILD) $(ASAN_BUILD).configure.log \
+	        build-fuzz build-fuzz.configure.log

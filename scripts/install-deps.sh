@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Installs the Debian packages Penumbra needs to build, test and benchmark.
+# Installs the Debian packages Penumbra needs to build, test, fuzz and benchmark (clang-14 and
+# libclang-rt-14-dev, which holds libclang_rt.fuzzer, for scripts/fuzz.sh).
 # Idempotent and quiet: does nothing when everything is already there.
 set -euo pipefail
 
@@ -10,6 +11,7 @@ packages=(
   libpng-dev
   libglfw3-dev libgl-dev libglx-mesa0 libgl1-mesa-dri libimgui-dev xvfb xdotool
   libvulkan-dev glslc mesa-vulkan-drivers
+  clang-14 libclang-rt-14-dev
 )
 
 missing=()

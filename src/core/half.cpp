@@ -1,5 +1,6 @@
 #include "core/half.hpp"
 
+#include <cpuid.h>
 #include <immintrin.h>
 
 #include <cstdlib>
@@ -23,12 +24,21 @@ namespace {
   for (; i < n; ++i) d[i] = Half(s[i]);
 }
 
-// Initialised before main, so the CPU model is initialised here rather than assumed.
+// F16C and AVX from CPUID, and the AVX registers enabled by the OS (XGETBV). Read directly:
+// clang 14's __builtin_cpu_supports does not know "f16c".
+bool cpu_has_f16c_avx() {
+  unsigned a = 0, b = 0, c = 0, d = 0;
+  if (!__get_cpuid(1, &a, &b, &c, &d)) return false;
+  if (!(c & bit_F16C) || !(c & bit_AVX) || !(c & bit_OSXSAVE)) return false;
+  unsigned lo = 0, hi = 0;
+  __asm__("xgetbv" : "=a"(lo), "=d"(hi) : "c"(0));
+  return (lo & 6) == 6;  // XMM and YMM state saved by the OS
+}
+
+// Initialised before main.
 const bool kHasF16c = [] {
-  __builtin_cpu_init();
   const char* off = std::getenv("PENUMBRA_NO_F16C");
-  return !(off && *off && *off != '0') && __builtin_cpu_supports("f16c") &&
-         __builtin_cpu_supports("avx");
+  return !(off && *off && *off != '0') && cpu_has_f16c_avx();
 }();
 
 }  // namespace

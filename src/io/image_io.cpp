@@ -8,6 +8,9 @@
 #include <ImfIO.h>
 #include <ImfInputFile.h>
 #include <ImfOutputFile.h>
+#include <ImfStdIO.h>
+#include <ImfTileDescription.h>
+#include <ImfVersion.h>
 #include <png.h>
 #include <stb_image.h>
 #include <stb_image_write.h>
@@ -117,6 +120,34 @@ Expected<std::vector<unsigned char>> read_all(const std::string& path) {
   return bytes;
 }
 
+// stb_image sizes a PNG's buffers from its header, before reading the pixel data, and in int.
+// So, before stb sees it: the filtered rows the header promises must fit in what the file can
+// hold (deflate expands at most 1032 times), and both they and the decoded pixels must fit in
+// an int (a 16-bit RGBA image of 16384^2 overflows stb's sizes). stbi_info has checked that the
+// file starts with a whole IHDR chunk: bit depth at byte 24, colour type at byte 25.
+Status check_png_data_size(const std::string& path, const std::vector<unsigned char>& file, int w,
+                           int h, int out_channels, bool sixteen) {
+  const unsigned bit_depth = file[24], colour_type = file[25];
+  unsigned samples = 1;  // grey (0) and palette (3)
+  if (colour_type == 2) samples = 3;
+  if (colour_type == 4) samples = 2;
+  if (colour_type == 6) samples = 4;
+  const std::uint64_t row_bytes = (std::uint64_t(w) * samples * bit_depth + 7) / 8;
+  const std::uint64_t filtered = std::uint64_t(h) * (1 + row_bytes);
+  const std::uint64_t decoded = std::uint64_t(w) * h * out_channels * (sixteen ? 2 : 1);
+  constexpr std::uint64_t kIntMax = std::numeric_limits<int>::max();
+  if (filtered > kIntMax || decoded > kIntMax) {
+    return fail(path, "PNG too large to decode (" + std::to_string(w) + " x " + std::to_string(h) +
+                          ", " + std::to_string(decoded) + " bytes of pixels; the limit is 2 GiB)");
+  }
+  if (filtered > 1032 * std::uint64_t(file.size())) {
+    return fail(path, "truncated PNG (a " + std::to_string(file.size()) +
+                          "-byte file cannot hold " + std::to_string(w) + " x " +
+                          std::to_string(h) + " pixels)");
+  }
+  return {};
+}
+
 Expected<RawImage> read_png(const std::string& path, Expect e) {
   auto bytes = read_all(path);
   if (!bytes) return bytes.error();
@@ -137,9 +168,10 @@ Expected<RawImage> read_png(const std::string& path, Expect e) {
   }
   // Checked before decoding so a hostile header cannot ask for gigabytes.
   if (Status s = check_size(path, w, h, e); !s) return s.error();
+  const bool sixteen = stbi_is_16_bit_from_memory(data, len) != 0;
+  if (Status s = check_png_data_size(path, *bytes, w, h, comp, sixteen); !s) return s.error();
 
   RawImage img;
-  const bool sixteen = stbi_is_16_bit_from_memory(data, len) != 0;
   if (sixteen) {
     std::unique_ptr<stbi_us, void (*)(void*)> px(
         stbi_load_16_from_memory(data, len, &img.width, &img.height, &img.channels, 0),
@@ -262,15 +294,50 @@ Expected<RawImage> read_pfm(const std::string& path, Expect e) {
 
 // ---- EXR ---------------------------------------------------------------------------------
 
+long long box_width(const Imath::Box2i& b) {
+  return static_cast<long long>(b.max.x) - b.min.x + 1;
+}
+long long box_height(const Imath::Box2i& b) {
+  return static_cast<long long>(b.max.y) - b.min.y + 1;
+}
+
+// OpenEXR sizes its line and tile buffers from the header as it opens a file, before the size
+// can be checked (a 229-byte file claiming 115720 columns asked for 2.2 GB): the header is read
+// alone first. Throws what OpenEXR throws on a damaged header.
+Status check_exr_header(const std::string& path, Expect e) {
+  Imf::StdIFStream in(path.c_str());
+  char head[8];
+  in.read(head, sizeof head);
+  if (!Imf::isImfMagic(head)) return fail(path, "not an EXR file (bad magic number)");
+  std::uint32_t bits = 0;  // little-endian in the file; unsigned, so high bits cannot overflow
+  for (int i = 7; i >= 4; --i) bits = bits << 8 | static_cast<unsigned char>(head[i]);
+  int version = std::bit_cast<int>(bits);
+  Imf::Header header;
+  header.readFrom(in, version);  // the first part's header in a multi-part file
+  const Imath::Box2i& dw = header.dataWindow();
+  if (Status s = check_size(path, box_width(dw), box_height(dw), e); !s) return s;
+  if (header.hasTileDescription()) {
+    const Imf::TileDescription& t = header.tileDescription();
+    if (t.xSize == 0 || t.ySize == 0 || t.xSize > unsigned(kMaxImageSide) ||
+        t.ySize > unsigned(kMaxImageSide))
+      return fail(path, "bad EXR tile size (" + std::to_string(t.xSize) + " x " +
+                            std::to_string(t.ySize) + ")");
+  }
+  return {};
+}
+
 Expected<RawImage> read_exr(const std::string& path, Expect e) {
   // Open once ourselves for a plain errno message on a missing or unreadable file.
   if (auto f = open_for_reading(path); !f) return f.error();
   try {
+    if (Status s = check_exr_header(path, e); !s) return s.error();
     Imf::InputFile file(path.c_str());
     const Imath::Box2i dw = file.header().dataWindow();
-    const long long width = static_cast<long long>(dw.max.x) - dw.min.x + 1;
-    const long long height = static_cast<long long>(dw.max.y) - dw.min.y + 1;
+    const long long width = box_width(dw), height = box_height(dw);
     if (Status s = check_size(path, width, height, e); !s) return s.error();
+    // Every block of pixels must be in the file before the pixels are allocated, so that a
+    // few kilobytes claiming 16384^2 cannot ask for gigabytes (as for PFM above).
+    if (!file.isComplete()) return fail(path, "truncated or damaged EXR (pixel data missing)");
 
     const Imf::ChannelList& list = file.header().channels();
     std::vector<std::string> names;

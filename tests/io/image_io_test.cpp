@@ -296,6 +296,98 @@ TEST_F(ImageIo, TruncatedOrGarbageExrIsAnError) {
 
 // ---- PNG ----
 
+// An 8x8 EXR whose header claims 16384^2, padded so that OpenEXR opens it: refused before its
+// pixels (3 GiB of floats) are allocated. Found by fuzzing the readers (docs/RELIABILITY.md).
+TEST_F(ImageIo, ExrClaimingAHugeSizeIsRefusedBeforeAllocating) {
+  const std::string p = path("huge.exr");
+  ASSERT_TRUE(io::write_exr(p, awkward_image(8, 8)).ok());
+  Bytes b = read_bytes(p);
+  for (const std::string name : {"dataWindow", "displayWindow"}) {
+    const std::string key = name + std::string("\0box2i\0", 7);
+    auto at = std::search(b.begin(), b.end(), key.begin(), key.end());
+    ASSERT_NE(at, b.end()) << name;
+    // After the name and type: the attribute's size (4 bytes), then xmin, ymin, xmax, ymax.
+    const std::size_t off = std::size_t(at - b.begin()) + key.size() + 4;
+    const std::int32_t box[4] = {0, 0, 16383, 16383};
+    std::memcpy(b.data() + off, box, sizeof box);
+  }
+  b.resize(b.size() + 9000, 0);  // room for the 1024 offsets of 16384 lines
+  write_bytes(p, b);
+  auto r = io::read_image(p);
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.error().message, p + ": truncated or damaged EXR (pixel data missing)");
+}
+
+// An EXR whose data window is wider than the limit: refused from the header read alone, before
+// OpenEXR opens the file and sizes its line buffers for 131072 columns. Found by the image
+// fuzzer (docs/RELIABILITY.md).
+TEST_F(ImageIo, ExrWiderThanTheLimitIsRefusedFromItsHeader) {
+  const std::string p = path("wide.exr");
+  ASSERT_TRUE(io::write_exr(p, awkward_image(8, 8)).ok());
+  Bytes b = read_bytes(p);
+  const std::string key("dataWindow\0box2i\0", 17);
+  auto at = std::search(b.begin(), b.end(), key.begin(), key.end());
+  ASSERT_NE(at, b.end());
+  const std::int32_t box[4] = {0, 0, 131071, 7};
+  std::memcpy(b.data() + (at - b.begin()) + key.size() + 4, box, sizeof box);
+  write_bytes(p, b);
+  auto r = io::read_image(p);
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.error().message, p + ": image too large (131072 x 8, the limit is 16384 per side)");
+}
+
+// An EXR whose version field has every flag set is an error, read without overflowing (the
+// header check once assembled the field in a signed int: UBSan, found by the image fuzzer).
+TEST_F(ImageIo, ExrWithEveryVersionFlagIsAnError) {
+  const std::string p = path("flags.exr");
+  ASSERT_TRUE(io::write_exr(p, awkward_image(8, 8)).ok());
+  Bytes b = read_bytes(p);
+  for (int i = 4; i < 8; ++i) b[i] = 0xff;
+  write_bytes(p, b);
+  auto r = io::read_image(p);
+  ASSERT_FALSE(r.ok());
+  EXPECT_TRUE(starts_with(r.error().message, p + ": ")) << r.error().message;
+}
+
+// A 69-byte PNG whose header claims 16384^2 pixels: refused from its header, before stb sizes
+// its buffers from it (16-bit RGBA overflowed stb's int sizes; 8-bit RGB would allocate 768 MiB
+// before finding the data short). Found by fuzzing the readers (docs/RELIABILITY.md).
+TEST_F(ImageIo, PngClaimingAHugeSizeIsRefusedFromItsHeader) {
+  auto chunk = [](Bytes& png, const char* type, const Bytes& data) {
+    auto be32 = [&](std::uint32_t v) {
+      for (int s = 24; s >= 0; s -= 8) png.push_back(static_cast<unsigned char>(v >> s));
+    };
+    be32(static_cast<std::uint32_t>(data.size()));
+    Bytes typed(type, type + 4);
+    typed.insert(typed.end(), data.begin(), data.end());
+    png.insert(png.end(), typed.begin(), typed.end());
+    // The chunk's CRC-32 over its type and data.
+    std::uint32_t crc = 0xffffffffu;
+    for (unsigned char c : typed) {
+      crc ^= c;
+      for (int k = 0; k < 8; ++k) crc = (crc >> 1) ^ (0xedb88320u & (0u - (crc & 1u)));
+    }
+    be32(crc ^ 0xffffffffu);
+  };
+  // zlib stream of 100 zero bytes.
+  const Bytes idat = {0x78, 0x9c, 0x63, 0x60, 0xa0, 0x3d, 0x00, 0x00, 0x00, 0x64, 0x00, 0x01};
+  const std::pair<int, const char*> cases[] = {{16 * 256 + 6, "PNG too large to decode"},
+                                               {8 * 256 + 2, "truncated PNG"}};
+  for (const auto& [depth_and_type, want] : cases) {
+    Bytes png = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+    chunk(png, "IHDR",
+          {0, 0, 0x40, 0, 0, 0, 0x40, 0, static_cast<unsigned char>(depth_and_type >> 8),
+           static_cast<unsigned char>(depth_and_type & 0xff), 0, 0, 0});
+    chunk(png, "IDAT", idat);
+    chunk(png, "IEND", {});
+    const std::string p = path("huge.png");
+    write_bytes(p, png);
+    auto r = io::read_image(p);
+    ASSERT_FALSE(r.ok()) << want;
+    EXPECT_TRUE(starts_with(r.error().message, p + ": " + want)) << r.error().message;
+  }
+}
+
 TEST_F(ImageIo, Png8RoundTripKeepsValues) {
   const std::vector<unsigned char> rgb = {0,   1,   2,  127, 128, 129,  // row 0
                                           254, 255, 17, 200, 64,  3};   // row 1

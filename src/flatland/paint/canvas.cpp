@@ -432,6 +432,8 @@ class StrokeReader : public io::JsonReader {
 
 Expected<StrokeFile> parse_strokes(std::string_view text, const std::string& path) {
   try {
+    // The scene loader's parse: it also names a number out of range (1e999), which
+    // nlohmann throws as out_of_range, not parse_error.
     const json doc = io::parse_json(text, path);
     const StrokeReader r(path);
     if (!doc.is_object()) r.expected("(document)", "an object with \"strokes\"", doc);
@@ -451,6 +453,8 @@ Expected<StrokeFile> parse_strokes(std::string_view text, const std::string& pat
     return out;
   } catch (const io::JsonFailure& e) {
     return Error{e.message};
+  } catch (const std::exception& e) {  // e.g. allocation failure: still no throw across the API
+    return Error{path + ": " + e.what()};
   }
 }
 

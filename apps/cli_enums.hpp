@@ -4,12 +4,12 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
-#include <charconv>
 #include <cmath>
 #include <map>
 #include <string>
 #include <vector>
 
+#include "io/json_reader.hpp"
 #include "penumbra/flatland/render.hpp"
 
 // `value` must outlive the parse; the help lists the names in the order given.
@@ -32,11 +32,8 @@ CLI::Option* add_enum_option(CLI::App* app, const std::string& name, E& value,
 // CLI::Range for real numbers, which prints its bounds as "1000000000.000000": this one says
 // "Value 3e38 not in range 0.001 to 1e+09" (shortest round-trip spelling).
 inline CLI::Validator real_range(double lo, double hi) {
-  auto spell = [](double v) {
-    char buf[32];
-    return std::string(buf, std::to_chars(buf, buf + sizeof buf, v).ptr);
-  };
-  const std::string bounds = spell(lo) + " to " + spell(hi);
+  const std::string bounds =
+      penumbra::io::format_number(lo) + " to " + penumbra::io::format_number(hi);
   return CLI::Validator(
       [lo, hi, bounds](std::string& text) -> std::string {
         double v = 0;

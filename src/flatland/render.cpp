@@ -87,17 +87,16 @@ struct Brightest {
   std::string where;  // what holds it, for messages
 };
 
-double fluence_bound(double radiance, int bounces) {
-  return kTwoPi * radiance * bounces;
-}
-
-Status too_bright(const std::string& where, double value, int bounces) {
+// Refuses a brightest value whose fluence bound passes the float range.
+Status within_floats(const std::string& where, double value, int bounces) {
+  const double bound = kTwoPi * value * bounces;
+  if (bound <= FLT_MAX) return {};
   return Error{where + ": " + io::format_number(float(value)) +  // values are floats
                " is too bright to render: the fluence can reach 2 pi x " +
                io::format_rounded(value) + " x " + std::to_string(bounces) +
-               (bounces == 1 ? " bounce" : " bounces") + " = " +
-               io::format_rounded(fluence_bound(value, bounces)) + ", more than a float holds (" +
-               io::format_rounded(FLT_MAX) + "); scale the scene's emission and environment down"};
+               (bounces == 1 ? " bounce" : " bounces") + " = " + io::format_rounded(bound) +
+               ", more than a float holds (" + io::format_rounded(FLT_MAX) +
+               "); scale the scene's emission and environment down"};
 }
 
 void consider(Brightest& b, const Rgb& c, const std::string& where) {
@@ -105,27 +104,48 @@ void consider(Brightest& b, const Rgb& c, const std::string& where) {
     if (std::fabs(v) > b.value) b = {std::fabs(v), where};
 }
 
+// The largest magnitude of an RGB array (emission of a scene or layer, a result) and its index;
+// `bad` is the index of the first value that is not finite (`n` when all are).
+struct Peak {
+  float value = 0;
+  std::size_t at = 0, bad = 0;
+};
+Peak peak(const float* p, std::size_t n) {
+  Peak k{0, 0, n};
+  for (std::size_t i = 0; i < n; ++i) {
+    const float v = std::fabs(p[i]);
+    if (!(v <= FLT_MAX)) {  // also NaN
+      k.bad = i;
+      break;
+    }
+    if (v > k.value) k.value = v, k.at = i;
+  }
+  return k;
+}
+
+// "(x, y)" of the value at index i of an RGB array `width` cells wide.
+std::string cell_of(std::size_t i, int width) {
+  // Appended piece by piece: GCC 12 warns falsely (-Wrestrict) on "(" + ... here.
+  std::string s = "(";
+  s += std::to_string(i / 3 % width);
+  s += ", ";
+  s += std::to_string(i / 3 / width);
+  s += ')';
+  return s;
+}
+
 // The brightest emission or environment of a rasterised scene; an error for a value that is not
 // finite (a Scene built by hand).
 Expected<Brightest> brightest(const Scene& scene) {
-  Brightest b;
   const Rgb& env = scene.environment;
   if (!std::isfinite(env.r) || !std::isfinite(env.g) || !std::isfinite(env.b))
     return Error{"scene: the environment is not finite"};
+  const Peak e = peak(scene.emission.data(), scene.emission.size());
+  if (e.bad < scene.emission.size())
+    return Error{"scene: the emission of cell " + cell_of(e.bad, scene.width) + " is not finite"};
+  Brightest b;
   consider(b, env, "scene: the environment");
-  std::size_t at = 0;
-  float largest = 0;
-  for (std::size_t i = 0; i < scene.emission.size(); ++i) {
-    const float v = std::fabs(scene.emission[i]);
-    if (!(v <= FLT_MAX)) {  // also NaN
-      return Error{"scene: the emission of cell (" + std::to_string(i / 3 % scene.width) + ", " +
-                   std::to_string(i / 3 / scene.width) + ") is not finite"};
-    }
-    if (v > largest) largest = v, at = i / 3;
-  }
-  if (largest > b.value)
-    b = {largest, "scene: the emission of cell (" + std::to_string(at % scene.width) + ", " +
-                      std::to_string(at / scene.width) + ")"};
+  if (e.value > b.value) b = {e.value, "scene: the emission of cell " + cell_of(e.at, scene.width)};
   return b;
 }
 
@@ -147,15 +167,11 @@ Status check_brightness(const SceneDesc& desc, const RenderOptions& options) {
   consider(b, desc.environment, "environment");
   for (std::size_t i = 0; i < desc.shapes.size(); ++i)
     consider(b, desc.shapes[i].material.emission, "shapes[" + std::to_string(i) + "].emission");
-  if (const auto& layer = desc.layers.emission) {
-    const float* p = layer->data();
-    for (std::size_t i = 0; i < std::size_t(layer->width()) * layer->height() * 3; ++i)
-      if (std::fabs(p[i]) > b.value)
-        b = {std::fabs(p[i]), "layers.emission: pixel (" + std::to_string(i / 3 % layer->width()) +
-                                  ", " + std::to_string(i / 3 / layer->width()) + ")"};
+  if (const auto& layer = desc.layers.emission) {  // finite: the loader checked it
+    const Peak e = peak(layer->data(), std::size_t(layer->width()) * layer->height() * 3);
+    if (e.value > b.value) b = {e.value, "layers.emission: pixel " + cell_of(e.at, layer->width())};
   }
-  if (fluence_bound(b.value, options.bounces) <= FLT_MAX) return {};
-  return too_bright(desc.source + ": " + b.where, b.value, options.bounces);
+  return within_floats(desc.source + ": " + b.where, b.value, options.bounces);
 }
 
 // What a Renderer keeps between renders: the packed medium, HRC's buffers, and the GPU solver
@@ -205,8 +221,7 @@ Expected<RenderResult> render_unchecked(const Scene& scene, const RenderOptions&
   const MethodEntry& method = entry(options.method);
   Expected<Brightest> light = brightest(scene);
   if (!light) return light.error();
-  if (fluence_bound(light->value, options.bounces) > FLT_MAX)
-    return too_bright(light->where, light->value, options.bounces).error();
+  if (Status s = within_floats(light->where, light->value, options.bounces); !s) return s.error();
   const int exponent = light_exponent(light->value, options);
   RenderResult result;
   result.options = plan.options;
@@ -241,11 +256,9 @@ Expected<RenderResult> render_unchecked(const Scene& scene, const RenderOptions&
              ++i)
           f[i] = std::ldexp(f[i], exponent);
       });
-    for (std::size_t i = 0; i < n; ++i)
-      if (!std::isfinite(f[i]))
-        return Error{std::string(method.title) + " gave a value that is not finite at cell (" +
-                     std::to_string(i / 3 % scene.width) + ", " +
-                     std::to_string(i / 3 / scene.width) + ")"};
+    if (const Peak r = peak(f, n); r.bad < n)
+      return Error{std::string(method.title) + " gave a value that is not finite at cell " +
+                   cell_of(r.bad, scene.width)};
     return std::move(result);
   };
   if (*device) {  // the whole render on the GPU: the stages are its pass times

@@ -125,39 +125,51 @@ double distance(const Points& pts, double x, double y) {
   return inside(pts, x, y) ? -d : d;
 }
 
-std::vector<float> coverage(const Points& pts, int w, int h) {
+// The old per-cell coverage of any shape with a signed distance and an exact inside test.
+template <class G>
+float cell_coverage(const G& g, int i, int j) {
   const double half_diagonal = 0.70710678118654752440;
-  double x0 = pts[0][0], y0 = pts[0][1], x1 = x0, y1 = y0;
-  for (const auto& p : pts) {
-    x0 = std::min(x0, double(p[0]));
-    y0 = std::min(y0, double(p[1]));
-    x1 = std::max(x1, double(p[0]));
-    y1 = std::max(y1, double(p[1]));
+  const double d = g.distance(i + 0.5, j + 0.5);
+  if (d <= -half_diagonal) return 1;
+  if (d >= half_diagonal) return 0;
+  int hits = 0;
+  for (int sy = 0; sy < 16; ++sy) {
+    double y = j + (sy + 0.5) / 16;
+    for (int sx = 0; sx < 16; ++sx) hits += g.inside(i + (sx + 0.5) / 16, y);
   }
-  const int i0 = int(std::clamp(std::floor(x0), 0.0, double(w)));
-  const int i1 = int(std::clamp(std::ceil(x1), 0.0, double(w)));
-  const int j0 = int(std::clamp(std::floor(y0), 0.0, double(h)));
-  const int j1 = int(std::clamp(std::ceil(y1), 0.0, double(h)));
-  std::vector<float> cov(std::size_t(w) * h, 0.0f);
-  for (int j = j0; j < j1; ++j) {
-    for (int i = i0; i < i1; ++i) {
-      float c;
-      const double d = distance(pts, i + 0.5, j + 0.5);
-      if (d <= -half_diagonal) {
-        c = 1;
-      } else if (d >= half_diagonal) {
-        c = 0;
-      } else {
-        int hits = 0;
-        for (int sy = 0; sy < 16; ++sy) {
-          double y = j + (sy + 0.5) / 16;
-          for (int sx = 0; sx < 16; ++sx) hits += inside(pts, i + (sx + 0.5) / 16, y);
-        }
-        c = float(hits) / float(16 * 16);
-      }
-      cov[std::size_t(j) * w + i] = c;
+  return float(hits) / float(16 * 16);
+}
+
+// Cells [i0, i1) x [j0, j1) touched by bounds {x0, y0, x1, y1}, clipped to the grid.
+std::array<int, 4> cell_range(const std::array<double, 4>& b, int w, int h) {
+  return {int(std::clamp(std::floor(b[0]), 0.0, double(w))),
+          int(std::clamp(std::ceil(b[2]), 0.0, double(w))),
+          int(std::clamp(std::floor(b[1]), 0.0, double(h))),
+          int(std::clamp(std::ceil(b[3]), 0.0, double(h)))};
+}
+
+struct Polygon {
+  const Points& pts;
+  double distance(double x, double y) const { return brute::distance(pts, x, y); }
+  bool inside(double x, double y) const { return brute::inside(pts, x, y); }
+  std::array<double, 4> bounds() const {
+    std::array<double, 4> b = {pts[0][0], pts[0][1], pts[0][0], pts[0][1]};
+    for (const auto& p : pts) {
+      b[0] = std::min(b[0], double(p[0]));
+      b[1] = std::min(b[1], double(p[1]));
+      b[2] = std::max(b[2], double(p[0]));
+      b[3] = std::max(b[3], double(p[1]));
     }
+    return b;
   }
+};
+
+std::vector<float> coverage(const Points& pts, int w, int h) {
+  const Polygon g{pts};
+  const auto [i0, i1, j0, j1] = cell_range(g.bounds(), w, h);
+  std::vector<float> cov(std::size_t(w) * h, 0.0f);
+  for (int j = j0; j < j1; ++j)
+    for (int i = i0; i < i1; ++i) cov[std::size_t(j) * w + i] = cell_coverage(g, i, j);
   return cov;
 }
 
@@ -218,31 +230,11 @@ struct BruteCapsule {
 // Blends shape g over s as build_scene did, cell by cell.
 template <class G>
 void brute_draw(Scene& s, const G& g, const Material& m) {
-  const double half_diagonal = 0.70710678118654752440;
-  const auto b = g.bounds();
-  const int i0 = int(std::clamp(std::floor(b[0]), 0.0, double(s.width)));
-  const int i1 = int(std::clamp(std::ceil(b[2]), 0.0, double(s.width)));
-  const int j0 = int(std::clamp(std::floor(b[1]), 0.0, double(s.height)));
-  const int j1 = int(std::clamp(std::ceil(b[3]), 0.0, double(s.height)));
-  for (int j = j0; j < j1; ++j) {
-    for (int i = i0; i < i1; ++i) {
-      float c;
-      const double d = g.distance(i + 0.5, j + 0.5);
-      if (d <= -half_diagonal) {
-        c = 1;
-      } else if (d >= half_diagonal) {
-        c = 0;
-      } else {
-        int hits = 0;
-        for (int sy = 0; sy < 16; ++sy) {
-          double y = j + (sy + 0.5) / 16;
-          for (int sx = 0; sx < 16; ++sx) hits += g.inside(i + (sx + 0.5) / 16, y);
-        }
-        c = float(hits) / float(16 * 16);
-      }
-      if (c > 0) blend(s, s.index(i, j), blend_fraction(c, m), m);
-    }
-  }
+  const auto [i0, i1, j0, j1] = brute::cell_range(g.bounds(), s.width, s.height);
+  for (int j = j0; j < j1; ++j)
+    for (int i = i0; i < i1; ++i)
+      if (const float c = brute::cell_coverage(g, i, j); c > 0)
+        blend(s, s.index(i, j), blend_fraction(c, m), m);
 }
 
 void brute_draw(Scene& s, const Shape& shape) {
@@ -257,6 +249,8 @@ void brute_draw(Scene& s, const Shape& shape) {
                m);
   } else if (const auto* g = std::get_if<Segment>(&shape.geometry)) {
     brute_draw(s, BruteCapsule{g->a[0], g->a[1], g->b[0], g->b[1], g->width / 2.0}, m);
+  } else if (const auto* p = std::get_if<Polygon>(&shape.geometry)) {
+    brute_draw(s, brute::Polygon{p->points}, m);
   }
 }
 
@@ -485,21 +479,7 @@ TEST(Rasterize, ManyShapesMatchBruteForceInOrder) {
     }
     if (k % 97 == 0) d.shapes.push_back({Polygon{random_points(rng, 6, -5, 105)}, m});
   }
-  // The polygons are compared apart; here the reference draws them with the same fill.
-  const Scene s = build_ok(d);
-  Scene want = build_ok(grid(100, 90));
-  for (const Shape& shape : d.shapes) {
-    if (const auto* p = std::get_if<Polygon>(&shape.geometry)) {
-      const std::vector<float> cov = brute::coverage(p->points, 100, 90);
-      for (std::size_t k = 0; k < cov.size(); ++k)
-        if (cov[k] > 0) blend(want, k, blend_fraction(cov[k], shape.material), shape.material);
-    } else {
-      brute_draw(want, shape);
-    }
-  }
-  EXPECT_EQ(s.opacity, want.opacity);
-  EXPECT_EQ(s.emission, want.emission);
-  EXPECT_EQ(s.albedo, want.albedo);
+  expect_scene_matches_brute_force(d, "mixed shapes with polygons between them");
 }
 
 TEST(Rasterize, PolygonUsesEvenOddRule) {

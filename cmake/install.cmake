@@ -1,6 +1,6 @@
 # `make install` and a package config so that find_package(penumbra) works.
 include(CMakePackageConfigHelpers)
-install(TARGETS penumbra penumbra_core penumbra_flatland penumbra_analysis penumbra_cli
+install(TARGETS penumbra penumbra_core penumbra_flatland penumbra_spaceland penumbra_analysis penumbra_cli
   EXPORT penumbraTargets
   ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
   LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}

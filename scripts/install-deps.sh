@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs the Debian packages Penumbra needs to build, test, fuzz and benchmark (clang-14 and
-# libclang-rt-14-dev, which holds libclang_rt.fuzzer, for scripts/fuzz.sh).
+# libclang-rt-14-dev, which holds libclang_rt.fuzzer, for scripts/fuzz.sh; glmark2-data's bunny
+# and assimp-testmodels' glTF files for the 3D example scenes and tests).
 # Idempotent and quiet: does nothing when everything is already there.
 set -euo pipefail
 
@@ -11,6 +12,8 @@ packages=(
   libpng-dev
   libglfw3-dev libgl-dev libglx-mesa0 libgl1-mesa-dri libimgui-dev xvfb xdotool
   libvulkan-dev glslc mesa-vulkan-drivers
+  libembree-dev libtinyobjloader-dev libtinygltf-dev
+  glmark2-data assimp-testmodels
   clang-14 libclang-rt-14-dev
 )
 

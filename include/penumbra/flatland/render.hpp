@@ -11,6 +11,7 @@
 #include "penumbra/error.hpp"
 #include "penumbra/flatland/scene.hpp"
 #include "penumbra/image.hpp"
+#include "penumbra/progress.hpp"
 
 namespace penumbra::flatland {
 
@@ -72,12 +73,7 @@ struct PtOptions {
 };
 
 // Reported between passes of progressive methods.
-struct RenderProgress {
-  std::uint64_t samples = 0;  // samples per cell taken so far
-  std::uint64_t target = 0;   // samples per cell asked for (0: until the time is up)
-  double elapsed_s = 0;
-  double fraction = 0;  // of the work asked for (samples or time), 0..1
-};
+using penumbra::RenderProgress;
 
 // Where a method runs.
 enum class Device {

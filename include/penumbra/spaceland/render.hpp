@@ -1,0 +1,98 @@
+// Running a 3D method on a scene: options in, the camera's image and timings out.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "penumbra/error.hpp"
+#include "penumbra/image.hpp"
+#include "penumbra/progress.hpp"
+#include "penumbra/spaceland/scene.hpp"
+
+namespace penumbra::spaceland {
+
+enum class Method {
+  pt,  // the reference path tracer: converges to the exact radiance the format defines
+};
+
+// What an image holds: the radiance (the methods' answer) or a G-buffer channel of the first hits
+// (the same for every method). Misses: depth +inf (EXR/PFM; PNG shows them black), normal 0,
+// albedo 0, position 0, emission the sky's radiance, object -1.
+enum class Aov {
+  radiance,  // linear RGB radiance towards the camera
+  depth,     // linear depth: distance along the camera's view direction
+  normal,    // shading normal facing the camera, world space
+  albedo,    // the hit's albedo, texture included
+  position,  // world-space hit position
+  emission,  // the hit's emitted radiance
+  object,    // index of the document's object (the same value in r, g and b)
+};
+
+// The reference path tracer (docs/METHODS.md, "The 3D path tracer").
+struct PtOptions {
+  int spp = 64;            // samples per pixel; with `seconds`, the most to take (0: no limit)
+  double seconds = 0;      // > 0: add samples until this much time has passed
+  std::uint64_t seed = 0;  // changes every random number; same seed, same image
+};
+
+struct RenderOptions {
+  Method method = Method::pt;
+  PtOptions pt;
+  Aov aov = Aov::radiance;
+  int bounces = 1;  // 1: direct light only; N: N-1 more diffuse bounces
+  int threads = 0;  // 0: all hardware threads
+  std::uint64_t max_memory = std::uint64_t(8) << 30;  // refuse work whose memory need is larger
+  // Progressive methods call this from the calling thread between passes.
+  std::function<void(const RenderProgress&)> progress;
+  // When set to true, progressive methods stop after the current pass and return what they have.
+  const std::atomic<bool>* cancel = nullptr;
+};
+
+struct StageTime {
+  std::string name;
+  double ms = 0;
+};
+
+struct RenderResult {
+  ImageRgb radiance;               // the camera's image: linear RGB (or the AOV asked for)
+  std::vector<StageTime> stages;   // in the order they ran
+  double time_ms = 0;              // computation only (BVH build included), no file I/O
+  std::uint64_t memory_bytes = 0;  // peak working memory (BVH, buffers; not the scene)
+  std::uint64_t rays = 0;          // rays traced (closest-hit and shadow)
+  std::uint64_t samples = 0;       // samples per pixel in the result
+  bool cancelled = false;          // stopped early through RenderOptions::cancel
+  RenderOptions options;           // the options used
+  std::string device = "cpu";
+};
+
+// Checks options: ranges and combinations.
+Status check_options(const RenderOptions& options);
+
+// Working memory of the render (the ray tracer's BVH and the image buffers), known before
+// anything is allocated.
+std::uint64_t estimate_memory(const Scene& scene, const RenderOptions& options);
+
+// Refuses, before anything is allocated, work whose memory need (the scene's arrays included)
+// exceeds options.max_memory.
+Status check_memory(const Scene& scene, const RenderOptions& options);
+
+// Runs the method. Refuses up front (Error, nothing allocated) when the scene or the options are
+// invalid or the memory estimate exceeds options.max_memory; never returns a value that is not
+// finite (except the depth of a miss).
+Expected<RenderResult> render(const Scene& scene, const RenderOptions& options);
+
+struct MethodInfo {
+  Method method;
+  const char* name;
+  const char* summary;
+};
+// Every 3D method, in the order of the Method enum.
+std::vector<MethodInfo> methods();
+
+const char* to_string(Method m);
+const char* to_string(Aov a);
+
+}  // namespace penumbra::spaceland

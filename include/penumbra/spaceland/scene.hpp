@@ -1,0 +1,143 @@
+// The 3D scene: the document of docs/scene-format.md (3D, version 1) with its meshes loaded and
+// every surface in world space, ready for the ray tracer. A program may also build one in code.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "penumbra/error.hpp"
+#include "penumbra/image.hpp"
+#include "penumbra/vec3.hpp"
+
+namespace penumbra::spaceland {
+
+// Largest image side the format allows (camera width and height, --width, --height).
+inline constexpr int kMaxImageSide = 8192;
+
+// The pinhole camera of the format: one ray through each pixel centre (camera.cpp).
+struct Camera {
+  Vec3 position{0, 0, 1};
+  Vec3 look_at{0, 0, 0};
+  Vec3 up{0, 1, 0};
+  float fov_y = 40;  // degrees, in (0, 180)
+  int width = 640, height = 480;
+};
+
+// Radiance of the sky by direction: y >= 0 blends horizon to zenith, y < 0 is ground. A uniform
+// sky has all three equal; the default is black.
+struct Sky {
+  Rgb zenith{}, horizon{}, ground{};
+};
+
+// A disk of uniform radiance irradiance / (pi sin^2(angular_radius)) around `direction`.
+struct Sun {
+  Vec3 direction{0, 1, 0};       // unit, towards the sun
+  Rgb irradiance{};              // on a surface facing the sun
+  float angular_radius = 0.27f;  // degrees, in (0, 45]
+};
+
+// Linear RGB texels, row 0 at v = 0 (glTF's convention: v runs down the image).
+struct Texture {
+  enum class Wrap { repeat, clamp, mirror };
+  int width = 0, height = 0;
+  std::vector<float> rgb;  // width * height * 3, linear (sRGB-decoded when read)
+  Wrap wrap_s = Wrap::repeat, wrap_t = Wrap::repeat;
+  bool nearest = false;  // magnification filter: nearest texel, else bilinear
+};
+
+// A Lambertian reflector and emitter.
+struct Material {
+  Rgb albedo{0.8f, 0.8f, 0.8f};  // in [0, 1]; times the texture where there is one
+  Rgb emission{};                // radiance, >= 0
+  int albedo_texture = -1;       // index into Scene::textures, or -1
+  std::string name;              // for messages
+};
+
+// Triangles of one object in world space: a mesh file, a box, a quad, or a sphere or disk that a
+// non-uniform scale turned into an ellipsoid or an ellipse (tessellated).
+struct TriangleMesh {
+  std::vector<Vec3> positions;
+  std::vector<Vec3> normals;              // one per position (unit), or empty: flat triangles
+  std::vector<std::array<float, 2>> uvs;  // one per position, or empty
+  std::vector<std::array<std::uint32_t, 3>> triangles;  // indices into positions
+  std::vector<std::uint32_t> materials;  // one per triangle: index into Scene::materials
+  int object = -1;                       // index of the document's object
+};
+
+// Exact analytic shapes (objects with a uniform scale).
+struct Sphere {
+  Vec3 center;
+  float radius = 1;
+  std::uint32_t material = 0;
+  int object = -1;
+};
+struct Disk {
+  Vec3 center;
+  Vec3 normal{0, 1, 0};  // unit
+  float radius = 1;
+  std::uint32_t material = 0;
+  int object = -1;
+};
+
+// A box of homogeneous fog.
+struct Medium {
+  Vec3 center;
+  Vec3 half_size{0.5f, 0.5f, 0.5f};
+  std::array<Vec3, 3> axes{Vec3{1, 0, 0}, Vec3{0, 1, 0}, Vec3{0, 0, 1}};  // unit, orthogonal
+  Rgb extinction{};                                                       // per world unit, >= 0
+  Rgb albedo{};    // single-scattering albedo in [0, 1]; isotropic phase function
+  Rgb emission{};  // radiance per unit length, >= 0
+};
+
+struct Scene {
+  Camera camera;
+  Sky sky;
+  bool has_sun = false;
+  Sun sun;
+  std::vector<Material> materials;
+  std::vector<Texture> textures;
+  std::vector<TriangleMesh> meshes;
+  std::vector<Sphere> spheres;
+  std::vector<Disk> disks;
+  std::vector<Medium> media;
+  // One line per object of the document ("objects[2] (sphere)"), indexed by `object` above.
+  std::vector<std::string> objects;
+  std::string source = "<code>";  // file name used in messages
+};
+
+struct LoadOptions {
+  // Mesh data (vertices, triangles, textures) past this many bytes is refused, before the
+  // arrays are allocated where the file's header tells their size.
+  std::uint64_t max_memory = std::uint64_t(8) << 30;
+};
+
+// Parses a version-1 3D document. `path` names the file in messages and anchors relative mesh
+// paths. Every rule of the format is checked; a message names the file, the JSON path and, for a
+// mesh file, what is wrong inside it.
+Expected<Scene> parse_scene(std::string_view json_text, const std::string& path,
+                            const LoadOptions& options = {});
+
+// Reads and parses a 3D scene file.
+Expected<Scene> load_scene(const std::string& path, const LoadOptions& options = {});
+
+// 2 or 3: the `dimensions` of a scene document (2 when absent), for programs that read both
+// worlds. Errors: unreadable file, invalid JSON, `dimensions` not 2 or 3.
+Expected<int> scene_dimensions(const std::string& path);
+
+// Checks a scene built in code as parse_scene checks a document: finite values in range, indices
+// in range, unit vectors. render() calls it.
+Status check_scene(const Scene& scene);
+
+// Axis-aligned bounds of every surface (media and the camera excluded); empty scene: the origin.
+struct Bounds {
+  Vec3 lo, hi;
+};
+Bounds scene_bounds(const Scene& scene);
+
+// Bytes the scene's arrays hold (vertices, triangles, textures).
+std::uint64_t scene_bytes(const Scene& scene);
+
+}  // namespace penumbra::spaceland

@@ -1,0 +1,30 @@
+// Reading the triangles and materials of a mesh file (OBJ + MTL, glTF 2.0 .gltf/.glb).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "penumbra/spaceland/scene.hpp"
+
+namespace penumbra::spaceland {
+
+// A mesh file's content in the file's own coordinates (glTF node transforms already applied);
+// the scene applies the object's transform.
+struct MeshFile {
+  TriangleMesh mesh;                // materials index into `materials` below; object unset
+  std::vector<Material> materials;  // the file's materials (a default one where it has none)
+  std::vector<Texture> textures;    // referenced by materials' albedo_texture, local indices
+};
+
+// Reads `file_path` (.obj, .gltf or .glb by extension, case-insensitive). Any failure throws
+// io::JsonFailure whose message is "<scene_file>: <json_path>: <file name>: <what is wrong inside
+// it>", e.g. "scene.json: objects[0].file: box.gltf: accessors[2]: index 40 out of range (24
+// vertices)". Refuses, before allocating them, arrays whose size would pass `max_bytes`.
+MeshFile read_mesh_file(const std::string& file_path, const std::string& scene_file,
+                        const std::string& json_path, std::uint64_t max_bytes);
+
+// The texture's linear RGB at texture coordinates (u, v), with its wrap modes and filter.
+Rgb sample_texture(const Texture& texture, float u, float v);
+
+}  // namespace penumbra::spaceland

@@ -19,6 +19,7 @@
 #include "core/timer.hpp"
 #include "parse.hpp"
 #include "penumbra/penumbra.hpp"
+#include "progress.hpp"
 #include "render_options.hpp"
 
 namespace {
@@ -63,35 +64,41 @@ nlohmann::json parameters_json(const penumbra::flatland::RenderOptions& o) {
   return p;
 }
 
-// Ctrl-C while a progressive method runs: the first asks it to stop after the current pass (the
-// image of the samples so far is still written); a second one ends the process at once.
-std::atomic<bool> g_cancel{false};
-
-extern "C" void on_interrupt(int) {
-  g_cancel.store(true);
-  static const char msg[] = "\npenumbra: stopping after this pass (Ctrl-C again to abort)\n";
-  [[maybe_unused]] ssize_t n = write(STDERR_FILENO, msg, sizeof msg - 1);
-  std::signal(SIGINT, SIG_DFL);
-}
-
-// A one-line progress bar with an estimate of the time left, redrawn in place.
-void draw_progress(const penumbra::flatland::RenderProgress& p) {
-  const int width = 30;
-  const int filled = int(std::lround(std::clamp(p.fraction, 0.0, 1.0) * width));
-  const double eta = p.fraction > 0 ? p.elapsed_s * (1 - p.fraction) / p.fraction : 0;
-  std::string bar(std::size_t(filled), '#');
-  bar.resize(std::size_t(width), '.');
-  if (p.target > 0)
-    std::fprintf(stderr, "\r[%s] %3.0f%%  %llu/%llu spp  %.1f s, %.1f s left ", bar.c_str(),
-                 100 * p.fraction, (unsigned long long)p.samples, (unsigned long long)p.target,
-                 p.elapsed_s, eta);
-  else
-    std::fprintf(stderr, "\r[%s] %3.0f%%  %llu spp  %.1f s, %.1f s left ", bar.c_str(),
-                 100 * p.fraction, (unsigned long long)p.samples, p.elapsed_s, eta);
-  std::fflush(stderr);
-}
+// The 3D-only options, refused with a 2D scene.
+const char* const k3dOnly[] = {"--width", "--height", "--aov"};
 
 int render_scene(const RenderArgs& a) {
+  if (!a.scene.empty()) {
+    penumbra::Expected<int> dims = penumbra::spaceland::scene_dimensions(a.scene);
+    if (!dims) {
+      std::cerr << "penumbra render: " << dims.error().message << "\n";
+      return kFailure;
+    }
+    if (*dims == 3) return render_scene_3d(a);
+  }
+  for (const char* name : k3dOnly)
+    if (a.app && a.app->get_option(name)->count() > 0) {
+      std::cerr << "penumbra render: " << name << " applies to 3D scenes only ("
+                << (a.scene.empty() ? std::string("the built-in scene") : a.scene)
+                << " is a 2D scene)\n";
+      return kUsage;
+    }
+  penumbra::flatland::RenderOptions options = a.options;
+  if (!a.method.empty()) {
+    bool known = false;
+    for (const penumbra::flatland::MethodInfo& m : penumbra::flatland::methods())
+      if (a.method == m.name) {
+        options.method = m.method;
+        known = true;
+      }
+    if (!known) {
+      std::cerr << "penumbra render: --method " << a.method << " is a 3D method; 2D methods:";
+      for (const penumbra::flatland::MethodInfo& m : penumbra::flatland::methods())
+        std::cerr << " " << m.name;
+      std::cerr << "\n";
+      return kUsage;
+    }
+  }
   for (const std::string& out : a.outputs)
     if (!penumbra::is_supported_output(out)) {
       std::cerr << "penumbra render: " << out << ": unknown output type (use .png, .exr or .pfm)\n";
@@ -103,7 +110,6 @@ int render_scene(const RenderArgs& a) {
       std::cerr << "penumbra render: " << s.error().message << "\n";
       return kFailure;
     }
-  penumbra::flatland::RenderOptions options = a.options;
   finish_render_options(options, a.flags);
   if (!parse_bytes(a.max_memory, options.max_memory)) {
     std::cerr << "penumbra render: --max-memory: expected a size such as 512M or 8G, found '"
@@ -160,11 +166,11 @@ int render_scene(const RenderArgs& a) {
   if (options.method == penumbra::flatland::Method::pt) {
     if (progress) options.progress = draw_progress;
     options.cancel = &g_cancel;
-    std::signal(SIGINT, on_interrupt);
+    watch_interrupts(true);
   }
   penumbra::Expected<penumbra::flatland::RenderResult> result =
       penumbra::flatland::render(*scene, options);
-  std::signal(SIGINT, SIG_DFL);
+  watch_interrupts(false);
   if (progress && options.method == penumbra::flatland::Method::pt) std::fprintf(stderr, "\n");
   if (!result) {
     std::cerr << "penumbra render: " << desc->source << ": " << with_flags(result.error().message)
@@ -250,15 +256,57 @@ bool RenderCommand::parsed() const {
 std::unique_ptr<RenderCommand> add_render_command(CLI::App& app) {
   auto cmd = std::make_unique<RenderCommand>();
   RenderArgs& a = cmd->args;
-  CLI::App* render = app.add_subcommand("render", "Render a 2D scene file (or the built-in scene)");
+  CLI::App* render =
+      app.add_subcommand("render", "Render a 2D or 3D scene file (or the built-in 2D scene)");
   cmd->app = render;
-  render->add_option("scene", a.scene, "Scene file (JSON, format 1); omitted: the built-in scene");
+  a.app = render;
+  render->add_option("scene", a.scene,
+                     "Scene file (JSON, format 1; 2D or 3D by its `dimensions`); omitted: the "
+                     "built-in 2D scene");
   render
       ->add_option("-o,--output", a.outputs,
-                   "Output file: .png (display), .exr or .pfm (fluence); repeatable")
+                   "Output file: .png (display), .exr or .pfm (2D fluence, 3D radiance); "
+                   "repeatable")
       ->required();
+  // --method names a method of either world: the scene decides which table it is looked up in.
+  {
+    std::vector<std::string> names;
+    std::string help = "Method (default: rc for a 2D scene, pt for a 3D one). 2D:";
+    for (const penumbra::flatland::MethodInfo& m : penumbra::flatland::methods()) {
+      names.push_back(m.name);
+      help += std::string(names.size() > 1 ? ";" : "") + " " + m.name + ", " + m.summary +
+              (m.gpu ? "" : " (CPU only)");
+    }
+    help += ". 3D:";
+    bool first = true;
+    for (const penumbra::spaceland::MethodInfo& m : penumbra::spaceland::methods()) {
+      if (std::find(names.begin(), names.end(), m.name) == names.end()) names.push_back(m.name);
+      help += std::string(first ? "" : ";") + " " + m.name + ", " + m.summary;
+      first = false;
+    }
+    render->add_option("--method", a.method, help)->check(CLI::IsMember(names));
+  }
+  render->add_option("--width", a.width, "3D: image width (the camera's fov_y is kept)")
+      ->check(CLI::Range(1, penumbra::spaceland::kMaxImageSide));
+  render->add_option("--height", a.height, "3D: image height")
+      ->check(CLI::Range(1, penumbra::spaceland::kMaxImageSide));
+  {
+    std::vector<std::string> aovs;
+    for (penumbra::spaceland::Aov v :
+         {penumbra::spaceland::Aov::radiance, penumbra::spaceland::Aov::depth,
+          penumbra::spaceland::Aov::normal, penumbra::spaceland::Aov::albedo,
+          penumbra::spaceland::Aov::position, penumbra::spaceland::Aov::emission,
+          penumbra::spaceland::Aov::object})
+      aovs.push_back(penumbra::spaceland::to_string(v));
+    render
+        ->add_option("--aov", a.aov,
+                     "3D: what the image holds: radiance, or a G-buffer channel of the first "
+                     "hits (depth, normal, albedo, position, emission, object)")
+        ->check(CLI::IsMember(aovs))
+        ->capture_default_str();
+  }
   RenderOptionSet all;
-  all.method = all.pt = all.rc = all.device = all.storage = all.hrc = true;
+  all.pt = all.rc = all.device = all.storage = all.hrc = true;
   all.bounces = all.threads = all.traversal = true;
   add_render_options(render, a.options, a.flags, all);
   render->add_option("--max-memory", a.max_memory, "Refuse work needing more working memory")

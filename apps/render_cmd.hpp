@@ -13,14 +13,19 @@ class App;
 }
 
 struct RenderArgs {
-  std::string scene;  // empty: the built-in scene
+  std::string scene;   // empty: the built-in scene
+  std::string method;  // empty: the world's default (rc in 2D, pt in 3D)
+  // 3D only: the camera's image size (0: the scene's) and what the image holds.
+  int width = 0, height = 0;
+  std::string aov = "radiance";
   std::vector<std::string> outputs;
   std::string max_memory = "8G";
   float exposure = 0;
   bool json = false;
   bool quiet = false;
   penumbra::flatland::RenderOptions options;
-  RenderOptionFlags flags;  // applied to `options` by run_render
+  RenderOptionFlags flags;        // applied to `options` by run_render
+  const CLI::App* app = nullptr;  // the subcommand, to tell which options were given
 };
 
 struct RenderCommand {
@@ -35,3 +40,6 @@ std::unique_ptr<RenderCommand> add_render_command(CLI::App& app);
 // Exit code: 0 success, 1 bad input or failure, 2 usage error, 130 interrupted (the image of the
 // samples so far is still written).
 int run_render(const RenderArgs& args);
+
+// The 3D half of `render` (render3d_cmd.cpp): `args.scene` is a 3D document.
+int render_scene_3d(const RenderArgs& args);

@@ -20,7 +20,7 @@ enum class Method {
 
 // What an image holds: the radiance (the methods' answer) or a G-buffer channel of the first hits
 // (the same for every method). Misses: depth +inf (EXR/PFM; PNG shows them black), normal 0,
-// albedo 0, position 0, emission the sky's radiance, object -1.
+// albedo 0, position 0, emission the sky's radiance (the sun's disk included), object -1.
 enum class Aov {
   radiance,  // linear RGB radiance towards the camera
   depth,     // linear depth: distance along the camera's view direction

@@ -1,0 +1,198 @@
+// `penumbra render` on a 3D scene: load it (meshes included), render the camera's image with one
+// method, write the images, and report timings (a table, or JSON).
+#include <unistd.h>
+
+#include <CLI/CLI.hpp>
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "core/timer.hpp"
+#include "parse.hpp"
+#include "penumbra/penumbra.hpp"
+#include "progress.hpp"
+#include "render_cmd.hpp"
+#include "render_options.hpp"
+
+namespace {
+
+constexpr int kUsage = 2;
+constexpr int kFailure = 1;
+constexpr int kInterrupted = 130;
+
+namespace sl = penumbra::spaceland;
+
+// What a 3D render reads; every other option given is refused, so none is silently ignored.
+const char* const kOptions3d[] = {"scene",      "--output", "--method",  "--spp",
+                                  "--time",     "--seed",   "--bounces", "--threads",
+                                  "--width",    "--height", "--aov",     "--max-memory",
+                                  "--exposure", "--json",   "--quiet",   "--device"};
+
+bool reads(const std::string& name) {
+  for (const char* n : kOptions3d)
+    if (name == n) return true;
+  return false;
+}
+
+}  // namespace
+
+int render_scene_3d(const RenderArgs& a) {
+  if (a.app)
+    for (const CLI::Option* opt : a.app->get_options())
+      if (opt->count() > 0 && !reads(opt->get_name())) {
+        std::cerr << "penumbra render: " << opt->get_name() << " applies to 2D scenes only ("
+                  << a.scene << " is a 3D scene)\n";
+        return kUsage;
+      }
+  if (a.options.device == penumbra::flatland::Device::gpu) {
+    std::cerr << "penumbra render: --device gpu: 3D scenes render on the CPU only for now ("
+              << a.scene << " is a 3D scene)\n";
+    return kUsage;
+  }
+  sl::RenderOptions options;
+  if (!a.method.empty()) {
+    bool known = false;
+    for (const sl::MethodInfo& m : sl::methods())
+      if (a.method == m.name) {
+        options.method = m.method;
+        known = true;
+      }
+    if (!known) {
+      std::cerr << "penumbra render: --method " << a.method << " is a 2D method (" << a.scene
+                << " is a 3D scene); 3D methods:";
+      for (const sl::MethodInfo& m : sl::methods()) std::cerr << " " << m.name;
+      std::cerr << "\n";
+      return kUsage;
+    }
+  }
+  for (sl::Aov v : {sl::Aov::radiance, sl::Aov::depth, sl::Aov::normal, sl::Aov::albedo,
+                    sl::Aov::position, sl::Aov::emission, sl::Aov::object})
+    if (a.aov == sl::to_string(v)) options.aov = v;
+  // The shared options, with --time alone meaning no sample limit, as in 2D.
+  penumbra::flatland::RenderOptions shared = a.options;
+  finish_render_options(shared, a.flags);
+  options.pt.spp = shared.pt.spp;
+  options.pt.seconds = shared.pt.seconds;
+  options.pt.seed = shared.pt.seed;
+  options.bounces = shared.bounces;
+  options.threads = shared.threads;
+  if (!parse_bytes(a.max_memory, options.max_memory)) {
+    std::cerr << "penumbra render: --max-memory: expected a size such as 512M or 8G, found '"
+              << a.max_memory << "'\n";
+    return kUsage;
+  }
+  if (!std::isfinite(a.exposure)) {
+    std::cerr << "penumbra render: --exposure: expected a finite number of EV\n";
+    return kUsage;
+  }
+  for (const std::string& out : a.outputs)
+    if (!penumbra::is_supported_output(out)) {
+      std::cerr << "penumbra render: " << out << ": unknown output type (use .png, .exr or .pfm)\n";
+      return kUsage;
+    }
+  for (const std::string& out : a.outputs)
+    if (penumbra::Status s = penumbra::check_output(out); !s) {
+      std::cerr << "penumbra render: " << s.error().message << "\n";
+      return kFailure;
+    }
+  if (penumbra::Status s = sl::check_options(options); !s) {
+    std::cerr << "penumbra render: " << with_flags(s.error().message) << "\n";
+    return kUsage;
+  }
+
+  penumbra::Stopwatch load_watch;
+  penumbra::Expected<sl::Scene> scene = sl::load_scene(a.scene, {options.max_memory});
+  if (!scene) {
+    std::cerr << "penumbra render: " << scene.error().message << "\n";
+    return kFailure;
+  }
+  const double load_ms = load_watch.ms();
+  // --width and --height replace the camera's image size; fov_y stays.
+  if (a.width > 0) scene->camera.width = a.width;
+  if (a.height > 0) scene->camera.height = a.height;
+  if (penumbra::Status s = sl::check_memory(*scene, options); !s) {
+    std::cerr << "penumbra render: " << a.scene << ": " << with_flags(s.error().message) << "\n";
+    return kFailure;
+  }
+
+  const bool progress = !a.quiet && isatty(STDERR_FILENO) && options.aov == sl::Aov::radiance;
+  if (progress) options.progress = draw_progress;
+  options.cancel = &g_cancel;
+  watch_interrupts(true);
+  penumbra::Expected<sl::RenderResult> result = sl::render(*scene, options);
+  watch_interrupts(false);
+  if (progress) std::fprintf(stderr, "\n");
+  if (!result) {
+    std::cerr << "penumbra render: " << a.scene << ": " << with_flags(result.error().message)
+              << "\n";
+    return kFailure;
+  }
+  penumbra::Stopwatch write_watch;
+  if (penumbra::Status s = sl::write_images(a.outputs, result->radiance, options.aov, {a.exposure});
+      !s) {
+    std::cerr << "penumbra render: " << s.error().message << "\n";
+    return kFailure;
+  }
+  const double write_ms = write_watch.ms();
+  const sl::Camera& cam = scene->camera;
+  if (a.json) {
+    nlohmann::json stages = nlohmann::json::object();
+    for (const sl::StageTime& s : result->stages) stages[s.name] = s.ms;
+    nlohmann::json parameters = {{"bounces", options.bounces},
+                                 {"threads", options.threads},
+                                 {"aov", sl::to_string(options.aov)},
+                                 {"max_memory", options.max_memory}};
+    if (options.method == sl::Method::pt)
+      parameters.update(
+          {{"spp", options.pt.spp}, {"time", options.pt.seconds}, {"seed", options.pt.seed}});
+    nlohmann::json j = {{"method", sl::to_string(options.method)},
+                        {"dimensions", 3},
+                        {"device", result->device},
+                        {"scene", a.scene},
+                        {"width", cam.width},
+                        {"height", cam.height},
+                        {"time_ms", result->time_ms},
+                        {"stages", stages},
+                        {"load_ms", load_ms},
+                        {"write_ms", write_ms},
+                        {"memory_bytes", result->memory_bytes},
+                        {"rays", result->rays},
+                        {"samples", result->samples},
+                        {"cancelled", result->cancelled},
+                        {"parameters", parameters},
+                        {"outputs", a.outputs}};
+    std::cout << j.dump(2) << "\n";
+  } else if (!a.quiet) {
+    std::size_t triangles = 0;
+    for (const sl::TriangleMesh& m : scene->meshes) triangles += m.triangles.size();
+    std::printf(
+        "penumbra %s: %s (3D), %dx%d pixels, %zu triangles, %zu spheres, %zu disks, "
+        "method %s on %s",
+        penumbra::kVersion, a.scene.c_str(), cam.width, cam.height, triangles,
+        scene->spheres.size(), scene->disks.size(), sl::to_string(options.method),
+        result->device.c_str());
+    if (options.aov != sl::Aov::radiance)
+      std::printf(", %s\n", sl::to_string(options.aov));
+    else
+      std::printf(", %llu samples per pixel, %d bounce%s\n", (unsigned long long)result->samples,
+                  options.bounces, options.bounces == 1 ? "" : "s");
+    std::printf("  %-24s %9.1f ms\n", "load scene", load_ms);
+    for (const sl::StageTime& s : result->stages)
+      std::printf("  %-24s %9.1f ms\n", s.name.c_str(), s.ms);
+    std::printf("  %-24s %9.1f ms  (computation)\n", "total", result->time_ms);
+    std::printf("  %-24s %9.1f ms\n", "write outputs", write_ms);
+    std::printf("  working memory %.1f MiB, %.1f M rays traced (%.2f M/s)\n",
+                double(result->memory_bytes) / (1 << 20), double(result->rays) / 1e6,
+                double(result->rays) / 1e3 / result->time_ms);
+    for (const std::string& out : a.outputs) std::printf("  wrote %s\n", out.c_str());
+  }
+  if (result->cancelled) {
+    std::fprintf(stderr,
+                 "penumbra render: interrupted; wrote the image of %llu samples per pixel\n",
+                 (unsigned long long)result->samples);
+    return kInterrupted;
+  }
+  return 0;
+}

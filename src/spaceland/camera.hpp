@@ -1,0 +1,79 @@
+// The format's pinhole camera: the one definition of the ray through pixel (i, j), and the
+// sky's radiance by direction. Every 3D method starts its camera rays here.
+#pragma once
+
+#include <cmath>
+
+#include "core/math.hpp"
+#include "penumbra/spaceland/scene.hpp"
+#include "spaceland/embree/ray_scene.hpp"
+
+namespace penumbra::spaceland {
+
+class CameraRays {
+ public:
+  explicit CameraRays(const Camera& c)
+      : origin_(c.position),
+        width_(c.width),
+        height_(c.height),
+        t_(std::tan(double(c.fov_y) * kPi / 360)) {
+    const Vec3 f = normalize(c.look_at - c.position);
+    const Vec3 r = normalize(cross(f, c.up));
+    f_ = f;
+    r_ = r;
+    u_ = cross(r, f);
+  }
+
+  // Unit direction of pixel (i, j), row 0 at the top; computed in double so that the spec's
+  // formula is met to float rounding.
+  Vec3 direction(int i, int j) const {
+    const double x = (2 * (i + 0.5) / width_ - 1) * t_ * width_ / height_;
+    const double y = (1 - 2 * (j + 0.5) / height_) * t_;
+    const double d[3] = {f_.x + x * r_.x + y * u_.x, f_.y + x * r_.y + y * u_.y,
+                         f_.z + x * r_.z + y * u_.z};
+    const double len = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    return {float(d[0] / len), float(d[1] / len), float(d[2] / len)};
+  }
+  Ray ray(int i, int j) const { return Ray{origin_, direction(i, j), 0.0f, 3.0e38f}; }
+  Vec3 forward() const { return f_; }
+  Vec3 origin() const { return origin_; }
+
+ private:
+  Vec3 origin_, f_, r_, u_;
+  int width_, height_;
+  double t_;
+};
+
+// Sun radiance inside its disk: irradiance / (pi sin^2(angular radius)).
+inline Rgb sun_radiance(const Sun& s) {
+  const double sr = std::sin(double(s.angular_radius) * kPi / 180);
+  const double k = 1 / (kPi * sr * sr);
+  return {float(s.irradiance.r * k), float(s.irradiance.g * k), float(s.irradiance.b * k)};
+}
+
+// cos of the sun's angular radius: a unit direction d is inside the disk when dot(d, sun) >= it.
+inline double sun_cos_radius(const Sun& s) {
+  return std::cos(double(s.angular_radius) * kPi / 180);
+}
+
+// The sky's radiance in unit direction d, without the sun.
+inline Rgb sky_radiance(const Sky& s, Vec3 d) {
+  if (d.y < 0) return s.ground;
+  const float y = d.y;
+  return {s.horizon.r + (s.zenith.r - s.horizon.r) * y,
+          s.horizon.g + (s.zenith.g - s.horizon.g) * y,
+          s.horizon.b + (s.zenith.b - s.horizon.b) * y};
+}
+
+// What a ray that leaves the scene sees: the sky, and the sun's disk where it lies.
+inline Rgb background(const Scene& scene, Vec3 d) {
+  Rgb c = sky_radiance(scene.sky, d);
+  if (scene.has_sun &&
+      double(dot(d, normalize(scene.sun.direction))) >= sun_cos_radius(scene.sun)) {
+    const Rgb s = sun_radiance(scene.sun);
+    c = {c.r + s.r, c.g + s.g, c.b + s.b};
+  }
+  return c;
+}
+
+}  // namespace penumbra::spaceland

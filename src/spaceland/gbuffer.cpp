@@ -1,0 +1,92 @@
+#include "spaceland/gbuffer.hpp"
+
+#include <limits>
+
+#include "core/parallel.hpp"
+#include "spaceland/camera.hpp"
+#include "spaceland/color.hpp"
+#include "spaceland/scene/mesh_file.hpp"
+
+namespace penumbra::spaceland {
+
+Rgb albedo_at(const Scene& scene, const Hit& hit) {
+  const Material& m = scene.materials[hit.material];
+  if (m.albedo_texture < 0) return m.albedo;
+  return m.albedo * sample_texture(scene.textures[std::size_t(m.albedo_texture)], hit.u, hit.v);
+}
+
+Rgb emission_at(const Scene& scene, const Hit& hit) {
+  return scene.materials[hit.material].emission;
+}
+
+void face_towards(Hit& hit, Vec3 d) {
+  if (dot(hit.geometric_normal, d) > 0) hit.geometric_normal = -hit.geometric_normal;
+  if (dot(hit.shading_normal, d) > 0) hit.shading_normal = -hit.shading_normal;
+}
+
+GBuffer make_gbuffer(const Scene& scene, const RayScene& rays) {
+  GBuffer g;
+  g.width = scene.camera.width;
+  g.height = scene.camera.height;
+  const std::size_t n = std::size_t(g.width) * g.height;
+  g.hits.resize(n);
+  g.found.resize(n);
+  g.directions.resize(n);
+  const CameraRays camera(scene.camera);
+  parallel_for(g.height, [&](int j) {
+    for (int i = 0; i < g.width; ++i) {
+      const std::size_t k = std::size_t(j) * g.width + i;
+      const Ray ray = camera.ray(i, j);
+      g.directions[k] = ray.direction;
+      Hit& h = g.hits[k];
+      g.found[k] = rays.intersect(ray, h) ? 1 : 0;
+      if (g.found[k]) face_towards(h, ray.direction);
+    }
+  });
+  return g;
+}
+
+ImageRgb aov_image(const Scene& scene, const GBuffer& g, Aov aov) {
+  ImageRgb img(g.width, g.height);
+  const CameraRays camera(scene.camera);
+  const Vec3 forward = camera.forward();
+  const float inf = std::numeric_limits<float>::infinity();
+  parallel_for(g.height, [&](int j) {
+    for (int i = 0; i < g.width; ++i) {
+      const std::size_t k = std::size_t(j) * g.width + i;
+      const Hit& h = g.hits[k];
+      const bool hit = g.found[k] != 0;
+      Rgb c{};
+      switch (aov) {
+        case Aov::depth: {
+          const float d = hit ? h.t * dot(g.directions[k], forward) : inf;
+          c = {d, d, d};
+          break;
+        }
+        case Aov::normal:
+          if (hit) c = {h.shading_normal.x, h.shading_normal.y, h.shading_normal.z};
+          break;
+        case Aov::albedo:
+          if (hit) c = albedo_at(scene, h);
+          break;
+        case Aov::position:
+          if (hit) c = {h.position.x, h.position.y, h.position.z};
+          break;
+        case Aov::emission:
+          c = hit ? emission_at(scene, h) : background(scene, g.directions[k]);
+          break;
+        case Aov::object: {
+          const float o = hit ? float(h.object) : -1.0f;
+          c = {o, o, o};
+          break;
+        }
+        case Aov::radiance:
+          break;
+      }
+      img.set(i, j, c);
+    }
+  });
+  return img;
+}
+
+}  // namespace penumbra::spaceland

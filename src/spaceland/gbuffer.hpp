@@ -1,0 +1,38 @@
+// The G-buffer: each pixel's first hit along its camera ray, computed once and shared by every
+// method that shades the visible surfaces (and written out by --aov).
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "penumbra/image.hpp"
+#include "penumbra/spaceland/render.hpp"
+#include "penumbra/spaceland/scene.hpp"
+#include "spaceland/embree/ray_scene.hpp"
+
+namespace penumbra::spaceland {
+
+// The albedo (texture included) and the emission of the surface at a hit.
+Rgb albedo_at(const Scene& scene, const Hit& hit);
+Rgb emission_at(const Scene& scene, const Hit& hit);
+
+// Turns a hit's normals to the side the ray arrives from (surfaces are two-sided).
+void face_towards(Hit& hit, Vec3 ray_direction);
+
+struct GBuffer {
+  int width = 0, height = 0;
+  std::vector<Hit> hits;            // normals faced towards the camera
+  std::vector<std::uint8_t> found;  // 1 where the camera ray hit a surface
+  std::vector<Vec3> directions;     // unit camera ray of each pixel
+
+  static std::uint64_t bytes_per_pixel() {
+    return sizeof(Hit) + sizeof(std::uint8_t) + sizeof(Vec3);
+  }
+};
+
+GBuffer make_gbuffer(const Scene& scene, const RayScene& rays);
+
+// A G-buffer channel as an image (Aov::radiance is not one).
+ImageRgb aov_image(const Scene& scene, const GBuffer& g, Aov aov);
+
+}  // namespace penumbra::spaceland

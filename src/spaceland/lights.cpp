@@ -1,0 +1,232 @@
+#include "spaceland/lights.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/math.hpp"
+#include "spaceland/camera.hpp"
+#include "spaceland/color.hpp"
+
+namespace penumbra::spaceland {
+
+void orthonormal_basis(Vec3 n, Vec3& t, Vec3& b) {
+  const float sign = std::copysign(1.0f, n.z);
+  const float a = -1.0f / (sign + n.z);
+  const float c = n.x * n.y * a;
+  t = {1.0f + sign * n.x * n.x * a, sign * c, -sign * n.x};
+  b = {c, sign + n.y * n.y * a, -n.y};
+}
+
+namespace {
+
+// 1 - cos(theta_max) of a sphere of radius r seen from distance d > r, without cancellation.
+double cone_width(double r, double d) {
+  const double s2 = (r * r) / (d * d);
+  return s2 / (1 + std::sqrt(std::max(0.0, 1 - s2)));
+}
+
+Vec3 triangle_normal(const TriangleMesh& m, std::uint32_t t, float& area) {
+  const auto& tri = m.triangles[t];
+  const Vec3 c =
+      cross(m.positions[tri[1]] - m.positions[tri[0]], m.positions[tri[2]] - m.positions[tri[0]]);
+  const float len = length(c);
+  area = 0.5f * len;
+  return len > 0 ? c / len : Vec3{0, 1, 0};
+}
+
+}  // namespace
+
+Lights::Lights(const Scene& scene) : scene_(&scene) {
+  auto emits = [&](std::uint32_t material) {
+    return !is_black(scene.materials[material].emission);
+  };
+  triangle_emitter_.resize(scene.meshes.size());
+  for (std::size_t m = 0; m < scene.meshes.size(); ++m) {
+    const TriangleMesh& mesh = scene.meshes[m];
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+      if (!emits(mesh.materials[t])) continue;
+      float area = 0;
+      triangle_normal(mesh, std::uint32_t(t), area);
+      if (!(area > 0)) continue;  // a degenerate triangle sends no light
+      if (triangle_emitter_[m].empty()) triangle_emitter_[m].assign(mesh.triangles.size(), -1);
+      triangle_emitter_[m][t] = int(emitters_.size());
+      emitters_.push_back({ShapeKind::triangle, std::uint32_t(m), std::uint32_t(t), area,
+                           scene.materials[mesh.materials[t]].emission});
+    }
+  }
+  sphere_emitter_.assign(scene.spheres.size(), -1);
+  for (std::size_t i = 0; i < scene.spheres.size(); ++i) {
+    const Sphere& s = scene.spheres[i];
+    if (!emits(s.material)) continue;
+    sphere_emitter_[i] = int(emitters_.size());
+    emitters_.push_back({ShapeKind::sphere, std::uint32_t(i), 0,
+                         float(4 * kPi * s.radius * s.radius),
+                         scene.materials[s.material].emission});
+  }
+  disk_emitter_.assign(scene.disks.size(), -1);
+  for (std::size_t i = 0; i < scene.disks.size(); ++i) {
+    const Disk& d = scene.disks[i];
+    if (!emits(d.material)) continue;
+    disk_emitter_[i] = int(emitters_.size());
+    emitters_.push_back({ShapeKind::disk, std::uint32_t(i), 0, float(kPi * d.radius * d.radius),
+                         scene.materials[d.material].emission});
+  }
+  // Picked by power (mean emitted radiance times area); both sides emit, which scales all alike.
+  double total = 0;
+  cdf_.reserve(emitters_.size());
+  for (const Emitter& e : emitters_) {
+    total += double(average(e.emission)) * e.area;
+    cdf_.push_back(total);
+  }
+  for (double& c : cdf_) c /= total;
+  if (!cdf_.empty()) cdf_.back() = 1;
+
+  if (scene.has_sun && !is_black(scene.sun.irradiance)) {
+    has_sun_ = true;
+    sun_dir_ = normalize(scene.sun.direction);
+    orthonormal_basis(sun_dir_, sun_t_, sun_b_);
+    sun_cos_ = sun_cos_radius(scene.sun);
+    const double s = std::sin(double(scene.sun.angular_radius) * kPi / 180);
+    sun_pdf_ = float(1 / (2 * kPi * (s * s / (1 + sun_cos_))));
+    sun_radiance_ = spaceland::sun_radiance(scene.sun);
+  }
+}
+
+std::uint64_t Lights::bytes() const {
+  std::uint64_t b = emitters_.size() * (sizeof(Emitter) + sizeof(double));
+  for (const auto& v : triangle_emitter_) b += v.size() * sizeof(int);
+  return b + (sphere_emitter_.size() + disk_emitter_.size()) * sizeof(int);
+}
+
+float Lights::pick_probability(int e) const {
+  return float(cdf_[std::size_t(e)] - (e > 0 ? cdf_[std::size_t(e) - 1] : 0.0));
+}
+
+float Lights::solid_angle_pdf(const Emitter& e, Vec3 p, Vec3 q, Vec3 n) const {
+  const Vec3 d = q - p;
+  const float dist2 = dot(d, d);
+  if (e.kind == ShapeKind::sphere) {
+    const Sphere& s = scene_->spheres[e.shape];
+    const double dc = length(s.center - p);
+    if (dc > s.radius) return float(1 / (2 * kPi * cone_width(s.radius, dc)));
+  }
+  const float cos_l = std::abs(dot(n, d)) / std::sqrt(dist2);
+  if (!(cos_l > 0)) return 0;
+  return dist2 / (e.area * cos_l);
+}
+
+LightSample Lights::sample(Vec3 p, float u_pick, std::array<float, 2> u) const {
+  LightSample ls;
+  if (emitters_.empty()) return ls;
+  const int e = int(std::min<std::ptrdiff_t>(
+      std::lower_bound(cdf_.begin(), cdf_.end(), double(u_pick)) - cdf_.begin(),
+      std::ptrdiff_t(cdf_.size()) - 1));
+  const Emitter& em = emitters_[std::size_t(e)];
+  const float pick = pick_probability(e);
+  if (!(pick > 0)) return ls;
+  Vec3 q, n;
+  if (em.kind == ShapeKind::triangle) {
+    const TriangleMesh& m = scene_->meshes[em.shape];
+    const auto& tri = m.triangles[em.primitive];
+    float a = u[0], b = u[1];
+    if (a + b > 1) {
+      a = 1 - a;
+      b = 1 - b;
+    }
+    const Vec3 p0 = m.positions[tri[0]];
+    q = p0 + (m.positions[tri[1]] - p0) * a + (m.positions[tri[2]] - p0) * b;
+    float area;
+    n = triangle_normal(m, em.primitive, area);
+  } else if (em.kind == ShapeKind::sphere) {
+    const Sphere& s = scene_->spheres[em.shape];
+    const Vec3 to_c = s.center - p;
+    const double dc = length(to_c);
+    if (dc > s.radius) {
+      // Uniform in the cone the sphere subtends: exact solid-angle sampling.
+      const double w = cone_width(s.radius, dc);
+      const double one_minus_cos = u[0] * w;
+      const double cos_t = 1 - one_minus_cos;
+      const double sin_t = std::sqrt(std::max(0.0, one_minus_cos * (2 - one_minus_cos)));
+      const double phi = kTwoPi * u[1];
+      const Vec3 axis = to_c / float(dc);
+      Vec3 t, b;
+      orthonormal_basis(axis, t, b);
+      const Vec3 dir = normalize(axis * float(cos_t) + t * float(sin_t * std::cos(phi)) +
+                                 b * float(sin_t * std::sin(phi)));
+      // The nearer intersection with the sphere (or the tangent point when it grazes).
+      const double b_half = dot(dir, to_c);
+      const double disc = std::max(0.0, b_half * b_half - (dc * dc - double(s.radius) * s.radius));
+      const double dist = b_half - std::sqrt(disc);
+      q = p + dir * float(dist);
+      n = normalize(q - s.center);
+      ls.direction = dir;
+      ls.distance = float(dist);
+      ls.point = q;
+      ls.normal = n;
+      ls.radiance = em.emission;
+      ls.pdf = float(pick / (2 * kPi * w));
+      return ls;
+    }
+    // Inside: uniform on the sphere (by area).
+    const double z = 1 - 2 * double(u[0]), r = std::sqrt(std::max(0.0, 1 - z * z));
+    const double phi = kTwoPi * u[1];
+    n = {float(r * std::cos(phi)), float(r * std::sin(phi)), float(z)};
+    q = s.center + n * s.radius;
+  } else {
+    const Disk& d = scene_->disks[em.shape];
+    const double r = d.radius * std::sqrt(double(u[0])), phi = kTwoPi * u[1];
+    Vec3 t, b;
+    orthonormal_basis(d.normal, t, b);
+    q = d.center + t * float(r * std::cos(phi)) + b * float(r * std::sin(phi));
+    n = d.normal;
+  }
+  const Vec3 d = q - p;
+  const float dist = length(d);
+  if (!(dist > 0)) return ls;
+  ls.direction = d / dist;
+  ls.distance = dist;
+  ls.point = q;
+  ls.normal = n;
+  ls.radiance = em.emission;
+  ls.pdf = pick * solid_angle_pdf(em, p, q, n);
+  return ls;
+}
+
+int Lights::index_of(const Hit& hit) const {
+  switch (hit.kind) {
+    case ShapeKind::triangle: {
+      const auto& v = triangle_emitter_[hit.shape];
+      return v.empty() ? -1 : v[hit.primitive];
+    }
+    case ShapeKind::sphere:
+      return sphere_emitter_[hit.shape];
+    case ShapeKind::disk:
+      return disk_emitter_[hit.shape];
+  }
+  return -1;
+}
+
+float Lights::pdf(Vec3 p, const Hit& hit) const {
+  const int e = index_of(hit);
+  if (e < 0) return 0;
+  return pick_probability(e) *
+         solid_angle_pdf(emitters_[std::size_t(e)], p, hit.position, hit.geometric_normal);
+}
+
+LightSample Lights::sample_sun(std::array<float, 2> u) const {
+  LightSample ls;
+  if (!has_sun_) return ls;
+  const double w = 1 - sun_cos_;
+  const double one_minus_cos = u[0] * w;
+  const double cos_t = 1 - one_minus_cos;
+  const double sin_t = std::sqrt(std::max(0.0, one_minus_cos * (2 - one_minus_cos)));
+  const double phi = kTwoPi * u[1];
+  ls.direction = normalize(sun_dir_ * float(cos_t) + sun_t_ * float(sin_t * std::cos(phi)) +
+                           sun_b_ * float(sin_t * std::sin(phi)));
+  ls.distance = 3.0e38f;
+  ls.radiance = sun_radiance_;
+  ls.pdf = sun_pdf_;
+  return ls;
+}
+
+}  // namespace penumbra::spaceland

@@ -1,0 +1,76 @@
+// The emitters a 3D method aims at: emitting triangles, spheres and disks (picked by power,
+// sampled by solid angle where that is cheap, by area otherwise) and the sun (its cone). One
+// definition of each sampling pdf, so that multiple importance sampling weights agree with it.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "penumbra/spaceland/scene.hpp"
+#include "spaceland/embree/ray_scene.hpp"
+
+namespace penumbra::spaceland {
+
+// A point on an emitter seen from a shading point.
+struct LightSample {
+  Vec3 direction;  // unit, from the shading point
+  float distance;  // to the sampled point
+  Vec3 point;      // on the emitter
+  Vec3 normal;     // the emitter's geometric normal there
+  Rgb radiance{};  // emitted towards the shading point
+  float pdf = 0;   // solid-angle density, the pick included (0: no sample)
+};
+
+class Lights {
+ public:
+  explicit Lights(const Scene& scene);
+
+  bool empty() const { return emitters_.empty(); }
+  std::size_t size() const { return emitters_.size(); }
+
+  // Picks an emitter by power with `u_pick` and a point on it with `u`.
+  LightSample sample(Vec3 p, float u_pick, std::array<float, 2> u) const;
+  // Density sample() would have given to reaching `hit` (an emitter) from p, in solid angle.
+  float pdf(Vec3 p, const Hit& hit) const;
+
+  // The sun's cone, when the scene has a sun.
+  bool has_sun() const { return has_sun_; }
+  LightSample sample_sun(std::array<float, 2> u) const;
+  float sun_pdf() const { return sun_pdf_; }
+  // Whether unit direction d lies in the sun's disk.
+  bool in_sun(Vec3 d) const { return has_sun_ && double(dot(d, sun_dir_)) >= sun_cos_; }
+  Rgb sun_radiance() const { return sun_radiance_; }
+
+  std::uint64_t bytes() const;
+
+ private:
+  struct Emitter {
+    ShapeKind kind;
+    std::uint32_t shape, primitive;
+    float area;
+    Rgb emission;
+  };
+  int index_of(const Hit& hit) const;
+  float pick_probability(int e) const;
+  float solid_angle_pdf(const Emitter& e, Vec3 p, Vec3 q, Vec3 n) const;
+
+  const Scene* scene_;
+  std::vector<Emitter> emitters_;
+  std::vector<double> cdf_;  // cumulative power, normalised to end at 1
+  // Emitter index per triangle of each mesh (empty for meshes that do not emit), per sphere,
+  // per disk; -1 where none.
+  std::vector<std::vector<int>> triangle_emitter_;
+  std::vector<int> sphere_emitter_, disk_emitter_;
+
+  bool has_sun_ = false;
+  Vec3 sun_dir_, sun_t_, sun_b_;
+  double sun_cos_ = 1;
+  float sun_pdf_ = 0;
+  Rgb sun_radiance_{};
+};
+
+// An orthonormal basis (t, b) around the unit vector n (Duff et al. 2017).
+void orthonormal_basis(Vec3 n, Vec3& t, Vec3& b);
+
+}  // namespace penumbra::spaceland

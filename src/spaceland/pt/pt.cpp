@@ -1,0 +1,277 @@
+#include "spaceland/pt/pt.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "core/math.hpp"
+#include "core/parallel.hpp"
+#include "core/sobol.hpp"
+#include "core/timer.hpp"
+#include "spaceland/camera.hpp"
+#include "spaceland/color.hpp"
+#include "spaceland/lights.hpp"
+#include "spaceland/media.hpp"
+
+namespace penumbra::spaceland::pt {
+
+namespace {
+
+constexpr float kInf = std::numeric_limits<float>::infinity();
+constexpr float kInvPi = float(1 / kPi);
+constexpr float kInv4Pi = float(1 / (4 * kPi));
+
+// Sobol pairs per scattering vertex: free flight, light pick, light point, sun, direction.
+enum Pair : std::uint32_t { kFlight, kPick, kLightPoint, kSunPoint, kDirection, kPairs };
+
+// Power heuristic (beta = 2) for a sample of density `a` against the other technique's `b`.
+float mis(float a, float b) {
+  const float a2 = a * a, b2 = b * b;
+  return a2 + b2 > 0 ? a2 / (a2 + b2) : 0;
+}
+
+// Cosine-weighted direction about the unit normal n.
+Vec3 cosine_direction(Vec3 n, std::array<float, 2> u) {
+  const double r = std::sqrt(double(u[0])), phi = kTwoPi * u[1];
+  const double z = std::sqrt(std::max(0.0, 1 - double(u[0])));
+  Vec3 t, b;
+  orthonormal_basis(n, t, b);
+  return normalize(t * float(r * std::cos(phi)) + b * float(r * std::sin(phi)) + n * float(z));
+}
+
+Vec3 uniform_sphere(std::array<float, 2> u) {
+  const double z = 1 - 2 * double(u[0]), r = std::sqrt(std::max(0.0, 1 - z * z));
+  const double phi = kTwoPi * u[1];
+  return {float(r * std::cos(phi)), float(r * std::sin(phi)), float(z)};
+}
+
+struct Context {
+  const Scene& scene;
+  const RayScene& rays;
+  const GBuffer& g;
+  const Lights& lights;
+  const Media& media;
+  Vec3 camera;
+  int bounces;
+};
+
+// A scattering vertex: a surface point (normals faced towards the arriving ray) or a point in
+// fog.
+struct Vertex {
+  Vec3 p;
+  bool in_medium = false;
+  Vec3 ng, ns;  // surface only
+  Rgb albedo{};
+};
+
+// Density of the direction sampler at a vertex for direction wi.
+float direction_pdf(const Vertex& v, Vec3 wi) {
+  if (v.in_medium) return kInv4Pi;
+  const float c = dot(v.ns, wi);
+  return c > 0 ? c * kInvPi : 0;
+}
+
+// BSDF (or phase function) times the cosine, for light arriving along wi.
+Rgb scattering(const Vertex& v, Vec3 wi) {
+  if (v.in_medium) return Rgb{kInv4Pi, kInv4Pi, kInv4Pi};
+  if (dot(v.ng, wi) <= 0) return {};  // below the surface: no light through it
+  const float c = dot(v.ns, wi);
+  return c > 0 ? v.albedo * (c * kInvPi) : Rgb{};
+}
+
+// A shadow ray from the vertex along unit direction wi for `distance` (kInf: to the sky).
+Ray shadow(const Context& ctx, const Vertex& v, Vec3 wi, float distance, Vec3 target) {
+  if (!v.in_medium) {
+    if (distance == kInf) return Ray{ctx.rays.spawn(v.p, v.ng, wi), wi, 0, kInf};
+    return ctx.rays.shadow_ray(v.p, v.ng, target);
+  }
+  const float eps = ctx.rays.epsilon();
+  return Ray{v.p, wi, 0, distance == kInf ? kInf : distance - eps};
+}
+
+// Light from one sampled emitter point (or the sun) through the vertex, MIS-weighted against
+// the direction sampler.
+Rgb direct(const Context& ctx, const Vertex& v, const LightSample& ls, Vec3 target,
+           std::uint64_t& rays) {
+  if (!(ls.pdf > 0) || is_black(ls.radiance)) return {};
+  const Rgb f = scattering(v, ls.direction);
+  if (is_black(f)) return {};
+  const Ray r = shadow(ctx, v, ls.direction, ls.distance, target);
+  ++rays;
+  if (ctx.rays.occluded(r)) return {};
+  Rgb tr{1, 1, 1};
+  if (!ctx.media.empty()) {
+    tr = ctx.media.transmittance(Ray{v.p, ls.direction, 0, kInf}, ls.distance);
+  }
+  const float w = mis(ls.pdf, direction_pdf(v, ls.direction));
+  return f * ls.radiance * tr * (w / ls.pdf);
+}
+
+// One sample of the radiance arriving at the camera through pixel k.
+Rgb trace(const Context& ctx, std::size_t k, std::uint32_t pixel_seed, std::uint32_t sample,
+          std::vector<MediumPiece>& pieces, std::uint64_t& rays) {
+  auto point = [&](int vertex, Pair pair) {
+    return sobol::sample_2d(sample, pixel_seed, std::uint32_t(vertex) * kPairs + pair);
+  };
+  Rgb L{}, beta{1, 1, 1};
+  Vec3 origin = ctx.camera, dir = ctx.g.directions[k];
+  Hit hit = ctx.g.hits[k];
+  bool found = ctx.g.found[k] != 0;
+  float prev_pdf = 0;  // density the direction sampler gave to `dir` (0 from the camera)
+  Vec3 prev_p = origin;
+  for (int scatters = 0;; ++scatters) {
+    Vertex v;
+    bool scattered_in_fog = false;
+    if (!ctx.media.empty()) {
+      const float t_end = found ? hit.t : kInf;
+      ctx.media.pieces(Ray{origin, dir, 0, t_end}, t_end, pieces);
+      if (!pieces.empty()) {
+        L += beta * Media::emitted(pieces);
+        if (scatters < ctx.bounces) {
+          const std::array<float, 2> u = point(scatters, kFlight);
+          const FreeFlight ff = Media::sample(pieces, u[0], u[1]);
+          beta *= ff.weight;
+          if (ff.scattered) {
+            scattered_in_fog = true;
+            v.in_medium = true;
+            v.p = origin + dir * ff.t;
+          }
+        } else {
+          beta *= ctx.media.transmittance(Ray{origin, dir, 0, kInf}, t_end);
+        }
+      }
+    }
+    if (!scattered_in_fog) {
+      if (!found) {
+        L += beta * sky_radiance(ctx.scene.sky, dir);
+        if (ctx.lights.in_sun(dir)) {
+          const float w = prev_pdf > 0 ? mis(prev_pdf, ctx.lights.sun_pdf()) : 1.0f;
+          L += beta * ctx.lights.sun_radiance() * w;
+        }
+        break;
+      }
+      const Rgb le = emission_at(ctx.scene, hit);
+      if (!is_black(le)) {
+        const float w = prev_pdf > 0 ? mis(prev_pdf, ctx.lights.pdf(prev_p, hit)) : 1.0f;
+        L += beta * le * w;
+      }
+      if (scatters == ctx.bounces) break;
+      v.p = hit.position;
+      v.ng = hit.geometric_normal;
+      v.ns = hit.shading_normal;
+      v.albedo = albedo_at(ctx.scene, hit);
+      if (is_black(v.albedo)) break;
+    }
+    // Next event estimation: one emitter point and the sun.
+    if (!ctx.lights.empty()) {
+      const LightSample ls =
+          ctx.lights.sample(v.p, point(scatters, kPick)[0], point(scatters, kLightPoint));
+      L += beta * direct(ctx, v, ls, ls.point, rays);
+    }
+    if (ctx.lights.has_sun()) {
+      const LightSample ls = ctx.lights.sample_sun(point(scatters, kSunPoint));
+      L += beta * direct(ctx, v, ls, Vec3{}, rays);
+    }
+    // The next direction: cosine-weighted (albedo / pi x cos / pdf = albedo), or isotropic in
+    // fog (its albedo is already in the free-flight weight).
+    const std::array<float, 2> u = point(scatters, kDirection);
+    Vec3 wi;
+    if (v.in_medium) {
+      wi = uniform_sphere(u);
+      prev_pdf = kInv4Pi;
+      origin = v.p;
+    } else {
+      wi = cosine_direction(v.ns, u);
+      if (dot(wi, v.ng) <= 0) break;  // under the surface: this path carries nothing
+      prev_pdf = direction_pdf(v, wi);
+      if (!(prev_pdf > 0)) break;
+      beta *= v.albedo;
+      origin = ctx.rays.spawn(v.p, v.ng, wi);
+    }
+    prev_p = v.p;
+    dir = wi;
+    ++rays;
+    found = ctx.rays.intersect(Ray{origin, dir, 0, kInf}, hit);
+    if (found) face_towards(hit, dir);
+    if (is_black(beta)) break;
+  }
+  return L;
+}
+
+}  // namespace
+
+ImageRgb render(const Scene& scene, const RayScene& rays, const GBuffer& g,
+                const RenderOptions& options, Stats& stats) {
+  const Lights lights(scene);
+  const Media media(scene);
+  const Context ctx{scene, rays, g, lights, media, scene.camera.position, options.bounces};
+  const int w = g.width, h = g.height;
+  const std::size_t n = std::size_t(w) * h;
+  std::vector<double> sum(n * 3, 0.0);
+  std::atomic<std::uint64_t> ray_count{0};
+  const std::uint32_t seed = sobol::hash(options.pt.seed);
+
+  const PtOptions& pt = options.pt;
+  const std::uint64_t target = pt.spp > 0 ? std::uint64_t(pt.spp) : 0;
+  Stopwatch watch;
+  std::uint64_t done = 0;
+  // Passes double in size (1, 2, 4, ... up to 64 samples), so that a time limit or Ctrl-C is
+  // honoured soon; a pixel's samples are summed in index order, so passes change no bit.
+  while (true) {
+    if (target > 0 && done >= target) break;
+    std::uint64_t pass = std::min<std::uint64_t>(std::max<std::uint64_t>(done, 1), 64);
+    if (target > 0) pass = std::min(pass, target - done);
+    const std::uint32_t s0 = std::uint32_t(done), s1 = std::uint32_t(done + pass);
+    parallel_for(h, [&](int j) {
+      std::vector<MediumPiece> pieces;
+      std::uint64_t local_rays = 0;
+      for (int i = 0; i < w; ++i) {
+        const std::size_t k = std::size_t(j) * w + i;
+        const std::uint32_t pixel_seed = sobol::hash((std::uint64_t(seed) << 32) | k);
+        double acc[3] = {sum[3 * k], sum[3 * k + 1], sum[3 * k + 2]};
+        for (std::uint32_t s = s0; s < s1; ++s) {
+          const Rgb c = trace(ctx, k, pixel_seed, s, pieces, local_rays);
+          // A sample that is not finite would poison the pixel; none is expected (every
+          // division is guarded), and tests check that images stay finite.
+          if (!std::isfinite(c.r) || !std::isfinite(c.g) || !std::isfinite(c.b)) continue;
+          acc[0] += c.r;
+          acc[1] += c.g;
+          acc[2] += c.b;
+        }
+        sum[3 * k] = acc[0];
+        sum[3 * k + 1] = acc[1];
+        sum[3 * k + 2] = acc[2];
+      }
+      ray_count.fetch_add(local_rays, std::memory_order_relaxed);
+    });
+    done += pass;
+    const double elapsed = watch.ms() / 1000;
+    const bool cancelled = options.cancel && options.cancel->load();
+    const bool timed_out = pt.seconds > 0 && elapsed >= pt.seconds;
+    if (options.progress) {
+      RenderProgress p;
+      p.samples = done;
+      p.target = target;
+      p.elapsed_s = elapsed;
+      const double by_samples = target > 0 ? double(done) / double(target) : 0;
+      const double by_time = pt.seconds > 0 ? elapsed / pt.seconds : 0;
+      p.fraction = std::min(1.0, std::max(by_samples, by_time));
+      options.progress(p);
+    }
+    if (cancelled) {
+      stats.cancelled = target == 0 || done < target;
+      break;
+    }
+    if (timed_out) break;
+  }
+  stats.samples = done;
+  stats.rays = ray_count.load() + n;  // the G-buffer's camera rays
+  ImageRgb img(w, h);
+  const double inv = done > 0 ? 1.0 / double(done) : 0;
+  for (std::size_t k = 0; k < n * 3; ++k) img.data()[k] = float(sum[k] * inv);
+  return img;
+}
+
+}  // namespace penumbra::spaceland::pt

@@ -4,14 +4,14 @@
 # the timeout or memory over the limit fails the script; the input is kept under
 # <build>/fuzz-work/artifacts/ (re-run it with: <build>/bin/<target> <file>).
 #   scripts/fuzz.sh [seconds per target]
-# Environment: FUZZ_BUILD (build-fuzz), JOBS (nproc), WERROR (OFF), FUZZ_TARGETS (all three).
+# Environment: FUZZ_BUILD (build-fuzz), JOBS (nproc), WERROR (OFF), FUZZ_TARGETS (all five).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$PWD
 seconds=${1:-60}
 build=${FUZZ_BUILD:-build-fuzz}
 jobs=${JOBS:-$(nproc)}
-targets=(${FUZZ_TARGETS:-fuzz_scene fuzz_image fuzz_strokes})
+targets=(${FUZZ_TARGETS:-fuzz_scene fuzz_image fuzz_strokes fuzz_scene3d fuzz_mesh})
 
 if ! command -v clang++-14 >/dev/null; then
   echo "fuzz.sh: clang++-14 is missing (scripts/install-deps.sh installs it)" >&2
@@ -42,6 +42,19 @@ mkdir -p "$work/layers"
 cp "$root"/scenes/layers/* "$work/gen/layers/"* "$work/layers/"
 rm -rf "$work/seeds/image"
 cp -r "$work/gen/image" "$work/seeds/image"
+# 3D: the example scenes (their meshes are Debian's, by absolute path), and mesh files behind
+# the byte that picks their format (0 .obj, 1 .gltf, 2 .glb).
+rm -rf "$work/seeds/scene3d" "$work/seeds/mesh"
+mkdir -p "$work/seeds/scene3d" "$work/seeds/mesh"
+cp "$root"/scenes/3d/*.json "$work/seeds/scene3d/"
+models=/usr/share/assimp/models/glTF2
+seed_mesh() {  # seed_mesh FORMAT_BYTE FILE NAME
+  { printf "\\$(printf '%03o' "$1")"; cat "$2"; } >"$work/seeds/mesh/$3"
+}
+seed_mesh 1 "$models/BoxTextured-glTF-Embedded/BoxTextured.gltf" box-embedded.gltf
+seed_mesh 2 "$models/BoxTextured-glTF-Binary/BoxTextured.glb" box.glb
+printf '\000v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvn 0 0 1\nvt 0 0\nf 1/1/1 2/1/1 4/1/1 3/1/1\n' \
+  >"$work/seeds/mesh/quad.obj"
 
 failed=()
 for t in "${targets[@]}"; do

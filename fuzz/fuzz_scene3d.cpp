@@ -1,0 +1,45 @@
+// libFuzzer target: the 3D scene loader (parse_scene) on arbitrary text; a scene it accepts must
+// pass check_scene, and small ones are rendered (Embree's BVH, the G-buffer and one path-traced
+// sample of two bounces), which must succeed with a finite image. docs/RELIABILITY.md.
+#include <cstddef>
+#include <cstdint>
+#include <cstdlib>
+#include <string_view>
+
+#include "penumbra/spaceland/render.hpp"
+#include "penumbra/spaceland/scene.hpp"
+
+namespace {
+
+using namespace penumbra::spaceland;
+using penumbra::Expected;
+
+// Rendering costs pixels x triangles at worst; only small scenes are rendered (a big one is a
+// legitimate scene whose slowness is no finding).
+constexpr long long kMaxPixels = 32 * 32;
+constexpr std::size_t kMaxTriangles = 20000;
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  const std::string_view text(reinterpret_cast<const char*>(data), size);
+  // Mesh paths resolve against the working directory, where scripts/fuzz.sh puts tiny meshes.
+  LoadOptions load;
+  load.max_memory = std::uint64_t(256) << 20;
+  Expected<Scene> scene = parse_scene(text, "fuzz.json", load);
+  if (!scene) return 0;
+  if (!check_scene(*scene)) std::abort();  // parse_scene validated it
+  std::size_t triangles = 0;
+  for (const TriangleMesh& m : scene->meshes) triangles += m.triangles.size();
+  if (static_cast<long long>(scene->camera.width) * scene->camera.height > kMaxPixels ||
+      triangles > kMaxTriangles)
+    return 0;
+  RenderOptions options;
+  options.pt.spp = 1;
+  options.bounces = 2;
+  options.threads = 1;
+  options.max_memory = std::uint64_t(512) << 20;
+  Expected<RenderResult> r = render(*scene, options);
+  if (!r) std::abort();  // a valid small scene must render
+  return 0;
+}

@@ -1,0 +1,126 @@
+// `penumbra render` on 3D scenes, run as a user runs it: the document's `dimensions` picks the
+// world, options that do not apply are refused, the camera's size can be overridden, AOVs.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "penumbra/io.hpp"
+#include "test_support.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// A lamp over a floor, 16x12 pixels: every render takes milliseconds.
+constexpr const char* kScene3d = R"({
+  "penumbra": 1,
+  "dimensions": 3,
+  "camera": { "position": [0, 1, 3], "look_at": [0, 0, 0], "fov_y": 50, "width": 16, "height": 12 },
+  "sky": [0.1, 0.1, 0.2],
+  "materials": { "lamp": { "emission": [4, 3, 2] } },
+  "objects": [
+    { "type": "disk", "center": [0, 0, 0], "normal": [0, 1, 0], "radius": 5 },
+    { "type": "sphere", "center": [0, 1, 0], "radius": 0.3, "material": "lamp" }
+  ]
+})";
+
+class Cli3d : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    fs::create_directories(tmp_.root() / "out");
+    scene_ = tmp_.write("scene3d.json", kScene3d);
+  }
+  penumbra::testing::CliResult run(const std::vector<std::string>& args) const {
+    return penumbra::testing::run_cli(args, tmp_.root());
+  }
+  std::string out(const std::string& name) const { return (tmp_.root() / "out" / name).string(); }
+  bool out_empty() const { return fs::is_empty(tmp_.root() / "out"); }
+
+  penumbra::testing::TestDir tmp_{"cli3d"};
+  std::string scene_;
+};
+
+TEST_F(Cli3d, RendersA3dSceneToEveryFormatWithAJsonReport) {
+  const auto r = run({"render", scene_, "--spp", "4", "--bounces", "2", "-o", out("a.png"), "-o",
+                      out("a.exr"), "-o", out("a.pfm"), "--json"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["dimensions"], 3);
+  EXPECT_EQ(j["method"], "pt");
+  EXPECT_EQ(j["width"], 16);
+  EXPECT_EQ(j["samples"], 4);
+  EXPECT_GT(j["rays"].get<double>(), 16 * 12 * 4);
+  const penumbra::Expected<penumbra::ImageRgb> exr = penumbra::read_rgb_image(out("a.exr"));
+  const penumbra::Expected<penumbra::ImageRgb> pfm = penumbra::read_rgb_image(out("a.pfm"));
+  ASSERT_TRUE(exr.ok() && pfm.ok());
+  EXPECT_EQ(exr->width(), 16);
+  EXPECT_EQ(exr->height(), 12);
+  // The sky above the horizon (top row) is what a miss sees.
+  EXPECT_NEAR(exr->at(0, 0).b, 0.2f, 1e-6f);
+  EXPECT_TRUE(fs::exists(out("a.png")));
+}
+
+TEST_F(Cli3d, WidthAndHeightReplaceTheCameraSize) {
+  const auto r = run({"render", scene_, "--spp", "1", "--width", "20", "--height", "10", "-o",
+                      out("b.pfm"), "-q"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const penumbra::Expected<penumbra::ImageRgb> img = penumbra::read_rgb_image(out("b.pfm"));
+  ASSERT_TRUE(img.ok());
+  EXPECT_EQ(img->width(), 20);
+  EXPECT_EQ(img->height(), 10);
+}
+
+TEST_F(Cli3d, DepthAovIsTheDistanceAlongTheViewDirection) {
+  // One pixel looking straight down at the floor from height 2: depth 2.
+  const std::string scene = tmp_.write("down.json", R"({
+    "penumbra": 1, "dimensions": 3,
+    "camera": { "position": [0, 2, 0], "look_at": [0, 0, 0], "up": [0, 0, -1], "fov_y": 10,
+                "width": 1, "height": 1 },
+    "objects": [ { "type": "disk", "center": [0, 0, 0], "normal": [0, 1, 0], "radius": 5 } ]
+  })");
+  const auto r = run({"render", scene, "--aov", "depth", "-o", out("d.pfm"), "-q"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const penumbra::Expected<penumbra::ImageRgb> img = penumbra::read_rgb_image(out("d.pfm"));
+  ASSERT_TRUE(img.ok());
+  EXPECT_NEAR(img->at(0, 0).r, 2.0f, 1e-5f);
+}
+
+TEST_F(Cli3d, OptionsOfTheOtherWorldAreRefused) {
+  auto r = run({"render", scene_, "--probe-spacing", "2", "-o", out("x.png")});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("--probe-spacing applies to 2D scenes only"), std::string::npos) << r.err;
+  r = run({"render", scene_, "--method", "hrc", "-o", out("x.png")});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("--method hrc is a 2D method"), std::string::npos) << r.err;
+  r = run({"render", scene_, "--device", "gpu", "-o", out("x.png")});
+  EXPECT_EQ(r.status, 2);
+  r = run({"render", "--aov", "depth", "-o", out("x.png")});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("--aov applies to 3D scenes only"), std::string::npos) << r.err;
+  EXPECT_TRUE(out_empty());
+}
+
+TEST_F(Cli3d, BadDocumentsNameTheFileAndThePathAndWriteNothing) {
+  const std::string bad = tmp_.write("bad.json", R"({
+    "penumbra": 1, "dimensions": 3,
+    "camera": { "position": [0, 1, 3], "look_at": [0, 0, 0], "width": 16, "height": 12 },
+    "objects": [ { "type": "sphere", "center": [0, 0, 0], "radius": -1 } ]
+  })");
+  auto r = run({"render", bad, "-o", out("x.png")});
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("bad.json"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("objects[0].radius"), std::string::npos) << r.err;
+  const std::string dims = tmp_.write("dims.json", R"({ "penumbra": 1, "dimensions": 4 })");
+  r = run({"render", dims, "-o", out("x.png")});
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("dimensions"), std::string::npos) << r.err;
+  r = run({"render", scene_, "--max-memory", "1K", "-o", out("x.png")});
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("--max-memory"), std::string::npos) << r.err;
+  EXPECT_TRUE(out_empty());
+}
+
+}  // namespace

@@ -1,0 +1,359 @@
+// The 3D path tracer against closed forms: enclosures (with and without fog), a sphere light
+// over a plane, a sky occluded by a black sphere, the sun and its hard shadow, Beer-Lambert and
+// fog emission; convergence; the same bits on any number of threads.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <numbers>
+#include <string>
+#include <vector>
+
+#include "penumbra/spaceland/render.hpp"
+#include "penumbra/spaceland/scene.hpp"
+
+namespace penumbra::spaceland {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+std::uint32_t add_material(Scene& s, Rgb albedo, Rgb emission = {}) {
+  Material m;
+  m.albedo = albedo;
+  m.emission = emission;
+  m.name = "m" + std::to_string(s.materials.size());
+  s.materials.push_back(m);
+  return std::uint32_t(s.materials.size() - 1);
+}
+
+int add_object(Scene& s, const std::string& what) {
+  s.objects.push_back("objects[" + std::to_string(s.objects.size()) + "] (" + what + ")");
+  return int(s.objects.size() - 1);
+}
+
+// The six faces of the box [lo, hi] as 12 flat triangles.
+void add_box(Scene& s, Vec3 lo, Vec3 hi, std::uint32_t material) {
+  TriangleMesh m;
+  for (int z = 0; z < 2; ++z)
+    for (int y = 0; y < 2; ++y)
+      for (int x = 0; x < 2; ++x)
+        m.positions.push_back({x ? hi.x : lo.x, y ? hi.y : lo.y, z ? hi.z : lo.z});
+  const std::uint32_t faces[6][4] = {{0, 1, 3, 2}, {4, 6, 7, 5}, {0, 4, 5, 1},
+                                     {2, 3, 7, 6}, {0, 2, 6, 4}, {1, 5, 7, 3}};
+  for (const auto& f : faces) {
+    m.triangles.push_back({f[0], f[1], f[2]});
+    m.triangles.push_back({f[0], f[2], f[3]});
+  }
+  m.materials.assign(m.triangles.size(), material);
+  m.object = add_object(s, "box");
+  s.meshes.push_back(m);
+}
+
+Camera camera(Vec3 position, Vec3 look_at, int w, int h, float fov = 60, Vec3 up = {0, 1, 0}) {
+  Camera c;
+  c.position = position;
+  c.look_at = look_at;
+  c.up = up;
+  c.fov_y = fov;
+  c.width = w;
+  c.height = h;
+  return c;
+}
+
+RenderResult render_ok(const Scene& s, const RenderOptions& o) {
+  Expected<RenderResult> r = render(s, o);
+  EXPECT_TRUE(r.ok()) << (r.ok() ? "" : r.error().message);
+  return r.ok() ? *r : RenderResult{};
+}
+
+RenderOptions pt(int spp, int bounces = 1) {
+  RenderOptions o;
+  o.pt.spp = spp;
+  o.bounces = bounces;
+  return o;
+}
+
+double geometric_sum(double a, int n) {
+  double s = 0, p = 1;
+  for (int k = 0; k <= n; ++k, p *= a) s += p;
+  return s;
+}
+
+// An enclosure whose walls all emit Le and reflect a: the image is Le (1 + a + ... + a^N).
+Scene furnace(bool fog) {
+  Scene s;
+  s.camera = camera({0.1f, -0.2f, 0.3f}, {0.5f, 0.4f, -1}, 12, 9, 90);
+  const Rgb le{1.0f, 0.5f, 0.25f};
+  const float a = 0.6f;
+  add_box(s, {-1, -1, -1}, {1, 1.5f, 2}, add_material(s, {a, a, a}, le));
+  if (fog) {
+    // Fog that reflects as the walls do and emits sigma Le per unit length keeps the same
+    // answer: along any ray, (1 - T)(Le + a L') + T (Le + a L') = Le + a L'.
+    Medium m;
+    m.center = {0, 0.2f, 0.4f};
+    m.half_size = {0.8f, 1.0f, 1.2f};
+    m.extinction = {0.5f, 1.0f, 2.0f};
+    m.albedo = {a, a, a};
+    m.emission = {m.extinction.r * le.r, m.extinction.g * le.g, m.extinction.b * le.b};
+    s.media.push_back(m);
+  }
+  return s;
+}
+
+void expect_furnace(bool fog, int spp, double tolerance) {
+  const Scene s = furnace(fog);
+  const Rgb le = s.materials[0].emission;
+  for (int n = 1; n <= 4; ++n) {
+    const RenderResult r = render_ok(s, pt(spp, n));
+    const double expect = geometric_sum(0.6, n);
+    double mean[3] = {0, 0, 0}, worst = 0;
+    const int pixels = r.radiance.width() * r.radiance.height();
+    for (int k = 0; k < pixels; ++k)
+      for (int c = 0; c < 3; ++c) {
+        const double want = expect * (c == 0 ? le.r : c == 1 ? le.g : le.b);
+        const double got = r.radiance.data()[3 * k + c];
+        mean[c] += got / pixels;
+        worst = std::max(worst, std::abs(got / want - 1));
+      }
+    for (int c = 0; c < 3; ++c) {
+      const double want = expect * (c == 0 ? le.r : c == 1 ? le.g : le.b);
+      EXPECT_NEAR(mean[c] / want, 1.0, tolerance) << "bounces " << n << " channel " << c;
+    }
+    EXPECT_LT(worst, 10 * tolerance) << "bounces " << n;
+  }
+}
+
+TEST(SpacelandPt, EnclosureGivesTheGeometricSeriesOfItsAlbedo) {
+  expect_furnace(false, 64, 0.003);
+}
+
+TEST(SpacelandPt, EnclosureFilledWithMatchingFogGivesTheSameSeries) {
+  expect_furnace(true, 256, 0.01);
+}
+
+// A plane of albedo a (a large disk at y = 0) under an emitting sphere; the camera looks down.
+Scene sphere_light_scene(Rgb sky) {
+  Scene s;
+  s.camera = camera({0, 3, 4}, {0, 0, 0}, 32, 24, 50);
+  s.sky = {sky, sky, sky};
+  Disk plane;
+  plane.radius = 1000;
+  plane.material = add_material(s, {0.5f, 0.5f, 0.5f});
+  plane.object = add_object(s, "disk");
+  s.disks.push_back(plane);
+  return s;
+}
+
+TEST(SpacelandPt, SphereLightOverAPlaneGivesALeRSquaredCosOverDSquared) {
+  Scene s = sphere_light_scene({0, 0, 0});
+  Sphere light;
+  light.center = {0.3f, 2, -0.5f};
+  light.radius = 0.5f;
+  light.material = add_material(s, {0, 0, 0}, {4, 3, 2});
+  light.object = add_object(s, "sphere");
+  s.spheres.push_back(light);
+  const RenderResult r = render_ok(s, pt(64));
+  RenderOptions po = pt(1);
+  po.aov = Aov::position;
+  const ImageRgb pos = render_ok(s, po).radiance;
+  po.aov = Aov::object;
+  const ImageRgb obj = render_ok(s, po).radiance;
+  int tested = 0;
+  double worst = 0;
+  for (int j = 0; j < pos.height(); ++j)
+    for (int i = 0; i < pos.width(); ++i) {
+      if (obj.at(i, j).r != 0) continue;  // the light itself
+      const Rgb p = pos.at(i, j);
+      const double dx = light.center.x - p.r, dy = light.center.y - p.g, dz = light.center.z - p.b;
+      const double d2 = dx * dx + dy * dy + dz * dz;
+      const double cos_t = dy / std::sqrt(d2);
+      const double k = 0.5 * light.radius * light.radius / d2 * cos_t;
+      const Rgb got = r.radiance.at(i, j);
+      worst = std::max({worst, std::abs(got.r / (4 * k) - 1), std::abs(got.g / (3 * k) - 1),
+                        std::abs(got.b / (2 * k) - 1)});
+      ++tested;
+    }
+  EXPECT_GT(tested, 600);
+  EXPECT_LT(worst, 0.01);
+}
+
+TEST(SpacelandPt, UniformSkyOverAPlaneLosesTheCapABlackSphereHides) {
+  const float sky = 2;
+  Scene s = sphere_light_scene({sky, sky, sky});
+  Sphere blocker;
+  blocker.center = {0.3f, 1.5f, -0.5f};
+  blocker.radius = 0.5f;
+  blocker.material = add_material(s, {0, 0, 0});
+  blocker.object = add_object(s, "sphere");
+  s.spheres.push_back(blocker);
+  RenderOptions po = pt(1);
+  po.aov = Aov::position;
+  const ImageRgb pos = render_ok(s, po).radiance;
+  po.aov = Aov::object;
+  const ImageRgb obj = render_ok(s, po).radiance;
+  // Relative RMS error over the plane's pixels at n samples.
+  auto error_at = [&](int spp) {
+    const RenderResult r = render_ok(s, pt(spp));
+    double sum = 0, mean_got = 0, mean_want = 0;
+    int n = 0;
+    for (int j = 0; j < pos.height(); ++j)
+      for (int i = 0; i < pos.width(); ++i) {
+        if (obj.at(i, j).r != 0) continue;
+        const Rgb p = pos.at(i, j);
+        const double dx = blocker.center.x - p.r, dy = blocker.center.y - p.g,
+                     dz = blocker.center.z - p.b;
+        const double d2 = dx * dx + dy * dy + dz * dz;
+        const double want =
+            0.5 * sky * (1 - blocker.radius * blocker.radius / d2 * (dy / std::sqrt(d2)));
+        const double got = r.radiance.at(i, j).g;
+        sum += (got / want - 1) * (got / want - 1);
+        mean_got += got;
+        mean_want += want;
+        ++n;
+      }
+    EXPECT_NEAR(mean_got / mean_want, 1.0, 0.003) << spp << " spp";
+    return std::sqrt(sum / n);
+  };
+  const double e16 = error_at(16), e64 = error_at(64), e256 = error_at(256);
+  // Four times the samples at least halve the error (Owen-scrambled Sobol points do better).
+  EXPECT_LT(e64, 0.55 * e16);
+  EXPECT_LT(e256, 0.55 * e64);
+  EXPECT_LT(e256, 0.01);
+}
+
+TEST(SpacelandPt, SunOnAPlaneGivesAECosOverPiAndNothingInTheHardShadow) {
+  Scene s = sphere_light_scene({0, 0, 0});
+  s.has_sun = true;
+  s.sun.direction = normalize(Vec3{0.3f, 1, 0.2f});
+  s.sun.irradiance = {3, 2, 1};
+  Disk blocker;
+  blocker.center = {0, 1, 0};
+  blocker.radius = 0.6f;
+  blocker.material = add_material(s, {0, 0, 0});
+  blocker.object = add_object(s, "disk");
+  s.disks.push_back(blocker);
+  const RenderResult r = render_ok(s, pt(16));
+  RenderOptions po = pt(1);
+  po.aov = Aov::position;
+  const ImageRgb pos = render_ok(s, po).radiance;
+  po.aov = Aov::object;
+  const ImageRgb obj = render_ok(s, po).radiance;
+  const Vec3 sun = s.sun.direction;
+  const double lit = 0.5 * sun.y / kPi;  // a E cos(theta) / pi per unit of irradiance
+  int in_shadow = 0, in_light = 0;
+  for (int j = 0; j < pos.height(); ++j)
+    for (int i = 0; i < pos.width(); ++i) {
+      if (obj.at(i, j).r != 0) continue;
+      const Rgb p = pos.at(i, j);
+      // Where the ray towards the sun's centre crosses the blocker's plane (y = 1).
+      const double t = (1 - p.g) / sun.y;
+      const double hx = p.r + t * sun.x, hz = p.b + t * sun.z;
+      const double rho = std::sqrt(hx * hx + hz * hz);
+      const Rgb got = r.radiance.at(i, j);
+      // Clear of the penumbra (0.27 degrees, under 0.01 wide here) by a margin.
+      if (rho < blocker.radius - 0.03) {
+        EXPECT_EQ(got.r + got.g + got.b, 0.0f) << i << ", " << j;
+        ++in_shadow;
+      } else if (rho > blocker.radius + 0.03) {
+        EXPECT_NEAR(got.r / (3 * lit), 1.0, 1e-3) << i << ", " << j;
+        EXPECT_NEAR(got.b / (1 * lit), 1.0, 1e-3) << i << ", " << j;
+        ++in_light;
+      }
+    }
+  EXPECT_GT(in_shadow, 20);
+  EXPECT_GT(in_light, 300);
+}
+
+// One pixel looking along -z at an emitting wall through a slab of fog.
+Scene slab(Rgb extinction, Rgb emission, Rgb wall) {
+  Scene s;
+  s.camera = camera({0, 0, 0}, {0, 0, -1}, 1, 1, 10);
+  Disk w;
+  w.center = {0, 0, -3};
+  w.normal = {0, 0, 1};
+  w.radius = 10;
+  w.material = add_material(s, {0, 0, 0}, wall);
+  w.object = add_object(s, "disk");
+  s.disks.push_back(w);
+  Medium m;
+  m.center = {0, 0, -1.5f};
+  m.half_size = {5, 5, 0.5f};
+  m.extinction = extinction;
+  m.albedo = {0, 0, 0};
+  m.emission = emission;
+  s.media.push_back(m);
+  return s;
+}
+
+TEST(SpacelandPt, FogAttenuatesAsBeerLambert) {
+  const Rgb sigma{0.5f, 1.0f, 2.0f};
+  const int spp = 4096;
+  const RenderResult r = render_ok(slab(sigma, {}, {2, 2, 2}), pt(spp));
+  const Rgb got = r.radiance.at(0, 0);
+  // Each sample passes (weight T / P) or is absorbed: a Bernoulli estimate with P the mean
+  // transmittance; allow four standard errors.
+  const double t[3] = {std::exp(-0.5), std::exp(-1.0), std::exp(-2.0)};
+  const double p = (t[0] + t[1] + t[2]) / 3;
+  const double tol = 4 * std::sqrt((1 - p) / (p * spp));
+  EXPECT_NEAR(got.r / (2 * t[0]), 1.0, tol);
+  EXPECT_NEAR(got.g / (2 * t[1]), 1.0, tol);
+  EXPECT_NEAR(got.b / (2 * t[2]), 1.0, tol);
+}
+
+TEST(SpacelandPt, EmittingFogGivesItsClosedForm) {
+  const Rgb sigma{0.5f, 1.0f, 2.0f}, e{1, 2, 3};
+  const RenderResult r = render_ok(slab(sigma, e, {}), pt(4));
+  const Rgb got = r.radiance.at(0, 0);
+  EXPECT_NEAR(got.r, 1 * (1 - std::exp(-0.5)) / 0.5, 1e-5);
+  EXPECT_NEAR(got.g, 2 * (1 - std::exp(-1.0)) / 1.0, 1e-5);
+  EXPECT_NEAR(got.b, 3 * (1 - std::exp(-2.0)) / 2.0, 1e-5);
+}
+
+TEST(SpacelandPt, SameBitsOnOneAndTwoThreadsAndDependsOnTheSeed) {
+  Scene s = furnace(true);
+  s.has_sun = true;
+  s.sun.irradiance = {1, 1, 1};
+  RenderOptions o = pt(8, 3);
+  o.threads = 1;
+  const ImageRgb one = render_ok(s, o).radiance;
+  o.threads = 2;
+  const ImageRgb two = render_ok(s, o).radiance;
+  ASSERT_EQ(one.size(), two.size());
+  EXPECT_TRUE(std::equal(one.data(), one.data() + one.size(), two.data()));
+  o.pt.seed = 7;
+  const ImageRgb other = render_ok(s, o).radiance;
+  EXPECT_FALSE(std::equal(one.data(), one.data() + one.size(), other.data()));
+}
+
+TEST(SpacelandPt, CancelStopsAfterAPassWithTheSamplesSoFar) {
+  const Scene s = furnace(false);
+  std::atomic<bool> cancel{true};
+  RenderOptions o = pt(1000);
+  o.cancel = &cancel;
+  const RenderResult r = render_ok(s, o);
+  EXPECT_TRUE(r.cancelled);
+  EXPECT_EQ(r.samples, 1u);
+  EXPECT_GT(r.radiance.at(0, 0).r, 0.0f);
+}
+
+TEST(SpacelandPt, RefusesBadOptionsAndWorkPastTheMemoryLimit) {
+  const Scene s = furnace(false);
+  RenderOptions o = pt(0);
+  Expected<RenderResult> r = render(s, o);
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find("pt.spp"), std::string::npos) << r.error().message;
+  o = pt(4);
+  o.bounces = 0;
+  r = render(s, o);
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find("bounces"), std::string::npos) << r.error().message;
+  o = pt(4);
+  o.max_memory = 1000;
+  r = render(s, o);
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find("max_memory"), std::string::npos) << r.error().message;
+}
+
+}  // namespace
+}  // namespace penumbra::spaceland

@@ -39,6 +39,8 @@ class RayScene {
  public:
   // Builds the BVH (the scene must pass check_scene). Errors: Embree failures (out of memory).
   static Expected<RayScene> build(const Scene& scene);
+  // The same, refusing (with an Error) to let Embree allocate more than `max_bytes`.
+  static Expected<RayScene> build(const Scene& scene, std::uint64_t max_bytes);
   // Bytes the BVH and Embree's copies of the geometry are expected to take.
   static std::uint64_t estimate_bytes(const Scene& scene);
 
@@ -62,6 +64,9 @@ class RayScene {
   // A shadow ray from a surface point towards a target point: ends short of the target by the
   // same scaled offset, so the target's own surface does not block it.
   Ray shadow_ray(Vec3 p, Vec3 n, Vec3 target) const;
+  // The same towards a target whose surface normal is known (a sampled light point): the ray ends
+  // at the target moved off its surface towards p, safe at grazing angles too.
+  Ray shadow_ray(Vec3 p, Vec3 n, Vec3 target, Vec3 target_normal) const;
   float epsilon() const;  // the offset scale
 
   std::uint64_t bytes() const;  // memory the BVH took (Embree's own accounting)

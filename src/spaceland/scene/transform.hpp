@@ -77,9 +77,10 @@ struct Affine {
         m[4] * m[8] - m[5] * m[7], m[5] * m[6] - m[3] * m[8], m[3] * m[7] - m[4] * m[6],
         m[2] * m[7] - m[1] * m[8], m[0] * m[8] - m[2] * m[6], m[1] * m[6] - m[0] * m[7],
         m[1] * m[5] - m[2] * m[4], m[2] * m[3] - m[0] * m[5], m[0] * m[4] - m[1] * m[3]};
-    const double x = c[0] * n.x + c[3] * n.y + c[6] * n.z;
-    const double y = c[1] * n.x + c[4] * n.y + c[7] * n.z;
-    const double z = c[2] * n.x + c[5] * n.y + c[8] * n.z;
+    // c is the cofactor matrix, row-major: n' = c n (c^T n would be the inverse's turn).
+    const double x = c[0] * n.x + c[1] * n.y + c[2] * n.z;
+    const double y = c[3] * n.x + c[4] * n.y + c[5] * n.z;
+    const double z = c[6] * n.x + c[7] * n.y + c[8] * n.z;
     const double len = std::sqrt(x * x + y * y + z * z);
     if (!(len > 0)) return n;
     return {float(x / len), float(y / len), float(z / len)};

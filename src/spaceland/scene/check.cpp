@@ -1,0 +1,296 @@
+// Checking scenes built in code, their bounds and their size in bytes.
+#include "spaceland/scene/check.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <utility>
+
+#include "io/json_reader.hpp"
+
+namespace penumbra::spaceland {
+
+namespace {
+
+using io::expected_text;
+using io::fail;
+using io::format_number;
+using io::in_range;
+using io::Range;
+
+// Unit vectors written by readers and by code are normalised in float; a little slack.
+constexpr double kUnitTolerance = 1e-3;
+
+std::string item(const std::string& array, std::size_t i) {
+  // Appended piece by piece: GCC 12 warns falsely (-Wrestrict) on "[" + ... + "]".
+  std::string s = array;
+  s += '[';
+  s += std::to_string(i);
+  s += ']';
+  return s;
+}
+
+void check_float(const std::string& file, const std::string& path, float v, Range r) {
+  if (!std::isfinite(v)) fail(file, path, "expected a finite number, found " + format_number(v));
+  if (!in_range(v, r))
+    fail(file, path, std::string("expected ") + expected_text(r) + ", found " + format_number(v));
+}
+
+void check_vec3(const std::string& file, const std::string& path, Vec3 v) {
+  for (int k = 0; k < 3; ++k) check_float(file, item(path, k), v[k], Range::any);
+}
+
+void check_rgb(const std::string& file, const std::string& path, const Rgb& c, Range r) {
+  check_float(file, item(path, 0), c.r, r);
+  check_float(file, item(path, 1), c.g, r);
+  check_float(file, item(path, 2), c.b, r);
+}
+
+double length_d(Vec3 v) {
+  return std::sqrt(double(v.x) * v.x + double(v.y) * v.y + double(v.z) * v.z);
+}
+
+void check_unit(const std::string& file, const std::string& path, Vec3 v) {
+  check_vec3(file, path, v);
+  const double len = length_d(v);
+  if (std::fabs(len - 1) > kUnitTolerance)
+    fail(
+        file, path,
+        "expected a unit vector, found " + format_vec3(v) + " (length " + format_number(len) + ")");
+}
+
+void check_open_interval(const std::string& file, const std::string& path, float v, double lo,
+                         double hi, bool hi_closed) {
+  const bool ok = std::isfinite(v) && v > lo && (hi_closed ? v <= hi : v < hi);
+  if (!ok)
+    fail(file, path,
+         "expected a number in (" + format_number(lo) + ", " + format_number(hi) +
+             (hi_closed ? "]" : ")") + ", found " + format_number(v));
+}
+
+void check_material_index(const std::string& file, const std::string& path, std::uint32_t m,
+                          const Scene& s) {
+  if (m >= s.materials.size())
+    fail(file, path,
+         "material " + std::to_string(m) + " out of range (" + std::to_string(s.materials.size()) +
+             " materials)");
+}
+
+void check_object_index(const std::string& file, const std::string& path, int object,
+                        const Scene& s) {
+  if (object < -1 || (object >= 0 && std::size_t(object) >= s.objects.size()))
+    fail(file, path + ".object",
+         "object " + std::to_string(object) + " out of range (-1 or one of the " +
+             std::to_string(s.objects.size()) + " objects)");
+}
+
+void check_mesh(const std::string& file, const std::string& path, const TriangleMesh& m,
+                const Scene& s) {
+  const std::size_t n = m.positions.size();
+  for (std::size_t i = 0; i < n; ++i)
+    check_vec3(file, item(path + ".positions", i), m.positions[i]);
+  if (!m.normals.empty() && m.normals.size() != n)
+    fail(file, path + ".normals",
+         "expected none or one per position (" + std::to_string(n) + "), found " +
+             std::to_string(m.normals.size()));
+  for (std::size_t i = 0; i < m.normals.size(); ++i)
+    check_unit(file, item(path + ".normals", i), m.normals[i]);
+  if (!m.uvs.empty() && m.uvs.size() != n)
+    fail(file, path + ".uvs",
+         "expected none or one per position (" + std::to_string(n) + "), found " +
+             std::to_string(m.uvs.size()));
+  for (std::size_t i = 0; i < m.uvs.size(); ++i) {
+    check_float(file, item(item(path + ".uvs", i), 0), m.uvs[i][0], Range::any);
+    check_float(file, item(item(path + ".uvs", i), 1), m.uvs[i][1], Range::any);
+  }
+  for (std::size_t t = 0; t < m.triangles.size(); ++t) {
+    for (std::uint32_t index : m.triangles[t]) {
+      if (index >= n)
+        fail(file, item(path + ".triangles", t),
+             "index " + std::to_string(index) + " out of range (" + std::to_string(n) +
+                 " positions)");
+    }
+  }
+  if (m.materials.size() != m.triangles.size())
+    fail(file, path + ".materials",
+         "expected one per triangle (" + std::to_string(m.triangles.size()) + "), found " +
+             std::to_string(m.materials.size()));
+  for (std::size_t t = 0; t < m.materials.size(); ++t)
+    check_material_index(file, item(path + ".materials", t), m.materials[t], s);
+  check_object_index(file, path, m.object, s);
+}
+
+void check_texture(const std::string& file, const std::string& path, const Texture& t) {
+  if (t.width < 1 || t.height < 1)
+    fail(file, path,
+         "expected a size of at least 1x1, found " + std::to_string(t.width) + "x" +
+             std::to_string(t.height));
+  const std::size_t n = std::size_t(t.width) * std::size_t(t.height) * 3;
+  if (t.rgb.size() != n)
+    fail(file, path + ".rgb",
+         "expected " + std::to_string(n) + " values (" + std::to_string(t.width) + "x" +
+             std::to_string(t.height) + " RGB), found " + std::to_string(t.rgb.size()));
+  // Texels multiply the albedo, so they are reflectances too.
+  for (std::size_t i = 0; i < n; ++i)
+    check_float(file, item(path + ".rgb", i), t.rgb[i], Range::unit);
+}
+
+}  // namespace
+
+std::string format_vec3(Vec3 v) {
+  std::string s = "[";  // piece by piece, for GCC 12's false -Wrestrict
+  s += format_number(v.x);
+  s += ", ";
+  s += format_number(v.y);
+  s += ", ";
+  s += format_number(v.z);
+  s += ']';
+  return s;
+}
+
+void check_camera(const std::string& file, const Camera& c) {
+  check_vec3(file, "camera.position", c.position);
+  check_vec3(file, "camera.look_at", c.look_at);
+  check_vec3(file, "camera.up", c.up);
+  check_open_interval(file, "camera.fov_y", c.fov_y, 0, 180, false);
+  for (auto [name, side] :
+       {std::pair{"camera.width", c.width}, std::pair{"camera.height", c.height}})
+    if (side < 1 || side > kMaxImageSide)
+      fail(file, name,
+           "expected an integer in 1.." + std::to_string(kMaxImageSide) + ", found " +
+               std::to_string(side));
+  // In double: float differences of nearby points may underflow.
+  const double f[3] = {double(c.look_at.x) - c.position.x, double(c.look_at.y) - c.position.y,
+                       double(c.look_at.z) - c.position.z};
+  const double flen = std::sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
+  if (!(flen > 0))
+    fail(file, "camera.look_at",
+         "expected a point distinct from camera.position, found " + format_vec3(c.look_at));
+  const double u[3] = {c.up.x, c.up.y, c.up.z};
+  const double ulen = length_d(c.up);
+  const double x[3] = {f[1] * u[2] - f[2] * u[1], f[2] * u[0] - f[0] * u[2],
+                       f[0] * u[1] - f[1] * u[0]};
+  const double sine = std::sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]) / (flen * ulen);
+  if (!(ulen > 0) || !(sine > 1e-6))
+    fail(file, "camera.up",
+         "expected a non-zero vector not parallel to the view direction (look_at - position), "
+         "found " +
+             format_vec3(c.up));
+}
+
+void check_scene_or_throw(const Scene& s) {
+  const std::string& file = s.source;
+  check_camera(file, s.camera);
+  check_rgb(file, "sky.zenith", s.sky.zenith, Range::nonneg);
+  check_rgb(file, "sky.horizon", s.sky.horizon, Range::nonneg);
+  check_rgb(file, "sky.ground", s.sky.ground, Range::nonneg);
+  if (s.has_sun) {
+    check_unit(file, "sun.direction", s.sun.direction);
+    check_rgb(file, "sun.irradiance", s.sun.irradiance, Range::nonneg);
+    check_open_interval(file, "sun.angular_radius", s.sun.angular_radius, 0, 45, true);
+  }
+  for (std::size_t i = 0; i < s.materials.size(); ++i) {
+    const Material& m = s.materials[i];
+    const std::string path = item("materials", i);
+    check_rgb(file, path + ".albedo", m.albedo, Range::unit);
+    check_rgb(file, path + ".emission", m.emission, Range::nonneg);
+    if (m.albedo_texture < -1 ||
+        (m.albedo_texture >= 0 && std::size_t(m.albedo_texture) >= s.textures.size()))
+      fail(file, path + ".albedo_texture",
+           "texture " + std::to_string(m.albedo_texture) + " out of range (-1 or one of the " +
+               std::to_string(s.textures.size()) + " textures)");
+  }
+  for (std::size_t i = 0; i < s.textures.size(); ++i)
+    check_texture(file, item("textures", i), s.textures[i]);
+  for (std::size_t i = 0; i < s.meshes.size(); ++i)
+    check_mesh(file, item("meshes", i), s.meshes[i], s);
+  for (std::size_t i = 0; i < s.spheres.size(); ++i) {
+    const Sphere& sp = s.spheres[i];
+    const std::string path = item("spheres", i);
+    check_vec3(file, path + ".center", sp.center);
+    check_float(file, path + ".radius", sp.radius, Range::positive);
+    check_material_index(file, path + ".material", sp.material, s);
+    check_object_index(file, path, sp.object, s);
+  }
+  for (std::size_t i = 0; i < s.disks.size(); ++i) {
+    const Disk& d = s.disks[i];
+    const std::string path = item("disks", i);
+    check_vec3(file, path + ".center", d.center);
+    check_unit(file, path + ".normal", d.normal);
+    check_float(file, path + ".radius", d.radius, Range::positive);
+    check_material_index(file, path + ".material", d.material, s);
+    check_object_index(file, path, d.object, s);
+  }
+  for (std::size_t i = 0; i < s.media.size(); ++i) {
+    const Medium& m = s.media[i];
+    const std::string path = item("media", i);
+    check_vec3(file, path + ".center", m.center);
+    for (int k = 0; k < 3; ++k) {
+      check_float(file, item(path + ".half_size", k), m.half_size[k], Range::positive);
+      check_unit(file, item(path + ".axes", k), m.axes[k]);
+    }
+    for (int a = 0; a < 3; ++a) {
+      const int b = (a + 1) % 3;
+      const double d = double(m.axes[a].x) * m.axes[b].x + double(m.axes[a].y) * m.axes[b].y +
+                       double(m.axes[a].z) * m.axes[b].z;
+      if (std::fabs(d) > kUnitTolerance)
+        fail(file, path + ".axes",
+             "expected orthogonal axes, found axes " + std::to_string(a) + " and " +
+                 std::to_string(b) + " with dot product " + format_number(d));
+    }
+    check_rgb(file, path + ".extinction", m.extinction, Range::nonneg);
+    check_rgb(file, path + ".albedo", m.albedo, Range::unit);
+    check_rgb(file, path + ".emission", m.emission, Range::nonneg);
+  }
+}
+
+Status check_scene(const Scene& scene) {
+  try {
+    check_scene_or_throw(scene);
+  } catch (const io::JsonFailure& f) {
+    return Error{f.message};
+  }
+  return {};
+}
+
+Bounds scene_bounds(const Scene& s) {
+  constexpr float kInf = std::numeric_limits<float>::infinity();
+  Vec3 lo{kInf, kInf, kInf}, hi{-kInf, -kInf, -kInf};
+  for (const TriangleMesh& m : s.meshes) {
+    for (Vec3 p : m.positions) {
+      lo = min(lo, p);
+      hi = max(hi, p);
+    }
+  }
+  for (const Sphere& sp : s.spheres) {
+    const Vec3 r{sp.radius, sp.radius, sp.radius};
+    lo = min(lo, sp.center - r);
+    hi = max(hi, sp.center + r);
+  }
+  for (const Disk& d : s.disks) {
+    // The disk's extent along axis i is radius * sin(angle between the normal and the axis).
+    Vec3 e;
+    for (int k = 0; k < 3; ++k)
+      e[k] = d.radius * std::sqrt(std::max(0.0f, 1 - d.normal[k] * d.normal[k]));
+    lo = min(lo, d.center - e);
+    hi = max(hi, d.center + e);
+  }
+  if (!(lo.x <= hi.x)) return {};
+  return {lo, hi};
+}
+
+std::uint64_t scene_bytes(const Scene& s) {
+  std::uint64_t bytes = 0;
+  for (const TriangleMesh& m : s.meshes)
+    bytes += m.positions.size() * sizeof(Vec3) + m.normals.size() * sizeof(Vec3) +
+             m.uvs.size() * sizeof(m.uvs[0]) + m.triangles.size() * sizeof(m.triangles[0]) +
+             m.materials.size() * sizeof(std::uint32_t);
+  for (const Texture& t : s.textures) bytes += t.rgb.size() * sizeof(float);
+  bytes += s.spheres.size() * sizeof(Sphere) + s.disks.size() * sizeof(Disk) +
+           s.media.size() * sizeof(Medium) + s.materials.size() * sizeof(Material);
+  return bytes;
+}
+
+}  // namespace penumbra::spaceland

@@ -1,0 +1,21 @@
+// The rules a 3D scene obeys, shared by the document parser (scene_json.cpp) and check_scene:
+// failures throw io::JsonFailure "<file>: <path>: <what>", the parser's message form.
+#pragma once
+
+#include <string>
+
+#include "penumbra/spaceland/scene.hpp"
+
+namespace penumbra::spaceland {
+
+// "[1, 0, -2.5]", for messages.
+std::string format_vec3(Vec3 v);
+
+// The camera's relations: look_at distinct from position, up not parallel to the view direction
+// (ranges included, so that a scene built in code is checked too).
+void check_camera(const std::string& file, const Camera& camera);
+
+// Every rule of check_scene, throwing.
+void check_scene_or_throw(const Scene& scene);
+
+}  // namespace penumbra::spaceland

@@ -1,0 +1,88 @@
+// read_mesh_file: dispatch by extension and the messages every mesh-file failure gets.
+#include "spaceland/scene/mesh_file.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <exception>
+#include <filesystem>
+#include <fstream>
+#include <new>
+#include <system_error>
+
+#include "io/json_reader.hpp"
+#include "spaceland/scene/mesh_reader.hpp"
+
+namespace penumbra::spaceland {
+
+namespace mesh_detail {
+
+void Budget::take(std::uint64_t bytes, const std::string& what) {
+  if (bytes > max_ || used_ > max_ - bytes)
+    mesh_fail(what + " need " + io::format_rounded(double(used_) + double(bytes)) +
+              " bytes, more than the memory limit of " + io::format_rounded(double(max_)) +
+              " bytes");
+  used_ += bytes;
+}
+
+std::uint64_t mesh_bytes(std::uint64_t vertices, bool normals, bool uvs, std::uint64_t triangles) {
+  const std::uint64_t per_vertex = sizeof(Vec3) * (normals ? 2 : 1) + (uvs ? 8 : 0);
+  const std::uint64_t per_triangle = 3 * sizeof(std::uint32_t) + sizeof(std::uint32_t);
+  // Saturates rather than wraps: counts come from the file.
+  const long double total =
+      (long double)vertices * per_vertex + (long double)triangles * per_triangle;
+  return total >= 1.8e19L ? UINT64_MAX : std::uint64_t(total);
+}
+
+std::string read_whole_file(const std::string& path, std::uint64_t max_bytes,
+                            const std::string& what) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) {
+    if (std::filesystem::exists(path, ec)) mesh_fail(what + " is not a regular file");
+    mesh_fail(what + " not found (" + path + ")");
+  }
+  const std::uintmax_t size = std::filesystem::file_size(path, ec);
+  if (ec) mesh_fail("cannot read " + what + ": " + ec.message());
+  if (size > max_bytes)
+    mesh_fail(what + " has " + std::to_string(size) + " bytes, more than the memory limit of " +
+              io::format_rounded(double(max_bytes)) + " bytes");
+  std::ifstream in(path, std::ios::binary);
+  std::string text(size, '\0');
+  if (!in || !in.read(text.data(), std::streamsize(size)) || in.gcount() != std::streamsize(size))
+    mesh_fail("cannot read " + what + " (" + path + ")");
+  return text;
+}
+
+Vec3 flat_normal(Vec3 a, Vec3 b, Vec3 c) {
+  const Vec3 n = cross(b - a, c - a);
+  const float len = length(n);
+  if (!(len > 0) || !std::isfinite(len)) return {0, 0, 1};
+  return n / len;
+}
+
+}  // namespace mesh_detail
+
+MeshFile read_mesh_file(const std::string& file_path, const std::string& scene_file,
+                        const std::string& json_path, std::uint64_t max_bytes) {
+  std::string ext = std::filesystem::path(file_path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return char(std::tolower(c)); });
+  std::string what;
+  try {
+    mesh_detail::Budget budget(max_bytes);
+    if (ext == ".obj") return mesh_detail::read_obj(file_path, budget);
+    if (ext == ".gltf" || ext == ".glb") return mesh_detail::read_gltf(file_path, budget);
+    what = "unknown mesh file type '" + ext + "' (expected .obj, .gltf or .glb)";
+  } catch (const mesh_detail::MeshError& e) {
+    what = e.what;
+  } catch (const std::bad_alloc&) {
+    what = "out of memory while reading it";
+  } catch (const std::exception& e) {
+    // The libraries' own exceptions (a JSON parser's, a container's).
+    what = std::string("cannot read it: ") + e.what();
+  }
+  io::fail(scene_file, json_path,
+           std::filesystem::path(file_path).filename().string() + ": " + what);
+}
+
+}  // namespace penumbra::spaceland

@@ -1,0 +1,261 @@
+// OBJ + MTL through tinyobjloader. The text is checked first for what tinyobjloader lets pass
+// silently (it reads "nan" as 0, skips quads whose indices are out of range, drops faces of fewer
+// than 3 corners), then parsed, then de-indexed: OBJ indexes positions, normals and uvs apart, a
+// TriangleMesh has one normal and uv per position.
+#include <tiny_obj_loader.h>
+
+#include <charconv>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <map>
+#include <sstream>
+#include <string_view>
+#include <unordered_map>
+
+#include "io/json_reader.hpp"
+#include "spaceland/scene/mesh_reader.hpp"
+
+namespace penumbra::spaceland::mesh_detail {
+
+namespace {
+
+std::string line_at(std::size_t line) {
+  return "line " + std::to_string(line);
+}
+
+// The next token of `s` from `pos` (split on blanks), empty at the end.
+std::string_view next_token(std::string_view s, std::size_t& pos) {
+  while (pos < s.size() && (s[pos] == ' ' || s[pos] == '\t' || s[pos] == '\r')) ++pos;
+  const std::size_t start = pos;
+  while (pos < s.size() && s[pos] != ' ' && s[pos] != '\t' && s[pos] != '\r') ++pos;
+  return s.substr(start, pos - start);
+}
+
+// A finite number as written, or a failure naming `where`.
+double finite_number(std::string_view token, const std::string& where) {
+  std::string_view t = token;
+  if (!t.empty() && t[0] == '+') t.remove_prefix(1);
+  double v = 0;
+  const auto r = std::from_chars(t.data(), t.data() + t.size(), v);
+  if (r.ec != std::errc() || r.ptr != t.data() + t.size() || !std::isfinite(v))
+    mesh_fail(where + ": '" + std::string(token) + "' is not a finite number");
+  return v;
+}
+
+// Every number after the keywords in `numeric` must be finite, at least `min_count` of them.
+// Faces' indices are checked against the vertex counts: negative ones (relative) against those
+// before the line, positive ones against the totals at the end.
+void check_text(std::string_view text, const std::string& file, bool obj) {
+  struct Kind {
+    long long count = 0, max_index = 0;
+    std::size_t max_line = 0;
+    const char* name;
+  };
+  Kind kinds[3] = {{0, 0, 0, "vertex"}, {0, 0, 0, "texture coordinate"}, {0, 0, 0, "normal"}};
+  std::size_t line = 0, begin = 0;
+  while (begin < text.size()) {
+    std::size_t end = text.find('\n', begin);
+    if (end == std::string_view::npos) end = text.size();
+    const std::string_view l = text.substr(begin, end - begin);
+    begin = end + 1;
+    ++line;
+    std::size_t pos = 0;
+    const std::string_view key = next_token(l, pos);
+    int min_count = -1, kind = -1;
+    if (obj) {
+      if (key == "v") min_count = 3, kind = 0;
+      if (key == "vt") min_count = 1, kind = 1;
+      if (key == "vn") min_count = 3, kind = 2;
+    } else if (key == "Kd" || key == "Ke") {
+      min_count = 3;
+    }
+    const std::string where = file + " " + line_at(line);
+    if (min_count > 0) {
+      int n = 0;
+      for (std::string_view t = next_token(l, pos); !t.empty(); t = next_token(l, pos), ++n)
+        finite_number(t, where);
+      if (n < min_count)
+        mesh_fail(where + ": '" + std::string(key) + "' needs " + std::to_string(min_count) +
+                  " numbers");
+      if (kind >= 0) ++kinds[kind].count;
+    } else if (obj && key == "f") {
+      int corners = 0;
+      for (std::string_view t = next_token(l, pos); !t.empty(); t = next_token(l, pos), ++corners) {
+        for (int k = 0; k < 3 && !t.empty(); ++k) {
+          const std::size_t slash = t.find('/');
+          const std::string_view part = t.substr(0, slash);
+          t = slash == std::string_view::npos ? std::string_view() : t.substr(slash + 1);
+          if (part.empty()) continue;
+          long long idx = 0;
+          const auto r = std::from_chars(part.data(), part.data() + part.size(), idx);
+          if (r.ec != std::errc() || r.ptr != part.data() + part.size() || idx == 0)
+            mesh_fail(where + ": '" + std::string(part) + "' is not a valid " + kinds[k].name +
+                      " index (1-based, or negative from the end)");
+          if (idx < 0 && -idx > kinds[k].count)
+            mesh_fail(where + ": " + kinds[k].name + " index " + std::string(part) +
+                      " out of range (" + std::to_string(kinds[k].count) + " before it)");
+          if (idx > kinds[k].max_index) kinds[k].max_index = idx, kinds[k].max_line = line;
+        }
+      }
+      if (corners < 3) mesh_fail(where + ": a face needs at least 3 corners");
+    }
+  }
+  for (const Kind& k : kinds)
+    if (k.max_index > k.count)
+      mesh_fail(file + " " + line_at(k.max_line) + ": " + k.name + " index " +
+                std::to_string(k.max_index) + " out of range (" + std::to_string(k.count) +
+                " in the file)");
+}
+
+// Opens MTL files next to the OBJ file, checks their numbers, and remembers which file each
+// material came from. A missing MTL file is refused (its materials would silently vanish).
+class MtlReader : public tinyobj::MaterialReader {
+ public:
+  MtlReader(std::filesystem::path dir, Budget& budget) : dir_(std::move(dir)), budget_(budget) {}
+  bool operator()(const std::string& name, std::vector<tinyobj::material_t>* materials,
+                  std::map<std::string, int>* map, std::string* warn, std::string* err) override {
+    const std::string text =
+        read_whole_file((dir_ / name).string(), budget_.max(), "MTL file '" + name + "' (mtllib)");
+    check_text(text, name, false);
+    std::istringstream in(text);
+    tinyobj::LoadMtl(map, materials, &in, warn, err);
+    files.resize(materials->size(), name);
+    return true;
+  }
+  std::vector<std::string> files;  // the MTL file of each material
+
+ private:
+  std::filesystem::path dir_;
+  Budget& budget_;
+};
+
+Material convert(const tinyobj::material_t& m, const std::string& file) {
+  Material out;
+  out.name = m.name;
+  const std::string what = "material '" + m.name + "' in " + file;
+  for (int c = 0; c < 3; ++c) {
+    const float kd = float(m.diffuse[c]), ke = float(m.emission[c]);
+    if (!(kd >= 0 && kd <= 1))
+      mesh_fail(what + ": Kd " + io::format_number(kd) + " is outside [0, 1]");
+    if (!(ke >= 0) || !std::isfinite(ke))
+      mesh_fail(what + ": Ke " + io::format_number(ke) + " must be a finite number >= 0");
+  }
+  out.albedo = {float(m.diffuse[0]), float(m.diffuse[1]), float(m.diffuse[2])};
+  out.emission = {float(m.emission[0]), float(m.emission[1]), float(m.emission[2])};
+  // map_Kd is ignored: the format gives OBJ meshes Kd and Ke only (docs/scene-3d.md).
+  return out;
+}
+
+struct Corner {
+  int v, vt, vn;
+  bool operator==(const Corner&) const = default;
+};
+struct CornerHash {
+  std::size_t operator()(const Corner& c) const {
+    return std::size_t(c.v) * 0x9E3779B97F4A7C15ull ^ std::size_t(c.vt) * 0xC2B2AE3D27D4EB4Full ^
+           std::size_t(c.vn);
+  }
+};
+
+}  // namespace
+
+MeshFile read_obj(const std::string& path, Budget& budget) {
+  const std::string name = std::filesystem::path(path).filename().string();
+  const std::string text = read_whole_file(path, budget.max(), "the file");
+  check_text(text, name, true);
+
+  tinyobj::attrib_t attrib;
+  std::vector<tinyobj::shape_t> shapes;
+  std::vector<tinyobj::material_t> materials;
+  std::string warn, err;
+  MtlReader mtl(std::filesystem::path(path).parent_path(), budget);
+  std::istringstream in(text);
+  if (!tinyobj::LoadObj(&attrib, &shapes, &materials, &warn, &err, &in, &mtl, true, false))
+    mesh_fail("invalid OBJ: " + err);
+
+  MeshFile out;
+  for (std::size_t i = 0; i < materials.size(); ++i)
+    out.materials.push_back(convert(materials[i], mtl.files[i]));
+  int default_material = -1;
+
+  std::uint64_t corners = 0;
+  bool any_normals = false, any_uvs = false;
+  for (const auto& s : shapes) {
+    corners += s.mesh.indices.size();
+    for (const auto& idx : s.mesh.indices) {
+      any_normals |= idx.normal_index >= 0;
+      any_uvs |= idx.texcoord_index >= 0;
+    }
+  }
+  budget.take(mesh_bytes(corners, any_normals, any_uvs, corners / 3),
+              std::to_string(corners / 3) + " triangles");
+  if (corners > UINT32_MAX) mesh_fail("more than 2^32 vertices");
+
+  TriangleMesh& mesh = out.mesh;
+  std::unordered_map<Corner, std::uint32_t, CornerHash> unique;
+  const std::size_t nv = attrib.vertices.size() / 3, nn = attrib.normals.size() / 3,
+                    nt = attrib.texcoords.size() / 2;
+  auto position = [&](int v) {
+    return Vec3{attrib.vertices[3 * v], attrib.vertices[3 * v + 1], attrib.vertices[3 * v + 2]};
+  };
+  for (const auto& s : shapes) {
+    const auto& ids = s.mesh.indices;
+    for (std::size_t f = 0; f + 2 < ids.size(); f += 3) {
+      std::array<std::uint32_t, 3> tri{};
+      Corner c[3];
+      for (int k = 0; k < 3; ++k) {
+        const auto& idx = ids[f + k];
+        // check_text has checked the ranges; this guards against a reading that differs.
+        if (idx.vertex_index < 0 || std::size_t(idx.vertex_index) >= nv ||
+            std::size_t(idx.normal_index + 1) > nn || std::size_t(idx.texcoord_index + 1) > nt)
+          mesh_fail("shape '" + s.name + "': an index is out of range");
+        c[k] = {idx.vertex_index, idx.texcoord_index, idx.normal_index};
+      }
+      const Vec3 p[3] = {position(c[0].v), position(c[1].v), position(c[2].v)};
+      for (int k = 0; k < 3; ++k) {
+        Vec3 n{0, 0, 1};
+        bool shared = true;
+        if (any_normals) {
+          if (c[k].vn >= 0) {
+            const float* a = &attrib.normals[3 * c[k].vn];
+            n = Vec3{a[0], a[1], a[2]};
+          }
+          const float len = length(n);
+          // A corner without a usable normal gets its triangle's, on a vertex of its own.
+          shared = c[k].vn >= 0 && len > 0 && std::isfinite(len);
+          n = shared ? n / len : flat_normal(p[0], p[1], p[2]);
+        }
+        if (shared) {
+          const auto [it, added] = unique.try_emplace(c[k], std::uint32_t(mesh.positions.size()));
+          tri[k] = it->second;
+          if (!added) continue;
+        } else {
+          tri[k] = std::uint32_t(mesh.positions.size());
+        }
+        mesh.positions.push_back(p[k]);
+        if (any_normals) mesh.normals.push_back(n);
+        if (any_uvs) {
+          const float* t = c[k].vt >= 0 ? &attrib.texcoords[2 * c[k].vt] : nullptr;
+          // OBJ's v runs up the image, the Texture convention's (glTF's) down.
+          mesh.uvs.push_back(t ? std::array<float, 2>{t[0], 1 - t[1]} : std::array<float, 2>{0, 0});
+        }
+      }
+      int m = s.mesh.material_ids[f / 3];
+      if (m < 0 || std::size_t(m) >= out.materials.size()) {
+        // Faces without usemtl (or naming no material of the MTL files): albedo 0.8, no emission.
+        if (default_material < 0) {
+          default_material = int(out.materials.size());
+          out.materials.push_back(Material{.name = "default"});
+        }
+        m = default_material;
+      }
+      mesh.triangles.push_back(tri);
+      mesh.materials.push_back(std::uint32_t(m));
+    }
+  }
+  if (out.materials.empty()) out.materials.push_back(Material{.name = "default"});
+  return out;
+}
+
+}  // namespace penumbra::spaceland::mesh_detail

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "core/math.hpp"
 #include "spaceland/camera.hpp"
@@ -223,7 +224,7 @@ LightSample Lights::sample_sun(std::array<float, 2> u) const {
   const double phi = kTwoPi * u[1];
   ls.direction = normalize(sun_dir_ * float(cos_t) + sun_t_ * float(sin_t * std::cos(phi)) +
                            sun_b_ * float(sin_t * std::sin(phi)));
-  ls.distance = 3.0e38f;
+  ls.distance = std::numeric_limits<float>::infinity();  // shadow rays go to the sky
   ls.radiance = sun_radiance_;
   ls.pdf = sun_pdf_;
   return ls;

@@ -106,7 +106,8 @@ TEST_F(Cli3d, OptionsOfTheOtherWorldAreRefused) {
 TEST_F(Cli3d, BadDocumentsNameTheFileAndThePathAndWriteNothing) {
   const std::string bad = tmp_.write("bad.json", R"({
     "penumbra": 1, "dimensions": 3,
-    "camera": { "position": [0, 1, 3], "look_at": [0, 0, 0], "width": 16, "height": 12 },
+    "camera": { "position": [0, 1, 3], "look_at": [0, 0, 0], "fov_y": 50, "width": 16,
+                "height": 12 },
     "objects": [ { "type": "sphere", "center": [0, 0, 0], "radius": -1 } ]
   })");
   auto r = run({"render", bad, "-o", out("x.png")});

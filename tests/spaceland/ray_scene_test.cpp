@@ -308,13 +308,15 @@ TEST(RayScene, StreamsEqualSingleRays) {
   const std::vector<Ray> rays = random_rays(3000, 4);
   std::vector<Hit> hits(rays.size());
   std::vector<std::uint8_t> found(rays.size()), blocked(rays.size());
-  rs.intersect(rays, hits, found);
   rs.occluded(rays, blocked);
-  for (std::size_t i = 0; i < rays.size(); ++i) {
-    Hit h;
-    ASSERT_EQ(bool(found[i]), rs.intersect(rays[i], h));
-    ASSERT_EQ(bool(blocked[i]), rs.occluded(rays[i]));
-    if (found[i]) expect_same(hits[i], h);
+  for (bool coherent : {false, true}) {
+    rs.intersect(rays, hits, found, coherent);
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+      Hit h;
+      ASSERT_EQ(bool(found[i]), rs.intersect(rays[i], h));
+      ASSERT_EQ(bool(blocked[i]), rs.occluded(rays[i]));
+      if (found[i]) expect_same(hits[i], h);
+    }
   }
 }
 

@@ -496,6 +496,31 @@ TEST(RaySceneSpawn, ShadowRaysReachTheLightButNotThroughBlockers) {
   }
 }
 
+// Light points seen edge-on (cosine down to 1e-3) do not shadow themselves, with or without the
+// light's normal.
+TEST(RaySceneSpawn, GrazingShadowRaysToALight) {
+  for (float size : {0.01f, 1.0f, 555.0f}) {
+    Scene s;
+    s.meshes.push_back(
+        quad(Vec3{0, 1, 0} * size, Vec3{0.3f, 0, 0} * size, Vec3{0, 0, 0.3f} * size));
+    s.meshes.push_back(quad(Vec3{2, 0, 0} * size, Vec3{0, 0, 1} * size, Vec3{0, 2, 0} * size));
+    const RayScene rs = build_ok(s);
+    std::mt19937 rng(10);
+    std::uniform_real_distribution<float> u(0.001f, 0.299f);
+    for (float drop : {1e-3f, 1e-2f, 0.1f}) {
+      int blocked = 0;
+      for (int i = 0; i < 2000; ++i) {
+        // A point on the wall at x = 2, a little below the light's plane.
+        const Vec3 p = Vec3{2, 1 - drop, u(rng)} * size;
+        const Vec3 target = Vec3{u(rng), 1, u(rng)} * size;
+        blocked += rs.occluded(rs.shadow_ray(p, {-1, 0, 0}, target, {0, 1, 0}));
+        blocked += rs.occluded(rs.shadow_ray(p, {-1, 0, 0}, target));
+      }
+      EXPECT_EQ(blocked, 0) << "size " << size << " drop " << drop;
+    }
+  }
+}
+
 TEST(RayScene, EstimateIsAtLeastTheMeasuredBytes) {
   for (int n : {1, 30, 300}) {
     Scene s;

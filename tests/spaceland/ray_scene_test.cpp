@@ -308,13 +308,15 @@ TEST(RayScene, StreamsEqualSingleRays) {
   const std::vector<Ray> rays = random_rays(3000, 4);
   std::vector<Hit> hits(rays.size());
   std::vector<std::uint8_t> found(rays.size()), blocked(rays.size());
-  rs.intersect(rays, hits, found);
   rs.occluded(rays, blocked);
-  for (std::size_t i = 0; i < rays.size(); ++i) {
-    Hit h;
-    ASSERT_EQ(bool(found[i]), rs.intersect(rays[i], h));
-    ASSERT_EQ(bool(blocked[i]), rs.occluded(rays[i]));
-    if (found[i]) expect_same(hits[i], h);
+  for (bool coherent : {false, true}) {
+    rs.intersect(rays, hits, found, coherent);
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+      Hit h;
+      ASSERT_EQ(bool(found[i]), rs.intersect(rays[i], h));
+      ASSERT_EQ(bool(blocked[i]), rs.occluded(rays[i]));
+      if (found[i]) expect_same(hits[i], h);
+    }
   }
 }
 
@@ -491,6 +493,31 @@ TEST(RaySceneSpawn, ShadowRaysReachTheLightButNotThroughBlockers) {
     EXPECT_TRUE(rs2.occluded(rs2.shadow_ray(q, {0, 1, 0}, target)));
     EXPECT_TRUE(rs2.occluded(rs2.shadow_ray(q, {0, 1, 0}, target, {0, -1, 0})));
     EXPECT_FALSE(rs.occluded(rs.shadow_ray(q, {0, 1, 0}, target)));
+  }
+}
+
+// Light points seen edge-on (cosine down to 1e-3) do not shadow themselves, with or without the
+// light's normal.
+TEST(RaySceneSpawn, GrazingShadowRaysToALight) {
+  for (float size : {0.01f, 1.0f, 555.0f}) {
+    Scene s;
+    s.meshes.push_back(
+        quad(Vec3{0, 1, 0} * size, Vec3{0.3f, 0, 0} * size, Vec3{0, 0, 0.3f} * size));
+    s.meshes.push_back(quad(Vec3{2, 0, 0} * size, Vec3{0, 0, 1} * size, Vec3{0, 2, 0} * size));
+    const RayScene rs = build_ok(s);
+    std::mt19937 rng(10);
+    std::uniform_real_distribution<float> u(0.001f, 0.299f);
+    for (float drop : {1e-3f, 1e-2f, 0.1f}) {
+      int blocked = 0;
+      for (int i = 0; i < 2000; ++i) {
+        // A point on the wall at x = 2, a little below the light's plane.
+        const Vec3 p = Vec3{2, 1 - drop, u(rng)} * size;
+        const Vec3 target = Vec3{u(rng), 1, u(rng)} * size;
+        blocked += rs.occluded(rs.shadow_ray(p, {-1, 0, 0}, target, {0, 1, 0}));
+        blocked += rs.occluded(rs.shadow_ray(p, {-1, 0, 0}, target));
+      }
+      EXPECT_EQ(blocked, 0) << "size " << size << " drop " << drop;
+    }
   }
 }
 

@@ -333,7 +333,10 @@ std::string camera_doc(const std::string& camera) {
 std::string object_doc(const std::string& object) {
   return objects_doc(R"({"type": "sphere", "center": [0, 0, 0], "radius": 1}, )" + object);
 }
-constexpr const char* kBox = R"("type": "box", "center": [0, 0, 0], "size": [1, 1, 1])";
+// A document whose second object is a box with `extra` members.
+std::string box_doc(const std::string& extra) {
+  return object_doc(R"({"type": "box", "center": [0, 0, 0], "size": [1, 1, 1])" + extra + "}");
+}
 
 std::vector<ErrorCase> error_cases() {
   const std::string cam = R"("position": [0, 0, 5], "look_at": [0, 0, 0], "width": 8, "height": 6)";
@@ -409,13 +412,11 @@ std::vector<ErrorCase> error_cases() {
        "materials.w.color", "unknown key"},
       {"MaterialNotObject", doc(R"(, "materials": {"w": [1, 1, 1]})"), "materials.w",
        "material object"},
-      {"UnknownMaterialName", object_doc(std::string("{") + kBox + R"(, "material": "whit"})"),
-       "objects[1].material", "unknown material \"whit\", expected one of: m"},
-      {"InlineMaterialAlbedoNegative",
-       object_doc(std::string("{") + kBox + R"(, "material": {"albedo": [-1, 0, 0]}})"),
+      {"UnknownMaterialName", box_doc(R"(, "material": "whit")"), "objects[1].material",
+       "unknown material \"whit\", expected one of: m"},
+      {"InlineMaterialAlbedoNegative", box_doc(R"(, "material": {"albedo": [-1, 0, 0]})"),
        "objects[1].material.albedo[0]", "found -1"},
-      {"MaterialNumber", object_doc(std::string("{") + kBox + R"(, "material": 3})"),
-       "objects[1].material", "material name"},
+      {"MaterialNumber", box_doc(R"(, "material": 3)"), "objects[1].material", "material name"},
       {"ObjectsNotArray", doc(R"(, "objects": {})"), "objects", "array"},
       {"ObjectNotObject", object_doc("3"), "objects[1]", "object"},
       {"MissingType", object_doc(R"({"center": [0, 0, 0], "radius": 1})"), "objects[1].type",
@@ -433,8 +434,7 @@ std::vector<ErrorCase> error_cases() {
        "objects[1].size[1]", "found -1"},
       {"BoxSizeTwoNumbers", object_doc(R"({"type": "box", "center": [0, 0, 0], "size": [1, 1]})"),
        "objects[1].size", "3 numbers > 0"},
-      {"BoxRotateString", object_doc(std::string("{") + kBox + R"(, "rotate": "90"})"),
-       "objects[1].rotate", "string"},
+      {"BoxRotateString", box_doc(R"(, "rotate": "90")"), "objects[1].rotate", "string"},
       {"QuadParallel",
        object_doc(R"({"type": "quad", "corner": [0, 0, 0], "u": [1, 2, 3], "v": [-2, -4, -6]})"),
        "objects[1].v", "not parallel"},
@@ -456,25 +456,18 @@ std::vector<ErrorCase> error_cases() {
        "objects[1].file", ".obj, .gltf or .glb"},
       {"MeshFileAbsent", object_doc(R"({"type": "mesh", "file": "no_such_mesh.obj"})"),
        "objects[1].file", "no_such_mesh.obj"},
-      {"TransformNotObject", object_doc(std::string("{") + kBox + R"(, "transform": [1]})"),
-       "objects[1].transform", "object"},
-      {"TransformUnknownKey",
-       object_doc(std::string("{") + kBox + R"(, "transform": {"scal": 2}})"),
-       "objects[1].transform.scal", "unknown key"},
-      {"TransformScaleZero",
-       object_doc(std::string("{") + kBox + R"(, "transform": {"scale": 0}})"),
+      {"TransformNotObject", box_doc(R"(, "transform": [1])"), "objects[1].transform", "object"},
+      {"TransformUnknownKey", box_doc(R"(, "transform": {"scal": 2})"), "objects[1].transform.scal",
+       "unknown key"},
+      {"TransformScaleZero", box_doc(R"(, "transform": {"scale": 0})"),
        "objects[1].transform.scale", "found 0"},
-      {"TransformScaleNegativeComponent",
-       object_doc(std::string("{") + kBox + R"(, "transform": {"scale": [1, 1, -2]}})"),
+      {"TransformScaleNegativeComponent", box_doc(R"(, "transform": {"scale": [1, 1, -2]})"),
        "objects[1].transform.scale[2]", "found -2"},
-      {"TransformScaleTwoNumbers",
-       object_doc(std::string("{") + kBox + R"(, "transform": {"scale": [1, 2]}})"),
+      {"TransformScaleTwoNumbers", box_doc(R"(, "transform": {"scale": [1, 2]})"),
        "objects[1].transform.scale", "a number > 0 or an array of 3 numbers > 0"},
-      {"TransformRotateTwoNumbers",
-       object_doc(std::string("{") + kBox + R"(, "transform": {"rotate": [1, 2]}})"),
+      {"TransformRotateTwoNumbers", box_doc(R"(, "transform": {"rotate": [1, 2]})"),
        "objects[1].transform.rotate", "3 numbers"},
-      {"TransformTranslateNull",
-       object_doc(std::string("{") + kBox + R"(, "transform": {"translate": [1, null, 2]}})"),
+      {"TransformTranslateNull", box_doc(R"(, "transform": {"translate": [1, null, 2]})"),
        "objects[1].transform.translate[1]", "null"},
       {"MediaNotArray", doc(R"(, "media": {})"), "media", "array"},
       {"MediumUnknownType", doc(R"(, "media": [{"type": "sphere"}])"), "media[0].type",

@@ -113,6 +113,47 @@ std::int32_t as_int(float f) {
   return std::bit_cast<std::int32_t>(f);
 }
 
+// Hits are refined in double from the primitive Embree found, so that single rays and streams
+// (whose SIMD intersectors round differently) give identical answers, and analytic shapes their
+// exact distance.
+struct D3 {
+  double x, y, z;
+};
+D3 d3(Vec3 a) {
+  return {a.x, a.y, a.z};
+}
+D3 operator-(D3 a, D3 b) {
+  return {a.x - b.x, a.y - b.y, a.z - b.z};
+}
+D3 operator+(D3 a, D3 b) {
+  return {a.x + b.x, a.y + b.y, a.z + b.z};
+}
+D3 operator*(double s, D3 a) {
+  return {s * a.x, s * a.y, s * a.z};
+}
+double dot(D3 a, D3 b) {
+  return a.x * b.x + a.y * b.y + a.z * b.z;
+}
+D3 cross(D3 a, D3 b) {
+  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+Vec3 f3(D3 a) {
+  return {float(a.x), float(a.y), float(a.z)};
+}
+
+// Möller-Trumbore in double: t and the barycentrics of p1 and p2; false where the ray is
+// parallel to the triangle (Embree's values are kept then).
+bool refine_triangle(D3 o, D3 d, D3 p0, D3 p1, D3 p2, double& t, double& b1, double& b2) {
+  const D3 e1 = p1 - p0, e2 = p2 - p0, pv = cross(d, e2);
+  const double det = dot(e1, pv);
+  if (det == 0 || !std::isfinite(det)) return false;
+  const D3 tv = o - p0, qv = cross(tv, e1);
+  b1 = dot(tv, pv) / det;
+  b2 = dot(d, qv) / det;
+  t = dot(e2, qv) / det;
+  return true;
+}
+
 RTCRayHit to_embree(const Ray& r) {
   RTCRayHit rh;
   rh.ray.org_x = r.origin.x;
@@ -133,9 +174,11 @@ RTCRayHit to_embree(const Ray& r) {
   return rh;
 }
 
-// Measured with BM_RaysBytes (bench/rays_bench.cpp) and rounded up: BVH bytes per triangle and
-// per point (sphere or disk), on top of Embree's copies of the vertices and indices.
-constexpr std::uint64_t kBytesPerTriangle = 160, kBytesPerPoint = 160;
+// BVH bytes per triangle on top of Embree's copies of the vertices and indices, and all bytes per
+// point (sphere or disk), rounded up from bytes() (2 cores): the bunny takes 90 bytes a triangle
+// with the copies, 90k scattered triangles 125 (test EstimateIsAtLeastTheMeasuredBytes), 10k
+// spheres 43 a sphere (BM_RaysBuild's bytes/prim).
+constexpr std::uint64_t kBytesPerTriangle = 128, kBytesPerPoint = 96;
 
 Error invalid(const std::string& what) {
   return Error{"ray scene: " + what};
@@ -218,8 +261,9 @@ Status RayScene::Impl::build(const Scene& scene, RTCDevice dev) {
   Impl& impl = *this;
   impl.scene = rtcNewScene(dev);
   if (!impl.scene) return Error{};
-  // Static scenes: the best BVH pays for its build time (docs/PERFORMANCE.md); ROBUST for
-  // watertight edges shared between triangles.
+  // ROBUST (conservative box tests, watertight edges) costs about 15 % of the ray rate on the
+  // bunny, a price a reference renderer pays. With it Embree builds HIGH as fast as MEDIUM
+  // (32 ms for the bunny's 70k triangles) and traces alike; without it HIGH took 155 ms.
   rtcSetSceneFlags(impl.scene, RTC_SCENE_FLAG_ROBUST);
   rtcSetSceneBuildQuality(impl.scene, RTC_BUILD_QUALITY_HIGH);
   for (std::size_t m = 0; m < scene.meshes.size(); ++m) {
@@ -326,8 +370,8 @@ Expected<RayScene> RayScene::build(const Scene& scene, std::uint64_t max_bytes) 
 }
 
 std::uint64_t RayScene::estimate_bytes(const Scene& scene) {
-  // Measured (bench/rays_bench.cpp, BM_RaysBytes): Embree's copies (16 bytes a vertex, 12 a
-  // triangle) plus a HIGH quality BVH with spatial splits, with a margin; the points likewise.
+  // Embree's copies (16 bytes a vertex, 12 a triangle), the BVH, and a megabyte for the scene
+  // and the allocator's blocks.
   std::uint64_t vertices = 0, triangles = 0;
   for (const TriangleMesh& m : scene.meshes) {
     vertices += m.positions.size();
@@ -345,31 +389,37 @@ RayScene::~RayScene() = default;
 
 void RayScene::Impl::fill(const RTCRayHit& rh, const Ray& ray, Hit& hit) const {
   const GeomRef& g = geoms[rh.hit.geomID];
-  hit.t = rh.ray.tfar;
+  const D3 o = d3(ray.origin), dir = d3(ray.direction);
+  double t = rh.ray.tfar;
   hit.kind = g.kind;
   hit.u = hit.v = 0;
   if (g.kind == ShapeKind::triangle) {
     const MeshData& m = meshes[g.index];
     const std::uint32_t prim = rh.hit.primID;
     const std::uint32_t* tri = m.triangles + 3 * std::size_t(prim);
-    const float b1 = rh.hit.u, b2 = rh.hit.v, b0 = 1 - b1 - b2;
     const Vec3 p0 = vertex(m.positions, tri[0]), p1 = vertex(m.positions, tri[1]),
                p2 = vertex(m.positions, tri[2]);
+    double b1 = rh.hit.u, b2 = rh.hit.v;
+    refine_triangle(o, dir, d3(p0), d3(p1), d3(p2), t, b1, b2);
+    const double b0 = 1 - b1 - b2;
+    hit.t = float(t);
     // From the barycentrics: the error is relative to the vertices, not to the ray's length.
-    hit.position = b0 * p0 + b1 * p1 + b2 * p2;
-    Vec3 n = cross(p1 - p0, p2 - p0);
+    hit.position = f3(b0 * d3(p0) + b1 * d3(p1) + b2 * d3(p2));
+    // cross(p1 - p0, p2 - p0), the orientation Embree's Ng has too (its u, v are b1, b2).
+    const Vec3 n = cross(p1 - p0, p2 - p0);
     const float len = length(n);
     hit.geometric_normal = len > 0 ? n / len : Vec3{0, 1, 0};
     hit.shading_normal = hit.geometric_normal;
+    const float c0 = float(b0), c1 = float(b1), c2 = float(b2);
     if (!m.normals.empty()) {
-      const Vec3 s = b0 * m.normals[tri[0]] + b1 * m.normals[tri[1]] + b2 * m.normals[tri[2]];
+      const Vec3 s = c0 * m.normals[tri[0]] + c1 * m.normals[tri[1]] + c2 * m.normals[tri[2]];
       const float sl = length(s);
       if (sl > 0) hit.shading_normal = s / sl;
     }
     if (!m.uvs.empty()) {
       const auto &t0 = m.uvs[tri[0]], &t1 = m.uvs[tri[1]], &t2 = m.uvs[tri[2]];
-      hit.u = b0 * t0[0] + b1 * t1[0] + b2 * t2[0];
-      hit.v = b0 * t0[1] + b1 * t1[1] + b2 * t2[1];
+      hit.u = c0 * t0[0] + c1 * t1[0] + c2 * t2[0];
+      hit.v = c0 * t0[1] + c1 * t1[1] + c2 * t2[1];
     }
     hit.material = m.materials[prim];
     hit.object = m.object;
@@ -377,24 +427,36 @@ void RayScene::Impl::fill(const RTCRayHit& rh, const Ray& ray, Hit& hit) const {
     hit.primitive = prim;
     return;
   }
-  const Vec3 p = ray.origin + hit.t * ray.direction;
   hit.shape = g.index + rh.hit.primID;
   hit.primitive = 0;
   if (g.kind == ShapeKind::sphere) {
     const Sphere& s = spheres[hit.shape];
-    const Vec3 d = p - s.center;
-    const float len = length(d);
-    hit.geometric_normal = len > 0 ? d / len : Vec3{0, 1, 0};
-    hit.position = s.center + s.radius * hit.geometric_normal;
+    const D3 c = d3(s.center), oc = o - c;
+    // The root of |o + t d - c| = r nearest Embree's (front or back surface).
+    const double a = dot(dir, dir), b = dot(oc, dir),
+                 disc = b * b - a * (dot(oc, oc) - double(s.radius) * s.radius);
+    if (disc >= 0 && a > 0) {
+      const double q = std::sqrt(disc), t0 = (-b - q) / a, t1 = (-b + q) / a;
+      t = std::abs(t0 - t) <= std::abs(t1 - t) ? t0 : t1;
+    }
+    const D3 d = (o + t * dir) - c;
+    const double len = std::sqrt(dot(d, d));
+    hit.geometric_normal = len > 0 ? f3((1 / len) * d) : Vec3{0, 1, 0};
+    hit.position = f3(c + (s.radius / len) * d);
     hit.material = s.material;
     hit.object = s.object;
   } else {
-    const Disk& d = disks[hit.shape];
-    hit.geometric_normal = d.normal;
-    hit.position = p - dot(p - d.center, d.normal) * d.normal;  // onto the disk's plane
-    hit.material = d.material;
-    hit.object = d.object;
+    const Disk& dk = disks[hit.shape];
+    const D3 n = d3(dk.normal), c = d3(dk.center);
+    const double dn = dot(dir, n);
+    if (dn != 0) t = dot(c - o, n) / dn;
+    const D3 p = o + t * dir;
+    hit.geometric_normal = dk.normal;
+    hit.position = f3(p - dot(p - c, n) * n);  // onto the disk's plane
+    hit.material = dk.material;
+    hit.object = dk.object;
   }
+  hit.t = float(t);
   hit.shading_normal = hit.geometric_normal;
 }
 
@@ -416,14 +478,34 @@ bool RayScene::occluded(const Ray& ray) const {
   return rh.ray.tfar == -std::numeric_limits<float>::infinity();  // Embree's mark of a hit
 }
 
-// Loops over single rays: on this machine Embree's streams (rtcIntersect1M) were not faster
-// for coherent primary rays (bench/rays_bench.cpp, BM_RaysPrimaryStream), and one code path keeps
-// stream and single results identical.
+// Coherent rays: Embree's stream interface in chunks (converted on the stack), 1.8 times the
+// single-ray rate for primary rays on the bunny (BM_RaysPrimaryStream) but 0.6 times for
+// scattered rays (BM_RaysSecondaryStream), hence the loop for those. The hits are refined in
+// double as single rays are, so both give the same answers.
 void RayScene::intersect(std::span<const Ray> rays, std::span<Hit> hits,
-                         std::span<std::uint8_t> found) const {
-  for (std::size_t i = 0; i < rays.size(); ++i) found[i] = intersect(rays[i], hits[i]);
+                         std::span<std::uint8_t> found, bool coherent) const {
+  if (!coherent) {
+    for (std::size_t i = 0; i < rays.size(); ++i) found[i] = intersect(rays[i], hits[i]);
+    return;
+  }
+  constexpr std::size_t kChunk = 256;
+  RTCRayHit rh[kChunk];
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+  for (std::size_t b = 0; b < rays.size(); b += kChunk) {
+    const std::size_t n = std::min(kChunk, rays.size() - b);
+    for (std::size_t i = 0; i < n; ++i) rh[i] = to_embree(rays[b + i]);
+    rtcIntersect1M(impl_->scene, &ctx, rh, unsigned(n), sizeof(RTCRayHit));
+    for (std::size_t i = 0; i < n; ++i) {
+      found[b + i] = rh[i].hit.geomID != RTC_INVALID_GEOMETRY_ID;
+      if (found[b + i]) impl_->fill(rh[i], rays[b + i], hits[b + i]);
+    }
+  }
 }
 
+// A loop: rtcOccluded1M was slower for shadow rays towards a light (5.4 against 6.4 million
+// rays/s on the bunny, 3.7 against 4.0 on the spheres, one core).
 void RayScene::occluded(std::span<const Ray> rays, std::span<std::uint8_t> blocked) const {
   for (std::size_t i = 0; i < rays.size(); ++i) blocked[i] = occluded(rays[i]);
 }

@@ -52,9 +52,11 @@ class RayScene {
   bool intersect(const Ray& ray, Hit& hit) const;
   // Any hit in (tmin, tmax): a shadow ray.
   bool occluded(const Ray& ray) const;
-  // Many rays at once (Embree's stream interface): hits[i] is filled where found[i] is 1.
-  void intersect(std::span<const Ray> rays, std::span<Hit> hits,
-                 std::span<std::uint8_t> found) const;
+  // Many rays at once: hits[i] is filled where found[i] is 1. `coherent` (rays from one point
+  // through neighbouring pixels, in order) uses Embree's stream interface, faster for those and
+  // slower for scattered rays; the answers are the same either way.
+  void intersect(std::span<const Ray> rays, std::span<Hit> hits, std::span<std::uint8_t> found,
+                 bool coherent = false) const;
   void occluded(std::span<const Ray> rays, std::span<std::uint8_t> blocked) const;
 
   // Where to start a ray leaving a surface at `p` with geometric normal `n` towards `direction`:

@@ -137,6 +137,16 @@ void check_texture(const std::string& file, const std::string& path, const Textu
     check_float(file, item(path + ".rgb", i), t.rgb[i], Range::unit);
 }
 
+// What spheres and disks share: centre, radius, material and object.
+template <class Shape>
+void check_analytic(const std::string& file, const std::string& path, const Shape& shape,
+                    const Scene& s) {
+  check_vec3(file, path + ".center", shape.center);
+  check_float(file, path + ".radius", shape.radius, Range::positive);
+  check_material_index(file, path + ".material", shape.material, s);
+  check_object_index(file, path, shape.object, s);
+}
+
 }  // namespace
 
 std::string format_vec3(Vec3 v) {
@@ -206,22 +216,11 @@ void check_scene_or_throw(const Scene& s) {
     check_texture(file, item("textures", i), s.textures[i]);
   for (std::size_t i = 0; i < s.meshes.size(); ++i)
     check_mesh(file, item("meshes", i), s.meshes[i], s);
-  for (std::size_t i = 0; i < s.spheres.size(); ++i) {
-    const Sphere& sp = s.spheres[i];
-    const std::string path = item("spheres", i);
-    check_vec3(file, path + ".center", sp.center);
-    check_float(file, path + ".radius", sp.radius, Range::positive);
-    check_material_index(file, path + ".material", sp.material, s);
-    check_object_index(file, path, sp.object, s);
-  }
+  for (std::size_t i = 0; i < s.spheres.size(); ++i)
+    check_analytic(file, item("spheres", i), s.spheres[i], s);
   for (std::size_t i = 0; i < s.disks.size(); ++i) {
-    const Disk& d = s.disks[i];
-    const std::string path = item("disks", i);
-    check_vec3(file, path + ".center", d.center);
-    check_unit(file, path + ".normal", d.normal);
-    check_float(file, path + ".radius", d.radius, Range::positive);
-    check_material_index(file, path + ".material", d.material, s);
-    check_object_index(file, path, d.object, s);
+    check_analytic(file, item("disks", i), s.disks[i], s);
+    check_unit(file, item("disks", i) + ".normal", s.disks[i].normal);
   }
   for (std::size_t i = 0; i < s.media.size(); ++i) {
     const Medium& m = s.media[i];

@@ -386,6 +386,31 @@ TEST(MeshFileGltf, RefusesIndicesOutOfRangeAndBadAccessors) {
       << msg;
 }
 
+TEST(MeshFileGltf, RefusesSparseAccessorsAndMissingImages) {
+  Dir d;
+  json j = gltf(kTriangle);
+  j["accessors"][0]["sparse"] = {{"count", 1},
+                                 {"indices", {{"bufferView", 0}, {"componentType", 5125}}},
+                                 {"values", {{"bufferView", 0}}}};
+  EXPECT_EQ(refusal(d.write("s.gltf", j.dump())),
+            prefix("s.gltf") +
+                "accessors[0] (POSITION of meshes[0].primitives[0]): sparse "
+                "accessors are not supported");
+  // A textured material whose image file is not there.
+  j = gltf({0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 1});
+  j["accessors"][0]["count"] = 3;
+  j["bufferViews"].push_back({{"buffer", 0}, {"byteOffset", 36}, {"byteLength", 24}});
+  j["accessors"].push_back(
+      {{"bufferView", 1}, {"componentType", 5126}, {"count", 3}, {"type", "VEC2"}});
+  j["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_0"] = 1;
+  j["meshes"][0]["primitives"][0]["material"] = 0;
+  j["materials"] = {{{"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}}}}}}};
+  j["textures"] = {{{"source", 0}}};
+  j["images"] = {{{"uri", "missing.png"}}};
+  const std::string msg = refusal(d.write("t.gltf", j.dump()));
+  EXPECT_EQ(msg, prefix("t.gltf") + "images[0]: no image data ('missing.png' could not be read)");
+}
+
 TEST(MeshFileGltf, MaterialsAndMixedNormals) {
   Dir d;
   // Two primitives on the same positions: the first with normals (all -z... scaled), the second

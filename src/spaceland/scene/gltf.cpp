@@ -290,6 +290,8 @@ class Reader {
     std::vector<Plan> plans;
     for (const Instance& inst : instances_) {
       const auto& mesh = m_.meshes[std::size_t(inst.mesh)];
+      // Counted too: a small file can instance a mesh of many primitives many times.
+      budget_.take(mesh.primitives.size() * sizeof(Plan), "the primitives of the mesh instances");
       for (std::size_t p = 0; p < mesh.primitives.size(); ++p)
         plans.push_back(plan(inst, mesh.primitives[p],
                              at("meshes", std::size_t(inst.mesh)) + "." + at("primitives", p)));
@@ -462,7 +464,6 @@ class Reader {
     const std::size_t element = std::size_t(csize) * std::size_t(v.components);
     if (a.bufferView < 0) {
       // No buffer view and not sparse: every value is zero (glTF 2.0, 3.6.2.3).
-      budget_.take(0, where);
       return v;
     }
     if (std::size_t(a.bufferView) >= m_.bufferViews.size())

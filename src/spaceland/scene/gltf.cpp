@@ -15,6 +15,7 @@
 // - A primitive without material gets the glTF spec's default: baseColorFactor (1, 1, 1), no
 //   emission. Alpha of baseColorFactor and textures is ignored.
 // - Skins, morph targets, animations, cameras and lights are ignored: the rest pose is drawn.
+// - Property types are checked before tinygltf reads the file (it skips wrong ones silently).
 // - extensionsRequired may hold only KHR_materials_emissive_strength and KHR_mesh_quantization
 //   (accessors of every component type are read); Draco and meshopt data are refused even when
 //   the extension is only used, since the plain data would be missing.
@@ -43,9 +44,84 @@ std::string num(double v) {
   return io::format_number(v);
 }
 
-// glTF 1.0 files have objects where 2.0 has arrays; tinygltf's messages about them would not
-// say what is wrong.
-void check_version(const std::string& bytes, bool binary) {
+// Property names by JSON type, glTF 2.0's core (extensions' own properties are left alone).
+// clang-format off
+constexpr std::string_view kStrings[] = {"name", "uri", "mimeType", "version", "generator",
+    "copyright", "minVersion", "alphaMode"};
+constexpr std::string_view kIndices[] = {"index", "texCoord", "scene", "bufferView", "buffer",
+    "byteOffset", "byteLength", "byteStride", "count", "componentType", "mesh", "skin", "camera",
+    "material", "indices", "mode", "source", "sampler", "node", "input", "output", "magFilter",
+    "minFilter", "wrapS", "wrapT", "skeleton", "inverseBindMatrices"};
+constexpr std::string_view kNumbers[] = {"strength", "metallicFactor", "roughnessFactor",
+    "alphaCutoff"};
+constexpr std::string_view kObjects[] = {"asset", "pbrMetallicRoughness", "normalTexture",
+    "occlusionTexture", "emissiveTexture", "baseColorTexture", "metallicRoughnessTexture",
+    "attributes", "sparse", "values"};
+constexpr std::string_view kArrays[] = {"primitives", "children", "nodes", "meshes", "accessors",
+    "bufferViews", "buffers", "materials", "textures", "images", "samplers", "scenes", "skins",
+    "cameras", "animations", "matrix", "rotation", "translation", "weights", "baseColorFactor",
+    "emissiveFactor", "min", "max", "targets", "joints", "channels", "extensionsUsed",
+    "extensionsRequired"};
+// clang-format on
+
+template <std::size_t N>
+bool in(const std::string& key, const std::string_view (&keys)[N]) {
+  return std::find(std::begin(keys), std::end(keys), key) != std::end(keys);
+}
+
+bool is_index(const nlohmann::json& v) {
+  if (v.is_number_unsigned()) return true;
+  if (!v.is_number_float()) return false;
+  const double d = v.get<double>();
+  return d >= 0 && d == std::floor(d) && d < 4e9;
+}
+
+// The JSON types of glTF 2.0's core properties, checked everywhere in the document but inside
+// `extras` and extensions: tinygltf skips a property of the wrong type silently (a name of 42, an
+// array for pbrMetallicRoughness, an index of -1), so such a file would load as something else.
+// Draco-compressed primitives are refused here, extensionsRequired or not.
+void check_types(const nlohmann::json& doc) {
+  using json = nlohmann::json;
+  auto expect = [](const std::string& path, const char* what, const json& found) {
+    mesh_fail(path + ": expected " + what + ", found " + io::describe(found));
+  };
+  std::vector<std::pair<const json*, std::string>> stack{{&doc, ""}};
+  while (!stack.empty()) {
+    const auto [j, path] = stack.back();
+    stack.pop_back();
+    if (j->is_array())
+      for (std::size_t i = 0; i < j->size(); ++i)
+        stack.push_back({&(*j)[i], path + "[" + std::to_string(i) + "]"});
+    if (!j->is_object()) continue;
+    for (const auto& [key, v] : j->items()) {
+      const std::string p = path.empty() ? key : path + "." + key;
+      if (key == "extras") continue;
+      if (key == "extensions") {
+        if (!v.is_object()) expect(p, "an object", v);
+        for (const auto& [ext, e] : v.items()) {
+          if (!e.is_object()) expect(p + "." + ext, "an object", e);
+          if (ext == "KHR_draco_mesh_compression")
+            mesh_fail(path + ": Draco compression (KHR_draco_mesh_compression) is not supported");
+        }
+        continue;
+      }
+      if (in(key, kStrings) && !v.is_string()) expect(p, "a string", v);
+      // A sparse accessor's indices are an object.
+      const bool sparse_indices = key == "indices" && path.ends_with(".sparse");
+      if (in(key, kIndices) && !is_index(v) && !sparse_indices) expect(p, "an integer >= 0", v);
+      if (in(key, kNumbers) && !v.is_number()) expect(p, "a number", v);
+      // A node's scale is an array, a normal texture's a number.
+      if (key == "scale" && !v.is_number() && !v.is_array()) expect(p, "a number or an array", v);
+      if (in(key, kObjects) && !v.is_object()) expect(p, "an object", v);
+      if (in(key, kArrays) && !v.is_array()) expect(p, "an array", v);
+      stack.push_back({&v, p});
+    }
+  }
+}
+
+// Before tinygltf: the version (glTF 1.0 files have objects where 2.0 has arrays; tinygltf's
+// messages about them would not say what is wrong), the property types, the required extensions.
+void check_json(const std::string& bytes, bool binary) {
   std::string_view json_text = bytes;
   if (binary) {
     std::uint32_t header[5] = {};
@@ -66,6 +142,13 @@ void check_version(const std::string& bytes, bool binary) {
   const std::string version = v.is_string() ? v.get<std::string>() : v.dump();
   if (version.rfind("2.", 0) != 0)
     mesh_fail("glTF 2.0 is needed (this file is version " + version + ")");
+  if (j.contains("extensionsRequired"))
+    for (const auto& e : j["extensionsRequired"])
+      if (!e.is_string() ||
+          (e != "KHR_materials_emissive_strength" && e != "KHR_mesh_quantization"))
+        mesh_fail("extensionsRequired: " + (e.is_string() ? e.get<std::string>() : e.dump()) +
+                  " is not supported");
+  check_types(j);
 }
 
 // File access for tinygltf: no path expansion (the default runs wordexp), and every file it
@@ -203,11 +286,12 @@ class Reader {
   Reader(const tinygltf::Model& model, Budget& budget) : m_(model), budget_(budget) {}
 
   MeshFile read() {
-    check_extensions();
     walk_nodes();
     std::vector<Plan> plans;
     for (const Instance& inst : instances_) {
       const auto& mesh = m_.meshes[std::size_t(inst.mesh)];
+      // Counted too: a small file can instance a mesh of many primitives many times.
+      budget_.take(mesh.primitives.size() * sizeof(Plan), "the primitives of the mesh instances");
       for (std::size_t p = 0; p < mesh.primitives.size(); ++p)
         plans.push_back(plan(inst, mesh.primitives[p],
                              at("meshes", std::size_t(inst.mesh)) + "." + at("primitives", p)));
@@ -236,12 +320,6 @@ class Reader {
   }
 
  private:
-  void check_extensions() const {
-    for (const std::string& e : m_.extensionsRequired)
-      if (e != "KHR_materials_emissive_strength" && e != "KHR_mesh_quantization")
-        mesh_fail("extensionsRequired: " + e + " is not supported");
-  }
-
   // The node tree: children in range, one parent each, no cycle; then the scene's roots walked
   // without recursion, transforms composed down the tree.
   void walk_nodes() {
@@ -257,6 +335,20 @@ class Reader {
                     ": a node with two parents or in a cycle (the node hierarchy must be a tree)");
         parent[std::size_t(c)] = int(i);
       }
+    // Every node reachable from a parentless one; the others sit on a cycle.
+    std::vector<char> seen(n, 0);
+    std::vector<std::pair<int, Affine>> stack;
+    for (std::size_t i = 0; i < n; ++i)
+      if (parent[i] < 0) stack.push_back({int(i), Affine{}});
+    while (!stack.empty()) {
+      const int i = stack.back().first;
+      stack.pop_back();
+      seen[std::size_t(i)] = 1;
+      for (int c : m_.nodes[std::size_t(i)].children) stack.push_back({c, Affine{}});
+    }
+    for (std::size_t i = 0; i < n; ++i)
+      if (!seen[i])
+        mesh_fail(at("nodes", i) + ": the node hierarchy has a cycle (it must be a tree)");
     std::vector<int> roots;
     if (m_.scenes.empty()) {
       if (m_.defaultScene >= 0)
@@ -280,26 +372,14 @@ class Reader {
         roots.push_back(r);
       }
     }
-    // Every node reachable from a parentless one; the others sit on a cycle.
-    std::vector<char> seen(n, 0);
-    std::vector<std::pair<int, Affine>> stack;
-    for (std::size_t i = 0; i < n; ++i)
-      if (parent[i] < 0) stack.push_back({int(i), Affine{}});
-    while (!stack.empty()) {
-      const int i = stack.back().first;
-      stack.pop_back();
-      seen[std::size_t(i)] = 1;
-      for (int c : m_.nodes[std::size_t(i)].children) stack.push_back({c, Affine{}});
-    }
-    for (std::size_t i = 0; i < n; ++i)
-      if (!seen[i])
-        mesh_fail(at("nodes", i) + ": the node hierarchy has a cycle (it must be a tree)");
-    for (int r : roots) stack.push_back({r, Affine{}});
+    // Pushed in reverse, so that meshes come out in document order.
+    for (auto r = roots.rbegin(); r != roots.rend(); ++r) stack.push_back({*r, Affine{}});
     std::fill(seen.begin(), seen.end(), 0);
     while (!stack.empty()) {
       auto [i, up] = stack.back();
       stack.pop_back();
-      if (seen[std::size_t(i)]) mesh_fail(at("scenes", 0) + ".nodes: a node is listed twice");
+      if (seen[std::size_t(i)])
+        mesh_fail(at("nodes", std::size_t(i)) + ": listed twice in the scene's nodes");
       seen[std::size_t(i)] = 1;
       const auto& node = m_.nodes[std::size_t(i)];
       const Affine world = up * local(node, at("nodes", std::size_t(i)));
@@ -309,7 +389,8 @@ class Reader {
                     " does not exist (" + std::to_string(m_.meshes.size()) + " meshes)");
         instances_.push_back({node.mesh, world});
       }
-      for (int c : node.children) stack.push_back({c, world});
+      for (auto c = node.children.rbegin(); c != node.children.rend(); ++c)
+        stack.push_back({*c, world});
     }
   }
 
@@ -383,7 +464,6 @@ class Reader {
     const std::size_t element = std::size_t(csize) * std::size_t(v.components);
     if (a.bufferView < 0) {
       // No buffer view and not sparse: every value is zero (glTF 2.0, 3.6.2.3).
-      budget_.take(0, where);
       return v;
     }
     if (std::size_t(a.bufferView) >= m_.bufferViews.size())
@@ -686,7 +766,7 @@ class Reader {
 MeshFile read_gltf(const std::string& path, Budget& budget) {
   const std::string bytes = read_whole_file(path, budget.max(), "the file");
   const bool binary = bytes.size() >= 4 && bytes.compare(0, 4, "glTF") == 0;
-  check_version(bytes, binary);
+  check_json(bytes, binary);
   if (bytes.size() > UINT32_MAX) mesh_fail("files past 4 GiB are not supported (tinygltf)");
 
   tinygltf::TinyGLTF loader;

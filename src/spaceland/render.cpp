@@ -119,7 +119,8 @@ Expected<RenderResult> render(const Scene& scene, const RenderOptions& options) 
     result.options = options;
     Stopwatch total;
     Stopwatch stage;
-    Expected<RayScene> rays = RayScene::build(scene);
+    // Embree may not allocate past the limit (its estimate was checked above; this holds it).
+    Expected<RayScene> rays = RayScene::build(scene, options.max_memory);
     if (!rays) return rays.error();
     result.stages.push_back({"build BVH", stage.ms()});
     stage.restart();

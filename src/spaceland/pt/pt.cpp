@@ -81,11 +81,14 @@ Rgb scattering(const Vertex& v, Vec3 wi) {
   return c > 0 ? v.albedo * (c * kInvPi) : Rgb{};
 }
 
-// A shadow ray from the vertex along unit direction wi for `distance` (kInf: to the sky).
-Ray shadow(const Context& ctx, const Vertex& v, Vec3 wi, float distance, Vec3 target) {
+// A shadow ray from the vertex to a sampled emitter point, or to the sky for the sun; both ends
+// are kept off their surfaces.
+Ray shadow(const Context& ctx, const Vertex& v, const LightSample& ls) {
+  const Vec3 wi = ls.direction;
+  const float distance = ls.distance;
   if (!v.in_medium) {
     if (distance == kInf) return Ray{ctx.rays.spawn(v.p, v.ng, wi), wi, 0, kInf};
-    return ctx.rays.shadow_ray(v.p, v.ng, target);
+    return ctx.rays.shadow_ray(v.p, v.ng, ls.point, ls.normal);
   }
   const float eps = ctx.rays.epsilon();
   return Ray{v.p, wi, 0, distance == kInf ? kInf : distance - eps};
@@ -93,12 +96,11 @@ Ray shadow(const Context& ctx, const Vertex& v, Vec3 wi, float distance, Vec3 ta
 
 // Light from one sampled emitter point (or the sun) through the vertex, MIS-weighted against
 // the direction sampler.
-Rgb direct(const Context& ctx, const Vertex& v, const LightSample& ls, Vec3 target,
-           std::uint64_t& rays) {
+Rgb direct(const Context& ctx, const Vertex& v, const LightSample& ls, std::uint64_t& rays) {
   if (!(ls.pdf > 0) || is_black(ls.radiance)) return {};
   const Rgb f = scattering(v, ls.direction);
   if (is_black(f)) return {};
-  const Ray r = shadow(ctx, v, ls.direction, ls.distance, target);
+  const Ray r = shadow(ctx, v, ls);
   ++rays;
   if (ctx.rays.occluded(r)) return {};
   Rgb tr{1, 1, 1};
@@ -168,11 +170,11 @@ Rgb trace(const Context& ctx, std::size_t k, std::uint32_t pixel_seed, std::uint
     if (!ctx.lights.empty()) {
       const LightSample ls =
           ctx.lights.sample(v.p, point(scatters, kPick)[0], point(scatters, kLightPoint));
-      L += beta * direct(ctx, v, ls, ls.point, rays);
+      L += beta * direct(ctx, v, ls, rays);
     }
     if (ctx.lights.has_sun()) {
       const LightSample ls = ctx.lights.sample_sun(point(scatters, kSunPoint));
-      L += beta * direct(ctx, v, ls, Vec3{}, rays);
+      L += beta * direct(ctx, v, ls, rays);
     }
     // The next direction: cosine-weighted (albedo / pi x cos / pdf = albedo), or isotropic in
     // fog (its albedo is already in the free-flight weight).

@@ -81,16 +81,17 @@ std::string file_name(const std::string& path) {
 }
 
 void print_table(const CompareArgs& a, const penumbra::ImageRgb& ref,
-                 const penumbra::ErrorMetrics& m) {
+                 const penumbra::ErrorMetrics& m, bool radiance) {
+  const char* unit = radiance ? "pixels" : "cells";
   const std::uint64_t all = std::uint64_t(ref.width()) * ref.height();
   std::printf("penumbra compare: %s against %s, %s", a.test.c_str(), a.reference.c_str(),
               size_text(ref.width(), ref.height()).c_str());
   if (!a.crop.empty())
-    std::printf(" (cells %d..%d x %d..%d)", a.crop[0], a.crop[0] + a.crop[2] - 1, a.crop[1],
+    std::printf(" (%s %d..%d x %d..%d)", unit, a.crop[0], a.crop[0] + a.crop[2] - 1, a.crop[1],
                 a.crop[1] + a.crop[3] - 1);
   std::printf("\n");
-  if (a.scene.empty())
-    std::printf("  %-16s %llu (all)\n", "cells", (unsigned long long)m.cells);
+  if (a.scene.empty() || radiance)
+    std::printf("  %-16s %llu (all)\n", unit, (unsigned long long)m.cells);
   else
     std::printf("  %-16s %llu of %llu (not opaque in %s)\n", "cells", (unsigned long long)m.cells,
                 (unsigned long long)all, a.scene.c_str());
@@ -150,7 +151,21 @@ int compare(const CompareArgs& a) {
   }
   std::optional<penumbra::flatland::Scene> scene;
   std::vector<std::uint8_t> mask;
+  bool radiance = a.radiance;
   if (!a.scene.empty()) {
+    penumbra::Expected<int> dims = penumbra::spaceland::scene_dimensions(a.scene);
+    if (!dims) return fail(kFailure, dims.error().message);
+    radiance = radiance || *dims == 3;
+  }
+  if (!a.scene.empty() && radiance) {
+    // A 3D scene names the world and the image size; every pixel counts.
+    penumbra::Expected<penumbra::spaceland::Scene> s3 = penumbra::spaceland::load_scene(a.scene);
+    if (!s3) return fail(kFailure, s3.error().message);
+    if (s3->camera.width != w || s3->camera.height != h)
+      return fail(kFailure, a.scene + ": the camera's image is " +
+                                size_text(s3->camera.width, s3->camera.height) +
+                                " but the images are " + size_text(w, h));
+  } else if (!a.scene.empty()) {
     penumbra::Expected<penumbra::flatland::SceneDesc> desc =
         penumbra::flatland::load_scene(a.scene);
     if (!desc) return fail(kFailure, desc.error().message);
@@ -186,6 +201,7 @@ int compare(const CompareArgs& a) {
     o.reference_label = "reference: " + file_name(a.reference);
     o.display.exposure = a.exposure;
     o.scene = scene ? &*scene : nullptr;
+    o.radiance = radiance;
     penumbra::Expected<penumbra::ImageRgb8> p =
         penumbra::flatland::comparison_montage(*test, *ref, counted, o);
     if (!p) return fail(kFailure, a.montage + ": " + p.error().message);
@@ -213,7 +229,7 @@ int compare(const CompareArgs& a) {
         {"reference_mean", m->reference_mean}};
     std::cout << j.dump(2) << "\n";
   } else if (!a.quiet) {
-    print_table(a, *ref, *m);
+    print_table(a, *ref, *m, radiance);
   }
   return 0;
 }
@@ -231,7 +247,11 @@ std::unique_ptr<CompareCommand> add_compare_command(CLI::App& app) {
       "compare", "Error metrics of a linear image (PFM/EXR) against a reference, with pictures");
   c->add_option("test", a.test, "The image to judge (.pfm or .exr)")->required();
   c->add_option("reference", a.reference, "The reference image, of the same size")->required();
-  c->add_option("--scene", a.scene, "Count only the cells this scene leaves not opaque");
+  c->add_option("--scene", a.scene,
+                "2D: count only the cells this scene leaves not opaque; 3D: the images are its "
+                "camera's radiance (as --radiance), every pixel counted");
+  c->add_flag("--radiance", a.radiance,
+              "The images are 3D radiance: the montage shows them as 3D PNGs do (no 1/2pi)");
   c->add_flag("--json", a.json, "Print one JSON object with the metrics");
   c->add_option("--heatmap", a.heatmap, "Write the signed error with a colour bar (.png)");
   c->add_option("--montage", a.montage, "Write test, reference and error side by side (.png)");

@@ -16,6 +16,7 @@ struct CompareArgs {
   std::vector<int> crop;         // empty, or X Y W H: compare only this rectangle of cells
   bool json = false;
   bool quiet = false;
+  bool radiance = false;  // 3D images: pixels of radiance (set too by a 3D --scene)
 };
 
 struct CompareCommand {

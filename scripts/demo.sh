@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# `make demo`: install, build, render the built-in scene, and say how long each stage took.
+# `make demo`: install, build, render the built-in 2D scene and the 3D Cornell box, and say how
+# long each stage took.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD=${BUILD:-build}
@@ -27,5 +28,8 @@ echo "demo: HRC again on the GPU through Vulkan (Mesa's CPU driver where there i
 if ! stage "render (hrc, gpu)" "$BUILD/bin/penumbra" render --method hrc --device gpu -o out/demo_hrc_gpu.png; then
   echo "demo: no Vulkan device here; the CPU renders above stand (docs/GPU.md)"
 fi
-echo "demo: open out/demo.png (display) or out/demo.exr (linear fluence); out/demo_hrc.* for HRC"
+echo "demo: a 3D scene: the Cornell box, path traced (4 bounces, 64 samples per pixel):"
+stage "render (3D, pt)" "$BUILD/bin/penumbra" render scenes/3d/cornell.json --bounces 4 --spp 64 -o out/demo_cornell3d.png -o out/demo_cornell3d.exr
+echo "demo: open out/demo.png (display) or out/demo.exr (linear fluence); out/demo_hrc.* for HRC;"
+echo "demo: out/demo_cornell3d.png for the 3D Cornell box"
 echo "demo: paint lights and walls in a window: $BUILD/bin/penumbra paint (docs/PAINTER.md)"

@@ -12,6 +12,7 @@
 #include "penumbra/compare.hpp"
 #include "penumbra/flatland/compare.hpp"
 #include "penumbra/flatland/io.hpp"
+#include "penumbra/spaceland/io.hpp"
 
 namespace penumbra::analysis {
 namespace {
@@ -239,7 +240,10 @@ Expected<ImageRgb8> comparison_montage(const ImageRgb& test, const ImageRgb& ref
   const ImageRgb* shown[2] = {&test, &ref};
   const std::string* labels[2] = {&options.test_label, &options.reference_label};
   for (int i = 0; i < 2; ++i) {
-    const ImageRgb8 cells = flatland::display_picture(*shown[i], options.scene, options.display);
+    const ImageRgb8 cells =
+        options.radiance
+            ? spaceland::display_picture(*shown[i], spaceland::Aov::radiance, options.display)
+            : flatland::display_picture(*shown[i], options.scene, options.display);
     place(p, l.panel_x[i], l.panel_y, resample(cells, l.zoom));
     draw_label(p, l.panel_x[i], l.margin, *labels[i], l.panel_w, l.text);
   }
@@ -255,7 +259,7 @@ Expected<ImageRgb8> comparison_montage(const ImageRgb& test, const ImageRgb& ref
           format("%+.4g", m->bias),
       "mean abs err " + format("%.4g", m->mean_abs) + "   max abs err " +
           format("%.4g", m->max_abs) + "   ref. mean " + format("%.4g", m->reference_mean) + "   " +
-          std::to_string(m->cells) + " cells"};
+          std::to_string(m->cells) + (options.radiance ? " pixels" : " cells")};
   for (int i = 0; i < kMetricLines; ++i)
     draw_text(p, l.margin, l.metrics_y + i * line_height(l.text), lines[i], kInk, l.text);
   return p;

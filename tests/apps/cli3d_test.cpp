@@ -124,4 +124,27 @@ TEST_F(Cli3d, BadDocumentsNameTheFileAndThePathAndWriteNothing) {
   EXPECT_TRUE(out_empty());
 }
 
+TEST_F(Cli3d, CompareReadsThreeDImagesAgainstTheirScene) {
+  ASSERT_EQ(run({"render", scene_, "--spp", "4", "-o", out("few.exr"), "-q"}).status, 0);
+  ASSERT_EQ(run({"render", scene_, "--spp", "256", "-o", out("many.exr"), "-q"}).status, 0);
+  auto r = run({"compare", out("few.exr"), out("many.exr"), "--scene", scene_, "--json",
+                "--montage", out("m.png")});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["cells"], 16 * 12);  // every pixel
+  const double rel = j["relative_rmse"];
+  EXPECT_GT(rel, 0.0);
+  EXPECT_LT(rel, 0.2);
+  EXPECT_TRUE(fs::exists(out("m.png")));
+  r = run({"compare", out("few.exr"), out("many.exr"), "--scene", scene_});
+  EXPECT_NE(r.out.find("pixels"), std::string::npos) << r.out;
+  // A scene whose camera is not the images' size is refused.
+  ASSERT_EQ(
+      run({"render", scene_, "--spp", "1", "--width", "8", "-o", out("small.exr"), "-q"}).status,
+      0);
+  r = run({"compare", out("small.exr"), out("small.exr"), "--scene", scene_});
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("the camera's image is 16x12"), std::string::npos) << r.err;
+}
+
 }  // namespace

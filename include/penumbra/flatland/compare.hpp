@@ -22,6 +22,9 @@ struct MontageOptions {
   DisplayOptions display;                     // exposure of the test and reference panels
   const Scene* scene = nullptr;  // optional, of the images' size: its opaque cells show what they
                                  // emit and reflect, as in write_image's PNG
+  // The images are 3D radiance: shown as the 3D PNGs show them (spaceland::display_picture)
+  // and counted as pixels.
+  bool radiance = false;
 };
 
 // Three panels side by side: TEST and REF tone-mapped alike (as write_image's PNG), then the

@@ -1,0 +1,70 @@
+// The 3D path tracer on the example scenes: samples per pixel per second and rays per second on
+// one thread and on all, so that a change to the tracer or to the ray queries shows in both.
+#include <benchmark/benchmark.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+
+#include "penumbra/spaceland/render.hpp"
+#include "penumbra/spaceland/scene.hpp"
+
+namespace {
+
+using namespace penumbra;
+using namespace penumbra::spaceland;
+
+struct Example {
+  const char* name;
+  int bounces;
+};
+// The Cornell box (42 triangles, a small light), the bunny under sky and sun (70k triangles),
+// and the textured glTF box (the sun, a texture lookup per hit).
+const Example kExamples[] = {{"cornell", 4}, {"bunny_sky", 2}, {"gltf_box", 2}};
+
+Scene load(int which) {
+  const std::string path =
+      std::string(PENUMBRA_SCENES_DIR) + "/3d/" + kExamples[which].name + ".json";
+  Expected<Scene> loaded = load_scene(path);
+  if (!loaded) {
+    std::fprintf(stderr, "%s\n", loaded.error().message.c_str());
+    std::exit(1);
+  }
+  return std::move(*loaded);
+}
+
+const Scene& example(int which) {
+  static const Scene scenes[3] = {load(0), load(1), load(2)};
+  return scenes[which];
+}
+
+// Args: example, threads (0: all).
+void BM_Pt3d(benchmark::State& state) {
+  const Example& e = kExamples[state.range(0)];
+  const Scene& scene = example(int(state.range(0)));
+  RenderOptions o;
+  o.pt.spp = 4;
+  o.bounces = e.bounces;
+  o.threads = int(state.range(1));
+  std::uint64_t rays = 0, samples = 0;
+  for (auto _ : state) {
+    Expected<RenderResult> r = render(scene, o);
+    if (!r) {
+      state.SkipWithError(r.error().message.c_str());
+      return;
+    }
+    rays += r->rays;
+    samples += r->samples * std::uint64_t(scene.camera.width) * scene.camera.height;
+    benchmark::DoNotOptimize(r->radiance.data());
+  }
+  state.SetLabel(std::string(e.name) + ", " + std::to_string(e.bounces) + " bounces, " +
+                 (o.threads == 1 ? "1 thread" : "all threads"));
+  state.counters["rays/s"] = benchmark::Counter(double(rays), benchmark::Counter::kIsRate);
+  state.counters["samples/s"] = benchmark::Counter(double(samples), benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_Pt3d)
+    ->ArgsProduct({{0, 1, 2}, {1, 0}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+}  // namespace

@@ -1,0 +1,57 @@
+// The 3D example scenes under scenes/3d/: each has a description and some light, and each is in
+// scenes/README.md with its command and its picture.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "penumbra/spaceland/scene.hpp"
+#include "test_support.hpp"
+
+namespace penumbra::spaceland {
+namespace {
+
+namespace fs = std::filesystem;
+const fs::path kScenes = fs::path(PENUMBRA_SOURCE_DIR) / "scenes";
+
+std::vector<std::string> scene_names() {
+  std::vector<std::string> names;
+  for (const auto& e : fs::directory_iterator(kScenes / "3d"))
+    if (e.path().extension() == ".json") names.push_back(e.path().stem().string());
+  return names;
+}
+
+TEST(ExampleScenes3d, EachHasADescriptionAndLight) {
+  const std::vector<std::string> names = scene_names();
+  ASSERT_GE(names.size(), 10u);
+  for (const std::string& name : names) {
+    const fs::path file = kScenes / "3d" / (name + ".json");
+    const nlohmann::json j = nlohmann::json::parse(penumbra::testing::slurp(file));
+    ASSERT_TRUE(j.contains("description") && j["description"].is_string()) << name;
+    EXPECT_GE(j["description"].get<std::string>().size(), 20u) << name;
+    Expected<Scene> s = load_scene(file.string());
+    ASSERT_TRUE(s.ok()) << s.error().message;
+    bool lit = s->has_sun;
+    const Rgb sky[3] = {s->sky.zenith, s->sky.horizon, s->sky.ground};
+    for (const Rgb& c : sky) lit = lit || c.r > 0 || c.g > 0 || c.b > 0;
+    for (const Material& m : s->materials)
+      lit = lit || m.emission.r > 0 || m.emission.g > 0 || m.emission.b > 0;
+    EXPECT_TRUE(lit) << name << " has no light";
+  }
+}
+
+TEST(ExampleScenes3d, EachIsInTheReadmeWithItsPicture) {
+  const std::string readme = penumbra::testing::slurp(kScenes / "README.md");
+  ASSERT_FALSE(readme.empty());
+  for (const std::string& name : scene_names()) {
+    EXPECT_NE(readme.find("scenes/3d/" + name + ".json"), std::string::npos) << name;
+    const std::string picture = "images/3d/" + name + ".png";
+    EXPECT_NE(readme.find("](" + picture + ")"), std::string::npos) << name << ": no " << picture;
+    EXPECT_TRUE(fs::is_regular_file(kScenes / picture)) << picture;
+  }
+}
+
+}  // namespace
+}  // namespace penumbra::spaceland

@@ -26,6 +26,19 @@ double cone_width(double r, double d) {
   return s2 / (1 + std::sqrt(std::max(0.0, 1 - s2)));
 }
 
+// Whether p is outside the sphere by more than the rounding of a point on it, so that the cone it
+// subtends can be sampled; dc is p's distance to the centre. A hit on the sphere is rounded to
+// float and its distance to the centre lands above the radius as often as below (a quarter of
+// the hits on a sphere off the origin): taken for outside, a point on the inside of an emitting
+// sphere would sample the near intersection of its own cone, which is itself, and its shadow ray
+// would never reach the far side. Within the margin, sampling by area stays exact: points on the
+// far side are hidden by the near side, and pdf() takes the same branch as sample().
+bool outside_sphere(const Sphere& s, Vec3 p, double& dc) {
+  dc = length(s.center - p);
+  const double c = std::max({std::abs(s.center.x), std::abs(s.center.y), std::abs(s.center.z)});
+  return dc > s.radius + 0x1.0p-16 * (s.radius + c);
+}
+
 Vec3 triangle_normal(const TriangleMesh& m, std::uint32_t t, float& area) {
   const auto& tri = m.triangles[t];
   const Vec3 c =
@@ -108,8 +121,8 @@ float Lights::solid_angle_pdf(const Emitter& e, Vec3 p, Vec3 q, Vec3 n) const {
   const float dist2 = dot(d, d);
   if (e.kind == ShapeKind::sphere) {
     const Sphere& s = scene_->spheres[e.shape];
-    const double dc = length(s.center - p);
-    if (dc > s.radius) return float(1 / (2 * kPi * cone_width(s.radius, dc)));
+    double dc;
+    if (outside_sphere(s, p, dc)) return float(1 / (2 * kPi * cone_width(s.radius, dc)));
   }
   const float cos_l = std::abs(dot(n, d)) / std::sqrt(dist2);
   if (!(cos_l > 0)) return 0;
@@ -141,8 +154,8 @@ LightSample Lights::sample(Vec3 p, float u_pick, std::array<float, 2> u) const {
   } else if (em.kind == ShapeKind::sphere) {
     const Sphere& s = scene_->spheres[em.shape];
     const Vec3 to_c = s.center - p;
-    const double dc = length(to_c);
-    if (dc > s.radius) {
+    double dc;
+    if (outside_sphere(s, p, dc)) {
       // Uniform in the cone the sphere subtends: exact solid-angle sampling.
       const double w = cone_width(s.radius, dc);
       const double one_minus_cos = u[0] * w;

@@ -62,9 +62,6 @@ void BM_Pt3d(benchmark::State& state) {
   state.counters["rays/s"] = benchmark::Counter(double(rays), benchmark::Counter::kIsRate);
   state.counters["samples/s"] = benchmark::Counter(double(samples), benchmark::Counter::kIsRate);
 }
-BENCHMARK(BM_Pt3d)
-    ->ArgsProduct({{0, 1, 2}, {1, 0}})
-    ->Unit(benchmark::kMillisecond)
-    ->UseRealTime();
+BENCHMARK(BM_Pt3d)->ArgsProduct({{0, 1, 2}, {1, 0}})->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace

@@ -1,7 +1,9 @@
 // `penumbra render` on 3D scenes, run as a user runs it: the document's `dimensions` picks the
 // world, options that do not apply are refused, the camera's size can be overridden, AOVs.
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 
+#include <cstdlib>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -145,6 +147,28 @@ TEST_F(Cli3d, CompareReadsThreeDImagesAgainstTheirScene) {
   r = run({"compare", out("small.exr"), out("small.exr"), "--scene", scene_});
   EXPECT_EQ(r.status, 1);
   EXPECT_NE(r.err.find("the camera's image is 16x12"), std::string::npos) << r.err;
+}
+
+TEST_F(Cli3d, InterruptWritesTheSamplesSoFarAndATimeLimitStops) {
+  using penumbra::testing::quote;
+  std::string cmd = quote(PENUMBRA_CLI);
+  for (const std::string& piece :
+       {std::string(" render "), quote(scene_), std::string(" --spp 100000000 -q -o "),
+        quote(out("i.pfm")), std::string(" 2>"), quote((tmp_.root() / "err.txt").string()),
+        std::string(" & pid=$!; sleep 1; kill -INT $pid; wait $pid; exit $?")})
+    cmd += piece;
+  const int raw = std::system(("bash -c " + quote(cmd)).c_str());
+  ASSERT_TRUE(WIFEXITED(raw));
+  EXPECT_EQ(WEXITSTATUS(raw), 130);
+  EXPECT_TRUE(fs::is_regular_file(out("i.pfm")));
+  const std::string err = penumbra::testing::slurp(tmp_.root() / "err.txt");
+  EXPECT_NE(err.find("interrupted; wrote the image of"), std::string::npos) << err;
+  // --time alone has no sample limit and stops when the time is up.
+  const auto r = run({"render", scene_, "--time", "0.3", "--json", "-o", out("t.pfm")});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_GT(j["samples"].get<int>(), 4);
+  EXPECT_FALSE(j["cancelled"].get<bool>());
 }
 
 }  // namespace

@@ -28,8 +28,9 @@ enum Pair : std::uint32_t { kFlight, kPick, kLightPoint, kSunPoint, kDirection, 
 
 // Power heuristic (beta = 2) for a sample of density `a` against the other technique's `b`.
 float mis(float a, float b) {
-  const float a2 = a * a, b2 = b * b;
-  return a2 + b2 > 0 ? a2 / (a2 + b2) : 0;
+  // In double: the squares of the densities of a nearly degenerate emitter overflow a float.
+  const double a2 = double(a) * a, b2 = double(b) * b;
+  return a2 + b2 > 0 ? float(a2 / (a2 + b2)) : 0.0f;
 }
 
 // Cosine-weighted direction about the unit normal n.
@@ -90,8 +91,10 @@ Ray shadow(const Context& ctx, const Vertex& v, const LightSample& ls) {
     if (distance == kInf) return Ray{ctx.rays.spawn(v.p, v.ng, wi), wi, 0, kInf};
     return ctx.rays.shadow_ray(v.p, v.ng, ls.point, ls.normal);
   }
-  const float eps = ctx.rays.epsilon();
-  return Ray{v.p, wi, 0, distance == kInf ? kInf : distance - eps};
+  // In fog there is no surface to leave: the point is moved (by the same tiny offset) towards the
+  // light, and the far end is kept off the light's surface as from a surface point.
+  if (distance == kInf) return Ray{v.p, wi, 0, kInf};
+  return ctx.rays.shadow_ray(v.p, wi, ls.point, ls.normal);
 }
 
 // Light from one sampled emitter point (or the sun) through the vertex, MIS-weighted against

@@ -138,6 +138,9 @@ LightSample Lights::sample(Vec3 p, float u_pick, std::array<float, 2> u) const {
   const Emitter& em = emitters_[std::size_t(e)];
   const float pick = pick_probability(e);
   if (!(pick > 0)) return ls;
+  ls.kind = em.kind;
+  ls.shape = em.shape;
+  ls.primitive = em.primitive;
   Vec3 q, n;
   if (em.kind == ShapeKind::triangle) {
     const TriangleMesh& m = scene_->meshes[em.shape];
@@ -240,6 +243,7 @@ LightSample Lights::sample_sun(std::array<float, 2> u) const {
   ls.distance = std::numeric_limits<float>::infinity();  // shadow rays go to the sky
   ls.radiance = sun_radiance_;
   ls.pdf = sun_pdf_;
+  ls.sun = true;
   return ls;
 }
 

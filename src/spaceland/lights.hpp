@@ -20,6 +20,17 @@ struct LightSample {
   Vec3 normal;     // the emitter's geometric normal there
   Rgb radiance{};  // emitted towards the shading point
   float pdf = 0;   // solid-angle density, the pick included (0: no sample)
+  // Which emitter (for the sun: none): a shadow ray that first meets this very primitive has
+  // reached the light, even if it meets it a hair before the sampled point (a grazing ray on a
+  // sphere's rim).
+  bool sun = false;
+  ShapeKind kind = ShapeKind::triangle;
+  std::uint32_t shape = 0, primitive = 0;
+
+  bool is(const Hit& h) const {
+    return !sun && h.kind == kind && h.shape == shape &&
+           (kind != ShapeKind::triangle || h.primitive == primitive);
+  }
 };
 
 class Lights {

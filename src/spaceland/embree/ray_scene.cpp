@@ -511,15 +511,20 @@ void RayScene::occluded(std::span<const Ray> rays, std::span<std::uint8_t> block
 }
 
 // Wächter and Binder, "A Fast and Robust Method for Avoiding Self-Intersection" (Ray Tracing
-// Gems, ch. 6): 256 ulps of each coordinate along the normal; near zero, where ulps vanish but
-// the hit's rounding error is that of the scene's coordinates, a fixed 2^-16 of the scene scale.
+// Gems, ch. 6): 256 ulps of each coordinate along the normal. A coordinate near zero has ulps too
+// small to cover the hit's rounding error, which is that of the point's largest coordinate m:
+// there the offset is 16 ulps of m (m 2^-19), or of the scene's scale at the origin. It is not a
+// fraction of the scene's scale: a ground disk 1000 across would lift every point of y = 0 by
+// 0.015 and bias light from objects a unit away (docs/QUALITY.md, the sky over a plane).
 Vec3 RayScene::spawn(Vec3 p, Vec3 n, Vec3 direction) const {
   if (dot(n, direction) < 0) n = -n;
-  const float near_zero = impl_->scale / 32, floor_offset = impl_->scale / 65536;
+  const float m = std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)});
+  const float near_zero = m / 32;
+  const float floor_offset = (m > 0 ? m : impl_->scale) * 0x1.0p-19f;
   Vec3 r;
   for (int i = 0; i < 3; ++i) {
     const auto ulps = std::int32_t(256 * n[i]);
-    if (std::abs(p[i]) < near_zero)
+    if (std::abs(p[i]) <= near_zero)
       r[i] = p[i] + floor_offset * n[i];
     else
       r[i] = as_float(as_int(p[i]) + (p[i] < 0 ? -ulps : ulps));

@@ -105,7 +105,14 @@ Rgb direct(const Context& ctx, const Vertex& v, const LightSample& ls, std::uint
   if (is_black(f)) return {};
   const Ray r = shadow(ctx, v, ls);
   ++rays;
-  if (ctx.rays.occluded(r)) return {};
+  if (ls.sun) {
+    if (ctx.rays.occluded(r)) return {};
+  } else {
+    // Closest hit, not any hit: meeting the sampled emitter itself (a grazing ray on a sphere's
+    // rim meets it a hair before the sampled point) is reaching it.
+    Hit h;
+    if (ctx.rays.intersect(r, h) && !ls.is(h)) return {};
+  }
   Rgb tr{1, 1, 1};
   if (!ctx.media.empty()) {
     tr = ctx.media.transmittance(Ray{v.p, ls.direction, 0, kInf}, ls.distance);

@@ -3,14 +3,12 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
-#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <string>
 
 #include "core/timer.hpp"
-#include "parse.hpp"
 #include "penumbra/penumbra.hpp"
 #include "progress.hpp"
 #include "render_cmd.hpp"
@@ -78,25 +76,7 @@ int render_scene_3d(const RenderArgs& a) {
   options.pt.seed = shared.pt.seed;
   options.bounces = shared.bounces;
   options.threads = shared.threads;
-  if (!parse_bytes(a.max_memory, options.max_memory)) {
-    std::cerr << "penumbra render: --max-memory: expected a size such as 512M or 8G, found '"
-              << a.max_memory << "'\n";
-    return kUsage;
-  }
-  if (!std::isfinite(a.exposure)) {
-    std::cerr << "penumbra render: --exposure: expected a finite number of EV\n";
-    return kUsage;
-  }
-  for (const std::string& out : a.outputs)
-    if (!penumbra::is_supported_output(out)) {
-      std::cerr << "penumbra render: " << out << ": unknown output type (use .png, .exr or .pfm)\n";
-      return kUsage;
-    }
-  for (const std::string& out : a.outputs)
-    if (penumbra::Status s = penumbra::check_output(out); !s) {
-      std::cerr << "penumbra render: " << s.error().message << "\n";
-      return kFailure;
-    }
+  if (int code = check_render_args(a, options.max_memory); code != 0) return code;
   if (penumbra::Status s = sl::check_options(options); !s) {
     std::cerr << "penumbra render: " << with_flags(s.error().message) << "\n";
     return kUsage;

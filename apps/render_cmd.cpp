@@ -64,6 +64,34 @@ nlohmann::json parameters_json(const penumbra::flatland::RenderOptions& o) {
   return p;
 }
 
+}  // namespace
+
+int check_render_args(const RenderArgs& a, std::uint64_t& max_memory) {
+  for (const std::string& out : a.outputs)
+    if (!penumbra::is_supported_output(out)) {
+      std::cerr << "penumbra render: " << out << ": unknown output type (use .png, .exr or .pfm)\n";
+      return kUsage;
+    }
+  // Refuse unwritable outputs before spending time on the render.
+  for (const std::string& out : a.outputs)
+    if (penumbra::Status s = penumbra::check_output(out); !s) {
+      std::cerr << "penumbra render: " << s.error().message << "\n";
+      return kFailure;
+    }
+  if (!parse_bytes(a.max_memory, max_memory)) {
+    std::cerr << "penumbra render: --max-memory: expected a size such as 512M or 8G, found '"
+              << a.max_memory << "'\n";
+    return kUsage;
+  }
+  if (!std::isfinite(a.exposure)) {
+    std::cerr << "penumbra render: --exposure: expected a finite number of EV\n";
+    return kUsage;
+  }
+  return 0;
+}
+
+namespace {
+
 // The 3D-only options, refused with a 2D scene.
 const char* const k3dOnly[] = {"--width", "--height", "--aov"};
 
@@ -99,27 +127,8 @@ int render_scene(const RenderArgs& a) {
       return kUsage;
     }
   }
-  for (const std::string& out : a.outputs)
-    if (!penumbra::is_supported_output(out)) {
-      std::cerr << "penumbra render: " << out << ": unknown output type (use .png, .exr or .pfm)\n";
-      return kUsage;
-    }
-  // Refuse unwritable outputs before spending time on the render.
-  for (const std::string& out : a.outputs)
-    if (penumbra::Status s = penumbra::check_output(out); !s) {
-      std::cerr << "penumbra render: " << s.error().message << "\n";
-      return kFailure;
-    }
+  if (int code = check_render_args(a, options.max_memory); code != 0) return code;
   finish_render_options(options, a.flags);
-  if (!parse_bytes(a.max_memory, options.max_memory)) {
-    std::cerr << "penumbra render: --max-memory: expected a size such as 512M or 8G, found '"
-              << a.max_memory << "'\n";
-    return kUsage;
-  }
-  if (!std::isfinite(a.exposure)) {
-    std::cerr << "penumbra render: --exposure: expected a finite number of EV\n";
-    return kUsage;
-  }
 
   penumbra::Stopwatch load_watch;
   penumbra::Expected<penumbra::flatland::SceneDesc> desc =

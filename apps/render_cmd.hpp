@@ -1,6 +1,7 @@
 // `penumbra render`: one scene, one method, images out.
 #pragma once
 
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -40,6 +41,10 @@ std::unique_ptr<RenderCommand> add_render_command(CLI::App& app);
 // Exit code: 0 success, 1 bad input or failure, 2 usage error, 130 interrupted (the image of the
 // samples so far is still written).
 int run_render(const RenderArgs& args);
+
+// What both worlds check before loading a scene: output types and writability, --max-memory
+// (parsed into `max_memory`) and --exposure. Prints the message; returns 0 or the exit code.
+int check_render_args(const RenderArgs& args, std::uint64_t& max_memory);
 
 // The 3D half of `render` (render3d_cmd.cpp): `args.scene` is a 3D document.
 int render_scene_3d(const RenderArgs& args);

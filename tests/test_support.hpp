@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <ostream>
 #include <sstream>
 #include <string>
 #include <system_error>
@@ -49,6 +50,28 @@ inline RenderOptions pt_options(int spp, Sampler sampler = Sampler::r1, bool nee
   o.pt.sampler = sampler;
   o.pt.nee = nee;
   return o;
+}
+
+// A document a loader must refuse, for value-parameterised error tests: the JSON path its
+// message names right after "scene.json: ", and another piece the message must contain.
+struct ErrorCase {
+  const char* name;
+  std::string json;
+  std::string path;
+  std::string words;
+};
+
+// gtest prints a parameter it cannot print as the bytes of the object (heap addresses that
+// change from run to run); a case is its name.
+inline void PrintTo(const ErrorCase& c, std::ostream* os) {
+  *os << c.name;
+}
+
+// Checks what a loader said about `c`, parsed as "scene.json".
+inline void expect_refused(bool ok, const std::string& message, const ErrorCase& c) {
+  ASSERT_FALSE(ok) << c.json;
+  EXPECT_EQ(message.rfind("scene.json: " + c.path + ": ", 0), 0u) << message;
+  EXPECT_NE(message.find(c.words), std::string::npos) << message;
 }
 
 // A directory of the running test's own under the test temporary directory, removed at the end.

@@ -63,4 +63,15 @@ constexpr Vec3 max(Vec3 a, Vec3 b) {
   return {a.x > b.x ? a.x : b.x, a.y > b.y ? a.y : b.y, a.z > b.z ? a.z : b.z};
 }
 
+// Two unit vectors orthogonal to the unit vector n and to each other, (t, b, n) right-handed
+// (Duff et al. 2017, "Building an Orthonormal Basis, Revisited": no branch, no division by a
+// small number).
+inline void orthonormal_basis(Vec3 n, Vec3& t, Vec3& b) {
+  const float sign = std::copysign(1.0f, n.z);
+  const float a = -1.0f / (sign + n.z);
+  const float c = n.x * n.y * a;
+  t = {1.0f + sign * n.x * n.x * a, sign * c, -sign * n.x};
+  b = {c, sign + n.y * n.y * a, -n.y};
+}
+
 }  // namespace penumbra

@@ -10,14 +10,6 @@
 
 namespace penumbra::spaceland {
 
-void orthonormal_basis(Vec3 n, Vec3& t, Vec3& b) {
-  const float sign = std::copysign(1.0f, n.z);
-  const float a = -1.0f / (sign + n.z);
-  const float c = n.x * n.y * a;
-  t = {1.0f + sign * n.x * n.x * a, sign * c, -sign * n.x};
-  b = {c, sign + n.y * n.y * a, -n.y};
-}
-
 namespace {
 
 // 1 - cos(theta_max) of a sphere of radius r seen from distance d > r, without cancellation.

@@ -81,7 +81,4 @@ class Lights {
   Rgb sun_radiance_{};
 };
 
-// An orthonormal basis (t, b) around the unit vector n (Duff et al. 2017).
-void orthonormal_basis(Vec3 n, Vec3& t, Vec3& b);
-
 }  // namespace penumbra::spaceland

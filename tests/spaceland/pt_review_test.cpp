@@ -14,49 +14,14 @@
 
 #include "penumbra/spaceland/render.hpp"
 #include "penumbra/spaceland/scene.hpp"
+#include "spaceland/scene_builders.hpp"
 
 namespace penumbra::spaceland {
 namespace {
 
+using namespace penumbra::spaceland::testing;
+
 constexpr double kPi = std::numbers::pi;
-
-std::uint32_t add_material(Scene& s, Rgb albedo, Rgb emission = {}) {
-  Material m;
-  m.albedo = albedo;
-  m.emission = emission;
-  m.name = "m";
-  m.name += std::to_string(s.materials.size());
-  s.materials.push_back(m);
-  return std::uint32_t(s.materials.size() - 1);
-}
-
-int add_object(Scene& s, const std::string& what) {
-  std::string line = "objects[";
-  line += std::to_string(s.objects.size());
-  line += "] (";
-  line += what;
-  line += ")";
-  s.objects.push_back(line);
-  return int(s.objects.size() - 1);
-}
-
-Camera camera(Vec3 position, Vec3 look_at, int w, int h, float fov) {
-  Camera c;
-  c.position = position;
-  c.look_at = look_at;
-  c.up = {0, 1, 0};
-  c.fov_y = fov;
-  c.width = w;
-  c.height = h;
-  return c;
-}
-
-RenderOptions pt(int spp, int bounces = 1) {
-  RenderOptions o;
-  o.pt.spp = spp;
-  o.bounces = bounces;
-  return o;
-}
 
 ImageRgb render_image(const Scene& s, const RenderOptions& o) {
   Expected<RenderResult> r = render(s, o);

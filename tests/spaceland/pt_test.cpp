@@ -12,74 +12,14 @@
 
 #include "penumbra/spaceland/render.hpp"
 #include "penumbra/spaceland/scene.hpp"
+#include "spaceland/scene_builders.hpp"
 
 namespace penumbra::spaceland {
 namespace {
 
+using namespace penumbra::spaceland::testing;
+
 constexpr double kPi = std::numbers::pi;
-
-std::uint32_t add_material(Scene& s, Rgb albedo, Rgb emission = {}) {
-  Material m;
-  m.albedo = albedo;
-  m.emission = emission;
-  // Appended piece by piece: GCC 12 warns falsely (-Wrestrict) on "m" + std::to_string(...).
-  m.name = "m";
-  m.name += std::to_string(s.materials.size());
-  s.materials.push_back(m);
-  return std::uint32_t(s.materials.size() - 1);
-}
-
-int add_object(Scene& s, const std::string& what) {
-  std::string line = "objects[";
-  line += std::to_string(s.objects.size());
-  line += "] (";
-  line += what;
-  line += ")";
-  s.objects.push_back(line);
-  return int(s.objects.size() - 1);
-}
-
-// The six faces of the box [lo, hi] as 12 flat triangles.
-void add_box(Scene& s, Vec3 lo, Vec3 hi, std::uint32_t material) {
-  TriangleMesh m;
-  for (int z = 0; z < 2; ++z)
-    for (int y = 0; y < 2; ++y)
-      for (int x = 0; x < 2; ++x)
-        m.positions.push_back({x ? hi.x : lo.x, y ? hi.y : lo.y, z ? hi.z : lo.z});
-  const std::uint32_t faces[6][4] = {{0, 1, 3, 2}, {4, 6, 7, 5}, {0, 4, 5, 1},
-                                     {2, 3, 7, 6}, {0, 2, 6, 4}, {1, 5, 7, 3}};
-  for (const auto& f : faces) {
-    m.triangles.push_back({f[0], f[1], f[2]});
-    m.triangles.push_back({f[0], f[2], f[3]});
-  }
-  m.materials.assign(m.triangles.size(), material);
-  m.object = add_object(s, "box");
-  s.meshes.push_back(m);
-}
-
-Camera camera(Vec3 position, Vec3 look_at, int w, int h, float fov = 60, Vec3 up = {0, 1, 0}) {
-  Camera c;
-  c.position = position;
-  c.look_at = look_at;
-  c.up = up;
-  c.fov_y = fov;
-  c.width = w;
-  c.height = h;
-  return c;
-}
-
-RenderResult render_ok(const Scene& s, const RenderOptions& o) {
-  Expected<RenderResult> r = render(s, o);
-  EXPECT_TRUE(r.ok()) << (r.ok() ? "" : r.error().message);
-  return r.ok() ? *r : RenderResult{};
-}
-
-RenderOptions pt(int spp, int bounces = 1) {
-  RenderOptions o;
-  o.pt.spp = spp;
-  o.bounces = bounces;
-  return o;
-}
 
 double geometric_sum(double a, int n) {
   double s = 0, p = 1;

@@ -9,15 +9,6 @@ namespace penumbra::spaceland {
 
 namespace {
 
-// Two unit vectors orthogonal to the unit vector n and to each other (Duff et al. 2017).
-void orthonormal_basis(Vec3 n, Vec3& a, Vec3& b) {
-  const float sign = std::copysign(1.0f, n.z);
-  const float k = -1.0f / (sign + n.z);
-  const float m = n.x * n.y * k;
-  a = {1 + sign * n.x * n.x * k, sign * m, -sign * n.x};
-  b = {m, sign + n.y * n.y * k, -n.y};
-}
-
 // Appends the parallelogram p, p + u, p + u + v, p + v with its flat normal (local space).
 void add_parallelogram(TriangleMesh& mesh, Vec3 p, Vec3 u, Vec3 v) {
   const auto base = std::uint32_t(mesh.positions.size());

@@ -1,0 +1,81 @@
+// Building 3D scenes in code for the tests: materials, object lines, boxes, cameras, and render()
+// where the test expects it to succeed.
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <string>
+
+#include "penumbra/spaceland/render.hpp"
+#include "penumbra/spaceland/scene.hpp"
+
+namespace penumbra::spaceland::testing {
+
+inline std::uint32_t add_material(Scene& s, Rgb albedo, Rgb emission = {}) {
+  Material m;
+  m.albedo = albedo;
+  m.emission = emission;
+  // Appended piece by piece: GCC 12 warns falsely (-Wrestrict) on "m" + std::to_string(...).
+  m.name = "m";
+  m.name += std::to_string(s.materials.size());
+  s.materials.push_back(m);
+  return std::uint32_t(s.materials.size() - 1);
+}
+
+// A line of Scene::objects; returns the object's index.
+inline int add_object(Scene& s, const std::string& what) {
+  std::string line = "objects[";
+  line += std::to_string(s.objects.size());
+  line += "] (";
+  line += what;
+  line += ")";
+  s.objects.push_back(line);
+  return int(s.objects.size() - 1);
+}
+
+// The six faces of the box [lo, hi] as 12 flat triangles.
+inline void add_box(Scene& s, Vec3 lo, Vec3 hi, std::uint32_t material) {
+  TriangleMesh m;
+  for (int z = 0; z < 2; ++z)
+    for (int y = 0; y < 2; ++y)
+      for (int x = 0; x < 2; ++x)
+        m.positions.push_back({x ? hi.x : lo.x, y ? hi.y : lo.y, z ? hi.z : lo.z});
+  const std::uint32_t faces[6][4] = {{0, 1, 3, 2}, {4, 6, 7, 5}, {0, 4, 5, 1},
+                                     {2, 3, 7, 6}, {0, 2, 6, 4}, {1, 5, 7, 3}};
+  for (const auto& f : faces) {
+    m.triangles.push_back({f[0], f[1], f[2]});
+    m.triangles.push_back({f[0], f[2], f[3]});
+  }
+  m.materials.assign(m.triangles.size(), material);
+  m.object = add_object(s, "box");
+  s.meshes.push_back(m);
+}
+
+inline Camera camera(Vec3 position, Vec3 look_at, int w, int h, float fov = 60,
+                     Vec3 up = {0, 1, 0}) {
+  Camera c;
+  c.position = position;
+  c.look_at = look_at;
+  c.up = up;
+  c.fov_y = fov;
+  c.width = w;
+  c.height = h;
+  return c;
+}
+
+// The path tracer with `spp` samples per pixel and `bounces`.
+inline RenderOptions pt(int spp, int bounces = 1) {
+  RenderOptions o;
+  o.pt.spp = spp;
+  o.bounces = bounces;
+  return o;
+}
+
+inline RenderResult render_ok(const Scene& s, const RenderOptions& o) {
+  Expected<RenderResult> r = render(s, o);
+  EXPECT_TRUE(r.ok()) << (r.ok() ? "" : r.error().message);
+  return r.ok() ? *r : RenderResult{};
+}
+
+}  // namespace penumbra::spaceland::testing

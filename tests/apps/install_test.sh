@@ -47,5 +47,6 @@ step "building the example"
 step "running the example"
 "$example_build/render_in_code" "$output" || die "the example program failed"
 [[ -s $output ]] || die "the example program did not write $output"
+"$example_build/render_3d_in_code" "${output%.*}_3d.pfm" || die "the 3D example program failed"
 
 step "OK: find_package(penumbra) works; wrote $output"

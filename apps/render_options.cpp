@@ -24,17 +24,22 @@ void add_render_options(CLI::App* app, RenderOptions& options, RenderOptionFlags
   }
   if (which.pt) {
     PtOptions& pt = options.pt;
-    flags.spp = app->add_option("--spp", pt.spp,
-                                "pt: samples per cell (with --time: the most; 0: no limit)")
-                    ->check(CLI::Range(0, 1 << 30))
-                    ->capture_default_str();
+    flags.spp =
+        app->add_option(
+               "--spp", pt.spp,
+               "pt: samples per cell, or per pixel in 3D (with --time: the most; 0: no limit)")
+            ->check(CLI::Range(0, 1 << 30))
+            ->capture_default_str();
     flags.time =
         app->add_option("--time", pt.seconds, "pt: add samples until this many seconds have passed")
             ->check(CLI::NonNegativeNumber);
-    app->add_flag("--nee", pt.nee,
-                  "pt: next event estimation (aim at emitting regions, combined by MIS)");
-    add_enum_option(app, "--sampler", pt.sampler, {Sampler::r1, Sampler::random},
-                    "pt: direction sequence: r1 (low discrepancy), random");
+    app->add_flag(
+        "--nee", pt.nee,
+        "2D pt: next event estimation (aim at emitting regions, combined by MIS; the 3D path "
+        "tracer always does)");
+    add_enum_option(
+        app, "--sampler", pt.sampler, {Sampler::r1, Sampler::random},
+        "2D pt: direction sequence: r1 (low discrepancy), random (3D: Owen-scrambled Sobol)");
     app->add_option("--seed", pt.seed, "pt: random seed")->capture_default_str();
   }
   if (which.rc) {

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "core/timer.hpp"
+#include "io/json_reader.hpp"
 #include "penumbra/penumbra.hpp"
 #include "progress.hpp"
 #include "render_cmd.hpp"
@@ -22,14 +23,19 @@ constexpr int kInterrupted = 130;
 
 namespace sl = penumbra::spaceland;
 
-// What a 3D render reads; every other option given is refused, so none is silently ignored.
-const char* const kOptions3d[] = {"scene",      "--output", "--method",  "--spp",
-                                  "--time",     "--seed",   "--bounces", "--threads",
-                                  "--width",    "--height", "--aov",     "--max-memory",
-                                  "--exposure", "--json",   "--quiet",   "--device"};
+// What a 3D render reads, for every method and per method; every other option given is
+// refused, so none is silently ignored.
+const char* const kCommon[] = {"scene",   "--output", "--method", "--bounces",    "--threads",
+                               "--width", "--height", "--aov",    "--max-memory", "--exposure",
+                               "--json",  "--quiet",  "--device"};
+const char* const kPt[] = {"--spp", "--time", "--seed"};
+const char* const kSpwi[] = {"--probe-spacing", "--directions", "--interval",   "--cascades",
+                             "--merge",         "--sun",        "--depth-bias", "--merge-edge",
+                             "--gather-edge",   "--disjoint"};
 
-bool reads(const std::string& name) {
-  for (const char* n : kOptions3d)
+template <std::size_t N>
+bool listed(const std::string& name, const char* const (&list)[N]) {
+  for (const char* n : list)
     if (name == n) return true;
   return false;
 }
@@ -37,13 +43,6 @@ bool reads(const std::string& name) {
 }  // namespace
 
 int render_scene_3d(const RenderArgs& a) {
-  if (a.app)
-    for (const CLI::Option* opt : a.app->get_options())
-      if (opt->count() > 0 && !reads(opt->get_name())) {
-        std::cerr << "penumbra render: " << opt->get_name() << " applies to 2D scenes only ("
-                  << a.scene << " is a 3D scene)\n";
-        return kUsage;
-      }
   if (a.options.device == penumbra::flatland::Device::gpu) {
     std::cerr << "penumbra render: --device gpu: 3D scenes render on the CPU only for now ("
               << a.scene << " is a 3D scene)\n";
@@ -65,6 +64,35 @@ int render_scene_3d(const RenderArgs& a) {
       return kUsage;
     }
   }
+  if (a.app)
+    for (const CLI::Option* opt : a.app->get_options()) {
+      const std::string name = opt->get_name();
+      if (opt->count() == 0 || listed(name, kCommon)) continue;
+      const bool pt = listed(name, kPt), spwi = listed(name, kSpwi);
+      if (!pt && !spwi) {
+        std::cerr << "penumbra render: " << name << " applies to 2D scenes only (" << a.scene
+                  << " is a 3D scene)\n";
+        return kUsage;
+      }
+      if ((pt && options.method != sl::Method::pt) ||
+          (spwi && options.method != sl::Method::spwi)) {
+        std::cerr << "penumbra render: " << name << " applies to --method " << (pt ? "pt" : "spwi")
+                  << " only, not " << sl::to_string(options.method) << "\n";
+        return kUsage;
+      }
+    }
+  // spwi: its defaults, and the options shared with 2D's cascades where they were given.
+  options.spwi = a.spwi;
+  if (a.disjoint) options.spwi.overlap = false;
+  for (sl::SpwiMerge m : {sl::SpwiMerge::bilinear, sl::SpwiMerge::bilateral,
+                          sl::SpwiMerge::bilinear3d, sl::SpwiMerge::fix})
+    if (a.merge == sl::to_string(m)) options.spwi.merge = m;
+  options.spwi.sun = a.sun == "cascades" ? sl::SpwiSun::cascades : sl::SpwiSun::direct;
+  auto given = [&](const char* name) { return a.app && a.app->get_option(name)->count() > 0; };
+  if (given("--probe-spacing")) options.spwi.probe_spacing = a.options.rc.probe_spacing;
+  if (given("--directions")) options.spwi.directions = a.options.rc.directions;
+  if (given("--interval")) options.spwi.interval = a.options.rc.interval;
+  if (given("--cascades")) options.spwi.cascades = a.options.rc.cascades;
   for (sl::Aov v : {sl::Aov::radiance, sl::Aov::depth, sl::Aov::normal, sl::Aov::albedo,
                     sl::Aov::position, sl::Aov::emission, sl::Aov::object})
     if (a.aov == sl::to_string(v)) options.aov = v;
@@ -124,9 +152,21 @@ int render_scene_3d(const RenderArgs& a) {
                                  {"threads", options.threads},
                                  {"aov", sl::to_string(options.aov)},
                                  {"max_memory", options.max_memory}};
+    const sl::RenderOptions& used = result->options;
     if (options.method == sl::Method::pt)
       parameters.update(
           {{"spp", options.pt.spp}, {"time", options.pt.seconds}, {"seed", options.pt.seed}});
+    if (options.method == sl::Method::spwi)
+      parameters.update({{"probe_spacing", used.spwi.probe_spacing},
+                         {"directions", used.spwi.directions},
+                         {"interval", used.spwi.interval},
+                         {"cascades", used.spwi.cascades},
+                         {"merge", sl::to_string(used.spwi.merge)},
+                         {"sun", sl::to_string(used.spwi.sun)},
+                         {"depth_bias", used.spwi.depth_bias},
+                         {"overlap", used.spwi.overlap},
+                         {"merge_edge", used.spwi.merge_edge},
+                         {"gather_edge", used.spwi.gather_edge}});
     nlohmann::json j = {{"method", sl::to_string(options.method)},
                         {"dimensions", 3},
                         {"device", result->device},
@@ -155,6 +195,10 @@ int render_scene_3d(const RenderArgs& a) {
         result->device.c_str());
     if (options.aov != sl::Aov::radiance)
       std::printf(", %s\n", sl::to_string(options.aov));
+    else if (options.method == sl::Method::spwi)
+      std::printf(", %d cascades, t0 %s, merge %s, sun %s\n", result->options.spwi.cascades,
+                  penumbra::io::format_rounded(result->options.spwi.interval).c_str(),
+                  sl::to_string(options.spwi.merge), sl::to_string(options.spwi.sun));
     else
       std::printf(", %llu samples per pixel, %d bounce%s\n", (unsigned long long)result->samples,
                   options.bounces, options.bounces == 1 ? "" : "s");

@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "cli_enums.hpp"
 #include "core/timer.hpp"
 #include "parse.hpp"
 #include "penumbra/penumbra.hpp"
@@ -93,7 +94,9 @@ int check_render_args(const RenderArgs& a, std::uint64_t& max_memory) {
 namespace {
 
 // The 3D-only options, refused with a 2D scene.
-const char* const k3dOnly[] = {"--width", "--height", "--aov"};
+const char* const k3dOnly[] = {"--width",      "--height",      "--aov",
+                               "--merge",      "--sun",         "--depth-bias",
+                               "--merge-edge", "--gather-edge", "--disjoint"};
 
 int render_scene(const RenderArgs& a) {
   if (!a.scene.empty()) {
@@ -312,6 +315,47 @@ std::unique_ptr<RenderCommand> add_render_command(CLI::App& app) {
                      "3D: what the image holds: radiance, or a G-buffer channel of the first "
                      "hits (depth, normal, albedo, position, emission, object)")
         ->check(CLI::IsMember(aovs))
+        ->capture_default_str();
+  }
+  {
+    using penumbra::spaceland::SpwiMerge;
+    std::vector<std::string> merges, suns;
+    for (SpwiMerge m :
+         {SpwiMerge::bilinear, SpwiMerge::bilateral, SpwiMerge::bilinear3d, SpwiMerge::fix})
+      merges.push_back(penumbra::spaceland::to_string(m));
+    for (penumbra::spaceland::SpwiSun v :
+         {penumbra::spaceland::SpwiSun::direct, penumbra::spaceland::SpwiSun::cascades})
+      suns.push_back(penumbra::spaceland::to_string(v));
+    render
+        ->add_option("--merge", a.merge,
+                     "3D spwi: merging with the upper cascade: bilinear, bilateral (depth "
+                     "edges), bilinear3d (world-space lines), fix (trace to each upper probe's "
+                     "interval start)")
+        ->check(CLI::IsMember(merges))
+        ->capture_default_str();
+    render
+        ->add_option("--sun", a.sun,
+                     "3D spwi: the sun on visible surfaces: direct (a shadow ray per pixel), "
+                     "cascades (the top cascade sees its disk)")
+        ->check(CLI::IsMember(suns))
+        ->capture_default_str();
+    render
+        ->add_option("--depth-bias", a.spwi.depth_bias,
+                     "3D spwi: probes moved to this fraction of their depth (seed 000: 0.98)")
+        ->check(real_range(1e-3, 1))
+        ->capture_default_str();
+    render->add_flag("--disjoint", a.disjoint,
+                     "3D spwi: cascades above 0 trace only their interval (the thesis), not from "
+                     "their probe (which stops light through walls near probes)");
+    render
+        ->add_option("--merge-edge", a.spwi.merge_edge,
+                     "3D spwi, bilateral merge: depth range over mean that is an edge")
+        ->check(real_range(0, 1e6))
+        ->capture_default_str();
+    render
+        ->add_option("--gather-edge", a.spwi.gather_edge,
+                     "3D spwi: the same test in the final gather")
+        ->check(real_range(0, 1e6))
         ->capture_default_str();
   }
   RenderOptionSet all;

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "penumbra/flatland/render.hpp"
+#include "penumbra/spaceland/render.hpp"
 #include "render_options.hpp"
 
 namespace CLI {
@@ -19,6 +20,11 @@ struct RenderArgs {
   // 3D only: the camera's image size (0: the scene's) and what the image holds.
   int width = 0, height = 0;
   std::string aov = "radiance";
+  // 3D spwi: its own options (--probe-spacing, --directions, --interval and --cascades are
+  // shared with 2D's cascades and copied when given).
+  penumbra::spaceland::SpwiOptions spwi;
+  std::string merge = "bilinear3d", sun = "direct";
+  bool disjoint = false;  // --disjoint: spwi's thesis intervals (SpwiOptions::overlap off)
   std::vector<std::string> outputs;
   std::string max_memory = "8G";
   float exposure = 0;

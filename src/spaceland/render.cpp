@@ -12,21 +12,80 @@
 #include "spaceland/embree/ray_scene.hpp"
 #include "spaceland/gbuffer.hpp"
 #include "spaceland/pt/pt.hpp"
+#include "spaceland/spwi/spwi.hpp"
 
 namespace penumbra::spaceland {
 
 namespace {
 
-// The method table: name, help, and the working memory per pixel besides the G-buffer.
+// What a method's solver is handed, and what it gives back besides the image.
+struct Solved {
+  std::vector<StageTime> stages;
+  std::uint64_t rays = 0, samples = 0, memory_bytes = 0;
+  bool cancelled = false;
+  RenderOptions derived;  // the options with the values the method derived filled in
+};
+using Solve = Expected<ImageRgb> (*)(const Scene&, const RayScene&, const GBuffer&,
+                                     const RenderOptions&, Solved&);
+
+Expected<ImageRgb> pt_solve(const Scene& scene, const RayScene& rays, const GBuffer& g,
+                            const RenderOptions& options, Solved& out) {
+  pt::Stats stats;
+  Stopwatch watch;
+  ImageRgb img = pt::render(scene, rays, g, options, stats);
+  out.stages.push_back({"path trace", watch.ms()});
+  out.rays = stats.rays;
+  out.samples = stats.samples;
+  out.cancelled = stats.cancelled;
+  out.memory_bytes = std::uint64_t(g.width) * g.height * pt::kBytesPerPixel;
+  return img;
+}
+
+Expected<ImageRgb> spwi_solve(const Scene& scene, const RayScene& rays, const GBuffer& g,
+                              const RenderOptions& options, Solved& out) {
+  spwi::Stats stats;
+  Expected<ImageRgb> img = spwi::render(scene, rays, g, options, stats);
+  out.stages = stats.stages;
+  out.rays = stats.rays + std::uint64_t(g.width) * g.height;  // and the G-buffer's
+  out.memory_bytes = stats.memory_bytes;
+  out.derived.spwi.interval = stats.plan.t0;
+  out.derived.spwi.cascades = stats.plan.cascades;
+  return img;
+}
+
+Status no_check(const Scene&, const RenderOptions&) {
+  return {};
+}
+
+std::uint64_t pt_bytes(const Scene& scene, const RenderOptions&) {
+  return std::uint64_t(scene.camera.width) * scene.camera.height * pt::kBytesPerPixel;
+}
+
+std::uint64_t spwi_bytes(const Scene& scene, const RenderOptions& options) {
+  return spwi::bytes_upper_bound(scene.camera.width, scene.camera.height, options.spwi);
+}
+
+// The method table (docs/ARCHITECTURE.md): name, help, the method's own option check, its
+// working memory besides the G-buffer (known before anything is allocated), its solver.
 struct MethodEntry {
   MethodInfo info;
-  std::uint64_t bytes_per_pixel;
+  Status (*check)(const Scene&, const RenderOptions&);
+  std::uint64_t (*bytes)(const Scene&, const RenderOptions&);
+  Solve solve;
 };
 
 const MethodEntry kMethods[] = {
     {{Method::pt, "pt",
       "reference path tracer (next event estimation + MIS, fog, Owen-scrambled Sobol points)"},
-     pt::kBytesPerPixel},
+     no_check,
+     pt_bytes,
+     pt_solve},
+    {{Method::spwi, "spwi",
+      "screen-space probes with world-space intervals (seed 000): radiance cascades on the "
+      "G-buffer, direct light"},
+     spwi::check,
+     spwi_bytes,
+     spwi_solve},
 };
 
 const MethodEntry& entry(Method m) {
@@ -71,6 +130,24 @@ const char* to_string(Aov a) {
   return "?";
 }
 
+const char* to_string(SpwiMerge m) {
+  switch (m) {
+    case SpwiMerge::bilinear:
+      return "bilinear";
+    case SpwiMerge::bilateral:
+      return "bilateral";
+    case SpwiMerge::bilinear3d:
+      return "bilinear3d";
+    case SpwiMerge::fix:
+      return "fix";
+  }
+  return "?";
+}
+
+const char* to_string(SpwiSun s) {
+  return s == SpwiSun::direct ? "direct" : "cascades";
+}
+
 Status check_options(const RenderOptions& o) {
   // Fields are named as in RenderOptions; the command line shows its flags instead.
   if (o.bounces < 1 || o.bounces > 64)
@@ -93,9 +170,10 @@ Status check_options(const RenderOptions& o) {
 
 std::uint64_t estimate_memory(const Scene& scene, const RenderOptions& options) {
   const std::uint64_t pixels = std::uint64_t(scene.camera.width) * scene.camera.height;
-  std::uint64_t per_pixel = GBuffer::bytes_per_pixel() + 3 * sizeof(float);  // + the image
-  if (options.aov == Aov::radiance) per_pixel += entry(options.method).bytes_per_pixel;
-  return RayScene::estimate_bytes(scene) + pixels * per_pixel;
+  const std::uint64_t per_pixel = GBuffer::bytes_per_pixel() + 3 * sizeof(float);  // + image
+  const std::uint64_t method =
+      options.aov == Aov::radiance ? entry(options.method).bytes(scene, options) : 0;
+  return RayScene::estimate_bytes(scene) + pixels * per_pixel + method;
 }
 
 Status check_memory(const Scene& scene, const RenderOptions& options) {
@@ -111,6 +189,8 @@ Status check_memory(const Scene& scene, const RenderOptions& options) {
 Expected<RenderResult> render(const Scene& scene, const RenderOptions& options) {
   if (Status s = check_options(options); !s) return s.error();
   if (Status s = check_scene(scene); !s) return s.error();
+  if (options.aov == Aov::radiance)
+    if (Status s = entry(options.method).check(scene, options); !s) return s.error();
   if (Status s = check_memory(scene, options); !s) return s.error();
 
   tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
@@ -134,13 +214,17 @@ Expected<RenderResult> render(const Scene& scene, const RenderOptions& options) 
       result.stages.push_back({"AOV", stage.ms()});
       result.rays = pixels;
     } else {
-      pt::Stats stats;
-      result.radiance = pt::render(scene, *rays, g, options, stats);
-      result.stages.push_back({"path trace", stage.ms()});
-      result.rays = stats.rays;
-      result.samples = stats.samples;
-      result.cancelled = stats.cancelled;
-      result.memory_bytes += pixels * pt::kBytesPerPixel;
+      Solved solved;
+      solved.derived = options;
+      Expected<ImageRgb> img = entry(options.method).solve(scene, *rays, g, options, solved);
+      if (!img) return img.error();
+      result.radiance = std::move(*img);
+      for (StageTime& st : solved.stages) result.stages.push_back(std::move(st));
+      result.rays = solved.rays;
+      result.samples = solved.samples;
+      result.cancelled = solved.cancelled;
+      result.memory_bytes += solved.memory_bytes;
+      result.options = solved.derived;
     }
     result.time_ms = total.ms();
     // Only a miss's depth may be infinite.

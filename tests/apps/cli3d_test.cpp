@@ -65,6 +65,24 @@ TEST_F(Cli3d, RendersA3dSceneToEveryFormatWithAJsonReport) {
   EXPECT_TRUE(fs::exists(out("a.png")));
 }
 
+TEST_F(Cli3d, SpwiReportsItsDerivedIntervalAndCascades) {
+  const auto r = run({"render", scene_, "--method", "spwi", "--merge", "bilateral", "--directions",
+                      "16", "--json", "-o", out("s.pfm")});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["method"], "spwi");
+  const nlohmann::json& p = j["parameters"];
+  EXPECT_EQ(p["merge"], "bilateral");
+  EXPECT_EQ(p["directions"], 16);
+  EXPECT_GT(p["interval"].get<double>(), 0.0);  // derived from the probe spacing
+  EXPECT_GE(p["cascades"].get<int>(), 2);
+  EXPECT_TRUE(fs::exists(out("s.pfm")));
+  // --bounces 2 needs the world-space cache that is not there yet.
+  const auto b = run({"render", scene_, "--method", "spwi", "--bounces", "2", "-o", out("b.pfm")});
+  EXPECT_EQ(b.status, 1);
+  EXPECT_NE(b.err.find("world-space radiance cache"), std::string::npos) << b.err;
+}
+
 TEST_F(Cli3d, WidthAndHeightReplaceTheCameraSize) {
   const auto r = run({"render", scene_, "--spp", "1", "--width", "20", "--height", "10", "-o",
                       out("b.pfm"), "-q"});
@@ -91,9 +109,17 @@ TEST_F(Cli3d, DepthAovIsTheDistanceAlongTheViewDirection) {
 }
 
 TEST_F(Cli3d, OptionsOfTheOtherWorldAreRefused) {
-  auto r = run({"render", scene_, "--probe-spacing", "2", "-o", out("x.png")});
+  auto r = run({"render", scene_, "--fix", "none", "-o", out("x.png")});
   EXPECT_EQ(r.status, 2);
-  EXPECT_NE(r.err.find("--probe-spacing applies to 2D scenes only"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("--fix applies to 2D scenes only"), std::string::npos) << r.err;
+  // Options of the other 3D method.
+  r = run({"render", scene_, "--probe-spacing", "2", "-o", out("x.png")});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("--probe-spacing applies to --method spwi only, not pt"), std::string::npos)
+      << r.err;
+  r = run({"render", scene_, "--method", "spwi", "--spp", "4", "-o", out("x.png")});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("--spp applies to --method pt only, not spwi"), std::string::npos) << r.err;
   r = run({"render", scene_, "--method", "hrc", "-o", out("x.png")});
   EXPECT_EQ(r.status, 2);
   EXPECT_NE(r.err.find("--method hrc is a 2D method"), std::string::npos) << r.err;

@@ -15,7 +15,23 @@
 namespace penumbra::spaceland {
 
 enum class Method {
-  pt,  // the reference path tracer: converges to the exact radiance the format defines
+  pt,    // the reference path tracer: converges to the exact radiance the format defines
+  spwi,  // screen-space probes with world-space intervals (seed 000, seed 001 section 4.5)
+};
+
+// How a ray of an SPWI cascade continues into the probes of the cascade above (--merge).
+enum class SpwiMerge {
+  bilinear,    // screen-space bilinear weights of the 4 upper probes
+  bilateral,   // seed 000 Alg. 7: on a depth edge, weights divided by the depth difference
+  bilinear3d,  // seed 000 Alg. 8: the point projected onto the 4 probes' lines in world space
+  fix,         // the 3D bilinear fix: a ray from the lower probe to each upper probe's interval
+               // start, so that the merged ray is continuous (seed 002 in 2D)
+};
+
+// Where the sun's light on the visible surfaces comes from (--sun).
+enum class SpwiSun {
+  direct,    // a shadow ray per pixel: sharp shadows; the cascades carry the sky only
+  cascades,  // seed 000: the sun's disk is in the sky the top cascade sees
 };
 
 // What an image holds: the radiance (the methods' answer) or a G-buffer channel of the first hits
@@ -38,9 +54,32 @@ struct PtOptions {
   std::uint64_t seed = 0;  // changes every random number; same seed, same image
 };
 
+// Screen-space probes with world-space intervals (docs/METHODS.md, "SPWI").
+struct SpwiOptions {
+  int probe_spacing = 4;  // s0: pixels between cascade-0 probes; cascade i uses s0 2^i
+  int directions = 64;    // Q0: directions of a cascade-0 probe (a square: 4, 16, 64, ...);
+                          // cascade i has Q0 4^i
+  float interval = 0;     // t0: cascade 0 traces [0, t0], cascade i [t0 4^(i-1), t0 4^i], in
+                          // world units (0: derived from the probe spacing at the median depth)
+  int cascades = 0;       // 0: enough that the last interval reaches across the scene's bounds
+  SpwiMerge merge = SpwiMerge::bilinear3d;
+  SpwiSun sun = SpwiSun::direct;
+  // Probes are moved towards the camera to this fraction of their depth (seed 000 Alg. 5 uses
+  // 0.98 against surface acne; 1 keeps them on the surface, rays leave it by a robust offset).
+  float depth_bias = 1;
+  // Cascades above 0 trace from their probe (t = 0), not from their interval's start: a ray that
+  // meets a surface before its interval is marked unusable, and a lower ray with no usable upper
+  // ray continues itself. Stops light through walls near probes (off: the thesis' disjoint
+  // intervals, which let it through).
+  bool overlap = true;
+  float merge_edge = 0.1f;    // bilateral merge: a depth range over the mean above this is an edge
+  float gather_edge = 0.05f;  // final gather: the same test between a pixel's 4 probes
+};
+
 struct RenderOptions {
   Method method = Method::pt;
   PtOptions pt;
+  SpwiOptions spwi;
   Aov aov = Aov::radiance;
   int bounces = 1;  // 1: direct light only; N: N-1 more diffuse bounces
   int threads = 0;  // 0: all hardware threads
@@ -94,5 +133,7 @@ std::vector<MethodInfo> methods();
 
 const char* to_string(Method m);
 const char* to_string(Aov a);
+const char* to_string(SpwiMerge m);
+const char* to_string(SpwiSun s);
 
 }  // namespace penumbra::spaceland

@@ -1,0 +1,499 @@
+#include "spaceland/spwi/spwi.hpp"
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "core/math.hpp"
+#include "core/octahedral.hpp"
+#include "core/parallel.hpp"
+#include "core/timer.hpp"
+#include "io/json_reader.hpp"
+#include "spaceland/camera.hpp"
+#include "spaceland/color.hpp"
+
+namespace penumbra::spaceland::spwi {
+
+namespace {
+
+constexpr int kMaxCascades = 12;
+
+// A direction into a probe's own surface brings it no light and holds no radiance: marked by a
+// negative red (radiance is never negative), and left out wherever directions are averaged, so
+// that the weights that remain sum to one (a uniform sky gives a L exactly at any map seam).
+// So is a ray of an upper cascade that met a surface before its interval (overlap): what lies
+// between its probe and its interval is not on the lower probes' rays, so it tells them nothing.
+constexpr Rgb kNoLight{-1, 0, 0};
+bool holds_light(const Rgb& c) {
+  return c.r >= 0;
+}
+
+// A probe: a visible surface point under the pixel at the centre of its tile.
+struct Probe {
+  Vec3 p, n;        // position (depth bias applied) and the surface's normal, faced to the camera
+  float depth = 0;  // linear depth
+  bool valid = false;  // false where the pixel sees the sky
+};
+
+// Screen position of probe index k along an axis (the centre of the pixel at the tile's middle).
+double probe_x(int k, int spacing) {
+  return double(k) * spacing + spacing / 2 + 0.5;
+}
+
+// The 4 probes of a grid around the screen point (x, y) and their bilinear weights, corners in
+// the order (0, 0), (1, 0), (0, 1), (1, 1) (Alg. 8's srcPoints order).
+struct Corners {
+  std::array<int, 4> index{};
+  std::array<float, 4> w{};
+  float fx = 0, fy = 0;
+};
+
+Corners corners(double x, double y, int spacing, int nx, int ny) {
+  auto axis = [&](double c, int n, int& base, float& f) {
+    const double g = (c - (spacing / 2 + 0.5)) / spacing;
+    base = int(std::floor(g));
+    f = float(g - base);
+    if (n == 1) {
+      base = 0;
+      f = 0;
+    } else if (base < 0) {
+      base = 0;
+      f = 0;
+    } else if (base >= n - 1) {
+      base = n - 2;
+      f = 1;
+    }
+  };
+  int bx, by;
+  Corners c;
+  axis(x, nx, bx, c.fx);
+  axis(y, ny, by, c.fy);
+  const int bx1 = std::min(bx + 1, nx - 1), by1 = std::min(by + 1, ny - 1);
+  c.index = {by * nx + bx, by * nx + bx1, by1 * nx + bx, by1 * nx + bx1};
+  c.w = {(1 - c.fx) * (1 - c.fy), c.fx * (1 - c.fy), (1 - c.fx) * c.fy, c.fx * c.fy};
+  return c;
+}
+
+// Bilateral weighting (seed 000 Alg. 7 and 11): on a depth edge among the valid probes (their
+// depth range over their mean above `edge`), each weight is divided by the probe's depth
+// difference to the point.
+void bilateral(Corners& c, const std::vector<Probe>& probes, float depth, float edge) {
+  float lo = std::numeric_limits<float>::infinity(), hi = -lo, sum = 0;
+  int n = 0;
+  for (int k = 0; k < 4; ++k) {
+    if (c.w[std::size_t(k)] <= 0) continue;
+    const float d = probes[std::size_t(c.index[std::size_t(k)])].depth;
+    lo = std::min(lo, d);
+    hi = std::max(hi, d);
+    sum += d;
+    ++n;
+  }
+  if (n < 2 || !((hi - lo) / (sum / float(n)) > edge)) return;
+  for (int k = 0; k < 4; ++k) {
+    if (c.w[std::size_t(k)] <= 0) continue;
+    const float d = probes[std::size_t(c.index[std::size_t(k)])].depth;
+    c.w[std::size_t(k)] /= std::abs(d - depth) + 1e-4f;
+  }
+}
+
+// Where the projection of p falls along the line a -> b, as a fraction in [0, 1].
+float project(Vec3 a, Vec3 b, Vec3 p) {
+  const Vec3 ab = b - a;
+  const float len2 = dot(ab, ab);
+  if (!(len2 > 0)) return 0.5f;
+  return std::clamp(dot(p - a, ab) / len2, 0.0f, 1.0f);
+}
+
+Vec3 mix(Vec3 a, Vec3 b, float t) {
+  return a + (b - a) * t;
+}
+
+// Seed 000 Alg. 8: the bilinear ratios refined by projecting the point onto the lines between
+// the 4 probes in world space (two iterations), starting from the screen-space ratios.
+void bilinear3d(Corners& c, const std::vector<Probe>& probes, Vec3 point) {
+  const Vec3 s[4] = {probes[std::size_t(c.index[0])].p, probes[std::size_t(c.index[1])].p,
+                     probes[std::size_t(c.index[2])].p, probes[std::size_t(c.index[3])].p};
+  float rx = c.fx, ry = c.fy;
+  for (int it = 0; it < 2; ++it) {
+    rx = project(mix(s[0], s[2], ry), mix(s[1], s[3], ry), point);
+    ry = project(mix(s[0], s[1], rx), mix(s[2], s[3], rx), point);
+  }
+  c.w = {(1 - rx) * (1 - ry), rx * (1 - ry), (1 - rx) * ry, rx * ry};
+}
+
+// Zero weights of probes on the sky, then normalise; false when no probe is left.
+bool normalise(Corners& c, const std::vector<Probe>& probes) {
+  float sum = 0;
+  for (int k = 0; k < 4; ++k) {
+    if (!probes[std::size_t(c.index[std::size_t(k)])].valid) c.w[std::size_t(k)] = 0;
+    sum += c.w[std::size_t(k)];
+  }
+  if (!(sum > 0)) return false;
+  for (float& w : c.w) w /= sum;
+  return true;
+}
+
+// Corners with sky probes left out before the depth weights look at them.
+Corners valid_corners(double x, double y, int spacing, int nx, int ny,
+                      const std::vector<Probe>& probes) {
+  Corners c = corners(x, y, spacing, nx, ny);
+  for (int k = 0; k < 4; ++k)
+    if (!probes[std::size_t(c.index[std::size_t(k)])].valid) c.w[std::size_t(k)] = 0;
+  return c;
+}
+
+// The probes of cascade i on the G-buffer.
+std::vector<Probe> place_probes(const Scene& scene, const GBuffer& g, const Plan& plan, int i,
+                                float depth_bias) {
+  const int s = plan.spacing(i), nx = plan.nx[std::size_t(i)], ny = plan.ny[std::size_t(i)];
+  std::vector<Probe> probes(std::size_t(nx) * ny);
+  const Vec3 eye = scene.camera.position;
+  const Vec3 forward = normalize(scene.camera.look_at - scene.camera.position);
+  for (int y = 0; y < ny; ++y)
+    for (int x = 0; x < nx; ++x) {
+      const int px = std::min(x * s + s / 2, g.width - 1),
+                py = std::min(y * s + s / 2, g.height - 1);
+      const std::size_t k = std::size_t(py) * g.width + px;
+      Probe& p = probes[std::size_t(y) * nx + x];
+      if (!g.found[k]) continue;
+      const Hit& h = g.hits[k];
+      p.valid = true;
+      p.p = eye + (h.position - eye) * depth_bias;
+      p.n = h.geometric_normal;
+      p.depth = h.t * dot(g.directions[k], forward);
+    }
+  return probes;
+}
+
+struct Context {
+  const Scene& scene;
+  const RayScene& rays;
+  const Plan& plan;
+  const SpwiOptions& o;
+  std::vector<Vec3> dirs;  // per cascade: filled per level
+};
+
+// What a ray that leaves the scene sees from the top cascade: the sky, with the sun's disk when
+// the cascades carry the sun.
+Rgb top_background(const Scene& scene, Vec3 d, SpwiSun sun) {
+  return sun == SpwiSun::cascades ? background(scene, d) : sky_radiance(scene.sky, d);
+}
+
+}  // namespace
+
+std::uint64_t Plan::bytes() const {
+  std::uint64_t largest = 0, probe_bytes = 0;
+  for (int i = 0; i < cascades; ++i) {
+    largest = std::max(largest, rays(i));
+    probe_bytes += probes(i) * sizeof(Probe);
+  }
+  return 2 * largest * sizeof(Rgb) + probe_bytes;
+}
+
+std::uint64_t bytes_upper_bound(int width, int height, const SpwiOptions& o) {
+  Plan p;
+  p.width = width;
+  p.height = height;
+  p.probe_spacing = std::max(1, o.probe_spacing);
+  p.side = std::max(1, int(std::lround(std::sqrt(double(std::max(1, o.directions))))));
+  p.cascades = o.cascades > 0 ? std::min(o.cascades, kMaxCascades) : kMaxCascades;
+  for (int i = 0; i < p.cascades; ++i) {
+    p.nx.push_back((width + p.spacing(i) - 1) / p.spacing(i));
+    p.ny.push_back((height + p.spacing(i) - 1) / p.spacing(i));
+  }
+  return p.bytes();
+}
+
+Status check(const Scene& scene, const RenderOptions& options) {
+  const SpwiOptions& o = options.spwi;
+  if (options.bounces > 1)
+    return Error{
+        "`bounces`: spwi computes direct light only (1 bounce): its later bounces need a "
+        "world-space radiance cache, which the world-space probe grid will provide; use "
+        "--method pt for more bounces"};
+  if (!scene.media.empty())
+    return Error{"spwi cannot carry fog: the scene has " + std::to_string(scene.media.size()) +
+                 " medium box(es); use --method pt"};
+  if (o.probe_spacing < 1 || o.probe_spacing > 64)
+    return Error{"`spwi.probe_spacing`: expected 1..64, found " + std::to_string(o.probe_spacing)};
+  const int side = int(std::lround(std::sqrt(double(std::max(0, o.directions)))));
+  if (o.directions < 4 || side * side != o.directions || (side & (side - 1)) != 0)
+    return Error{
+        "`spwi.directions`: expected the square of a power of two (4, 16, 64, ...), "
+        "found " +
+        std::to_string(o.directions)};
+  if (!std::isfinite(o.interval) || o.interval < 0)
+    return Error{"`spwi.interval`: expected a length > 0 in world units (0: derived), found " +
+                 io::format_number(o.interval)};
+  if (o.cascades < 0 || o.cascades > kMaxCascades)
+    return Error{"`spwi.cascades`: expected 0..12 (0: derived), found " +
+                 std::to_string(o.cascades)};
+  if (!(o.depth_bias > 0 && o.depth_bias <= 1))
+    return Error{"`spwi.depth_bias`: expected a fraction in (0, 1], found " +
+                 io::format_number(o.depth_bias)};
+  if (!(o.merge_edge >= 0) || !(o.gather_edge >= 0) || !std::isfinite(o.merge_edge) ||
+      !std::isfinite(o.gather_edge))
+    return Error{"`spwi.merge_edge` and `spwi.gather_edge`: expected numbers >= 0"};
+  return {};
+}
+
+namespace {
+
+// The plan, with t0 and the cascade count derived where the options leave them to 0.
+Plan make_plan(const Scene& scene, const GBuffer& g, const SpwiOptions& o) {
+  Plan p;
+  p.width = g.width;
+  p.height = g.height;
+  p.probe_spacing = o.probe_spacing;
+  p.side = int(std::lround(std::sqrt(double(o.directions))));
+  p.t0 = o.interval;
+  if (!(p.t0 > 0)) {
+    // The world size of s0 pixels at the median depth of the visible surfaces: cascade 0's
+    // interval as long as its probes are apart (the penumbra condition's balance).
+    std::vector<float> depths;
+    const Vec3 forward = normalize(scene.camera.look_at - scene.camera.position);
+    for (std::size_t k = 0; k < g.hits.size(); ++k)
+      if (g.found[k]) depths.push_back(g.hits[k].t * dot(g.directions[k], forward));
+    float median = 1;
+    if (!depths.empty()) {
+      std::nth_element(depths.begin(), depths.begin() + depths.size() / 2, depths.end());
+      median = depths[depths.size() / 2];
+    }
+    const double pixel = 2 * median * std::tan(double(scene.camera.fov_y) * kPi / 360) / g.height;
+    p.t0 = float(std::max(1e-6, pixel * o.probe_spacing));
+  }
+  p.cascades = o.cascades;
+  if (p.cascades == 0) {
+    // Enough that the last interval reaches across the scene's bounds and the camera.
+    Bounds b = scene_bounds(scene);
+    b.lo = min(b.lo, scene.camera.position);
+    b.hi = max(b.hi, scene.camera.position);
+    const double reach = length(b.hi - b.lo);
+    p.cascades = 1;
+    while (p.cascades < kMaxCascades && double(p.interval_end(p.cascades - 1)) < reach)
+      ++p.cascades;
+  }
+  for (int i = 0; i < p.cascades; ++i) {
+    p.nx.push_back((g.width + p.spacing(i) - 1) / p.spacing(i));
+    p.ny.push_back((g.height + p.spacing(i) - 1) / p.spacing(i));
+  }
+  return p;
+}
+
+std::string mib(std::uint64_t bytes) {
+  return io::format_rounded(double(bytes) / double(1 << 20)) + " MiB";
+}
+
+}  // namespace
+
+Expected<ImageRgb> render(const Scene& scene, const RayScene& rays, const GBuffer& g,
+                          const RenderOptions& options, Stats& stats) {
+  const SpwiOptions& o = options.spwi;
+  const Plan plan = make_plan(scene, g, o);
+  stats.plan = plan;
+  stats.memory_bytes = plan.bytes();
+  if (stats.memory_bytes > options.max_memory)
+    return Error{"spwi's cascades need about " + mib(stats.memory_bytes) + ", more than the `" +
+                 "max_memory` limit of " + mib(options.max_memory)};
+
+  std::atomic<std::uint64_t> ray_count{0};
+  std::vector<Rgb> upper, lower;
+  std::vector<Probe> upper_probes;
+  // Cascades from the top down (Alg. 9): each merges with the one above, then takes its place.
+  for (int i = plan.cascades - 1; i >= 0; --i) {
+    Stopwatch watch;
+    const std::vector<Probe> probes = place_probes(scene, g, plan, i, o.depth_bias);
+    const int side = plan.map_side(i), nx = plan.nx[std::size_t(i)];
+    const std::uint64_t count = plan.probes(i);
+    std::vector<Vec3> dirs(std::size_t(side) * side);
+    for (int v = 0; v < side; ++v)
+      for (int u = 0; u < side; ++u)
+        dirs[std::size_t(v) * side + u] = octahedral::cell_direction(u, v, side);
+    lower.assign(std::size_t(plan.rays(i)), Rgb{});
+    const float a = plan.interval_start(i), b = plan.interval_end(i);
+    const bool top = i == plan.cascades - 1;
+    const int up = i + 1;
+    const int up_side = top ? 0 : plan.map_side(up);
+    const std::uint64_t up_count = top ? 0 : plan.probes(up);
+    // The upper radiance towards lower direction (u, v): the mean of its 2x2 children that hold
+    // light (the bilinear sample of the upper map at the lower cell's centre, which crosses no
+    // seam); false when none does.
+    auto upper_mean = [&](int probe, int u, int v, Rgb& mean) {
+      Rgb sum{};
+      int n = 0;
+      for (int dv = 0; dv < 2; ++dv)
+        for (int du = 0; du < 2; ++du) {
+          const std::size_t d = std::size_t(2 * v + dv) * up_side + std::size_t(2 * u + du);
+          const Rgb& c = upper[d * up_count + std::size_t(probe)];
+          if (!holds_light(c)) continue;
+          sum += c;
+          ++n;
+        }
+      if (n == 0) return false;
+      mean = sum * (1.0f / float(n));
+      return true;
+    };
+    parallel_for(plan.ny[std::size_t(i)], [&](int py) {
+      std::uint64_t local = 0;
+      for (int px = 0; px < nx; ++px) {
+        const std::size_t q = std::size_t(py) * nx + px;
+        const Probe& pr = probes[q];
+        if (!pr.valid) continue;
+        Corners c;
+        bool merge = !top;
+        if (merge) {
+          const double sx = probe_x(px, plan.spacing(i)), sy = probe_x(py, plan.spacing(i));
+          c = valid_corners(sx, sy, plan.spacing(up), plan.nx[std::size_t(up)],
+                            plan.ny[std::size_t(up)], upper_probes);
+          // The fix weighs its 4 segments as the bilateral merge weighs probes: a probe across a
+          // depth edge would send the segment through whatever lies between.
+          if (o.merge == SpwiMerge::bilateral || o.merge == SpwiMerge::fix)
+            bilateral(c, upper_probes, pr.depth, o.merge_edge);
+          if (o.merge == SpwiMerge::bilinear3d) bilinear3d(c, upper_probes, pr.p);
+          merge = normalise(c, upper_probes);
+        }
+        for (int v = 0; v < side; ++v)
+          for (int u = 0; u < side; ++u) {
+            const std::size_t k = std::size_t(v) * side + u;
+            const Vec3 d = dirs[k];
+            Rgb& out = lower[k * count + q];
+            if (dot(d, pr.n) <= 0) {  // into the probe's own surface
+              out = kNoLight;
+              continue;
+            }
+            if (merge && o.merge == SpwiMerge::fix) {
+              // A segment from this probe to the start of each upper probe's interval in this
+              // direction, merged with that probe alone: the merged ray is continuous.
+              Rgb sum{};
+              float weight = 0;
+              for (int j = 0; j < 4; ++j) {
+                if (c.w[std::size_t(j)] <= 0) continue;
+                const Probe& uq = upper_probes[std::size_t(c.index[std::size_t(j)])];
+                // From where this cascade's interval starts to where the upper one's starts.
+                const Vec3 target = uq.p + d * b;
+                const Vec3 from = a > 0 ? pr.p + d * a : rays.spawn(pr.p, pr.n, target - pr.p);
+                const Ray r{from, target - from, 0, 1};
+                Hit h;
+                Rgb got;
+                ++local;
+                if (rays.intersect(r, h))
+                  got = emission_at(scene, h);
+                else if (!upper_mean(c.index[std::size_t(j)], u, v, got))
+                  continue;
+                sum += got * c.w[std::size_t(j)];
+                weight += c.w[std::size_t(j)];
+              }
+              out = weight > 0 ? sum * (1 / weight) : kNoLight;
+              continue;
+            }
+            Ray r{rays.spawn(pr.p, pr.n, d), d, o.overlap ? 0.0f : a, b};
+            Hit h;
+            ++local;
+            if (rays.intersect(r, h)) {
+              out = h.t >= a ? emission_at(scene, h) : kNoLight;  // opaque: nothing beyond
+            } else if (!merge) {
+              // The top cascade's misses see the sky; so do rays of a probe with no upper
+              // probe around it (only sky above it on screen).
+              out = top_background(scene, d, o.sun);
+            } else {
+              Rgb sum{}, got;
+              float weight = 0;
+              for (int j = 0; j < 4; ++j)
+                if (c.w[std::size_t(j)] > 0 && upper_mean(c.index[std::size_t(j)], u, v, got)) {
+                  sum += got * c.w[std::size_t(j)];
+                  weight += c.w[std::size_t(j)];
+                }
+              if (weight > 0) {
+                out = sum * (1 / weight);
+              } else {
+                // No upper probe has light for this direction (its rays met surfaces before their
+                // intervals, or the upper map has only directions into their surfaces): this
+                // ray continues itself, to the end of the top cascade's interval.
+                ++local;
+                const Ray rest{r.origin, d, b, plan.interval_end(plan.cascades - 1)};
+                out = rays.intersect(rest, h) ? emission_at(scene, h)
+                                              : top_background(scene, d, o.sun);
+              }
+            }
+          }
+      }
+      ray_count.fetch_add(local, std::memory_order_relaxed);
+    });
+    std::swap(upper, lower);
+    upper_probes = probes;
+    stats.stages.push_back({"cascade " + std::to_string(i), watch.ms()});
+  }
+
+  // Final gather (Alg. 11): the 4 nearest cascade-0 probes, depth-aware weights, each probe's
+  // cosine-weighted mean radiance over the pixel's hemisphere.
+  Stopwatch watch;
+  const int side = plan.map_side(0);
+  std::vector<Vec3> dirs(std::size_t(side) * side);
+  for (int v = 0; v < side; ++v)
+    for (int u = 0; u < side; ++u)
+      dirs[std::size_t(v) * side + u] = octahedral::cell_direction(u, v, side);
+  const std::uint64_t count = plan.probes(0);
+  const CameraRays camera(scene.camera);
+  const Vec3 forward = camera.forward();
+  const bool sun_direct = o.sun == SpwiSun::direct && scene.has_sun;
+  const Vec3 sun_dir = scene.has_sun ? normalize(scene.sun.direction) : Vec3{0, 1, 0};
+  ImageRgb img(g.width, g.height);
+  parallel_for(g.height, [&](int y) {
+    std::uint64_t local = 0;
+    for (int x = 0; x < g.width; ++x) {
+      const std::size_t k = std::size_t(y) * g.width + x;
+      if (!g.found[k]) {
+        img.set(x, y, background(scene, g.directions[k]));
+        continue;
+      }
+      const Hit& h = g.hits[k];
+      const Vec3 n = h.shading_normal;
+      Rgb l = emission_at(scene, h);
+      const Rgb albedo = albedo_at(scene, h);
+      Corners c =
+          valid_corners(x + 0.5, y + 0.5, plan.spacing(0), plan.nx[0], plan.ny[0], upper_probes);
+      bilateral(c, upper_probes, h.t * dot(g.directions[k], forward), o.gather_edge);
+      if (normalise(c, upper_probes)) {
+        Rgb e{};
+        float used = 0;  // the weight of probes with light towards this pixel's hemisphere
+        for (int j = 0; j < 4; ++j) {
+          if (c.w[std::size_t(j)] <= 0) continue;
+          Rgb sum{};
+          float weight = 0;
+          for (std::size_t d = 0; d < dirs.size(); ++d) {
+            const float cos_t = dot(n, dirs[d]);
+            const Rgb& r = upper[d * count + std::size_t(c.index[std::size_t(j)])];
+            if (cos_t <= 0 || !holds_light(r)) continue;
+            sum += r * cos_t;
+            weight += cos_t;
+          }
+          if (weight > 0) {
+            e += sum * (c.w[std::size_t(j)] / weight);
+            used += c.w[std::size_t(j)];
+          }
+        }
+        if (used > 0) l += albedo * e * (1 / used);
+      }
+      if (sun_direct) {
+        const float cos_s = dot(n, sun_dir);
+        if (cos_s > 0 && dot(h.geometric_normal, sun_dir) > 0) {
+          ++local;
+          const Ray r{rays.spawn(h.position, h.geometric_normal, sun_dir), sun_dir, 0,
+                      std::numeric_limits<float>::infinity()};
+          if (!rays.occluded(r)) l += albedo * scene.sun.irradiance * float(cos_s / kPi);
+        }
+      }
+      img.set(x, y, l);
+    }
+    ray_count.fetch_add(local, std::memory_order_relaxed);
+  });
+  stats.stages.push_back({"gather", watch.ms()});
+  stats.rays = ray_count.load();
+  return img;
+}
+
+}  // namespace penumbra::spaceland::spwi

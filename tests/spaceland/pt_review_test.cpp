@@ -279,11 +279,7 @@ Lamps lamps() {
   Lamps l;
   Scene& s = l.s;
   s.camera = camera({0, 6, 3}, {0, 0, 0}, 48, 36, 50);
-  Disk floor;
-  floor.radius = 100;
-  floor.material = add_material(s, {0.5f, 0.5f, 0.5f});
-  floor.object = add_object(s, "disk");
-  s.disks.push_back(floor);
+  add_floor(s, 100, {0.5f, 0.5f, 0.5f});
   Disk d;
   d.center = l.disk_c;
   d.normal = {0, -1, 0};
@@ -353,11 +349,7 @@ TEST(SpacelandPtReview, DiskLightOnItsAxisGivesPiLeRSquaredOverRSquaredPlusHSqua
 TEST(SpacelandPtReview, TiltedTriangleLightMatchesANumericalIntegral) {
   Scene s;
   s.camera = camera({0, 3, 4}, {0, 0, 0}, 24, 18, 50);
-  Disk floor;
-  floor.radius = 100;
-  floor.material = add_material(s, {0.5f, 0.5f, 0.5f});
-  floor.object = add_object(s, "disk");
-  s.disks.push_back(floor);
+  add_floor(s, 100, {0.5f, 0.5f, 0.5f});
   const Vec3 v0{-0.6f, 1.2f, -0.4f}, v1{0.9f, 1.8f, -0.2f}, v2{0.1f, 1.0f, 0.7f};
   TriangleMesh t;
   t.positions = {v0, v1, v2};
@@ -427,11 +419,7 @@ TEST(SpacelandPtReview, WideSunOverASkyGradientGivesItsClosedForm) {
   s.sun.direction = {float(std::sin(tilt)), float(std::cos(tilt)), 0};
   s.sun.angular_radius = 45;
   s.sun.irradiance = {2, 1, 0.5f};
-  Disk floor;
-  floor.radius = 100;
-  floor.material = add_material(s, {0.5f, 0.5f, 0.5f});
-  floor.object = add_object(s, "disk");
-  s.disks.push_back(floor);
+  add_floor(s, 100, {0.5f, 0.5f, 0.5f});
   const ImageRgb obj = aov(s, Aov::object);
   const ImageRgb img = render_image(s, pt(256));
   const Check c = compare(

@@ -84,11 +84,7 @@ Scene sphere_light_scene(Rgb sky) {
   Scene s;
   s.camera = camera({0, 3, 4}, {0, 0, 0}, 32, 24, 50);
   s.sky = {sky, sky, sky};
-  Disk plane;
-  plane.radius = 1000;
-  plane.material = add_material(s, {0.5f, 0.5f, 0.5f});
-  plane.object = add_object(s, "disk");
-  s.disks.push_back(plane);
+  add_floor(s, 1000, {0.5f, 0.5f, 0.5f});
   return s;
 }
 
@@ -101,11 +97,8 @@ TEST(SpacelandPt, SphereLightOverAPlaneGivesALeRSquaredCosOverDSquared) {
   light.object = add_object(s, "sphere");
   s.spheres.push_back(light);
   const RenderResult r = render_ok(s, pt(64));
-  RenderOptions po = pt(1);
-  po.aov = Aov::position;
-  const ImageRgb pos = render_ok(s, po).radiance;
-  po.aov = Aov::object;
-  const ImageRgb obj = render_ok(s, po).radiance;
+  const FirstHits hits = first_hits(s);
+  const ImageRgb &pos = hits.position, &obj = hits.object;
   int tested = 0;
   double worst = 0;
   for (int j = 0; j < pos.height(); ++j)
@@ -134,11 +127,8 @@ TEST(SpacelandPt, UniformSkyOverAPlaneLosesTheCapABlackSphereHides) {
   blocker.material = add_material(s, {0, 0, 0});
   blocker.object = add_object(s, "sphere");
   s.spheres.push_back(blocker);
-  RenderOptions po = pt(1);
-  po.aov = Aov::position;
-  const ImageRgb pos = render_ok(s, po).radiance;
-  po.aov = Aov::object;
-  const ImageRgb obj = render_ok(s, po).radiance;
+  const FirstHits hits = first_hits(s);
+  const ImageRgb &pos = hits.position, &obj = hits.object;
   // Relative RMS error over the plane's pixels at n samples.
   auto error_at = [&](int spp) {
     const RenderResult r = render_ok(s, pt(spp));
@@ -183,11 +173,8 @@ TEST(SpacelandPt, SunOnAPlaneGivesAECosOverPiAndNothingInTheHardShadow) {
   blocker.object = add_object(s, "disk");
   s.disks.push_back(blocker);
   const RenderResult r = render_ok(s, pt(16));
-  RenderOptions po = pt(1);
-  po.aov = Aov::position;
-  const ImageRgb pos = render_ok(s, po).radiance;
-  po.aov = Aov::object;
-  const ImageRgb obj = render_ok(s, po).radiance;
+  const FirstHits hits = first_hits(s);
+  const ImageRgb &pos = hits.position, &obj = hits.object;
   const Vec3 sun = s.sun.direction;
   const double lit = 0.5 * sun.y / kPi;  // a E cos(theta) / pi per unit of irradiance
   int in_shadow = 0, in_light = 0;

@@ -52,6 +52,26 @@ inline void add_box(Scene& s, Vec3 lo, Vec3 hi, std::uint32_t material) {
   s.meshes.push_back(m);
 }
 
+// A disk of `radius` at y = 0 facing up (a floor, or an open plane when large); returns its object.
+inline int add_floor(Scene& s, float radius, Rgb albedo) {
+  Disk d;
+  d.radius = radius;
+  d.material = add_material(s, albedo);
+  d.object = add_object(s, "disk");
+  s.disks.push_back(d);
+  return d.object;
+}
+
+inline Sphere add_sphere(Scene& s, Vec3 center, float radius, std::uint32_t material) {
+  Sphere b;
+  b.center = center;
+  b.radius = radius;
+  b.material = material;
+  b.object = add_object(s, "sphere");
+  s.spheres.push_back(b);
+  return b;
+}
+
 inline Camera camera(Vec3 position, Vec3 look_at, int w, int h, float fov = 60,
                      Vec3 up = {0, 1, 0}) {
   Camera c;
@@ -76,6 +96,21 @@ inline RenderResult render_ok(const Scene& s, const RenderOptions& o) {
   Expected<RenderResult> r = render(s, o);
   EXPECT_TRUE(r.ok()) << (r.ok() ? "" : r.error().message);
   return r.ok() ? *r : RenderResult{};
+}
+
+// Each pixel's first hit: its world position and its object (-1 for the sky), through render's
+// AOVs (the renderer's own G-buffer, so a closed form is evaluated where the pixel looks).
+struct FirstHits {
+  ImageRgb position, object;
+};
+inline FirstHits first_hits(const Scene& s) {
+  RenderOptions o = pt(1);
+  o.aov = Aov::position;
+  FirstHits f;
+  f.position = render_ok(s, o).radiance;
+  o.aov = Aov::object;
+  f.object = render_ok(s, o).radiance;
+  return f;
 }
 
 }  // namespace penumbra::spaceland::testing

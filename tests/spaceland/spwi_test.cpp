@@ -32,11 +32,7 @@ Scene sky_plane() {
   Scene s;
   s.camera = camera({0.3f, 2, 3}, {0, 0, -1}, 64, 48, 60);
   s.sky = {{1.5f, 1, 0.5f}, {1.5f, 1, 0.5f}, {1.5f, 1, 0.5f}};
-  Disk d;
-  d.radius = 1000;
-  d.material = add_material(s, {0.6f, 0.6f, 0.6f});
-  d.object = add_object(s, "disk");
-  s.disks.push_back(d);
+  add_floor(s, 1000, {0.6f, 0.6f, 0.6f});
   return s;
 }
 
@@ -79,22 +75,15 @@ TEST(Spwi, EmittingEnclosureGivesLeTimesOnePlusAInEveryMergeMode) {
 TEST(Spwi, SphereLightOverAPlaneIsWithinItsMeasuredError) {
   Scene s;
   s.camera = camera({0, 3, 4}, {0, 0, 0}, 96, 72, 50);
-  Disk plane;
-  plane.radius = 1000;
-  plane.material = add_material(s, {0.5f, 0.5f, 0.5f});
-  plane.object = add_object(s, "disk");
-  s.disks.push_back(plane);
+  add_floor(s, 1000, {0.5f, 0.5f, 0.5f});
   Sphere light;
   light.center = {0.3f, 2, -0.5f};
   light.radius = 0.5f;
   light.material = add_material(s, {0, 0, 0}, {4, 4, 4});
   light.object = add_object(s, "sphere");
   s.spheres.push_back(light);
-  RenderOptions po = pt(1);
-  po.aov = Aov::position;
-  const ImageRgb pos = render_ok(s, po).radiance;
-  po.aov = Aov::object;
-  const ImageRgb obj = render_ok(s, po).radiance;
+  const FirstHits hits = first_hits(s);
+  const ImageRgb &pos = hits.position, &obj = hits.object;
   const double measured[] = {0.310, 0.315, 0.298, 1.20};
   for (int mode = 0; mode < 4; ++mode) {
     const SpwiMerge m = kMerges[mode];
@@ -124,11 +113,7 @@ TEST(Spwi, SphereLightOverAPlaneIsWithinItsMeasuredError) {
 TEST(Spwi, LightFromBehindTheCameraReachesTheFloor) {
   Scene s;
   s.camera = camera({0, 1, 0}, {0, 0, -3}, 48, 36, 60);
-  Disk floor;
-  floor.radius = 100;
-  floor.material = add_material(s, {0.8f, 0.8f, 0.8f});
-  floor.object = add_object(s, "disk");
-  s.disks.push_back(floor);
+  add_floor(s, 100, {0.8f, 0.8f, 0.8f});
   Disk lamp;  // behind the camera, facing the floor in front
   lamp.center = {0, 2, 2};
   lamp.normal = normalize(Vec3{0, -1, -1});

@@ -29,9 +29,9 @@ const char* const kCommon[] = {"scene",   "--output", "--method", "--bounces",  
                                "--width", "--height", "--aov",    "--max-memory", "--exposure",
                                "--json",  "--quiet",  "--device"};
 const char* const kPt[] = {"--spp", "--time", "--seed"};
-const char* const kSpwi[] = {"--probe-spacing", "--directions", "--interval",   "--cascades",
-                             "--merge",         "--sun",        "--depth-bias", "--merge-edge",
-                             "--gather-edge",   "--disjoint"};
+const char* const kSpwi[] = {"--probe-spacing", "--directions", "--interval",     "--cascades",
+                             "--merge",         "--sun",        "--depth-bias",   "--merge-edge",
+                             "--gather-edge",   "--disjoint",   "--gather-normal"};
 
 template <std::size_t N>
 bool listed(const std::string& name, const char* const (&list)[N]) {
@@ -166,7 +166,8 @@ int render_scene_3d(const RenderArgs& a) {
                          {"depth_bias", used.spwi.depth_bias},
                          {"overlap", used.spwi.overlap},
                          {"merge_edge", used.spwi.merge_edge},
-                         {"gather_edge", used.spwi.gather_edge}});
+                         {"gather_edge", used.spwi.gather_edge},
+                         {"gather_normal", used.spwi.gather_normal}});
     nlohmann::json j = {{"method", sl::to_string(options.method)},
                         {"dimensions", 3},
                         {"device", result->device},

@@ -94,9 +94,9 @@ int check_render_args(const RenderArgs& a, std::uint64_t& max_memory) {
 namespace {
 
 // The 3D-only options, refused with a 2D scene.
-const char* const k3dOnly[] = {"--width",      "--height",      "--aov",
-                               "--merge",      "--sun",         "--depth-bias",
-                               "--merge-edge", "--gather-edge", "--disjoint"};
+const char* const k3dOnly[] = {"--width",    "--height",       "--aov",        "--merge",
+                               "--sun",      "--depth-bias",   "--merge-edge", "--gather-edge",
+                               "--disjoint", "--gather-normal"};
 
 int render_scene(const RenderArgs& a) {
   if (!a.scene.empty()) {
@@ -351,6 +351,12 @@ std::unique_ptr<RenderCommand> add_render_command(CLI::App& app) {
         ->add_option("--merge-edge", a.spwi.merge_edge,
                      "3D spwi, bilateral merge: depth range over mean that is an edge")
         ->check(real_range(0, 1e6))
+        ->capture_default_str();
+    render
+        ->add_option("--gather-normal", a.spwi.gather_normal,
+                     "3D spwi: final gather weights times cos^p of the probe's and the pixel's "
+                     "normals (0: off, as seed 000)")
+        ->check(real_range(0, 64))
         ->capture_default_str();
     render
         ->add_option("--gather-edge", a.spwi.gather_edge,

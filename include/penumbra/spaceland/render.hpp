@@ -74,6 +74,9 @@ struct SpwiOptions {
   bool overlap = true;
   float merge_edge = 0.1f;    // bilateral merge: a depth range over the mean above this is an edge
   float gather_edge = 0.05f;  // final gather: the same test between a pixel's 4 probes
+  // Final gather: each probe's weight times cos^p of the angle between its normal and the
+  // pixel's (0: off, as the thesis).
+  float gather_normal = 1;
 };
 
 struct RenderOptions {

@@ -238,6 +238,9 @@ Status check(const Scene& scene, const RenderOptions& options) {
   if (!(o.merge_edge >= 0) || !(o.gather_edge >= 0) || !std::isfinite(o.merge_edge) ||
       !std::isfinite(o.gather_edge))
     return Error{"`spwi.merge_edge` and `spwi.gather_edge`: expected numbers >= 0"};
+  if (!(o.gather_normal >= 0 && o.gather_normal <= 64))
+    return Error{"`spwi.gather_normal`: expected an exponent in [0, 64], found " +
+                 io::format_number(o.gather_normal)};
   return {};
 }
 
@@ -457,6 +460,18 @@ Expected<ImageRgb> render(const Scene& scene, const RayScene& rays, const GBuffe
       Corners c =
           valid_corners(x + 0.5, y + 0.5, plan.spacing(0), plan.nx[0], plan.ny[0], upper_probes);
       bilateral(c, upper_probes, h.t * dot(g.directions[k], forward), o.gather_edge);
+      if (o.gather_normal > 0) {
+        // Probes on surfaces facing elsewhere (the front of a block, for a pixel on its top)
+        // gather light the pixel does not see: weighted by cos^p of the normals' angle, unless
+        // that leaves no probe.
+        Corners facing = c;
+        for (int j = 0; j < 4; ++j) {
+          const Vec3 pn = upper_probes[std::size_t(c.index[std::size_t(j)])].n;
+          facing.w[std::size_t(j)] *=
+              std::pow(std::max(0.0f, dot(pn, h.geometric_normal)), o.gather_normal);
+        }
+        if (facing.w[0] + facing.w[1] + facing.w[2] + facing.w[3] > 0) c = facing;
+      }
       if (normalise(c, upper_probes)) {
         Rgb e{};
         float used = 0;  // the weight of probes with light towards this pixel's hemisphere

@@ -1,5 +1,6 @@
-// The 3D path tracer on the example scenes: samples per pixel per second and rays per second on
-// one thread and on all, so that a change to the tracer or to the ray queries shows in both.
+// The 3D methods on the example scenes: the path tracer's samples and rays per second, and
+// SPWI's time and rays per second, on one thread and on all, so that a change to a method or to
+// the ray queries shows in both.
 #include <benchmark/benchmark.h>
 
 #include <cstdio>
@@ -63,5 +64,30 @@ void BM_Pt3d(benchmark::State& state) {
   state.counters["samples/s"] = benchmark::Counter(double(samples), benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_Pt3d)->ArgsProduct({{0, 1, 2}, {1, 0}})->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// SPWI at its defaults. Args: example, threads (0: all).
+void BM_Spwi3d(benchmark::State& state) {
+  const Example& e = kExamples[state.range(0)];
+  const Scene& scene = example(int(state.range(0)));
+  RenderOptions o;
+  o.method = Method::spwi;
+  o.threads = int(state.range(1));
+  std::uint64_t rays = 0;
+  for (auto _ : state) {
+    Expected<RenderResult> r = render(scene, o);
+    if (!r) {
+      state.SkipWithError(r.error().message.c_str());
+      return;
+    }
+    rays += r->rays;
+    benchmark::DoNotOptimize(r->radiance.data());
+  }
+  state.SetLabel(std::string(e.name) + ", " + (o.threads == 1 ? "1 thread" : "all threads"));
+  state.counters["rays/s"] = benchmark::Counter(double(rays), benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_Spwi3d)
+    ->ArgsProduct({{0, 1, 2}, {1, 0}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 }  // namespace

@@ -61,7 +61,9 @@ struct SpwiOptions {
                           // cascade i has Q0 4^i
   float interval = 0;     // t0: cascade 0 traces [0, t0], cascade i [t0 4^(i-1), t0 4^i], in
                           // world units (0: derived from the probe spacing at the median depth)
-  int cascades = 0;       // 0: enough that the last interval reaches across the scene's bounds
+  int cascades = 0;       // 0: enough that the last interval reaches across the scene's bounds,
+                          // at most until the probe spacing passes the image's diagonal; the
+                          // top cascade's interval runs to infinity
   SpwiMerge merge = SpwiMerge::bilinear3d;
   SpwiSun sun = SpwiSun::direct;
   // Probes are moved towards the camera to this fraction of their depth (seed 000 Alg. 5 uses

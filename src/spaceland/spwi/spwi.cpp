@@ -22,6 +22,15 @@ namespace {
 
 constexpr int kMaxCascades = 12;
 
+// The most cascades worth having on a w x h image: until the probe spacing reaches the image's
+// diagonal (one probe for the whole screen). Past it a cascade only quadruples its directions.
+int screen_cascades(int w, int h, int s0) {
+  const double diagonal = std::sqrt(double(w) * w + double(h) * h);
+  int n = 1;
+  while (n < kMaxCascades && double(s0) * double(1 << (n - 1)) < diagonal) ++n;
+  return n;
+}
+
 // A direction into a probe's own surface brings it no light and holds no radiance: marked by a
 // negative red (radiance is never negative), and left out wherever directions are averaged, so
 // that the weights that remain sum to one (a uniform sky gives a L exactly at any map seam).
@@ -200,7 +209,8 @@ std::uint64_t bytes_upper_bound(int width, int height, const SpwiOptions& o) {
   p.height = height;
   p.probe_spacing = std::max(1, o.probe_spacing);
   p.side = std::max(1, int(std::lround(std::sqrt(double(std::max(1, o.directions))))));
-  p.cascades = o.cascades > 0 ? std::min(o.cascades, kMaxCascades) : kMaxCascades;
+  p.cascades = o.cascades > 0 ? std::min(o.cascades, kMaxCascades)
+                              : screen_cascades(width, height, p.probe_spacing);
   for (int i = 0; i < p.cascades; ++i) {
     p.nx.push_back((width + p.spacing(i) - 1) / p.spacing(i));
     p.ny.push_back((height + p.spacing(i) - 1) / p.spacing(i));
@@ -276,9 +286,9 @@ Plan make_plan(const Scene& scene, const GBuffer& g, const SpwiOptions& o) {
     b.lo = min(b.lo, scene.camera.position);
     b.hi = max(b.hi, scene.camera.position);
     const double reach = length(b.hi - b.lo);
+    const int most = screen_cascades(g.width, g.height, p.probe_spacing);
     p.cascades = 1;
-    while (p.cascades < kMaxCascades && double(p.interval_end(p.cascades - 1)) < reach)
-      ++p.cascades;
+    while (p.cascades < most && double(p.interval_end(p.cascades - 1)) < reach) ++p.cascades;
   }
   for (int i = 0; i < p.cascades; ++i) {
     p.nx.push_back((g.width + p.spacing(i) - 1) / p.spacing(i));
@@ -317,8 +327,11 @@ Expected<ImageRgb> render(const Scene& scene, const RayScene& rays, const GBuffe
       for (int u = 0; u < side; ++u)
         dirs[std::size_t(v) * side + u] = octahedral::cell_direction(u, v, side);
     lower.assign(std::size_t(plan.rays(i)), Rgb{});
-    const float a = plan.interval_start(i), b = plan.interval_end(i);
     const bool top = i == plan.cascades - 1;
+    // The top cascade's interval runs to infinity: its misses see the sky, whatever the reach
+    // of its nominal interval (the cascade count stops at the screen's diagonal).
+    const float a = plan.interval_start(i),
+                b = top ? std::numeric_limits<float>::infinity() : plan.interval_end(i);
     const int up = i + 1;
     const int up_side = top ? 0 : plan.map_side(up);
     const std::uint64_t up_count = top ? 0 : plan.probes(up);
@@ -415,9 +428,9 @@ Expected<ImageRgb> render(const Scene& scene, const RayScene& rays, const GBuffe
               } else {
                 // No upper probe has light for this direction (its rays met surfaces before their
                 // intervals, or the upper map has only directions into their surfaces): this
-                // ray continues itself, to the end of the top cascade's interval.
+                // ray continues itself, to infinity as the top cascade does.
                 ++local;
-                const Ray rest{r.origin, d, b, plan.interval_end(plan.cascades - 1)};
+                const Ray rest{r.origin, d, b, std::numeric_limits<float>::infinity()};
                 out = rays.intersect(rest, h) ? emission_at(scene, h)
                                               : top_background(scene, d, o.sun);
               }

@@ -29,9 +29,9 @@ const char* const kCommon[] = {"scene",   "--output", "--method", "--bounces",  
                                "--width", "--height", "--aov",    "--max-memory", "--exposure",
                                "--json",  "--quiet",  "--device"};
 const char* const kPt[] = {"--spp", "--time", "--seed"};
-const char* const kSpwi[] = {"--probe-spacing", "--directions", "--interval",     "--cascades",
-                             "--merge",         "--sun",        "--depth-bias",   "--merge-edge",
-                             "--gather-edge",   "--disjoint",   "--gather-normal"};
+const char* const kSpwi[] = {"--probe-spacing", "--directions", "--interval",      "--cascades",
+                             "--merge",         "--sun",        "--depth-bias",    "--merge-edge",
+                             "--gather-edge",   "--disjoint",   "--gather-normal", "--preaverage"};
 
 template <std::size_t N>
 bool listed(const std::string& name, const char* const (&list)[N]) {
@@ -93,6 +93,7 @@ int render_scene_3d(const RenderArgs& a) {
   if (given("--directions")) options.spwi.directions = a.options.rc.directions;
   if (given("--interval")) options.spwi.interval = a.options.rc.interval;
   if (given("--cascades")) options.spwi.cascades = a.options.rc.cascades;
+  if (given("--preaverage")) options.spwi.preaverage = a.options.rc.preaverage;
   for (sl::Aov v : {sl::Aov::radiance, sl::Aov::depth, sl::Aov::normal, sl::Aov::albedo,
                     sl::Aov::position, sl::Aov::emission, sl::Aov::object})
     if (a.aov == sl::to_string(v)) options.aov = v;
@@ -165,6 +166,7 @@ int render_scene_3d(const RenderArgs& a) {
                          {"sun", sl::to_string(used.spwi.sun)},
                          {"depth_bias", used.spwi.depth_bias},
                          {"overlap", used.spwi.overlap},
+                         {"preaverage", used.spwi.preaverage},
                          {"merge_edge", used.spwi.merge_edge},
                          {"gather_edge", used.spwi.gather_edge},
                          {"gather_normal", used.spwi.gather_normal}});

@@ -20,10 +20,11 @@ using namespace penumbra::spaceland::testing;
 const SpwiMerge kMerges[] = {SpwiMerge::bilinear, SpwiMerge::bilateral, SpwiMerge::bilinear3d,
                              SpwiMerge::fix};
 
-RenderOptions spwi(SpwiMerge merge) {
+RenderOptions spwi(SpwiMerge merge, bool preaverage = false) {
   RenderOptions o;
   o.method = Method::spwi;
   o.spwi.merge = merge;
+  o.spwi.preaverage = preaverage;
   return o;
 }
 
@@ -38,19 +39,20 @@ Scene sky_plane() {
 
 TEST(Spwi, UniformSkyOverAnOpenPlaneIsExactInEveryMergeMode) {
   const Scene s = sky_plane();
-  for (SpwiMerge m : kMerges) {
-    const RenderResult r = render_ok(s, spwi(m));
-    double worst = 0;
-    for (int j = 0; j < 48; ++j)
-      for (int i = 0; i < 64; ++i) {
-        const Rgb c = r.radiance.at(i, j);
-        // Plane pixels a L; sky pixels (the top rows) L.
-        const double k = c.g < 0.8 ? 0.6 : 1.0;
-        worst = std::max({worst, std::abs(c.r / (1.5 * k) - 1), std::abs(c.g / (1.0 * k) - 1),
-                          std::abs(c.b / (0.5 * k) - 1)});
-      }
-    EXPECT_LT(worst, 1e-5) << to_string(m);
-  }
+  for (int pre = 0; pre < 2; ++pre)
+    for (SpwiMerge m : kMerges) {
+      const RenderResult r = render_ok(s, spwi(m, pre == 1));
+      double worst = 0;
+      for (int j = 0; j < 48; ++j)
+        for (int i = 0; i < 64; ++i) {
+          const Rgb c = r.radiance.at(i, j);
+          // Plane pixels a L; sky pixels (the top rows) L.
+          const double k = c.g < 0.8 ? 0.6 : 1.0;
+          worst = std::max({worst, std::abs(c.r / (1.5 * k) - 1), std::abs(c.g / (1.0 * k) - 1),
+                            std::abs(c.b / (0.5 * k) - 1)});
+        }
+      EXPECT_LT(worst, 1e-5) << to_string(m) << (pre ? ", pre-averaged" : "");
+    }
 }
 
 TEST(Spwi, EmittingEnclosureGivesLeTimesOnePlusAInEveryMergeMode) {
@@ -58,14 +60,15 @@ TEST(Spwi, EmittingEnclosureGivesLeTimesOnePlusAInEveryMergeMode) {
   s.camera = camera({0.1f, -0.2f, 0.3f}, {0.5f, 0.4f, -1}, 48, 36, 90);
   add_box(s, {-1, -1.25f, -1.5f}, {1, 1.25f, 1.5f},
           add_material(s, {0.6f, 0.6f, 0.6f}, {1, 0.5f, 0.25f}));
-  for (SpwiMerge m : kMerges) {
-    const RenderResult r = render_ok(s, spwi(m));
-    double worst = 0;
-    for (int j = 0; j < 36; ++j)
-      for (int i = 0; i < 48; ++i)
-        worst = std::max(worst, std::abs(r.radiance.at(i, j).r / 1.6 - 1));
-    EXPECT_LT(worst, 1e-5) << to_string(m);
-  }
+  for (int pre = 0; pre < 2; ++pre)
+    for (SpwiMerge m : kMerges) {
+      const RenderResult r = render_ok(s, spwi(m, pre == 1));
+      double worst = 0;
+      for (int j = 0; j < 36; ++j)
+        for (int i = 0; i < 48; ++i)
+          worst = std::max(worst, std::abs(r.radiance.at(i, j).r / 1.6 - 1));
+      EXPECT_LT(worst, 1e-5) << to_string(m);
+    }
 }
 
 // A sphere light over a plane: L = a Le (r/d)^2 cos(theta). The bounds are the relative RMSE over
@@ -134,7 +137,7 @@ TEST(Spwi, LightFromBehindTheCameraReachesTheFloor) {
 }
 
 // Two closed rooms side by side; the light is in the one the camera is not in.
-TEST(Spwi, NoLightCrossesAClosedWallInAnyMergeMode) {
+TEST(Spwi, NoLightCrossesAClosedWallInAnyMergeModeWithOrWithoutPreAveraging) {
   Scene s;
   s.camera = camera({0, 0, 0.5f}, {0.2f, -0.3f, -1}, 48, 36, 80);
   const std::uint32_t wall = add_material(s, {0.7f, 0.7f, 0.7f});
@@ -146,12 +149,13 @@ TEST(Spwi, NoLightCrossesAClosedWallInAnyMergeMode) {
   light.material = add_material(s, {0, 0, 0}, {50, 50, 50});
   light.object = add_object(s, "sphere");
   s.spheres.push_back(light);
-  for (SpwiMerge m : kMerges) {
-    const ImageRgb img = render_ok(s, spwi(m)).radiance;
-    float most = 0;
-    for (std::size_t k = 0; k < img.size(); ++k) most = std::max(most, img.data()[k]);
-    EXPECT_EQ(most, 0.0f) << to_string(m);
-  }
+  for (int pre = 0; pre < 2; ++pre)
+    for (SpwiMerge m : kMerges) {
+      const ImageRgb img = render_ok(s, spwi(m, pre == 1)).radiance;
+      float most = 0;
+      for (std::size_t k = 0; k < img.size(); ++k) most = std::max(most, img.data()[k]);
+      EXPECT_EQ(most, 0.0f) << to_string(m);
+    }
 }
 
 TEST(Spwi, SameBitsOnOneAndTwoThreads) {

@@ -74,6 +74,9 @@ struct SpwiOptions {
   // ray continues itself. Stops light through walls near probes (off: the thesis' disjoint
   // intervals, which let it through).
   bool overlap = true;
+  // Pre-averaging (seed 000 section 5.1): every probe's rays traced from the 2x2 sub-probes of
+  // its tile and averaged (4x the rays, the same memory).
+  bool preaverage = false;
   float merge_edge = 0.1f;    // bilateral merge: a depth range over the mean above this is an edge
   float gather_edge = 0.05f;  // final gather: the same test between a pixel's 4 probes
   // Final gather: each probe's weight times cos^p of the angle between its normal and the

@@ -155,36 +155,51 @@ Corners valid_corners(double x, double y, int spacing, int nx, int ny,
   return c;
 }
 
+// A probe on the surface pixel (x, y) sees, if it sees one.
+Probe probe_at(const Scene& scene, const GBuffer& g, int x, int y, float depth_bias) {
+  Probe p;
+  x = std::min(x, g.width - 1);
+  y = std::min(y, g.height - 1);
+  const std::size_t k = std::size_t(y) * g.width + x;
+  if (!g.found[k]) return p;
+  const Hit& h = g.hits[k];
+  const Vec3 eye = scene.camera.position;
+  const Vec3 forward = normalize(scene.camera.look_at - scene.camera.position);
+  p.valid = true;
+  p.p = eye + (h.position - eye) * depth_bias;
+  p.n = h.geometric_normal;
+  p.depth = h.t * dot(g.directions[k], forward);
+  return p;
+}
+
+// The 2x2 sub-probes of each tile of cascade i, at the middles of its quarters (pre-averaging).
+std::vector<std::array<Probe, 4>> place_sub_probes(const Scene& scene, const GBuffer& g,
+                                                   const Plan& plan, int i, float depth_bias) {
+  const int s = plan.spacing(i), nx = plan.nx[std::size_t(i)], ny = plan.ny[std::size_t(i)];
+  const int q1 = s / 4, q3 = (3 * s) / 4;
+  std::vector<std::array<Probe, 4>> subs(std::size_t(nx) * ny);
+  for (int y = 0; y < ny; ++y)
+    for (int x = 0; x < nx; ++x) {
+      std::array<Probe, 4>& sp = subs[std::size_t(y) * nx + x];
+      sp[0] = probe_at(scene, g, x * s + q1, y * s + q1, depth_bias);
+      sp[1] = probe_at(scene, g, x * s + q3, y * s + q1, depth_bias);
+      sp[2] = probe_at(scene, g, x * s + q1, y * s + q3, depth_bias);
+      sp[3] = probe_at(scene, g, x * s + q3, y * s + q3, depth_bias);
+    }
+  return subs;
+}
+
 // The probes of cascade i on the G-buffer.
 std::vector<Probe> place_probes(const Scene& scene, const GBuffer& g, const Plan& plan, int i,
                                 float depth_bias) {
   const int s = plan.spacing(i), nx = plan.nx[std::size_t(i)], ny = plan.ny[std::size_t(i)];
   std::vector<Probe> probes(std::size_t(nx) * ny);
-  const Vec3 eye = scene.camera.position;
-  const Vec3 forward = normalize(scene.camera.look_at - scene.camera.position);
   for (int y = 0; y < ny; ++y)
-    for (int x = 0; x < nx; ++x) {
-      const int px = std::min(x * s + s / 2, g.width - 1),
-                py = std::min(y * s + s / 2, g.height - 1);
-      const std::size_t k = std::size_t(py) * g.width + px;
-      Probe& p = probes[std::size_t(y) * nx + x];
-      if (!g.found[k]) continue;
-      const Hit& h = g.hits[k];
-      p.valid = true;
-      p.p = eye + (h.position - eye) * depth_bias;
-      p.n = h.geometric_normal;
-      p.depth = h.t * dot(g.directions[k], forward);
-    }
+    for (int x = 0; x < nx; ++x)
+      probes[std::size_t(y) * nx + x] =
+          probe_at(scene, g, x * s + s / 2, y * s + s / 2, depth_bias);
   return probes;
 }
-
-struct Context {
-  const Scene& scene;
-  const RayScene& rays;
-  const Plan& plan;
-  const SpwiOptions& o;
-  std::vector<Vec3> dirs;  // per cascade: filled per level
-};
 
 // What a ray that leaves the scene sees from the top cascade: the sky, with the sun's disk when
 // the cascades carry the sun.
@@ -198,7 +213,7 @@ std::uint64_t Plan::bytes() const {
   std::uint64_t largest = 0, probe_bytes = 0;
   for (int i = 0; i < cascades; ++i) {
     largest = std::max(largest, rays(i));
-    probe_bytes += probes(i) * sizeof(Probe);
+    probe_bytes += probes(i) * sizeof(Probe) * (preaverage ? 5 : 1);
   }
   return 2 * largest * sizeof(Rgb) + probe_bytes;
 }
@@ -209,6 +224,7 @@ std::uint64_t bytes_upper_bound(int width, int height, const SpwiOptions& o) {
   p.height = height;
   p.probe_spacing = std::max(1, o.probe_spacing);
   p.side = std::max(1, int(std::lround(std::sqrt(double(std::max(1, o.directions))))));
+  p.preaverage = o.preaverage;
   p.cascades = o.cascades > 0 ? std::min(o.cascades, kMaxCascades)
                               : screen_cascades(width, height, p.probe_spacing);
   for (int i = 0; i < p.cascades; ++i) {
@@ -259,6 +275,7 @@ namespace {
 // The plan, with t0 and the cascade count derived where the options leave them to 0.
 Plan make_plan(const Scene& scene, const GBuffer& g, const SpwiOptions& o) {
   Plan p;
+  p.preaverage = o.preaverage;
   p.width = g.width;
   p.height = g.height;
   p.probe_spacing = o.probe_spacing;
@@ -320,6 +337,8 @@ Expected<ImageRgb> render(const Scene& scene, const RayScene& rays, const GBuffe
   for (int i = plan.cascades - 1; i >= 0; --i) {
     Stopwatch watch;
     const std::vector<Probe> probes = place_probes(scene, g, plan, i, o.depth_bias);
+    std::vector<std::array<Probe, 4>> sub_probes;
+    if (o.preaverage) sub_probes = place_sub_probes(scene, g, plan, i, o.depth_bias);
     const int side = plan.map_side(i), nx = plan.nx[std::size_t(i)];
     const std::uint64_t count = plan.probes(i);
     std::vector<Vec3> dirs(std::size_t(side) * side);
@@ -372,69 +391,82 @@ Expected<ImageRgb> render(const Scene& scene, const RayScene& rays, const GBuffe
           if (o.merge == SpwiMerge::bilinear3d) bilinear3d(c, upper_probes, pr.p);
           merge = normalise(c, upper_probes);
         }
+        // The radiance probe `from` receives along d from this cascade's interval and, through
+        // the merge, from beyond it.
+        auto ray_value = [&](const Probe& from, Vec3 d, int u, int v) -> Rgb {
+          if (dot(d, from.n) <= 0) return kNoLight;  // into the probe's own surface
+          Hit h;
+          if (merge && o.merge == SpwiMerge::fix) {
+            // A segment from this probe to the start of each upper probe's interval in this
+            // direction, merged with that probe alone: the merged ray is continuous.
+            Rgb sum{};
+            float weight = 0;
+            for (int j = 0; j < 4; ++j) {
+              if (c.w[std::size_t(j)] <= 0) continue;
+              const Probe& uq = upper_probes[std::size_t(c.index[std::size_t(j)])];
+              // From where this cascade's interval starts to where the upper one's starts.
+              const Vec3 target = uq.p + d * b;
+              const Vec3 start =
+                  a > 0 ? from.p + d * a : rays.spawn(from.p, from.n, target - from.p);
+              const Ray r{start, target - start, 0, 1};
+              Rgb got;
+              ++local;
+              if (rays.intersect(r, h))
+                got = emission_at(scene, h);
+              else if (!upper_mean(c.index[std::size_t(j)], u, v, got))
+                continue;
+              sum += got * c.w[std::size_t(j)];
+              weight += c.w[std::size_t(j)];
+            }
+            return weight > 0 ? sum * (1 / weight) : kNoLight;
+          }
+          const Ray r{rays.spawn(from.p, from.n, d), d, o.overlap ? 0.0f : a, b};
+          ++local;
+          if (rays.intersect(r, h))
+            return h.t >= a ? emission_at(scene, h) : kNoLight;  // opaque: nothing beyond
+          // The top cascade's misses see the sky; so do rays of a probe with no upper probe
+          // around it (only sky above it on screen).
+          if (!merge) return top_background(scene, d, o.sun);
+          Rgb sum{}, got;
+          float weight = 0;
+          for (int j = 0; j < 4; ++j)
+            if (c.w[std::size_t(j)] > 0 && upper_mean(c.index[std::size_t(j)], u, v, got)) {
+              sum += got * c.w[std::size_t(j)];
+              weight += c.w[std::size_t(j)];
+            }
+          if (weight > 0) return sum * (1 / weight);
+          // No upper probe has light for this direction (its rays met surfaces before their
+          // intervals, or the upper map has only directions into their surfaces): this ray
+          // continues itself, to infinity as the top cascade does.
+          ++local;
+          const Ray rest{r.origin, d, b, std::numeric_limits<float>::infinity()};
+          return rays.intersect(rest, h) ? emission_at(scene, h) : top_background(scene, d, o.sun);
+        };
+        // With the fix, a segment above cascade 0 starts where the cascade below aimed: at this
+        // probe's interval start, not a sub-probe's, so only cascade 0 is pre-averaged there.
+        const bool pre = o.preaverage && !(merge && o.merge == SpwiMerge::fix && a > 0);
+        const std::array<Probe, 4>* subs = pre ? &sub_probes[q] : nullptr;
         for (int v = 0; v < side; ++v)
           for (int u = 0; u < side; ++u) {
             const std::size_t k = std::size_t(v) * side + u;
             const Vec3 d = dirs[k];
             Rgb& out = lower[k * count + q];
-            if (dot(d, pr.n) <= 0) {  // into the probe's own surface
-              out = kNoLight;
+            if (!subs) {
+              out = ray_value(pr, d, u, v);
               continue;
             }
-            if (merge && o.merge == SpwiMerge::fix) {
-              // A segment from this probe to the start of each upper probe's interval in this
-              // direction, merged with that probe alone: the merged ray is continuous.
-              Rgb sum{};
-              float weight = 0;
-              for (int j = 0; j < 4; ++j) {
-                if (c.w[std::size_t(j)] <= 0) continue;
-                const Probe& uq = upper_probes[std::size_t(c.index[std::size_t(j)])];
-                // From where this cascade's interval starts to where the upper one's starts.
-                const Vec3 target = uq.p + d * b;
-                const Vec3 from = a > 0 ? pr.p + d * a : rays.spawn(pr.p, pr.n, target - pr.p);
-                const Ray r{from, target - from, 0, 1};
-                Hit h;
-                Rgb got;
-                ++local;
-                if (rays.intersect(r, h))
-                  got = emission_at(scene, h);
-                else if (!upper_mean(c.index[std::size_t(j)], u, v, got))
-                  continue;
-                sum += got * c.w[std::size_t(j)];
-                weight += c.w[std::size_t(j)];
-              }
-              out = weight > 0 ? sum * (1 / weight) : kNoLight;
-              continue;
+            // Pre-averaging (seed 000 section 5.1): the same direction traced from the 2x2
+            // sub-probes of the tile, averaged into the probe (4x the rays, the same storage).
+            Rgb sum{};
+            int n = 0;
+            for (const Probe& sp : *subs) {
+              if (!sp.valid) continue;
+              const Rgb got = ray_value(sp, d, u, v);
+              if (!holds_light(got)) continue;
+              sum += got;
+              ++n;
             }
-            Ray r{rays.spawn(pr.p, pr.n, d), d, o.overlap ? 0.0f : a, b};
-            Hit h;
-            ++local;
-            if (rays.intersect(r, h)) {
-              out = h.t >= a ? emission_at(scene, h) : kNoLight;  // opaque: nothing beyond
-            } else if (!merge) {
-              // The top cascade's misses see the sky; so do rays of a probe with no upper
-              // probe around it (only sky above it on screen).
-              out = top_background(scene, d, o.sun);
-            } else {
-              Rgb sum{}, got;
-              float weight = 0;
-              for (int j = 0; j < 4; ++j)
-                if (c.w[std::size_t(j)] > 0 && upper_mean(c.index[std::size_t(j)], u, v, got)) {
-                  sum += got * c.w[std::size_t(j)];
-                  weight += c.w[std::size_t(j)];
-                }
-              if (weight > 0) {
-                out = sum * (1 / weight);
-              } else {
-                // No upper probe has light for this direction (its rays met surfaces before their
-                // intervals, or the upper map has only directions into their surfaces): this
-                // ray continues itself, to infinity as the top cascade does.
-                ++local;
-                const Ray rest{r.origin, d, b, std::numeric_limits<float>::infinity()};
-                out = rays.intersect(rest, h) ? emission_at(scene, h)
-                                              : top_background(scene, d, o.sun);
-              }
-            }
+            out = n > 0 ? sum * (1.0f / float(n)) : kNoLight;
           }
       }
       ray_count.fetch_add(local, std::memory_order_relaxed);

@@ -22,6 +22,7 @@ struct Plan {
   int probe_spacing = 4;    // s0
   int side = 4;             // cascade 0's octahedral map is side x side directions
   float t0 = 0;             // world units
+  bool preaverage = false;  // 2x2 sub-probes per probe
   std::vector<int> nx, ny;  // probe grid of each cascade
 
   int spacing(int i) const { return probe_spacing << i; }

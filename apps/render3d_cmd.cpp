@@ -85,7 +85,7 @@ int render_scene_3d(const RenderArgs& a) {
   options.spwi = a.spwi;
   if (a.disjoint) options.spwi.overlap = false;
   for (sl::SpwiMerge m : {sl::SpwiMerge::bilinear, sl::SpwiMerge::bilateral,
-                          sl::SpwiMerge::bilinear3d, sl::SpwiMerge::fix})
+                          sl::SpwiMerge::bilinear3d, sl::SpwiMerge::fix, sl::SpwiMerge::minmax})
     if (a.merge == sl::to_string(m)) options.spwi.merge = m;
   options.spwi.sun = a.sun == "cascades" ? sl::SpwiSun::cascades : sl::SpwiSun::direct;
   auto given = [&](const char* name) { return a.app && a.app->get_option(name)->count() > 0; };

@@ -320,8 +320,8 @@ std::unique_ptr<RenderCommand> add_render_command(CLI::App& app) {
   {
     using penumbra::spaceland::SpwiMerge;
     std::vector<std::string> merges, suns;
-    for (SpwiMerge m :
-         {SpwiMerge::bilinear, SpwiMerge::bilateral, SpwiMerge::bilinear3d, SpwiMerge::fix})
+    for (SpwiMerge m : {SpwiMerge::bilinear, SpwiMerge::bilateral, SpwiMerge::bilinear3d,
+                        SpwiMerge::fix, SpwiMerge::minmax})
       merges.push_back(penumbra::spaceland::to_string(m));
     for (penumbra::spaceland::SpwiSun v :
          {penumbra::spaceland::SpwiSun::direct, penumbra::spaceland::SpwiSun::cascades})
@@ -330,7 +330,8 @@ std::unique_ptr<RenderCommand> add_render_command(CLI::App& app) {
         ->add_option("--merge", a.merge,
                      "3D spwi: merging with the upper cascade: bilinear, bilateral (depth "
                      "edges), bilinear3d (world-space lines), fix (trace to each upper probe's "
-                     "interval start)")
+                     "interval start), minmax (probes on each tile's nearest and farthest "
+                     "surface)")
         ->check(CLI::IsMember(merges))
         ->capture_default_str();
     render

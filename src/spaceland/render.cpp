@@ -140,6 +140,8 @@ const char* to_string(SpwiMerge m) {
       return "bilinear3d";
     case SpwiMerge::fix:
       return "fix";
+    case SpwiMerge::minmax:
+      return "minmax";
   }
   return "?";
 }

@@ -26,6 +26,8 @@ enum class SpwiMerge {
   bilinear3d,  // seed 000 Alg. 8: the point projected onto the 4 probes' lines in world space
   fix,         // the 3D bilinear fix: a ray from the lower probe to each upper probe's interval
                // start, so that the merged ray is continuous (seed 002 in 2D)
+  minmax,      // seed 000 chapter 7: two probes per tile, on its nearest and farthest surface,
+               // interpolated in depth between them (twice the rays and memory)
 };
 
 // Where the sun's light on the visible surfaces comes from (--sun).

@@ -56,8 +56,9 @@ double probe_x(int k, int spacing) {
 // The 4 probes of a grid around the screen point (x, y) and their bilinear weights, corners in
 // the order (0, 0), (1, 0), (0, 1), (1, 1) (Alg. 8's srcPoints order).
 struct Corners {
-  std::array<int, 4> index{};
-  std::array<float, 4> w{};
+  std::array<int, 8> index{};  // probes; 8 with the min-max merge (2 per tile)
+  std::array<float, 8> w{};
+  int n = 4;
   float fx = 0, fy = 0;
 };
 
@@ -84,6 +85,7 @@ Corners corners(double x, double y, int spacing, int nx, int ny) {
   const int bx1 = std::min(bx + 1, nx - 1), by1 = std::min(by + 1, ny - 1);
   c.index = {by * nx + bx, by * nx + bx1, by1 * nx + bx, by1 * nx + bx1};
   c.w = {(1 - c.fx) * (1 - c.fy), c.fx * (1 - c.fy), (1 - c.fx) * c.fy, c.fx * c.fy};
+  c.n = 4;
   return c;
 }
 
@@ -93,7 +95,7 @@ Corners corners(double x, double y, int spacing, int nx, int ny) {
 void bilateral(Corners& c, const std::vector<Probe>& probes, float depth, float edge) {
   float lo = std::numeric_limits<float>::infinity(), hi = -lo, sum = 0;
   int n = 0;
-  for (int k = 0; k < 4; ++k) {
+  for (int k = 0; k < c.n; ++k) {
     if (c.w[std::size_t(k)] <= 0) continue;
     const float d = probes[std::size_t(c.index[std::size_t(k)])].depth;
     lo = std::min(lo, d);
@@ -102,7 +104,7 @@ void bilateral(Corners& c, const std::vector<Probe>& probes, float depth, float 
     ++n;
   }
   if (n < 2 || !((hi - lo) / (sum / float(n)) > edge)) return;
-  for (int k = 0; k < 4; ++k) {
+  for (int k = 0; k < c.n; ++k) {
     if (c.w[std::size_t(k)] <= 0) continue;
     const float d = probes[std::size_t(c.index[std::size_t(k)])].depth;
     c.w[std::size_t(k)] /= std::abs(d - depth) + 1e-4f;
@@ -137,12 +139,12 @@ void bilinear3d(Corners& c, const std::vector<Probe>& probes, Vec3 point) {
 // Zero weights of probes on the sky, then normalise; false when no probe is left.
 bool normalise(Corners& c, const std::vector<Probe>& probes) {
   float sum = 0;
-  for (int k = 0; k < 4; ++k) {
+  for (int k = 0; k < c.n; ++k) {
     if (!probes[std::size_t(c.index[std::size_t(k)])].valid) c.w[std::size_t(k)] = 0;
     sum += c.w[std::size_t(k)];
   }
   if (!(sum > 0)) return false;
-  for (float& w : c.w) w /= sum;
+  for (int k = 0; k < c.n; ++k) c.w[std::size_t(k)] /= sum;
   return true;
 }
 
@@ -189,7 +191,76 @@ std::vector<std::array<Probe, 4>> place_sub_probes(const Scene& scene, const GBu
   return subs;
 }
 
+// The min-max merge (seed 000 chapter 7): each tile of the cascade above has a probe on the
+// nearest and one on the farthest surface in it; a point at `depth` takes each tile's two by
+// linear interpolation in depth between them (trilinear with the screen's bilinear weights).
+// `c` holds tile indices; probes are 2 per tile (min, max).
+Corners minmax_corners(const Corners& c, const std::vector<Probe>& probes, float depth) {
+  Corners out;
+  out.n = 0;
+  for (int k = 0; k < 4; ++k) {
+    const float w = c.w[std::size_t(k)];
+    if (w <= 0) continue;
+    const int lo = 2 * c.index[std::size_t(k)], hi = lo + 1;
+    const Probe &a = probes[std::size_t(lo)], &b = probes[std::size_t(hi)];
+    if (!a.valid && !b.valid) continue;
+    float t = 0.5f;
+    if (a.valid && b.valid) {
+      const float span = b.depth - a.depth;
+      t = span > 0 ? std::clamp((depth - a.depth) / span, 0.0f, 1.0f) : 0.5f;
+    } else {
+      t = b.valid ? 1.0f : 0.0f;
+    }
+    out.index[std::size_t(out.n)] = lo;
+    out.w[std::size_t(out.n++)] = w * (1 - t);
+    out.index[std::size_t(out.n)] = hi;
+    out.w[std::size_t(out.n++)] = w * t;
+  }
+  if (out.n == 0) {  // no tile with a surface: an entry of weight 0 that normalise refuses
+    out.n = 1;
+    out.index[0] = 2 * c.index[0];
+    out.w[0] = 0;
+  }
+  return out;
+}
+
 // The probes of cascade i on the G-buffer.
+// With the min-max merge: per tile, probes on the nearest and the farthest surface pixel of the
+// tile (the min-max depth pyramid's level of this cascade, read directly off the G-buffer).
+std::vector<Probe> place_minmax_probes(const Scene& scene, const GBuffer& g, const Plan& plan,
+                                       int i, float depth_bias) {
+  const int s = plan.spacing(i), nx = plan.nx[std::size_t(i)], ny = plan.ny[std::size_t(i)];
+  const Vec3 forward = normalize(scene.camera.look_at - scene.camera.position);
+  std::vector<Probe> probes(std::size_t(nx) * ny * 2);
+  parallel_for(ny, [&](int ty) {
+    for (int tx = 0; tx < nx; ++tx) {
+      float lo = std::numeric_limits<float>::infinity(), hi = -lo;
+      int lx = -1, ly = -1, hx = -1, hy = -1;
+      for (int y = ty * s; y < std::min((ty + 1) * s, g.height); ++y)
+        for (int x = tx * s; x < std::min((tx + 1) * s, g.width); ++x) {
+          const std::size_t k = std::size_t(y) * g.width + x;
+          if (!g.found[k]) continue;
+          const float d = g.hits[k].t * dot(g.directions[k], forward);
+          if (d < lo) {
+            lo = d;
+            lx = x;
+            ly = y;
+          }
+          if (d > hi) {
+            hi = d;
+            hx = x;
+            hy = y;
+          }
+        }
+      const std::size_t t = std::size_t(ty) * nx + tx;
+      if (lx < 0) continue;
+      probes[2 * t] = probe_at(scene, g, lx, ly, depth_bias);
+      probes[2 * t + 1] = probe_at(scene, g, hx, hy, depth_bias);
+    }
+  });
+  return probes;
+}
+
 std::vector<Probe> place_probes(const Scene& scene, const GBuffer& g, const Plan& plan, int i,
                                 float depth_bias) {
   const int s = plan.spacing(i), nx = plan.nx[std::size_t(i)], ny = plan.ny[std::size_t(i)];
@@ -225,6 +296,7 @@ std::uint64_t bytes_upper_bound(int width, int height, const SpwiOptions& o) {
   p.probe_spacing = std::max(1, o.probe_spacing);
   p.side = std::max(1, int(std::lround(std::sqrt(double(std::max(1, o.directions))))));
   p.preaverage = o.preaverage;
+  p.layers = o.merge == SpwiMerge::minmax ? 2 : 1;
   p.cascades = o.cascades > 0 ? std::min(o.cascades, kMaxCascades)
                               : screen_cascades(width, height, p.probe_spacing);
   for (int i = 0; i < p.cascades; ++i) {
@@ -264,6 +336,10 @@ Status check(const Scene& scene, const RenderOptions& options) {
   if (!(o.merge_edge >= 0) || !(o.gather_edge >= 0) || !std::isfinite(o.merge_edge) ||
       !std::isfinite(o.gather_edge))
     return Error{"`spwi.merge_edge` and `spwi.gather_edge`: expected numbers >= 0"};
+  if (o.preaverage && o.merge == SpwiMerge::minmax)
+    return Error{
+        "`spwi.preaverage` does not combine with the min-max merge yet: use one or the "
+        "other"};
   if (!(o.gather_normal >= 0 && o.gather_normal <= 64))
     return Error{"`spwi.gather_normal`: expected an exponent in [0, 64], found " +
                  io::format_number(o.gather_normal)};
@@ -276,6 +352,7 @@ namespace {
 Plan make_plan(const Scene& scene, const GBuffer& g, const SpwiOptions& o) {
   Plan p;
   p.preaverage = o.preaverage;
+  p.layers = o.merge == SpwiMerge::minmax ? 2 : 1;
   p.width = g.width;
   p.height = g.height;
   p.probe_spacing = o.probe_spacing;
@@ -336,7 +413,9 @@ Expected<ImageRgb> render(const Scene& scene, const RayScene& rays, const GBuffe
   // Cascades from the top down (Alg. 9): each merges with the one above, then takes its place.
   for (int i = plan.cascades - 1; i >= 0; --i) {
     Stopwatch watch;
-    const std::vector<Probe> probes = place_probes(scene, g, plan, i, o.depth_bias);
+    const bool minmax = o.merge == SpwiMerge::minmax;
+    const std::vector<Probe> probes = minmax ? place_minmax_probes(scene, g, plan, i, o.depth_bias)
+                                             : place_probes(scene, g, plan, i, o.depth_bias);
     std::vector<std::array<Probe, 4>> sub_probes;
     if (o.preaverage) sub_probes = place_sub_probes(scene, g, plan, i, o.depth_bias);
     const int side = plan.map_side(i), nx = plan.nx[std::size_t(i)];
@@ -374,101 +453,110 @@ Expected<ImageRgb> render(const Scene& scene, const RayScene& rays, const GBuffe
     };
     parallel_for(plan.ny[std::size_t(i)], [&](int py) {
       std::uint64_t local = 0;
-      for (int px = 0; px < nx; ++px) {
-        const std::size_t q = std::size_t(py) * nx + px;
-        const Probe& pr = probes[q];
-        if (!pr.valid) continue;
-        Corners c;
-        bool merge = !top;
-        if (merge) {
-          const double sx = probe_x(px, plan.spacing(i)), sy = probe_x(py, plan.spacing(i));
-          c = valid_corners(sx, sy, plan.spacing(up), plan.nx[std::size_t(up)],
-                            plan.ny[std::size_t(up)], upper_probes);
-          // The fix weighs its 4 segments as the bilateral merge weighs probes: a probe across a
-          // depth edge would send the segment through whatever lies between.
-          if (o.merge == SpwiMerge::bilateral || o.merge == SpwiMerge::fix)
-            bilateral(c, upper_probes, pr.depth, o.merge_edge);
-          if (o.merge == SpwiMerge::bilinear3d) bilinear3d(c, upper_probes, pr.p);
-          merge = normalise(c, upper_probes);
-        }
-        // The radiance probe `from` receives along d from this cascade's interval and, through
-        // the merge, from beyond it.
-        auto ray_value = [&](const Probe& from, Vec3 d, int u, int v) -> Rgb {
-          if (dot(d, from.n) <= 0) return kNoLight;  // into the probe's own surface
-          Hit h;
-          if (merge && o.merge == SpwiMerge::fix) {
-            // A segment from this probe to the start of each upper probe's interval in this
-            // direction, merged with that probe alone: the merged ray is continuous.
-            Rgb sum{};
+      for (int tile = py * nx, end = tile + nx; tile < end; ++tile)
+        for (int layer = 0; layer < plan.layers; ++layer) {
+          const int px = tile - py * nx;
+          const std::size_t q = std::size_t(tile) * std::size_t(plan.layers) + std::size_t(layer);
+          const Probe& pr = probes[q];
+          if (!pr.valid) continue;
+          Corners c;
+          bool merge = !top;
+          if (merge && minmax) {
+            const double sx = probe_x(px, plan.spacing(i)), sy = probe_x(py, plan.spacing(i));
+            c = minmax_corners(corners(sx, sy, plan.spacing(up), plan.nx[std::size_t(up)],
+                                       plan.ny[std::size_t(up)]),
+                               upper_probes, pr.depth);
+            merge = normalise(c, upper_probes);
+          } else if (merge) {
+            const double sx = probe_x(px, plan.spacing(i)), sy = probe_x(py, plan.spacing(i));
+            c = valid_corners(sx, sy, plan.spacing(up), plan.nx[std::size_t(up)],
+                              plan.ny[std::size_t(up)], upper_probes);
+            // The fix weighs its 4 segments as the bilateral merge weighs probes: a probe across a
+            // depth edge would send the segment through whatever lies between.
+            if (o.merge == SpwiMerge::bilateral || o.merge == SpwiMerge::fix)
+              bilateral(c, upper_probes, pr.depth, o.merge_edge);
+            if (o.merge == SpwiMerge::bilinear3d) bilinear3d(c, upper_probes, pr.p);
+            merge = normalise(c, upper_probes);
+          }
+          // The radiance probe `from` receives along d from this cascade's interval and, through
+          // the merge, from beyond it.
+          auto ray_value = [&](const Probe& from, Vec3 d, int u, int v) -> Rgb {
+            if (dot(d, from.n) <= 0) return kNoLight;  // into the probe's own surface
+            Hit h;
+            if (merge && o.merge == SpwiMerge::fix) {
+              // A segment from this probe to the start of each upper probe's interval in this
+              // direction, merged with that probe alone: the merged ray is continuous.
+              Rgb sum{};
+              float weight = 0;
+              for (int j = 0; j < c.n; ++j) {
+                if (c.w[std::size_t(j)] <= 0) continue;
+                const Probe& uq = upper_probes[std::size_t(c.index[std::size_t(j)])];
+                // From where this cascade's interval starts to where the upper one's starts.
+                const Vec3 target = uq.p + d * b;
+                const Vec3 start =
+                    a > 0 ? from.p + d * a : rays.spawn(from.p, from.n, target - from.p);
+                const Ray r{start, target - start, 0, 1};
+                Rgb got;
+                ++local;
+                if (rays.intersect(r, h))
+                  got = emission_at(scene, h);
+                else if (!upper_mean(c.index[std::size_t(j)], u, v, got))
+                  continue;
+                sum += got * c.w[std::size_t(j)];
+                weight += c.w[std::size_t(j)];
+              }
+              return weight > 0 ? sum * (1 / weight) : kNoLight;
+            }
+            const Ray r{rays.spawn(from.p, from.n, d), d, o.overlap ? 0.0f : a, b};
+            ++local;
+            if (rays.intersect(r, h))
+              return h.t >= a ? emission_at(scene, h) : kNoLight;  // opaque: nothing beyond
+            // The top cascade's misses see the sky; so do rays of a probe with no upper probe
+            // around it (only sky above it on screen).
+            if (!merge) return top_background(scene, d, o.sun);
+            Rgb sum{}, got;
             float weight = 0;
-            for (int j = 0; j < 4; ++j) {
-              if (c.w[std::size_t(j)] <= 0) continue;
-              const Probe& uq = upper_probes[std::size_t(c.index[std::size_t(j)])];
-              // From where this cascade's interval starts to where the upper one's starts.
-              const Vec3 target = uq.p + d * b;
-              const Vec3 start =
-                  a > 0 ? from.p + d * a : rays.spawn(from.p, from.n, target - from.p);
-              const Ray r{start, target - start, 0, 1};
-              Rgb got;
-              ++local;
-              if (rays.intersect(r, h))
-                got = emission_at(scene, h);
-              else if (!upper_mean(c.index[std::size_t(j)], u, v, got))
+            for (int j = 0; j < c.n; ++j)
+              if (c.w[std::size_t(j)] > 0 && upper_mean(c.index[std::size_t(j)], u, v, got)) {
+                sum += got * c.w[std::size_t(j)];
+                weight += c.w[std::size_t(j)];
+              }
+            if (weight > 0) return sum * (1 / weight);
+            // No upper probe has light for this direction (its rays met surfaces before their
+            // intervals, or the upper map has only directions into their surfaces): this ray
+            // continues itself, to infinity as the top cascade does.
+            ++local;
+            const Ray rest{r.origin, d, b, std::numeric_limits<float>::infinity()};
+            return rays.intersect(rest, h) ? emission_at(scene, h)
+                                           : top_background(scene, d, o.sun);
+          };
+          // With the fix, a segment above cascade 0 starts where the cascade below aimed: at this
+          // probe's interval start, not a sub-probe's, so only cascade 0 is pre-averaged there.
+          const bool pre = o.preaverage && !(merge && o.merge == SpwiMerge::fix && a > 0);
+          const std::array<Probe, 4>* subs = pre ? &sub_probes[std::size_t(tile)] : nullptr;
+          for (int v = 0; v < side; ++v)
+            for (int u = 0; u < side; ++u) {
+              const std::size_t k = std::size_t(v) * side + u;
+              const Vec3 d = dirs[k];
+              Rgb& out = lower[k * count + q];
+              if (!subs) {
+                out = ray_value(pr, d, u, v);
                 continue;
-              sum += got * c.w[std::size_t(j)];
-              weight += c.w[std::size_t(j)];
+              }
+              // Pre-averaging (seed 000 section 5.1): the same direction traced from the 2x2
+              // sub-probes of the tile, averaged into the probe (4x the rays, the same storage).
+              Rgb sum{};
+              int n = 0;
+              for (const Probe& sp : *subs) {
+                if (!sp.valid) continue;
+                const Rgb got = ray_value(sp, d, u, v);
+                if (!holds_light(got)) continue;
+                sum += got;
+                ++n;
+              }
+              out = n > 0 ? sum * (1.0f / float(n)) : kNoLight;
             }
-            return weight > 0 ? sum * (1 / weight) : kNoLight;
-          }
-          const Ray r{rays.spawn(from.p, from.n, d), d, o.overlap ? 0.0f : a, b};
-          ++local;
-          if (rays.intersect(r, h))
-            return h.t >= a ? emission_at(scene, h) : kNoLight;  // opaque: nothing beyond
-          // The top cascade's misses see the sky; so do rays of a probe with no upper probe
-          // around it (only sky above it on screen).
-          if (!merge) return top_background(scene, d, o.sun);
-          Rgb sum{}, got;
-          float weight = 0;
-          for (int j = 0; j < 4; ++j)
-            if (c.w[std::size_t(j)] > 0 && upper_mean(c.index[std::size_t(j)], u, v, got)) {
-              sum += got * c.w[std::size_t(j)];
-              weight += c.w[std::size_t(j)];
-            }
-          if (weight > 0) return sum * (1 / weight);
-          // No upper probe has light for this direction (its rays met surfaces before their
-          // intervals, or the upper map has only directions into their surfaces): this ray
-          // continues itself, to infinity as the top cascade does.
-          ++local;
-          const Ray rest{r.origin, d, b, std::numeric_limits<float>::infinity()};
-          return rays.intersect(rest, h) ? emission_at(scene, h) : top_background(scene, d, o.sun);
-        };
-        // With the fix, a segment above cascade 0 starts where the cascade below aimed: at this
-        // probe's interval start, not a sub-probe's, so only cascade 0 is pre-averaged there.
-        const bool pre = o.preaverage && !(merge && o.merge == SpwiMerge::fix && a > 0);
-        const std::array<Probe, 4>* subs = pre ? &sub_probes[q] : nullptr;
-        for (int v = 0; v < side; ++v)
-          for (int u = 0; u < side; ++u) {
-            const std::size_t k = std::size_t(v) * side + u;
-            const Vec3 d = dirs[k];
-            Rgb& out = lower[k * count + q];
-            if (!subs) {
-              out = ray_value(pr, d, u, v);
-              continue;
-            }
-            // Pre-averaging (seed 000 section 5.1): the same direction traced from the 2x2
-            // sub-probes of the tile, averaged into the probe (4x the rays, the same storage).
-            Rgb sum{};
-            int n = 0;
-            for (const Probe& sp : *subs) {
-              if (!sp.valid) continue;
-              const Rgb got = ray_value(sp, d, u, v);
-              if (!holds_light(got)) continue;
-              sum += got;
-              ++n;
-            }
-            out = n > 0 ? sum * (1.0f / float(n)) : kNoLight;
-          }
-      }
+        }
       ray_count.fetch_add(local, std::memory_order_relaxed);
     });
     std::swap(upper, lower);
@@ -502,25 +590,33 @@ Expected<ImageRgb> render(const Scene& scene, const RayScene& rays, const GBuffe
       const Vec3 n = h.shading_normal;
       Rgb l = emission_at(scene, h);
       const Rgb albedo = albedo_at(scene, h);
-      Corners c =
-          valid_corners(x + 0.5, y + 0.5, plan.spacing(0), plan.nx[0], plan.ny[0], upper_probes);
-      bilateral(c, upper_probes, h.t * dot(g.directions[k], forward), o.gather_edge);
+      const float depth = h.t * dot(g.directions[k], forward);
+      Corners c;
+      if (o.merge == SpwiMerge::minmax) {
+        c = minmax_corners(corners(x + 0.5, y + 0.5, plan.spacing(0), plan.nx[0], plan.ny[0]),
+                           upper_probes, depth);
+      } else {
+        c = valid_corners(x + 0.5, y + 0.5, plan.spacing(0), plan.nx[0], plan.ny[0], upper_probes);
+        bilateral(c, upper_probes, depth, o.gather_edge);
+      }
       if (o.gather_normal > 0) {
         // Probes on surfaces facing elsewhere (the front of a block, for a pixel on its top)
         // gather light the pixel does not see: weighted by cos^p of the normals' angle, unless
         // that leaves no probe.
         Corners facing = c;
-        for (int j = 0; j < 4; ++j) {
+        float left = 0;
+        for (int j = 0; j < c.n; ++j) {
           const Vec3 pn = upper_probes[std::size_t(c.index[std::size_t(j)])].n;
           facing.w[std::size_t(j)] *=
               std::pow(std::max(0.0f, dot(pn, h.geometric_normal)), o.gather_normal);
+          left += facing.w[std::size_t(j)];
         }
-        if (facing.w[0] + facing.w[1] + facing.w[2] + facing.w[3] > 0) c = facing;
+        if (left > 0) c = facing;
       }
       if (normalise(c, upper_probes)) {
         Rgb e{};
         float used = 0;  // the weight of probes with light towards this pixel's hemisphere
-        for (int j = 0; j < 4; ++j) {
+        for (int j = 0; j < c.n; ++j) {
           if (c.w[std::size_t(j)] <= 0) continue;
           Rgb sum{};
           float weight = 0;

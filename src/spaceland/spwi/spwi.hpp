@@ -23,12 +23,13 @@ struct Plan {
   int side = 4;             // cascade 0's octahedral map is side x side directions
   float t0 = 0;             // world units
   bool preaverage = false;  // 2x2 sub-probes per probe
+  int layers = 1;           // probes per tile: 2 with the min-max merge (nearest, farthest)
   std::vector<int> nx, ny;  // probe grid of each cascade
 
   int spacing(int i) const { return probe_spacing << i; }
   int map_side(int i) const { return side << i; }
   std::uint64_t probes(int i) const {
-    return std::uint64_t(nx[std::size_t(i)]) * ny[std::size_t(i)];
+    return std::uint64_t(nx[std::size_t(i)]) * ny[std::size_t(i)] * std::uint64_t(layers);
   }
   std::uint64_t rays(int i) const {
     return probes(i) * std::uint64_t(map_side(i)) * std::uint64_t(map_side(i));

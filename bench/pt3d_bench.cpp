@@ -39,14 +39,10 @@ const Scene& example(int which) {
   return scenes[which];
 }
 
-// Args: example, threads (0: all).
-void BM_Pt3d(benchmark::State& state) {
-  const Example& e = kExamples[state.range(0)];
-  const Scene& scene = example(int(state.range(0)));
-  RenderOptions o;
-  o.pt.spp = 4;
-  o.bounces = e.bounces;
-  o.threads = int(state.range(1));
+// Renders `scene` with `o` once per iteration; reports rays/s and, for a progressive method,
+// samples/s (per pixel, summed over pixels).
+void run(benchmark::State& state, const Scene& scene, const RenderOptions& o,
+         const std::string& label) {
   std::uint64_t rays = 0, samples = 0;
   for (auto _ : state) {
     Expected<RenderResult> r = render(scene, o);
@@ -58,32 +54,30 @@ void BM_Pt3d(benchmark::State& state) {
     samples += r->samples * std::uint64_t(scene.camera.width) * scene.camera.height;
     benchmark::DoNotOptimize(r->radiance.data());
   }
-  state.SetLabel(std::string(e.name) + ", " + std::to_string(e.bounces) + " bounces, " +
-                 (o.threads == 1 ? "1 thread" : "all threads"));
+  state.SetLabel(label + (o.threads == 1 ? ", 1 thread" : ", all threads"));
   state.counters["rays/s"] = benchmark::Counter(double(rays), benchmark::Counter::kIsRate);
-  state.counters["samples/s"] = benchmark::Counter(double(samples), benchmark::Counter::kIsRate);
+  if (samples > 0)
+    state.counters["samples/s"] = benchmark::Counter(double(samples), benchmark::Counter::kIsRate);
+}
+
+// The path tracer at 4 samples per pixel. Args: example, threads (0: all).
+void BM_Pt3d(benchmark::State& state) {
+  const Example& e = kExamples[state.range(0)];
+  RenderOptions o;
+  o.pt.spp = 4;
+  o.bounces = e.bounces;
+  o.threads = int(state.range(1));
+  run(state, example(int(state.range(0))), o,
+      std::string(e.name) + ", " + std::to_string(e.bounces) + " bounces");
 }
 BENCHMARK(BM_Pt3d)->ArgsProduct({{0, 1, 2}, {1, 0}})->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // SPWI at its defaults. Args: example, threads (0: all).
 void BM_Spwi3d(benchmark::State& state) {
-  const Example& e = kExamples[state.range(0)];
-  const Scene& scene = example(int(state.range(0)));
   RenderOptions o;
   o.method = Method::spwi;
   o.threads = int(state.range(1));
-  std::uint64_t rays = 0;
-  for (auto _ : state) {
-    Expected<RenderResult> r = render(scene, o);
-    if (!r) {
-      state.SkipWithError(r.error().message.c_str());
-      return;
-    }
-    rays += r->rays;
-    benchmark::DoNotOptimize(r->radiance.data());
-  }
-  state.SetLabel(std::string(e.name) + ", " + (o.threads == 1 ? "1 thread" : "all threads"));
-  state.counters["rays/s"] = benchmark::Counter(double(rays), benchmark::Counter::kIsRate);
+  run(state, example(int(state.range(0))), o, kExamples[state.range(0)].name);
 }
 BENCHMARK(BM_Spwi3d)
     ->ArgsProduct({{0, 1, 2}, {1, 0}})

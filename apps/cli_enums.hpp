@@ -1,6 +1,6 @@
-// Options whose values are the library's enums, named on the command line as to_string() names
-// them, so that the parser, the help and the reports agree; ranges of real numbers printed as a
-// person writes them.
+// Options whose values are the library's enums (of either world: to_string is found by
+// argument-dependent lookup), named on the command line as to_string() names them, so that the
+// parser, the help and the reports agree; ranges of real numbers printed as a person writes them.
 #pragma once
 
 #include <CLI/CLI.hpp>
@@ -11,6 +11,7 @@
 
 #include "io/json_reader.hpp"
 #include "penumbra/flatland/render.hpp"
+#include "penumbra/spaceland/render.hpp"
 
 // `value` must outlive the parse; the help lists the names in the order given.
 template <class E>
@@ -19,14 +20,14 @@ CLI::Option* add_enum_option(CLI::App* app, const std::string& name, E& value,
   std::vector<std::string> list;
   std::map<std::string, E> names;
   for (E v : values) {
-    list.push_back(penumbra::flatland::to_string(v));
+    list.push_back(to_string(v));
     names[list.back()] = v;
   }
   return app
       ->add_option_function<std::string>(
           name, [&value, names](const std::string& s) { value = names.at(s); }, help)
       ->check(CLI::IsMember(list))
-      ->default_str(penumbra::flatland::to_string(value));
+      ->default_str(to_string(value));
 }
 
 // CLI::Range for real numbers, which prints its bounds as "1000000000.000000": this one says

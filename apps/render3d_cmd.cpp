@@ -7,6 +7,7 @@
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <string_view>
 
 #include "core/timer.hpp"
 #include "io/json_reader.hpp"
@@ -23,19 +24,14 @@ constexpr int kInterrupted = 130;
 
 namespace sl = penumbra::spaceland;
 
-// What a 3D render reads, for every method and per method; every other option given is
-// refused, so none is silently ignored.
-const char* const kCommon[] = {"scene",   "--output", "--method", "--bounces",    "--threads",
-                               "--width", "--height", "--aov",    "--max-memory", "--exposure",
-                               "--json",  "--quiet",  "--device"};
-const char* const kPt[] = {"--spp", "--time", "--seed"};
-const char* const kSpwi[] = {"--probe-spacing", "--directions", "--interval",      "--cascades",
-                             "--merge",         "--sun",        "--depth-bias",    "--merge-edge",
-                             "--gather-edge",   "--disjoint",   "--gather-normal", "--preaverage"};
+// What every 3D render reads besides k3dOptions.
+constexpr std::string_view kCommon[] = {"scene",     "--output",     "--method",   "--bounces",
+                                        "--threads", "--max-memory", "--exposure", "--json",
+                                        "--quiet",   "--device"};
 
 template <std::size_t N>
-bool listed(const std::string& name, const char* const (&list)[N]) {
-  for (const char* n : list)
+bool listed(const std::string& name, const std::string_view (&list)[N]) {
+  for (std::string_view n : list)
     if (name == n) return true;
   return false;
 }
@@ -67,8 +63,9 @@ int render_scene_3d(const RenderArgs& a) {
   if (a.app)
     for (const CLI::Option* opt : a.app->get_options()) {
       const std::string name = opt->get_name();
-      if (opt->count() == 0 || listed(name, kCommon)) continue;
-      const bool pt = listed(name, kPt), spwi = listed(name, kSpwi);
+      if (opt->count() == 0 || listed(name, kCommon) || listed(name, k3dOptions)) continue;
+      const bool pt = listed(name, kPtOptions),
+                 spwi = listed(name, kSpwiOptions) || listed(name, kSpwiSharedOptions);
       if (!pt && !spwi) {
         std::cerr << "penumbra render: " << name << " applies to 2D scenes only (" << a.scene
                   << " is a 3D scene)\n";
@@ -84,19 +81,13 @@ int render_scene_3d(const RenderArgs& a) {
   // spwi: its defaults, and the options shared with 2D's cascades where they were given.
   options.spwi = a.spwi;
   if (a.disjoint) options.spwi.overlap = false;
-  for (sl::SpwiMerge m : {sl::SpwiMerge::bilinear, sl::SpwiMerge::bilateral,
-                          sl::SpwiMerge::bilinear3d, sl::SpwiMerge::fix, sl::SpwiMerge::minmax})
-    if (a.merge == sl::to_string(m)) options.spwi.merge = m;
-  options.spwi.sun = a.sun == "cascades" ? sl::SpwiSun::cascades : sl::SpwiSun::direct;
   auto given = [&](const char* name) { return a.app && a.app->get_option(name)->count() > 0; };
   if (given("--probe-spacing")) options.spwi.probe_spacing = a.options.rc.probe_spacing;
   if (given("--directions")) options.spwi.directions = a.options.rc.directions;
   if (given("--interval")) options.spwi.interval = a.options.rc.interval;
   if (given("--cascades")) options.spwi.cascades = a.options.rc.cascades;
   if (given("--preaverage")) options.spwi.preaverage = a.options.rc.preaverage;
-  for (sl::Aov v : {sl::Aov::radiance, sl::Aov::depth, sl::Aov::normal, sl::Aov::albedo,
-                    sl::Aov::position, sl::Aov::emission, sl::Aov::object})
-    if (a.aov == sl::to_string(v)) options.aov = v;
+  options.aov = a.aov;
   // The shared options, with --time alone meaning no sample limit, as in 2D.
   penumbra::flatland::RenderOptions shared = a.options;
   finish_render_options(shared, a.flags);

@@ -93,10 +93,19 @@ int check_render_args(const RenderArgs& a, std::uint64_t& max_memory) {
 
 namespace {
 
-// The 3D-only options, refused with a 2D scene.
-const char* const k3dOnly[] = {"--width",    "--height",       "--aov",        "--merge",
-                               "--sun",      "--depth-bias",   "--merge-edge", "--gather-edge",
-                               "--disjoint", "--gather-normal"};
+// A 3D-only option given with a 2D scene, or nullptr.
+const CLI::Option* given_3d_option(const RenderArgs& a) {
+  if (!a.app) return nullptr;
+  for (const CLI::Option* opt : a.app->get_options()) {
+    if (opt->count() == 0) continue;
+    const std::string name = opt->get_name();
+    for (std::string_view n : k3dOptions)
+      if (name == n) return opt;
+    for (std::string_view n : kSpwiOptions)
+      if (name == n) return opt;
+  }
+  return nullptr;
+}
 
 int render_scene(const RenderArgs& a) {
   if (!a.scene.empty()) {
@@ -107,13 +116,12 @@ int render_scene(const RenderArgs& a) {
     }
     if (*dims == 3) return render_scene_3d(a);
   }
-  for (const char* name : k3dOnly)
-    if (a.app && a.app->get_option(name)->count() > 0) {
-      std::cerr << "penumbra render: " << name << " applies to 3D scenes only ("
-                << (a.scene.empty() ? std::string("the built-in scene") : a.scene)
-                << " is a 2D scene)\n";
-      return kUsage;
-    }
+  if (const CLI::Option* opt = given_3d_option(a)) {
+    std::cerr << "penumbra render: " << opt->get_name() << " applies to 3D scenes only ("
+              << (a.scene.empty() ? std::string("the built-in scene") : a.scene)
+              << " is a 2D scene)\n";
+    return kUsage;
+  }
   penumbra::flatland::RenderOptions options = a.options;
   if (!a.method.empty()) {
     bool known = false;
@@ -303,43 +311,22 @@ std::unique_ptr<RenderCommand> add_render_command(CLI::App& app) {
   render->add_option("--height", a.height, "3D: image height")
       ->check(CLI::Range(1, penumbra::spaceland::kMaxImageSide));
   {
-    std::vector<std::string> aovs;
-    for (penumbra::spaceland::Aov v :
-         {penumbra::spaceland::Aov::radiance, penumbra::spaceland::Aov::depth,
-          penumbra::spaceland::Aov::normal, penumbra::spaceland::Aov::albedo,
-          penumbra::spaceland::Aov::position, penumbra::spaceland::Aov::emission,
-          penumbra::spaceland::Aov::object})
-      aovs.push_back(penumbra::spaceland::to_string(v));
-    render
-        ->add_option("--aov", a.aov,
-                     "3D: what the image holds: radiance, or a G-buffer channel of the first "
-                     "hits (depth, normal, albedo, position, emission, object)")
-        ->check(CLI::IsMember(aovs))
-        ->capture_default_str();
-  }
-  {
-    using penumbra::spaceland::SpwiMerge;
-    std::vector<std::string> merges, suns;
-    for (SpwiMerge m : {SpwiMerge::bilinear, SpwiMerge::bilateral, SpwiMerge::bilinear3d,
-                        SpwiMerge::fix, SpwiMerge::minmax})
-      merges.push_back(penumbra::spaceland::to_string(m));
-    for (penumbra::spaceland::SpwiSun v :
-         {penumbra::spaceland::SpwiSun::direct, penumbra::spaceland::SpwiSun::cascades})
-      suns.push_back(penumbra::spaceland::to_string(v));
-    render
-        ->add_option("--merge", a.merge,
-                     "3D spwi: merging with the upper cascade: bilinear, bilateral (depth "
-                     "edges), bilinear3d (world-space lines), fix (trace to each upper probe's "
-                     "interval start), minmax (probes on each tile's nearest and farthest "
-                     "surface)")
-        ->check(CLI::IsMember(merges))
-        ->capture_default_str();
-    render
-        ->add_option("--sun", a.sun,
-                     "3D spwi: the sun on visible surfaces: direct (a shadow ray per pixel), "
-                     "cascades (the top cascade sees its disk)")
-        ->check(CLI::IsMember(suns))
-        ->capture_default_str();
+    namespace sl = penumbra::spaceland;
+    add_enum_option(render, "--aov", a.aov,
+                    {sl::Aov::radiance, sl::Aov::depth, sl::Aov::normal, sl::Aov::albedo,
+                     sl::Aov::position, sl::Aov::emission, sl::Aov::object},
+                    "3D: what the image holds: radiance, or a G-buffer channel of the first "
+                    "hits (depth, normal, albedo, position, emission, object)");
+    add_enum_option(render, "--merge", a.spwi.merge,
+                    {sl::SpwiMerge::bilinear, sl::SpwiMerge::bilateral, sl::SpwiMerge::bilinear3d,
+                     sl::SpwiMerge::fix, sl::SpwiMerge::minmax},
+                    "3D spwi: merging with the upper cascade: bilinear, bilateral (depth "
+                    "edges), bilinear3d (world-space lines), fix (trace to each upper probe's "
+                    "interval start), minmax (probes on each tile's nearest and farthest "
+                    "surface)");
+    add_enum_option(render, "--sun", a.spwi.sun, {sl::SpwiSun::direct, sl::SpwiSun::cascades},
+                    "3D spwi: the sun on visible surfaces: direct (a shadow ray per pixel), "
+                    "cascades (the top cascade sees its disk)");
     render
         ->add_option("--depth-bias", a.spwi.depth_bias,
                      "3D spwi: probes moved to this fraction of their depth (seed 000: 0.98)")

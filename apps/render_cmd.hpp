@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "penumbra/flatland/render.hpp"
@@ -19,11 +20,10 @@ struct RenderArgs {
   std::string method;  // empty: the world's default (rc in 2D, pt in 3D)
   // 3D only: the camera's image size (0: the scene's) and what the image holds.
   int width = 0, height = 0;
-  std::string aov = "radiance";
-  // 3D spwi: its own options (--probe-spacing, --directions, --interval and --cascades are
-  // shared with 2D's cascades and copied when given).
+  penumbra::spaceland::Aov aov = penumbra::spaceland::Aov::radiance;
+  // 3D spwi: its own options (those in kSpwiSharedOptions are read into 2D's `options.rc` and
+  // copied when given).
   penumbra::spaceland::SpwiOptions spwi;
-  std::string merge = "bilinear3d", sun = "direct";
   bool disjoint = false;  // --disjoint: spwi's thesis intervals (SpwiOptions::overlap off)
   std::vector<std::string> outputs;
   std::string max_memory = "8G";
@@ -47,6 +47,19 @@ std::unique_ptr<RenderCommand> add_render_command(CLI::App& app);
 // Exit code: 0 success, 1 bad input or failure, 2 usage error, 130 interrupted (the image of the
 // samples so far is still written).
 int run_render(const RenderArgs& args);
+
+// Which options a 3D render reads: render3d_cmd.cpp refuses any other that was given (naming
+// the method or the world it belongs to), render_cmd.cpp refuses the 3D-only ones with a 2D
+// scene. One list each, so that a new option is declared once.
+inline constexpr std::string_view k3dOptions[] = {"--width", "--height", "--aov"};
+// spwi's own options, and those it shares with 2D's cascades (read into `options.rc`).
+inline constexpr std::string_view kSpwiOptions[] = {
+    "--merge",       "--sun",      "--depth-bias",   "--merge-edge",
+    "--gather-edge", "--disjoint", "--gather-normal"};
+inline constexpr std::string_view kSpwiSharedOptions[] = {
+    "--probe-spacing", "--directions", "--interval", "--cascades", "--preaverage"};
+// The 3D path tracer's (read into `options.pt`, as 2D's path tracer reads them).
+inline constexpr std::string_view kPtOptions[] = {"--spp", "--time", "--seed"};
 
 // What both worlds check before loading a scene: output types and writability, --max-memory
 // (parsed into `max_memory`) and --exposure. Prints the message; returns 0 or the exit code.

@@ -35,11 +35,13 @@ GBuffer make_gbuffer(const Scene& scene, const RayScene& rays) {
   g.found.resize(n);
   g.directions.resize(n);
   const CameraRays camera(scene.camera);
+  g.forward = camera.forward();
   // A row at a time through Embree's stream interface: camera rays through neighbouring pixels
   // are coherent, which it traces about twice as fast as single rays (docs/PERFORMANCE.md).
   parallel_for(g.height, [&](int j) {
     const std::size_t row = std::size_t(j) * g.width;
-    std::vector<Ray> rays_of_row(std::size_t(g.width));
+    thread_local std::vector<Ray> rays_of_row;  // allocated once per thread, not per row
+    rays_of_row.resize(std::size_t(g.width));
     for (int i = 0; i < g.width; ++i) {
       rays_of_row[std::size_t(i)] = camera.ray(i, j);
       g.directions[row + std::size_t(i)] = rays_of_row[std::size_t(i)].direction;
@@ -55,8 +57,6 @@ GBuffer make_gbuffer(const Scene& scene, const RayScene& rays) {
 
 ImageRgb aov_image(const Scene& scene, const GBuffer& g, Aov aov) {
   ImageRgb img(g.width, g.height);
-  const CameraRays camera(scene.camera);
-  const Vec3 forward = camera.forward();
   const float inf = std::numeric_limits<float>::infinity();
   parallel_for(g.height, [&](int j) {
     for (int i = 0; i < g.width; ++i) {
@@ -66,7 +66,7 @@ ImageRgb aov_image(const Scene& scene, const GBuffer& g, Aov aov) {
       Rgb c{};
       switch (aov) {
         case Aov::depth: {
-          const float d = hit ? h.t * dot(g.directions[k], forward) : inf;
+          const float d = hit ? g.linear_depth(k) : inf;
           c = {d, d, d};
           break;
         }

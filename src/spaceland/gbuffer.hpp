@@ -24,6 +24,10 @@ struct GBuffer {
   std::vector<Hit> hits;            // normals faced towards the camera
   std::vector<std::uint8_t> found;  // 1 where the camera ray hit a surface
   std::vector<Vec3> directions;     // unit camera ray of each pixel
+  Vec3 forward;                     // the camera's view direction
+
+  // Linear depth of pixel k's hit: its distance along the view direction.
+  float linear_depth(std::size_t k) const { return hits[k].t * dot(directions[k], forward); }
 
   static std::uint64_t bytes_per_pixel() {
     return sizeof(Hit) + sizeof(std::uint8_t) + sizeof(Vec3);

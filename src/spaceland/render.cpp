@@ -18,6 +18,13 @@ namespace penumbra::spaceland {
 
 namespace {
 
+// The result image: 3 floats per pixel.
+constexpr std::uint64_t kImageBytesPerPixel = 3 * sizeof(float);
+
+std::uint64_t pt_bytes(const Scene& scene, const RenderOptions&) {
+  return std::uint64_t(scene.camera.width) * scene.camera.height * pt::kBytesPerPixel;
+}
+
 // What a method's solver is handed, and what it gives back besides the image.
 struct Solved {
   std::vector<StageTime> stages;
@@ -37,7 +44,7 @@ Expected<ImageRgb> pt_solve(const Scene& scene, const RayScene& rays, const GBuf
   out.rays = stats.rays;
   out.samples = stats.samples;
   out.cancelled = stats.cancelled;
-  out.memory_bytes = std::uint64_t(g.width) * g.height * pt::kBytesPerPixel;
+  out.memory_bytes = pt_bytes(scene, options);
   return img;
 }
 
@@ -46,7 +53,7 @@ Expected<ImageRgb> spwi_solve(const Scene& scene, const RayScene& rays, const GB
   spwi::Stats stats;
   Expected<ImageRgb> img = spwi::render(scene, rays, g, options, stats);
   out.stages = stats.stages;
-  out.rays = stats.rays + std::uint64_t(g.width) * g.height;  // and the G-buffer's
+  out.rays = stats.rays;
   out.memory_bytes = stats.memory_bytes;
   out.derived.spwi.interval = stats.plan.t0;
   out.derived.spwi.cascades = stats.plan.cascades;
@@ -55,10 +62,6 @@ Expected<ImageRgb> spwi_solve(const Scene& scene, const RayScene& rays, const GB
 
 Status no_check(const Scene&, const RenderOptions&) {
   return {};
-}
-
-std::uint64_t pt_bytes(const Scene& scene, const RenderOptions&) {
-  return std::uint64_t(scene.camera.width) * scene.camera.height * pt::kBytesPerPixel;
 }
 
 std::uint64_t spwi_bytes(const Scene& scene, const RenderOptions& options) {
@@ -172,16 +175,17 @@ Status check_options(const RenderOptions& o) {
 
 std::uint64_t estimate_memory(const Scene& scene, const RenderOptions& options) {
   const std::uint64_t pixels = std::uint64_t(scene.camera.width) * scene.camera.height;
-  const std::uint64_t per_pixel = GBuffer::bytes_per_pixel() + 3 * sizeof(float);  // + image
+  const std::uint64_t per_pixel = GBuffer::bytes_per_pixel() + kImageBytesPerPixel;
   const std::uint64_t method =
       options.aov == Aov::radiance ? entry(options.method).bytes(scene, options) : 0;
   return RayScene::estimate_bytes(scene) + pixels * per_pixel + method;
 }
 
 Status check_memory(const Scene& scene, const RenderOptions& options) {
-  const std::uint64_t need = estimate_memory(scene, options) + scene_bytes(scene);
+  const std::uint64_t held = scene_bytes(scene);
+  const std::uint64_t need = estimate_memory(scene, options) + held;
   if (need > options.max_memory)
-    return Error{"needs about " + mib(need) + " of memory (the scene " + mib(scene_bytes(scene)) +
+    return Error{"needs about " + mib(need) + " of memory (the scene " + mib(held) +
                  ", the ray tracer's BVH and " + std::to_string(scene.camera.width) + "x" +
                  std::to_string(scene.camera.height) + " pixels of buffers), more than the `" +
                  "max_memory` limit of " + mib(options.max_memory)};
@@ -210,11 +214,12 @@ Expected<RenderResult> render(const Scene& scene, const RenderOptions& options) 
     result.stages.push_back({"G-buffer", stage.ms()});
     stage.restart();
     const std::uint64_t pixels = std::uint64_t(g.width) * g.height;
-    result.memory_bytes = rays->bytes() + pixels * (GBuffer::bytes_per_pixel() + 12);
+    result.memory_bytes =
+        rays->bytes() + pixels * (GBuffer::bytes_per_pixel() + kImageBytesPerPixel);
+    result.rays = pixels;  // the G-buffer's camera rays
     if (options.aov != Aov::radiance) {
       result.radiance = aov_image(scene, g, options.aov);
       result.stages.push_back({"AOV", stage.ms()});
-      result.rays = pixels;
     } else {
       Solved solved;
       solved.derived = options;
@@ -222,7 +227,7 @@ Expected<RenderResult> render(const Scene& scene, const RenderOptions& options) 
       if (!img) return img.error();
       result.radiance = std::move(*img);
       for (StageTime& st : solved.stages) result.stages.push_back(std::move(st));
-      result.rays = solved.rays;
+      result.rays += solved.rays;
       result.samples = solved.samples;
       result.cancelled = solved.cancelled;
       result.memory_bytes += solved.memory_bytes;

@@ -279,7 +279,7 @@ ImageRgb render(const Scene& scene, const RayScene& rays, const GBuffer& g,
     if (timed_out) break;
   }
   stats.samples = done;
-  stats.rays = ray_count.load() + n;  // the G-buffer's camera rays
+  stats.rays = ray_count.load();
   ImageRgb img(w, h);
   const double inv = done > 0 ? 1.0 / double(done) : 0;
   for (std::size_t k = 0; k < n * 3; ++k) img.data()[k] = float(sum[k] * inv);

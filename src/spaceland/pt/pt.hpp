@@ -14,7 +14,7 @@
 namespace penumbra::spaceland::pt {
 
 struct Stats {
-  std::uint64_t rays = 0;     // closest-hit and shadow rays traced
+  std::uint64_t rays = 0;     // continuation and shadow rays traced (not the G-buffer's)
   std::uint64_t samples = 0;  // per pixel
   bool cancelled = false;
 };

@@ -166,11 +166,10 @@ Probe probe_at(const Scene& scene, const GBuffer& g, int x, int y, float depth_b
   if (!g.found[k]) return p;
   const Hit& h = g.hits[k];
   const Vec3 eye = scene.camera.position;
-  const Vec3 forward = normalize(scene.camera.look_at - scene.camera.position);
   p.valid = true;
   p.p = eye + (h.position - eye) * depth_bias;
   p.n = h.geometric_normal;
-  p.depth = h.t * dot(g.directions[k], forward);
+  p.depth = g.linear_depth(k);
   return p;
 }
 
@@ -224,13 +223,11 @@ Corners minmax_corners(const Corners& c, const std::vector<Probe>& probes, float
   return out;
 }
 
-// The probes of cascade i on the G-buffer.
 // With the min-max merge: per tile, probes on the nearest and the farthest surface pixel of the
 // tile (the min-max depth pyramid's level of this cascade, read directly off the G-buffer).
 std::vector<Probe> place_minmax_probes(const Scene& scene, const GBuffer& g, const Plan& plan,
                                        int i, float depth_bias) {
   const int s = plan.spacing(i), nx = plan.nx[std::size_t(i)], ny = plan.ny[std::size_t(i)];
-  const Vec3 forward = normalize(scene.camera.look_at - scene.camera.position);
   std::vector<Probe> probes(std::size_t(nx) * ny * 2);
   parallel_for(ny, [&](int ty) {
     for (int tx = 0; tx < nx; ++tx) {
@@ -240,7 +237,7 @@ std::vector<Probe> place_minmax_probes(const Scene& scene, const GBuffer& g, con
         for (int x = tx * s; x < std::min((tx + 1) * s, g.width); ++x) {
           const std::size_t k = std::size_t(y) * g.width + x;
           if (!g.found[k]) continue;
-          const float d = g.hits[k].t * dot(g.directions[k], forward);
+          const float d = g.linear_depth(k);
           if (d < lo) {
             lo = d;
             lx = x;
@@ -261,6 +258,7 @@ std::vector<Probe> place_minmax_probes(const Scene& scene, const GBuffer& g, con
   return probes;
 }
 
+// The probes of cascade i on the G-buffer.
 std::vector<Probe> place_probes(const Scene& scene, const GBuffer& g, const Plan& plan, int i,
                                 float depth_bias) {
   const int s = plan.spacing(i), nx = plan.nx[std::size_t(i)], ny = plan.ny[std::size_t(i)];
@@ -270,6 +268,15 @@ std::vector<Probe> place_probes(const Scene& scene, const GBuffer& g, const Plan
       probes[std::size_t(y) * nx + x] =
           probe_at(scene, g, x * s + s / 2, y * s + s / 2, depth_bias);
   return probes;
+}
+
+// The cell directions of a side x side map, in storage order (v rows of u).
+std::vector<Vec3> map_directions(int side) {
+  std::vector<Vec3> dirs(std::size_t(side) * side);
+  for (int v = 0; v < side; ++v)
+    for (int u = 0; u < side; ++u)
+      dirs[std::size_t(v) * side + u] = octahedral::cell_direction(u, v, side);
+  return dirs;
 }
 
 // What a ray that leaves the scene sees from the top cascade: the sky, with the sun's disk when
@@ -289,7 +296,10 @@ std::uint64_t Plan::bytes() const {
   return 2 * largest * sizeof(Rgb) + probe_bytes;
 }
 
-std::uint64_t bytes_upper_bound(int width, int height, const SpwiOptions& o) {
+namespace {
+
+// What the options fix of a plan for a w x h image (no t0, no cascade count, no grids yet).
+Plan options_plan(int width, int height, const SpwiOptions& o) {
   Plan p;
   p.width = width;
   p.height = height;
@@ -297,12 +307,24 @@ std::uint64_t bytes_upper_bound(int width, int height, const SpwiOptions& o) {
   p.side = std::max(1, int(std::lround(std::sqrt(double(std::max(1, o.directions))))));
   p.preaverage = o.preaverage;
   p.layers = o.merge == SpwiMerge::minmax ? 2 : 1;
+  return p;
+}
+
+// The probe grid of each of the plan's cascades.
+void add_grids(Plan& p) {
+  for (int i = 0; i < p.cascades; ++i) {
+    p.nx.push_back((p.width + p.spacing(i) - 1) / p.spacing(i));
+    p.ny.push_back((p.height + p.spacing(i) - 1) / p.spacing(i));
+  }
+}
+
+}  // namespace
+
+std::uint64_t bytes_upper_bound(int width, int height, const SpwiOptions& o) {
+  Plan p = options_plan(width, height, o);
   p.cascades = o.cascades > 0 ? std::min(o.cascades, kMaxCascades)
                               : screen_cascades(width, height, p.probe_spacing);
-  for (int i = 0; i < p.cascades; ++i) {
-    p.nx.push_back((width + p.spacing(i) - 1) / p.spacing(i));
-    p.ny.push_back((height + p.spacing(i) - 1) / p.spacing(i));
-  }
+  add_grids(p);
   return p.bytes();
 }
 
@@ -350,21 +372,14 @@ namespace {
 
 // The plan, with t0 and the cascade count derived where the options leave them to 0.
 Plan make_plan(const Scene& scene, const GBuffer& g, const SpwiOptions& o) {
-  Plan p;
-  p.preaverage = o.preaverage;
-  p.layers = o.merge == SpwiMerge::minmax ? 2 : 1;
-  p.width = g.width;
-  p.height = g.height;
-  p.probe_spacing = o.probe_spacing;
-  p.side = int(std::lround(std::sqrt(double(o.directions))));
+  Plan p = options_plan(g.width, g.height, o);
   p.t0 = o.interval;
   if (!(p.t0 > 0)) {
     // The world size of s0 pixels at the median depth of the visible surfaces: cascade 0's
     // interval as long as its probes are apart (the penumbra condition's balance).
     std::vector<float> depths;
-    const Vec3 forward = normalize(scene.camera.look_at - scene.camera.position);
     for (std::size_t k = 0; k < g.hits.size(); ++k)
-      if (g.found[k]) depths.push_back(g.hits[k].t * dot(g.directions[k], forward));
+      if (g.found[k]) depths.push_back(g.linear_depth(k));
     float median = 1;
     if (!depths.empty()) {
       std::nth_element(depths.begin(), depths.begin() + depths.size() / 2, depths.end());
@@ -384,10 +399,7 @@ Plan make_plan(const Scene& scene, const GBuffer& g, const SpwiOptions& o) {
     p.cascades = 1;
     while (p.cascades < most && double(p.interval_end(p.cascades - 1)) < reach) ++p.cascades;
   }
-  for (int i = 0; i < p.cascades; ++i) {
-    p.nx.push_back((g.width + p.spacing(i) - 1) / p.spacing(i));
-    p.ny.push_back((g.height + p.spacing(i) - 1) / p.spacing(i));
-  }
+  add_grids(p);
   return p;
 }
 
@@ -414,16 +426,13 @@ Expected<ImageRgb> render(const Scene& scene, const RayScene& rays, const GBuffe
   for (int i = plan.cascades - 1; i >= 0; --i) {
     Stopwatch watch;
     const bool minmax = o.merge == SpwiMerge::minmax;
-    const std::vector<Probe> probes = minmax ? place_minmax_probes(scene, g, plan, i, o.depth_bias)
-                                             : place_probes(scene, g, plan, i, o.depth_bias);
+    std::vector<Probe> probes = minmax ? place_minmax_probes(scene, g, plan, i, o.depth_bias)
+                                       : place_probes(scene, g, plan, i, o.depth_bias);
     std::vector<std::array<Probe, 4>> sub_probes;
     if (o.preaverage) sub_probes = place_sub_probes(scene, g, plan, i, o.depth_bias);
     const int side = plan.map_side(i), nx = plan.nx[std::size_t(i)];
     const std::uint64_t count = plan.probes(i);
-    std::vector<Vec3> dirs(std::size_t(side) * side);
-    for (int v = 0; v < side; ++v)
-      for (int u = 0; u < side; ++u)
-        dirs[std::size_t(v) * side + u] = octahedral::cell_direction(u, v, side);
+    const std::vector<Vec3> dirs = map_directions(side);
     lower.assign(std::size_t(plan.rays(i)), Rgb{});
     const bool top = i == plan.cascades - 1;
     // The top cascade's interval runs to infinity: its misses see the sky, whatever the reach
@@ -560,7 +569,7 @@ Expected<ImageRgb> render(const Scene& scene, const RayScene& rays, const GBuffe
       ray_count.fetch_add(local, std::memory_order_relaxed);
     });
     std::swap(upper, lower);
-    upper_probes = probes;
+    upper_probes = std::move(probes);
     stats.stages.push_back({"cascade " + std::to_string(i), watch.ms()});
   }
 
@@ -568,13 +577,8 @@ Expected<ImageRgb> render(const Scene& scene, const RayScene& rays, const GBuffe
   // cosine-weighted mean radiance over the pixel's hemisphere.
   Stopwatch watch;
   const int side = plan.map_side(0);
-  std::vector<Vec3> dirs(std::size_t(side) * side);
-  for (int v = 0; v < side; ++v)
-    for (int u = 0; u < side; ++u)
-      dirs[std::size_t(v) * side + u] = octahedral::cell_direction(u, v, side);
+  const std::vector<Vec3> dirs = map_directions(side);
   const std::uint64_t count = plan.probes(0);
-  const CameraRays camera(scene.camera);
-  const Vec3 forward = camera.forward();
   const bool sun_direct = o.sun == SpwiSun::direct && scene.has_sun;
   const Vec3 sun_dir = scene.has_sun ? normalize(scene.sun.direction) : Vec3{0, 1, 0};
   ImageRgb img(g.width, g.height);
@@ -590,7 +594,7 @@ Expected<ImageRgb> render(const Scene& scene, const RayScene& rays, const GBuffe
       const Vec3 n = h.shading_normal;
       Rgb l = emission_at(scene, h);
       const Rgb albedo = albedo_at(scene, h);
-      const float depth = h.t * dot(g.directions[k], forward);
+      const float depth = g.linear_depth(k);
       Corners c;
       if (o.merge == SpwiMerge::minmax) {
         c = minmax_corners(corners(x + 0.5, y + 0.5, plan.spacing(0), plan.nx[0], plan.ny[0]),

@@ -57,6 +57,7 @@ GBuffer make_gbuffer(const Scene& scene, const RayScene& rays) {
 
 ImageRgb aov_image(const Scene& scene, const GBuffer& g, Aov aov) {
   ImageRgb img(g.width, g.height);
+  const Background bg(scene);
   const float inf = std::numeric_limits<float>::infinity();
   parallel_for(g.height, [&](int j) {
     for (int i = 0; i < g.width; ++i) {
@@ -80,7 +81,7 @@ ImageRgb aov_image(const Scene& scene, const GBuffer& g, Aov aov) {
           if (hit) c = {h.position.x, h.position.y, h.position.z};
           break;
         case Aov::emission:
-          c = hit ? emission_at(scene, h) : background(scene, g.directions[k]);
+          c = hit ? emission_at(scene, h) : bg(g.directions[k]);
           break;
         case Aov::object: {
           const float o = hit ? float(h.object) : -1.0f;

@@ -7,6 +7,7 @@
 #include "core/math.hpp"
 #include "spaceland/camera.hpp"
 #include "spaceland/color.hpp"
+#include "spaceland/sampling.hpp"
 
 namespace penumbra::spaceland {
 
@@ -42,7 +43,7 @@ Vec3 triangle_normal(const TriangleMesh& m, std::uint32_t t, float& area) {
 
 }  // namespace
 
-Lights::Lights(const Scene& scene) : scene_(&scene) {
+Lights::Lights(const Scene& scene) : scene_(&scene), background_(scene) {
   auto emits = [&](std::uint32_t material) {
     return !is_black(scene.materials[material].emission);
   };
@@ -87,14 +88,9 @@ Lights::Lights(const Scene& scene) : scene_(&scene) {
   for (double& c : cdf_) c /= total;
   if (!cdf_.empty()) cdf_.back() = 1;
 
-  if (scene.has_sun && !is_black(scene.sun.irradiance)) {
-    has_sun_ = true;
-    sun_dir_ = normalize(scene.sun.direction);
-    orthonormal_basis(sun_dir_, sun_t_, sun_b_);
-    sun_cos_ = sun_cos_radius(scene.sun);
-    const double s = std::sin(double(scene.sun.angular_radius) * kPi / 180);
-    sun_pdf_ = float(1 / (2 * kPi * (s * s / (1 + sun_cos_))));
-    sun_radiance_ = spaceland::sun_radiance(scene.sun);
+  if (background_.has_sun()) {
+    orthonormal_basis(background_.sun_direction(), sun_t_, sun_b_);
+    sun_pdf_ = float(1 / (2 * kPi * background_.sun_one_minus_cos()));
   }
 }
 
@@ -153,15 +149,10 @@ LightSample Lights::sample(Vec3 p, float u_pick, std::array<float, 2> u) const {
     if (outside_sphere(s, p, dc)) {
       // Uniform in the cone the sphere subtends: exact solid-angle sampling.
       const double w = cone_width(s.radius, dc);
-      const double one_minus_cos = u[0] * w;
-      const double cos_t = 1 - one_minus_cos;
-      const double sin_t = std::sqrt(std::max(0.0, one_minus_cos * (2 - one_minus_cos)));
-      const double phi = kTwoPi * u[1];
       const Vec3 axis = to_c / float(dc);
       Vec3 t, b;
       orthonormal_basis(axis, t, b);
-      const Vec3 dir = normalize(axis * float(cos_t) + t * float(sin_t * std::cos(phi)) +
-                                 b * float(sin_t * std::sin(phi)));
+      const Vec3 dir = cone_direction(axis, t, b, w, u);
       // The nearer intersection with the sphere (or the tangent point when it grazes).
       const double b_half = dot(dir, to_c);
       const double disc = std::max(0.0, b_half * b_half - (dc * dc - double(s.radius) * s.radius));
@@ -177,9 +168,7 @@ LightSample Lights::sample(Vec3 p, float u_pick, std::array<float, 2> u) const {
       return ls;
     }
     // Inside: uniform on the sphere (by area).
-    const double z = 1 - 2 * double(u[0]), r = std::sqrt(std::max(0.0, 1 - z * z));
-    const double phi = kTwoPi * u[1];
-    n = {float(r * std::cos(phi)), float(r * std::sin(phi)), float(z)};
+    n = uniform_sphere(u);
     q = s.center + n * s.radius;
   } else {
     const Disk& d = scene_->disks[em.shape];
@@ -224,16 +213,11 @@ float Lights::pdf(Vec3 p, const Hit& hit) const {
 
 LightSample Lights::sample_sun(std::array<float, 2> u) const {
   LightSample ls;
-  if (!has_sun_) return ls;
-  const double w = 1 - sun_cos_;
-  const double one_minus_cos = u[0] * w;
-  const double cos_t = 1 - one_minus_cos;
-  const double sin_t = std::sqrt(std::max(0.0, one_minus_cos * (2 - one_minus_cos)));
-  const double phi = kTwoPi * u[1];
-  ls.direction = normalize(sun_dir_ * float(cos_t) + sun_t_ * float(sin_t * std::cos(phi)) +
-                           sun_b_ * float(sin_t * std::sin(phi)));
+  if (!background_.has_sun()) return ls;
+  ls.direction = cone_direction(background_.sun_direction(), sun_t_, sun_b_,
+                                background_.sun_one_minus_cos(), u);
   ls.distance = std::numeric_limits<float>::infinity();  // shadow rays go to the sky
-  ls.radiance = sun_radiance_;
+  ls.radiance = background_.sun();
   ls.pdf = sun_pdf_;
   ls.sun = true;
   return ls;

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "penumbra/spaceland/scene.hpp"
+#include "spaceland/camera.hpp"
 #include "spaceland/embree/ray_scene.hpp"
 
 namespace penumbra::spaceland {
@@ -46,12 +47,11 @@ class Lights {
   float pdf(Vec3 p, const Hit& hit) const;
 
   // The sun's cone, when the scene has a sun.
-  bool has_sun() const { return has_sun_; }
+  bool has_sun() const { return background_.has_sun(); }
   LightSample sample_sun(std::array<float, 2> u) const;
   float sun_pdf() const { return sun_pdf_; }
-  // Whether unit direction d lies in the sun's disk.
-  bool in_sun(Vec3 d) const { return has_sun_ && double(dot(d, sun_dir_)) >= sun_cos_; }
-  Rgb sun_radiance() const { return sun_radiance_; }
+  // The sky and the sun as rays that leave the scene see them.
+  const Background& background() const { return background_; }
 
   std::uint64_t bytes() const;
 
@@ -74,11 +74,9 @@ class Lights {
   std::vector<std::vector<int>> triangle_emitter_;
   std::vector<int> sphere_emitter_, disk_emitter_;
 
-  bool has_sun_ = false;
-  Vec3 sun_dir_, sun_t_, sun_b_;
-  double sun_cos_ = 1;
+  Background background_;
+  Vec3 sun_t_, sun_b_;  // a basis around the sun's direction, for sampling its cone
   float sun_pdf_ = 0;
-  Rgb sun_radiance_{};
 };
 
 }  // namespace penumbra::spaceland

@@ -14,6 +14,7 @@
 #include "spaceland/color.hpp"
 #include "spaceland/lights.hpp"
 #include "spaceland/media.hpp"
+#include "spaceland/sampling.hpp"
 
 namespace penumbra::spaceland::pt {
 
@@ -31,21 +32,6 @@ float mis(float a, float b) {
   // In double: the squares of the densities of a nearly degenerate emitter overflow a float.
   const double a2 = double(a) * a, b2 = double(b) * b;
   return a2 + b2 > 0 ? float(a2 / (a2 + b2)) : 0.0f;
-}
-
-// Cosine-weighted direction about the unit normal n.
-Vec3 cosine_direction(Vec3 n, std::array<float, 2> u) {
-  const double r = std::sqrt(double(u[0])), phi = kTwoPi * u[1];
-  const double z = std::sqrt(std::max(0.0, 1 - double(u[0])));
-  Vec3 t, b;
-  orthonormal_basis(n, t, b);
-  return normalize(t * float(r * std::cos(phi)) + b * float(r * std::sin(phi)) + n * float(z));
-}
-
-Vec3 uniform_sphere(std::array<float, 2> u) {
-  const double z = 1 - 2 * double(u[0]), r = std::sqrt(std::max(0.0, 1 - z * z));
-  const double phi = kTwoPi * u[1];
-  return {float(r * std::cos(phi)), float(r * std::sin(phi)), float(z)};
 }
 
 struct Context {
@@ -157,10 +143,11 @@ Rgb trace(const Context& ctx, std::size_t k, std::uint32_t pixel_seed, std::uint
     }
     if (!scattered_in_fog) {
       if (!found) {
-        L += beta * sky_radiance(ctx.scene.sky, dir);
-        if (ctx.lights.in_sun(dir)) {
+        const Background& bg = ctx.lights.background();
+        L += beta * bg.sky(dir);
+        if (bg.in_sun(dir)) {
           const float w = prev_pdf > 0 ? mis(prev_pdf, ctx.lights.sun_pdf()) : 1.0f;
-          L += beta * ctx.lights.sun_radiance() * w;
+          L += beta * bg.sun() * w;
         }
         break;
       }

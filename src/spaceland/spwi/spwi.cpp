@@ -281,8 +281,8 @@ std::vector<Vec3> map_directions(int side) {
 
 // What a ray that leaves the scene sees from the top cascade: the sky, with the sun's disk when
 // the cascades carry the sun.
-Rgb top_background(const Scene& scene, Vec3 d, SpwiSun sun) {
-  return sun == SpwiSun::cascades ? background(scene, d) : sky_radiance(scene.sky, d);
+Rgb top_background(const Background& bg, Vec3 d, SpwiSun sun) {
+  return sun == SpwiSun::cascades ? bg(d) : bg.sky(d);
 }
 
 }  // namespace
@@ -419,6 +419,7 @@ Expected<ImageRgb> render(const Scene& scene, const RayScene& rays, const GBuffe
     return Error{"spwi's cascades need about " + mib(stats.memory_bytes) + ", more than the `" +
                  "max_memory` limit of " + mib(options.max_memory)};
 
+  const Background bg(scene);
   std::atomic<std::uint64_t> ray_count{0};
   std::vector<Rgb> upper, lower;
   std::vector<Probe> upper_probes;
@@ -522,7 +523,7 @@ Expected<ImageRgb> render(const Scene& scene, const RayScene& rays, const GBuffe
               return h.t >= a ? emission_at(scene, h) : kNoLight;  // opaque: nothing beyond
             // The top cascade's misses see the sky; so do rays of a probe with no upper probe
             // around it (only sky above it on screen).
-            if (!merge) return top_background(scene, d, o.sun);
+            if (!merge) return top_background(bg, d, o.sun);
             Rgb sum{}, got;
             float weight = 0;
             for (int j = 0; j < c.n; ++j)
@@ -536,8 +537,7 @@ Expected<ImageRgb> render(const Scene& scene, const RayScene& rays, const GBuffe
             // continues itself, to infinity as the top cascade does.
             ++local;
             const Ray rest{r.origin, d, b, std::numeric_limits<float>::infinity()};
-            return rays.intersect(rest, h) ? emission_at(scene, h)
-                                           : top_background(scene, d, o.sun);
+            return rays.intersect(rest, h) ? emission_at(scene, h) : top_background(bg, d, o.sun);
           };
           // With the fix, a segment above cascade 0 starts where the cascade below aimed: at this
           // probe's interval start, not a sub-probe's, so only cascade 0 is pre-averaged there.
@@ -579,15 +579,15 @@ Expected<ImageRgb> render(const Scene& scene, const RayScene& rays, const GBuffe
   const int side = plan.map_side(0);
   const std::vector<Vec3> dirs = map_directions(side);
   const std::uint64_t count = plan.probes(0);
-  const bool sun_direct = o.sun == SpwiSun::direct && scene.has_sun;
-  const Vec3 sun_dir = scene.has_sun ? normalize(scene.sun.direction) : Vec3{0, 1, 0};
+  const bool sun_direct = o.sun == SpwiSun::direct && bg.has_sun();
+  const Vec3 sun_dir = bg.sun_direction();
   ImageRgb img(g.width, g.height);
   parallel_for(g.height, [&](int y) {
     std::uint64_t local = 0;
     for (int x = 0; x < g.width; ++x) {
       const std::size_t k = std::size_t(y) * g.width + x;
       if (!g.found[k]) {
-        img.set(x, y, background(scene, g.directions[k]));
+        img.set(x, y, bg(g.directions[k]));
         continue;
       }
       const Hit& h = g.hits[k];

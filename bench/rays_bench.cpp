@@ -4,13 +4,14 @@
 #include <benchmark/benchmark.h>
 
 #include <cmath>
-#include <fstream>
 #include <random>
-#include <sstream>
 #include <string>
 #include <vector>
 
+#include "io/json_reader.hpp"
+#include "spaceland/camera.hpp"
 #include "spaceland/embree/ray_scene.hpp"
+#include "spaceland/scene/mesh_file.hpp"
 
 namespace {
 
@@ -35,27 +36,16 @@ void add_box(Scene& s) {
   s.meshes.push_back(quad({-0.25f, 0.99f, -0.25f}, {0.5f, 0, 0}, {0, 0, 0.5f}));
 }
 
-// The glmark2 bunny: a plain triangle OBJ (`v x y z`, `f a b c`), read here with a small loop
-// while the scene's OBJ reader is written; scaled into the box, on its floor.
+// The glmark2 bunny (read by the scene's own OBJ reader), scaled into the box, on its floor.
 bool add_bunny(Scene& s) {
-  std::ifstream in("/usr/share/glmark2/models/bunny.obj");
-  if (!in) return false;
-  TriangleMesh m;
-  std::string line;
-  while (std::getline(in, line)) {
-    std::istringstream l(line);
-    std::string tag;
-    l >> tag;
-    if (tag == "v") {
-      Vec3 p;
-      l >> p.x >> p.y >> p.z;
-      m.positions.push_back(p);
-    } else if (tag == "f") {
-      std::array<std::uint32_t, 3> t;
-      l >> t[0] >> t[1] >> t[2];
-      m.triangles.push_back({t[0] - 1, t[1] - 1, t[2] - 1});
-    }
+  MeshFile file;
+  try {
+    file = read_mesh_file("/usr/share/glmark2/models/bunny.obj", "rays_bench", "bunny",
+                          std::uint64_t(1) << 30);
+  } catch (const io::JsonFailure&) {
+    return false;
   }
+  TriangleMesh m = std::move(file.mesh);
   Vec3 lo{1e30f, 1e30f, 1e30f}, hi{-1e30f, -1e30f, -1e30f};
   for (Vec3 p : m.positions) lo = min(lo, p), hi = max(hi, p);
   const float k = 1.6f / std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
@@ -96,14 +86,15 @@ const RayScene& ray_scene(int which) {
 
 // A 512 x 512 pinhole camera looking into the box, rows in order (coherent).
 std::vector<Ray> primary_rays() {
+  Camera cam;
+  cam.position = {0, 0, 3.6f};
+  cam.look_at = {0, 0, 0};
+  cam.fov_y = 40.1f;
+  cam.width = cam.height = 512;
+  const CameraRays camera(cam);
   std::vector<Ray> rays;
-  const int n = 512;
-  const float t = std::tan(0.35f);
-  for (int j = 0; j < n; ++j)
-    for (int i = 0; i < n; ++i) {
-      const float x = (2 * (i + 0.5f) / n - 1) * t, y = (1 - 2 * (j + 0.5f) / n) * t;
-      rays.push_back({{0, 0, 3.6f}, normalize(Vec3{x, y, -1})});
-    }
+  for (int j = 0; j < cam.height; ++j)
+    for (int i = 0; i < cam.width; ++i) rays.push_back(camera.ray(i, j));
   return rays;
 }
 

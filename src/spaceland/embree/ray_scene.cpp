@@ -213,14 +213,9 @@ Status check_arrays(const Scene& scene) {
 
 // Largest coordinate magnitude of any surface: the scale of rounding errors in hit points.
 float scene_scale(const Scene& scene) {
+  const Bounds b = scene_bounds(scene);
   float s = 0;
-  auto grow = [&](Vec3 p, float r) {
-    for (int i = 0; i < 3; ++i) s = std::max(s, std::abs(p[i]) + r);
-  };
-  for (const TriangleMesh& m : scene.meshes)
-    for (Vec3 p : m.positions) grow(p, 0);
-  for (const Sphere& sp : scene.spheres) grow(sp.center, sp.radius);
-  for (const Disk& d : scene.disks) grow(d.center, d.radius);
+  for (int i = 0; i < 3; ++i) s = std::max({s, std::abs(b.lo[i]), std::abs(b.hi[i])});
   return s > 0 && std::isfinite(s) ? s : 1.0f;
 }
 

@@ -1,8 +1,6 @@
 // read_mesh_file: dispatch by extension and the messages every mesh-file failure gets.
 #include "spaceland/scene/mesh_file.hpp"
 
-#include <algorithm>
-#include <cctype>
 #include <cmath>
 #include <exception>
 #include <filesystem>
@@ -11,6 +9,7 @@
 #include <system_error>
 
 #include "io/json_reader.hpp"
+#include "io/path_util.hpp"
 #include "spaceland/scene/mesh_reader.hpp"
 
 namespace penumbra::spaceland {
@@ -64,9 +63,7 @@ Vec3 flat_normal(Vec3 a, Vec3 b, Vec3 c) {
 
 MeshFile read_mesh_file(const std::string& file_path, const std::string& scene_file,
                         const std::string& json_path, std::uint64_t max_bytes) {
-  std::string ext = std::filesystem::path(file_path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(),
-                 [](unsigned char c) { return char(std::tolower(c)); });
+  const std::string ext = io::lowercase_extension(file_path);
   std::string what;
   try {
     mesh_detail::Budget budget(max_bytes);

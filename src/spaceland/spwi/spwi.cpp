@@ -471,14 +471,13 @@ Expected<ImageRgb> render(const Scene& scene, const RayScene& rays, const GBuffe
           if (!pr.valid) continue;
           Corners c;
           bool merge = !top;
+          const double sx = probe_x(px, plan.spacing(i)), sy = probe_x(py, plan.spacing(i));
           if (merge && minmax) {
-            const double sx = probe_x(px, plan.spacing(i)), sy = probe_x(py, plan.spacing(i));
             c = minmax_corners(corners(sx, sy, plan.spacing(up), plan.nx[std::size_t(up)],
                                        plan.ny[std::size_t(up)]),
                                upper_probes, pr.depth);
             merge = normalise(c, upper_probes);
           } else if (merge) {
-            const double sx = probe_x(px, plan.spacing(i)), sy = probe_x(py, plan.spacing(i));
             c = valid_corners(sx, sy, plan.spacing(up), plan.nx[std::size_t(up)],
                               plan.ny[std::size_t(up)], upper_probes);
             // The fix weighs its 4 segments as the bilateral merge weighs probes: a probe across a

@@ -409,6 +409,14 @@ TEST(MeshFileGltf, RefusesSparseAccessorsAndMissingImages) {
   j["images"] = {{{"uri", "missing.png"}}};
   const std::string msg = refusal(d.write("t.gltf", j.dump()));
   EXPECT_EQ(msg, prefix("t.gltf") + "images[0]: no image data ('missing.png' could not be read)");
+  // An image in a buffer view that runs past its buffer (tinygltf does not check this one; the
+  // fuzzer found it reading past the buffer).
+  j["bufferViews"].push_back({{"buffer", 0}, {"byteOffset", 40}, {"byteLength", 10000}});
+  j["images"] = {{{"bufferView", 2}, {"mimeType", "image/png"}}};
+  EXPECT_EQ(refusal(d.write("v.gltf", j.dump())),
+            prefix("v.gltf") +
+                "bufferViews[2]: byteOffset 40 + byteLength 10000 passes the end of buffers[0] "
+                "(60 bytes)");
 }
 
 TEST(MeshFileGltf, MaterialsAndMixedNormals) {

@@ -183,10 +183,12 @@ bool read_file(std::vector<unsigned char>* out, std::string* err, const std::str
 bool write_file(std::string*, const std::string&, const std::vector<unsigned char>&, void*) {
   return false;
 }
-// Keeps images encoded; the materials decode the ones they use.
+// Keeps images encoded; the materials decode the ones they use. An image in a buffer view is
+// left where it is: tinygltf hands over the view's bytes without checking them against the
+// buffer, so the materials read them through Reader::buffer_view, which does.
 bool keep_image(tinygltf::Image* image, const int, std::string*, std::string*, int, int,
                 const unsigned char* bytes, int size, void*) {
-  image->image.assign(bytes, bytes + size);
+  if (image->bufferView < 0) image->image.assign(bytes, bytes + size);
   image->as_is = true;
   return true;
 }
@@ -466,23 +468,9 @@ class Reader {
       // No buffer view and not sparse: every value is zero (glTF 2.0, 3.6.2.3).
       return v;
     }
-    if (std::size_t(a.bufferView) >= m_.bufferViews.size())
-      mesh_fail(where + ": bufferView " + std::to_string(a.bufferView) + " does not exist (" +
-                std::to_string(m_.bufferViews.size()) + " buffer views)");
+    const unsigned char* bytes = buffer_view(a.bufferView, where);
     const auto& bv = m_.bufferViews[std::size_t(a.bufferView)];
     const std::string bv_name = at("bufferViews", std::size_t(a.bufferView));
-    for (const char* ext : {"EXT_meshopt_compression", "KHR_meshopt_compression"})
-      if (bv.extensions.count(ext))
-        mesh_fail(bv_name + ": meshopt compression (" + ext + ") is not supported");
-    if (bv.buffer < 0 || std::size_t(bv.buffer) >= m_.buffers.size())
-      mesh_fail(bv_name + ": buffer " + std::to_string(bv.buffer) + " does not exist (" +
-                std::to_string(m_.buffers.size()) + " buffers)");
-    const auto& buffer = m_.buffers[std::size_t(bv.buffer)];
-    if (bv.byteOffset > buffer.data.size() || bv.byteLength > buffer.data.size() - bv.byteOffset)
-      mesh_fail(bv_name + ": byteOffset " + std::to_string(bv.byteOffset) + " + byteLength " +
-                std::to_string(bv.byteLength) + " passes the end of " +
-                at("buffers", std::size_t(bv.buffer)) + " (" + std::to_string(buffer.data.size()) +
-                " bytes)");
     v.stride = bv.byteStride ? bv.byteStride : element;
     if (v.stride < element)
       mesh_fail(bv_name + ": byteStride " + std::to_string(bv.byteStride) + " is less than " +
@@ -495,8 +483,31 @@ class Reader {
       mesh_fail(where + ": byteOffset " + std::to_string(a.byteOffset) + " + " +
                 std::to_string(v.count) + " elements of stride " + std::to_string(v.stride) +
                 " pass the end of " + bv_name + " (" + std::to_string(bv.byteLength) + " bytes)");
-    v.data = buffer.data.data() + bv.byteOffset + a.byteOffset;
+    v.data = bytes + a.byteOffset;
     return v;
+  }
+
+  // The first byte of buffer view `index`, used by `user`, once its byteOffset and byteLength are
+  // checked against its buffer.
+  const unsigned char* buffer_view(int index, const std::string& user) const {
+    if (index < 0 || std::size_t(index) >= m_.bufferViews.size())
+      mesh_fail(user + ": bufferView " + std::to_string(index) + " does not exist (" +
+                std::to_string(m_.bufferViews.size()) + " buffer views)");
+    const auto& bv = m_.bufferViews[std::size_t(index)];
+    const std::string bv_name = at("bufferViews", std::size_t(index));
+    for (const char* ext : {"EXT_meshopt_compression", "KHR_meshopt_compression"})
+      if (bv.extensions.count(ext))
+        mesh_fail(bv_name + ": meshopt compression (" + ext + ") is not supported");
+    if (bv.buffer < 0 || std::size_t(bv.buffer) >= m_.buffers.size())
+      mesh_fail(bv_name + ": buffer " + std::to_string(bv.buffer) + " does not exist (" +
+                std::to_string(m_.buffers.size()) + " buffers)");
+    const auto& buffer = m_.buffers[std::size_t(bv.buffer)];
+    if (bv.byteOffset > buffer.data.size() || bv.byteLength > buffer.data.size() - bv.byteOffset)
+      mesh_fail(bv_name + ": byteOffset " + std::to_string(bv.byteOffset) + " + byteLength " +
+                std::to_string(bv.byteLength) + " passes the end of " +
+                at("buffers", std::size_t(bv.buffer)) + " (" + std::to_string(buffer.data.size()) +
+                " bytes)");
+    return buffer.data.data() + bv.byteOffset;
   }
 
   Plan plan(const Instance& inst, const tinygltf::Primitive& prim, const std::string& name) {
@@ -709,12 +720,17 @@ class Reader {
       mesh_fail(where + ": no source image in images (an image in an extension is not supported)");
     const auto& image = m_.images[std::size_t(gt.source)];
     const std::string iname = at("images", std::size_t(gt.source));
-    if (image.image.empty() || !image.as_is)
+    const unsigned char* bytes = image.image.data();
+    std::size_t length = image.image.size();
+    if (image.bufferView >= 0) {
+      bytes = buffer_view(image.bufferView, iname);
+      length = m_.bufferViews[std::size_t(image.bufferView)].byteLength;
+    }
+    if (length == 0 || !image.as_is)
       mesh_fail(
           iname + ": no image data" +
           (image.uri.empty() ? "" : " ('" + image.uri.substr(0, 60) + "' could not be read)"));
-    const auto* bytes = image.image.data();
-    const int size = int(std::min<std::size_t>(image.image.size(), INT32_MAX));
+    const int size = int(std::min<std::size_t>(length, INT32_MAX));
     int w = 0, h = 0, channels = 0;
     if (!stbi_info_from_memory(bytes, size, &w, &h, &channels) || w <= 0 || h <= 0)
       mesh_fail(iname + ": cannot decode the image (" + std::string(stbi_failure_reason()) + ")");

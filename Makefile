@@ -48,13 +48,18 @@ bench: build
 	@$(BUILD)/bin/penumbra_bench --benchmark_counters_tabular=true
 
 # The quality studies in docs/QUALITY.md (minutes: the path-traced references are cached; the
-# 3D closed forms, about 35 s on 2 cores, write docs/quality/3d/quality3d.md).
+# 3D closed forms, about 35 s on 2 cores, write docs/quality/3d/quality3d.md and spwi3d.md).
+# The 3D scenes of SPWI's study (a reference of 1024 spp each, about 20 s; then 20 s of runs).
+QUALITY_3D = cornell offscreen bunny_sky bunny_lights two_rooms four_cubes
 quality: build
 	@$(BUILD)/bin/penumbra bench-quality scenes/occluder.json -o docs/quality/occluder --doc docs/QUALITY.md --cache $(BUILD)/quality-cache
 	@$(BUILD)/bin/penumbra bench-quality scenes/cornell.json --bounces 2 --reference-spp 2048 --max-spp 64 -o docs/quality/cornell --doc docs/QUALITY.md --cache $(BUILD)/quality-cache
 	@$(BUILD)/bin/penumbra bench-quality scenes/pinhole.json --reference-spp 4096 --max-spp 64 -o docs/quality/pinhole --doc docs/QUALITY.md --cache $(BUILD)/quality-cache
 	@$(BUILD)/bin/penumbra bench-quality scenes/fog.json --max-spp 64 -o docs/quality/fog --doc docs/QUALITY.md --cache $(BUILD)/quality-cache
 	@$(BUILD)/bin/penumbra_quality3d docs/quality/3d > /dev/null
+	@for s in $(QUALITY_3D); do \
+	  $(BUILD)/bin/penumbra bench-quality scenes/3d/$$s.json -o docs/quality/3d/study/$$s --doc docs/QUALITY.md --cache $(BUILD)/quality-cache || exit 1; \
+	done
 
 install: build
 	@cmake --install $(BUILD)

@@ -53,7 +53,10 @@ void add_render_options(CLI::App* app, RenderOptions& options, RenderOptionFlags
     app->add_option("--branching", rc.branching, "Angular branching per cascade")
         ->check(CLI::IsMember({2, 4}))
         ->capture_default_str();
-    app->add_option("--interval", rc.interval, "Cascade-0 interval length t0 in cells")
+    app->add_option(
+           "--interval", rc.interval,
+           "Cascade-0 interval length t0: in cells (2D); in world units for 3D spwi (default "
+           "there: four probe spacings at the median depth)")
         ->check(CLI::PositiveNumber)
         ->capture_default_str();
     app->add_option("--cascades", rc.cascades, "Number of cascades (0: reach the grid diagonal)")

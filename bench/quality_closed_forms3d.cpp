@@ -317,6 +317,69 @@ Metrics measure(const ImageRgb& got, const std::vector<std::optional<Rgb>>& want
   return m;
 }
 
+// Each pixel's closed form, evaluated at its first hit (or nothing where it does not hold).
+Expected<std::vector<std::optional<Rgb>>> closed_form(const Case& c) {
+  Expected<ImageRgb> pos = render_image(c, 1, Aov::position), obj = render_image(c, 1, Aov::object);
+  if (!pos || !obj) return (pos ? obj : pos).error();
+  std::vector<std::optional<Rgb>> want(std::size_t(pos->width()) * pos->height());
+  for (std::size_t k = 0; k < want.size(); ++k) {
+    const float* p = pos->data() + 3 * k;
+    want[k] = c.exact({p[0], p[1], p[2]}, int(obj->data()[3 * k]));
+  }
+  return want;
+}
+
+// SPWI (one bounce) on the closed-form scenes it can render: each merge, then the settings
+// docs/QUALITY.md studies, as a markdown table per scene. `t0_scale` > 0: that multiple of the
+// interval the defaults derived.
+struct SpwiRun {
+  std::string label;
+  std::function<void(SpwiOptions&)> set;
+  double t0_scale = 0;
+};
+
+std::vector<SpwiRun> spwi_runs() {
+  std::vector<SpwiRun> runs = {{"defaults (bilinear3d)", [](SpwiOptions&) {}}};
+  for (SpwiMerge m : {SpwiMerge::bilinear, SpwiMerge::bilateral, SpwiMerge::fix, SpwiMerge::minmax})
+    runs.push_back({std::string("--merge ") + to_string(m), [m](SpwiOptions& o) { o.merge = m; }});
+  for (double k : {0.25, 0.5, 2.0}) runs.push_back({"t0 " + fmt("%g", k) + "x", {}, k});
+  runs.push_back({"--probe-spacing 2", [](SpwiOptions& o) { o.probe_spacing = 2; }});
+  runs.push_back({"--directions 256", [](SpwiOptions& o) { o.directions = 256; }});
+  runs.push_back({"--preaverage", [](SpwiOptions& o) { o.preaverage = true; }});
+  runs.push_back({"--disjoint", [](SpwiOptions& o) { o.overlap = false; }});
+  runs.push_back({"--sun cascades", [](SpwiOptions& o) { o.sun = SpwiSun::cascades; }});
+  return runs;
+}
+
+// The table of one scene; `csv` gets a line per run.
+Expected<std::string> spwi_table(const Case& c, std::ostringstream& csv) {
+  Expected<std::vector<std::optional<Rgb>>> want = closed_form(c);
+  if (!want) return want.error();
+  std::ostringstream md;
+  md << "**" << c.name << "** (SPWI, one bounce).\n\n"
+     << "| configuration | t0 | rel. RMSE | rel. bias | max rel. error | time (ms) |\n"
+     << "| --- | ---: | ---: | ---: | ---: | ---: |\n";
+  float default_t0 = 0;
+  for (const SpwiRun& run : spwi_runs()) {
+    RenderOptions o;
+    o.method = Method::spwi;
+    if (run.set) run.set(o.spwi);
+    if (run.t0_scale > 0) o.spwi.interval = float(run.t0_scale * default_t0);
+    Expected<RenderResult> r = render(c.scene, o);
+    if (!r) return Error{c.name + ", " + run.label + ": " + r.error().message};
+    if (default_t0 == 0) default_t0 = r->options.spwi.interval;  // the defaults run first
+    const Metrics m = measure(r->radiance, *want);
+    md << "| " << run.label << " | " << fmt("%.3g", r->options.spwi.interval) << " | "
+       << fmt("%.3g%%", 100 * m.rel_rmse) << " | " << fmt("%+.2g%%", 100 * m.rel_bias) << " | "
+       << fmt("%.3g%%", 100 * m.max_rel) << " | " << fmt("%.0f", r->time_ms) << " |\n";
+    csv << '"' << c.name << "\",\"" << run.label << "\"," << fmt("%.6g", r->options.spwi.interval)
+        << ',' << fmt("%.6g", m.rel_rmse) << ',' << fmt("%.6g", m.rel_bias) << ','
+        << fmt("%.6g", m.max_rel) << ',' << fmt("%.1f", r->time_ms) << '\n';
+  }
+  md << "\n";
+  return md.str();
+}
+
 // Exponent k of error ~ spp^-k, least squares in log-log over the rows with an error above 0.
 double order(const std::vector<Row>& rows) {
   double sx = 0, sy = 0, sxx = 0, sxy = 0;
@@ -535,6 +598,9 @@ int main(int argc, char** argv) {
   app.add_option("folder", dir, "Where the CSV, the plot and the pictures go (must exist)")
       ->required();
   app.add_flag("--quick", quick, "Up to 64 samples per pixel instead of 1024");
+  bool spwi_only = false;
+  app.add_flag("--spwi-only", spwi_only,
+               "Only SPWI's table (spwi3d.md, spwi3d.csv), not the path tracer's curves");
   try {
     app.parse(argc, argv);
   } catch (const CLI::Success& e) {
@@ -548,6 +614,32 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "%s\n", st.error().message.c_str());
       return kCannotWrite;
     }
+
+  // SPWI on the one-bounce scenes without fog.
+  {
+    std::ostringstream md, csv;
+    csv << "scene,configuration,t0,relative_rmse,relative_bias,max_relative_error,time_ms\n";
+    md << "SPWI against the closed forms: relative RMSE over the pixels the closed form covers, "
+          "defaults unless the row says otherwise.\n\n";
+    for (const Case& c : {enclosure(1, Shell::box), enclosure(1, Shell::sphere), sphere_light(),
+                          sky(1000), sun()}) {
+      Expected<std::string> table = spwi_table(c, csv);
+      if (!table) {
+        std::fprintf(stderr, "%s\n", table.error().message.c_str());
+        return 1;
+      }
+      std::fputs(table->c_str(), stdout);
+      std::fflush(stdout);
+      md << *table;
+    }
+    if (Status st = io::write_text_files(
+            {{dir + "/spwi3d.csv", csv.str()}, {dir + "/spwi3d.md", md.str()}});
+        !st) {
+      std::fprintf(stderr, "%s\n", st.error().message.c_str());
+      return kCannotWrite;
+    }
+    if (spwi_only) return 0;
+  }
 
   std::vector<Case> cases;
   for (int n = 1; n <= 4; ++n) cases.push_back(enclosure(n, Shell::box));
@@ -569,17 +661,12 @@ int main(int argc, char** argv) {
   csv << "scene,bounces,spp,pixels,relative_rmse,relative_bias,max_relative_error,time_ms\n";
   for (const Case& c : cases) {
     // The first hits: where each pixel's closed form is evaluated.
-    Expected<ImageRgb> pos = render_image(c, 1, Aov::position),
-                       obj = render_image(c, 1, Aov::object);
-    if (!pos || !obj) {
-      std::fprintf(stderr, "%s: %s\n", c.name.c_str(), (pos ? obj : pos).error().message.c_str());
+    Expected<std::vector<std::optional<Rgb>>> closed = closed_form(c);
+    if (!closed) {
+      std::fprintf(stderr, "%s: %s\n", c.name.c_str(), closed.error().message.c_str());
       return 1;
     }
-    std::vector<std::optional<Rgb>> want(std::size_t(pos->width()) * pos->height());
-    for (std::size_t k = 0; k < want.size(); ++k) {
-      const float* p = pos->data() + 3 * k;
-      want[k] = c.exact({p[0], p[1], p[2]}, int(obj->data()[3 * k]));
-    }
+    const std::vector<std::optional<Rgb>>& want = *closed;
     md << "**" << c.name << "**: " << c.setup << ". Closed form: `" << c.closed_form << "`.\n\n"
        << "| spp | pixels | rel. RMSE | rel. bias | max rel. error | time (ms) |\n"
        << "| ---: | ---: | ---: | ---: | ---: | ---: |\n";

@@ -29,7 +29,7 @@ std::string percent(double v) {
 std::vector<Row> curve_rows(const std::vector<Row>& rows, const std::string& curve) {
   std::vector<Row> out;
   for (const Row& r : rows)
-    if (r.run.curve == curve) out.push_back(r);
+    if (r.curve == curve) out.push_back(r);
   std::sort(out.begin(), out.end(),
             [](const Row& a, const Row& b) { return a.samples < b.samples; });
   return out;
@@ -111,7 +111,7 @@ double convergence_order(const std::vector<Row>& rows, const std::string& curve)
   double sx = 0, sy = 0, sxx = 0, sxy = 0;
   int n = 0;
   for (const Row& r : rows) {
-    if (r.run.curve != curve || r.samples == 0 || !(r.error.relative_rmse > 0)) continue;
+    if (r.curve != curve || r.samples == 0 || !(r.error.relative_rmse > 0)) continue;
     const double x = std::log(double(r.samples)), y = std::log(r.error.relative_rmse);
     sx += x, sy += y, sxx += x * x, sxy += x * y, ++n;
   }
@@ -126,10 +126,9 @@ std::string to_csv(const std::vector<Row>& rows) {
   for (const Row& r : rows) {
     char buf[512];
     std::snprintf(buf, sizeof buf, "\"%s\",%s,%s,%llu,%.3f,%.6g,%.6g,%.6g,%.6g,%.4f,%.6g,%.3f,%d\n",
-                  r.run.label.c_str(), r.run.curve.c_str(), to_string(r.run.options.method),
-                  (unsigned long long)r.samples, r.time_ms, r.error.rmse, r.error.relative_rmse,
-                  r.error.mean_abs, r.error.max_abs, r.error.psnr, r.error.bias, r.pt_equal_time_ms,
-                  r.extrapolated ? 1 : 0);
+                  r.label.c_str(), r.curve.c_str(), r.method.c_str(), (unsigned long long)r.samples,
+                  r.time_ms, r.error.rmse, r.error.relative_rmse, r.error.mean_abs, r.error.max_abs,
+                  r.error.psnr, r.error.bias, r.pt_equal_time_ms, r.extrapolated ? 1 : 0);
     s << buf;
   }
   return s.str();
@@ -138,8 +137,8 @@ std::string to_csv(const std::vector<Row>& rows) {
 std::string to_markdown(const std::vector<Row>& rows, const std::string& scene,
                         const Reference& ref) {
   std::ostringstream s;
-  s << "Scene `" << scene << "`; reference: path tracer with NEE, " << ref.spp
-    << " samples per cell (`" << ref.path << "`), its own relative RMSE estimated at "
+  s << "Scene `" << scene << "`; reference: path tracer with NEE, " << ref.spp << " samples per "
+    << ref.unit << " (`" << ref.path << "`), its own relative RMSE estimated at "
     << percent(ref.estimated_rel) << " by extrapolating the NEE curve.\n\n";
   s << "| configuration | time (ms) | rel. RMSE | PSNR (dB) | bias | max abs. error "
        "| PT+NEE time at equal error (ms) | speed-up |\n";
@@ -151,14 +150,22 @@ std::string to_markdown(const std::vector<Row>& rows, const std::string& scene,
       equal = r.extrapolated ? "~" : "";
       equal += format("%.0f", r.pt_equal_time_ms);
     }
-    s << "| " << r.run.label << " | " << format("%.0f", r.time_ms) << " | "
+    s << "| " << r.label << " | " << format("%.0f", r.time_ms) << " | "
       << percent(r.error.relative_rmse) << " | " << format("%.1f", r.error.psnr) << " | "
       << format("%+.3g", r.error.bias) << " | " << format("%.3g", r.error.max_abs) << " | " << equal
       << " | " << (has ? format("%.2gx", r.pt_equal_time_ms / r.time_ms) : "n/a") << " |\n";
   }
-  const double k = convergence_order(rows, "pt"), kn = convergence_order(rows, "pt nee");
-  s << "\nPath tracer convergence (fitted error ~ spp^-k): k = " << format("%.2f", k) << " plain, "
-    << format("%.2f", kn) << " with NEE (k = 0.5 is the Monte Carlo rate).\n";
+  // The fitted orders of the curves there are (3D has only the NEE one).
+  std::string fits;
+  for (const auto& [curve, name] : {std::pair{"pt", " plain"}, std::pair{"pt nee", " with NEE"}}) {
+    const double k = convergence_order(rows, curve);
+    if (!std::isfinite(k)) continue;
+    fits += fits.empty() ? "k = " : ", ";
+    fits += format("%.2f", k) + name;
+  }
+  if (!fits.empty())
+    s << "\nPath tracer convergence (fitted error ~ spp^-k): " << fits
+      << " (k = 0.5 is the Monte Carlo rate).\n";
   return s.str();
 }
 
@@ -184,8 +191,11 @@ namespace {
 // Where a plot puts things: log-log axes over whole decades that hold every row, the curves and
 // the single points with a legend column on the right. Shared by the SVG and the PNG.
 struct Plot {
-  static constexpr double H = 480, left = 70, top = 40, bottom = 50, frame = 480;
-  double right = 230;  // the legend column, as wide as its longest name needs
+  static constexpr double left = 70, top = 40, bottom = 50, frame = 480;
+  static constexpr double legend_gap = 36;   // frame to legend: room for the last time label
+  static constexpr double legend_step = 26;  // pixels per legend line (text 2x and a gap)
+  double H = 480;                            // taller when the legend needs it
+  double right = 230;                        // the legend column, as wide as its longest name needs
   double x0 = 0, x1 = 1, y0 = -2, y1 = 0;
   double W() const { return left + frame + right; }
   double frame_right() const { return left + frame; }
@@ -195,6 +205,7 @@ struct Plot {
     std::string name, colour;
     bool line;
     std::vector<std::pair<double, double>> points;  // pixel positions
+    std::string tag;  // a single point's number, drawn beside it and before its legend name
   };
   std::vector<Series> series;
 };
@@ -214,26 +225,47 @@ Plot layout(const std::vector<Row>& rows) {
   if (!(tmax > 0)) tmin = 1, tmax = 10, emin = 0.01, emax = 1;
   p.x0 = std::floor(std::log10(tmin)), p.x1 = std::max(p.x0 + 1, std::ceil(std::log10(tmax)));
   p.y0 = std::floor(std::log10(emin)), p.y1 = std::max(p.y0 + 1, std::ceil(std::log10(emax)));
+  // The legend first: the plot grows downwards when it is longer than the frame, and the
+  // positions depend on the height.
   const std::pair<const char*, const char*> curves[] = {{"pt", "#1f77b4"}, {"pt nee", "#ff7f0e"}};
   const char* names[] = {"path tracer", "path tracer + NEE"};
+  std::vector<std::pair<const Row*, std::vector<Row>>> entries;  // a single row, or a curve
+  std::vector<int> curve_of;
   for (int c = 0; c < 2; ++c) {
-    Plot::Series s{names[c], curves[c].second, true, {}};
+    std::vector<Row> curve;
     for (const Row& r : curve_rows(rows, curves[c].first))
-      if (plottable(r)) s.points.push_back({p.px(r.time_ms), p.py(r.error.relative_rmse)});
-    if (!s.points.empty()) p.series.push_back(s);
+      if (plottable(r)) curve.push_back(r);
+    if (!curve.empty()) entries.push_back({nullptr, curve}), curve_of.push_back(c);
   }
+  for (const Row& r : rows)
+    if (r.curve.empty() && plottable(r)) entries.push_back({&r, {}}), curve_of.push_back(-1);
+  p.H = std::max(p.H, p.top + 10 + p.legend_step * double(entries.size()) + 10);
+  // Single points are numbered: with more of them than colours, the number tells them apart.
   static const char* palette[] = {"#2ca02c", "#d62728", "#9467bd", "#8c564b",
                                   "#e377c2", "#7f7f7f", "#bcbd22", "#17becf"};
   int k = 0;
-  for (const Row& r : rows)
-    if (r.run.curve.empty() && plottable(r))
-      p.series.push_back(
-          {r.run.label, palette[k++ % 8], false, {{p.px(r.time_ms), p.py(r.error.relative_rmse)}}});
+  for (std::size_t e = 0; e < entries.size(); ++e) {
+    const int c = curve_of[e];
+    if (c >= 0) {
+      Plot::Series s{names[c], curves[c].second, true, {}, ""};
+      for (const Row& r : entries[e].second)
+        s.points.push_back({p.px(r.time_ms), p.py(r.error.relative_rmse)});
+      p.series.push_back(s);
+    } else {
+      const Row& r = *entries[e].first;
+      const std::string tag = std::to_string(k + 1);
+      p.series.push_back({tag + " " + r.label,
+                          palette[k++ % 8],
+                          false,
+                          {{p.px(r.time_ms), p.py(r.error.relative_rmse)}},
+                          tag});
+    }
+  }
   // The legend column widens to its longest name (at least the NEE curve's).
   int longest = analysis::text_width(names[1], 2);
   for (const Plot::Series& c : p.series)
     longest = std::max(longest, analysis::text_width(c.name, 2));
-  p.right = 44 + longest;
+  p.right = Plot::legend_gap + 34 + longest;
   return p;
 }
 
@@ -282,12 +314,15 @@ std::string to_svg(const std::vector<Row>& rows, const std::string& title) {
           << "\"/>\n";
     } else {
       s << "<rect x=\"" << c.points[0].first - 4 << "\" y=\"" << c.points[0].second - 4
-        << "\" width=\"8\" height=\"8\" fill=\"" << c.colour << "\"/>\n";
+        << "\" width=\"8\" height=\"8\" fill=\"" << c.colour << "\"/>\n<text x=\""
+        << c.points[0].first + 6 << "\" y=\"" << c.points[0].second - 4 << "\" font-size=\"11\">"
+        << c.tag << "</text>\n";
     }
-    s << "<rect x=\"" << p.frame_right() + 14 << "\" y=\"" << legend_y - 8
+    s << "<rect x=\"" << p.frame_right() + p.legend_gap << "\" y=\"" << legend_y - 8
       << "\" width=\"14\" height=\"8\" fill=\"" << c.colour << "\"/><text x=\""
-      << p.frame_right() + 34 << "\" y=\"" << legend_y << "\">" << c.name << "</text>\n";
-    legend_y += 18;
+      << p.frame_right() + p.legend_gap + 20 << "\" y=\"" << legend_y << "\">" << c.name
+      << "</text>\n";
+    legend_y += p.legend_step;
   }
   s << "</svg>\n";
   return s.str();
@@ -341,10 +376,14 @@ ImageRgb8 to_png_plot(const std::vector<Row>& rows, const std::string& title) {
     } else {
       analysis::fill_rect(img, int(c.points[0].first) - 4, int(c.points[0].second) - 4, 9, 9,
                           colour);
+      analysis::draw_text(img, int(c.points[0].first) + 6,
+                          int(c.points[0].second) - 4 - analysis::line_height(2) / 2, c.tag, ink,
+                          2);
     }
-    analysis::fill_rect(img, int(p.frame_right()) + 12, legend_y + 2, 14, 8, colour);
-    analysis::draw_text(img, int(p.frame_right()) + 32, legend_y, c.name, ink, scale);
-    legend_y += analysis::line_height(scale) + 4;
+    analysis::fill_rect(img, int(p.frame_right() + p.legend_gap), legend_y + 2, 14, 8, colour);
+    analysis::draw_text(img, int(p.frame_right() + p.legend_gap) + 20, legend_y, c.name, ink,
+                        scale);
+    legend_y += int(p.legend_step);
   }
   return img;
 }

@@ -25,8 +25,11 @@ struct Run {
 // `bounces`.
 std::vector<Run> default_runs(int bounces, int max_spp, bool quick);
 
+// One measured configuration, of either world.
 struct Row {
-  Run run;
+  std::string label;
+  std::string curve;   // as Run::curve
+  std::string method;  // the method's name (pt, rc, hrc, spwi, ...)
   double time_ms = 0;
   std::uint64_t samples = 0;
   ErrorMetrics error;
@@ -48,10 +51,11 @@ void add_equal_error_times(std::vector<Row>& rows);
 double convergence_order(const std::vector<Row>& rows, const std::string& curve);
 
 struct Reference {
-  std::string path;  // where the reference image is cached
-  int spp = 0;
-  double time_ms = 0;        // how long rendering it took (0 when it came from the cache)
-  double estimated_rel = 0;  // its own relative RMSE, extrapolated along the NEE curve
+  std::string path;           // where the reference image is cached
+  int spp = 0;                // samples per cell (2D) or pixel (3D)
+  double time_ms = 0;         // how long rendering it took (0 when it came from the cache)
+  double estimated_rel = 0;   // its own relative RMSE, extrapolated along the NEE curve
+  std::string unit = "cell";  // what a sample is taken for: "cell" (2D) or "pixel" (3D)
 };
 
 std::string to_csv(const std::vector<Row>& rows);

@@ -5,6 +5,9 @@
 
 #include <cmath>
 #include <filesystem>
+#include <sstream>
+#include <string>
+#include <vector>
 
 #include "io/image_io.hpp"
 #include "test_support.hpp"
@@ -16,8 +19,8 @@ namespace fs = std::filesystem;
 
 study::Row row(const std::string& curve, std::uint64_t spp, double ms, double rel) {
   study::Row r;
-  r.run.label = curve + " " + std::to_string(spp);
-  r.run.curve = curve;
+  r.label = curve + " " + std::to_string(spp);
+  r.curve = curve;
   r.samples = spp;
   r.time_ms = ms;
   r.error.relative_rmse = rel;
@@ -158,6 +161,63 @@ TEST(Study, CommandWritesEverythingAndReusesTheReference) {
   EXPECT_EQ(r.status, 1);
   EXPECT_NE(r.err.find("bad.json"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir.file("none")));
+}
+
+// The same command on a 3D scene: the path tracer's curve and SPWI's variants, every pixel counted.
+TEST(Study, ThreeDSceneComparesSpwiWithThePathTracer) {
+  testing::TestDir dir("study3d");
+  const std::string text = R"({
+    "penumbra": 1, "dimensions": 3,
+    "camera": { "position": [0, 1, 3], "look_at": [0, 0, 0], "fov_y": 50, "width": 24,
+                "height": 16 },
+    "sky": [0.1, 0.1, 0.2],
+    "materials": { "lamp": { "emission": [4, 3, 2] } },
+    "objects": [ { "type": "disk", "center": [0, 0, 0], "normal": [0, 1, 0], "radius": 5 },
+                 { "type": "sphere", "center": [0, 1, 0], "radius": 0.3, "material": "lamp" } ]
+  })";
+  const std::string scene = dir.write("s3.json", text);
+  const std::string out = dir.file("q");
+  const std::vector<std::string> args = {"bench-quality",   scene, "-o", out, "--max-spp", "16",
+                                         "--reference-spp", "64"};
+  testing::CliResult r = testing::run_cli(args, dir.root());
+  ASSERT_EQ(r.status, 0) << r.err;
+  for (const char* f :
+       {"quality.csv", "quality.md", "quality.svg", "quality.png", "spwi_vs_reference.png"})
+    EXPECT_TRUE(fs::is_regular_file(fs::path(out) / f)) << f;
+  const std::string md = testing::slurp(fs::path(out) / "quality.md");
+  EXPECT_NE(md.find("64 samples per pixel"), std::string::npos) << md;
+  for (const char* label : {"| pt 16 spp |", "| spwi (defaults) |", "| spwi --merge fix |",
+                            "| spwi t0 2x (--interval ", "| spwi --preaverage |"})
+    EXPECT_NE(md.find(label), std::string::npos) << label << "\n" << md;
+  // The path tracer's error falls with its samples (the curve the equal-error times read).
+  std::vector<double> pt;
+  std::istringstream csv(testing::slurp(fs::path(out) / "quality.csv"));
+  for (std::string line; std::getline(csv, line);)
+    if (line.rfind("\"pt ", 0) == 0) {
+      std::vector<std::string> cells;
+      std::stringstream cs(line);
+      for (std::string c; std::getline(cs, c, ',');) cells.push_back(c);
+      pt.push_back(std::stod(cells.at(6)));
+    }
+  ASSERT_EQ(pt.size(), 3u);
+  EXPECT_GT(pt[0], 1.5 * pt[1]);
+  EXPECT_GT(pt[1], 1.5 * pt[2]);
+  // The reference is cached, and a changed sky needs a new one.
+  r = testing::run_cli(args, dir.root());
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("(cached)"), std::string::npos) << r.out;
+  std::string brighter = text;
+  brighter.replace(brighter.find("[0.1, 0.1, 0.2]"), 15, "[0.2, 0.1, 0.2]");
+  dir.write("s3.json", brighter);
+  r = testing::run_cli(args, dir.root());
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("rendering 64 spp"), std::string::npos) << r.out;
+  // SPWI has one bounce for now: more is refused before anything is rendered.
+  r = testing::run_cli({"bench-quality", scene, "-o", dir.file("b2"), "--bounces", "2"},
+                       dir.root());
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("s3.json: --bounces 2"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir.file("b2")));
 }
 
 }  // namespace

@@ -62,7 +62,7 @@ struct SpwiOptions {
   int directions = 64;    // Q0: directions of a cascade-0 probe (a square: 4, 16, 64, ...);
                           // cascade i has Q0 4^i
   float interval = 0;     // t0: cascade 0 traces [0, t0], cascade i [t0 4^(i-1), t0 4^i], in
-                          // world units (0: derived from the probe spacing at the median depth)
+                          // world units (0: four probe spacings at the median depth)
   int cascades = 0;       // 0: enough that the last interval reaches across the scene's bounds,
                           // at most until the probe spacing passes the image's diagonal; the
                           // top cascade's interval runs to infinity

@@ -375,8 +375,11 @@ Plan make_plan(const Scene& scene, const GBuffer& g, const SpwiOptions& o) {
   Plan p = options_plan(g.width, g.height, o);
   p.t0 = o.interval;
   if (!(p.t0 > 0)) {
-    // The world size of s0 pixels at the median depth of the visible surfaces: cascade 0's
-    // interval as long as its probes are apart (the penumbra condition's balance).
+    // Four times the world size of s0 pixels at the median depth of the visible surfaces. One
+    // probe spacing (the penumbra condition's balance at the median depth) was measured too
+    // short: probes on farther surfaces are further apart, and small lights need cascade 0's
+    // finer directions to reach them. 4x is the best or near it on 8 of 9 scenes
+    // (docs/QUALITY.md, "SPWI against the path tracer: the study").
     std::vector<float> depths;
     for (std::size_t k = 0; k < g.hits.size(); ++k)
       if (g.found[k]) depths.push_back(g.linear_depth(k));
@@ -386,7 +389,7 @@ Plan make_plan(const Scene& scene, const GBuffer& g, const SpwiOptions& o) {
       median = depths[depths.size() / 2];
     }
     const double pixel = 2 * median * std::tan(double(scene.camera.fov_y) * kPi / 360) / g.height;
-    p.t0 = float(std::max(1e-6, pixel * o.probe_spacing));
+    p.t0 = float(std::max(1e-6, 4 * pixel * o.probe_spacing));
   }
   p.cascades = o.cascades;
   if (p.cascades == 0) {

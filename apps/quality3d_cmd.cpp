@@ -1,0 +1,189 @@
+// `penumbra bench-quality` on a 3D scene: the path tracer's curve (1, 4, 16, ... samples per
+// pixel) and SPWI at its defaults and each variant docs/QUALITY.md studies, against the path
+// tracer at --reference-spp, as error against time.
+#include <unistd.h>
+
+#include <cinttypes>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+
+#include "io/image_io.hpp"
+#include "io/json_reader.hpp"
+#include "penumbra/penumbra.hpp"
+#include "quality_cmd.hpp"
+
+namespace fs = std::filesystem;
+using namespace penumbra;
+namespace sl = penumbra::spaceland;
+
+namespace {
+
+int fail(const std::string& what) {
+  std::cerr << "penumbra bench-quality: " << what << "\n";
+  return 1;
+}
+
+// A 64-bit hash (FNV-1a) of everything that determines a 3D scene's image, to name cached
+// references: the camera, the sky and sun, the materials and textures, every surface and medium.
+std::uint64_t scene_hash(const sl::Scene& scene) {
+  std::uint64_t h = 1469598103934665603ull;
+  auto bytes = [&](const void* p, std::size_t n) {
+    const unsigned char* c = static_cast<const unsigned char*>(p);
+    for (std::size_t i = 0; i < n; ++i) h = (h ^ c[i]) * 1099511628211ull;
+  };
+  auto array = [&](const auto& v) { bytes(v.data(), v.size() * sizeof(v[0])); };
+  auto values = [&](const auto&... v) { (bytes(&v, sizeof v), ...); };
+  const sl::Camera& c = scene.camera;
+  values(c.position, c.look_at, c.up, c.fov_y, c.width, c.height);
+  values(scene.sky.zenith, scene.sky.horizon, scene.sky.ground, scene.has_sun);
+  if (scene.has_sun) values(scene.sun.direction, scene.sun.irradiance, scene.sun.angular_radius);
+  for (const sl::Material& m : scene.materials) values(m.albedo, m.emission, m.albedo_texture);
+  for (const sl::Texture& t : scene.textures) {
+    values(t.width, t.height, t.wrap_s, t.wrap_t, t.nearest);
+    array(t.rgb);
+  }
+  for (const sl::TriangleMesh& m : scene.meshes) {
+    array(m.positions);
+    array(m.normals);
+    array(m.uvs);
+    array(m.triangles);
+    array(m.materials);
+  }
+  for (const sl::Sphere& s : scene.spheres) values(s.center, s.radius, s.material);
+  for (const sl::Disk& d : scene.disks) values(d.center, d.normal, d.radius, d.material);
+  for (const sl::Medium& m : scene.media) bytes(&m, sizeof m);
+  return h;
+}
+
+// One configuration. `t0_scale` > 0: SPWI's interval is that multiple of the one the defaults
+// derived (known once the defaults have run, which come first).
+struct Run {
+  std::string label, curve;
+  sl::RenderOptions options;
+  double t0_scale = 0;
+};
+
+// The path tracer at 1, 4, 16, ... samples per pixel, SPWI at its defaults, then (unless quick)
+// each merge, t0 from 0.25x to 2x, s0 and Q0 each way, pre-averaging, the thesis'
+// disjoint intervals and its gather without normals, and a dense setting.
+std::vector<Run> default_runs(int max_spp, bool quick) {
+  std::vector<Run> runs;
+  for (int spp = 1; spp <= max_spp; spp *= 4) {
+    if (quick && spp > 16) break;
+    sl::RenderOptions o;
+    o.pt.spp = spp;
+    runs.push_back({"pt " + std::to_string(spp) + " spp", "pt nee", o});
+  }
+  auto spwi = [&](const std::string& label, auto&& set, double t0_scale = 0) {
+    sl::RenderOptions o;
+    o.method = sl::Method::spwi;
+    set(o.spwi);
+    runs.push_back({label, "", o, t0_scale});
+  };
+  using S = sl::SpwiOptions;
+  spwi("spwi (defaults)", [](S&) {});
+  if (quick) return runs;
+  for (sl::SpwiMerge m : {sl::SpwiMerge::bilinear, sl::SpwiMerge::bilateral, sl::SpwiMerge::fix,
+                          sl::SpwiMerge::minmax})
+    spwi(std::string("spwi --merge ") + sl::to_string(m), [m](S& s) { s.merge = m; });
+  for (double k : {0.25, 0.5, 2.0})
+    spwi(
+        "spwi t0", [](S&) {}, k);
+  spwi("spwi --probe-spacing 2", [](S& s) { s.probe_spacing = 2; });
+  spwi("spwi --probe-spacing 8", [](S& s) { s.probe_spacing = 8; });
+  spwi("spwi --directions 16", [](S& s) { s.directions = 16; });
+  spwi("spwi --directions 256", [](S& s) { s.directions = 256; });
+  spwi("spwi --preaverage", [](S& s) { s.preaverage = true; });
+  spwi("spwi --disjoint", [](S& s) { s.overlap = false; });
+  spwi("spwi --gather-normal 0", [](S& s) { s.gather_normal = 0; });
+  spwi("spwi --probe-spacing 2 --directions 256", [](S& s) {
+    s.probe_spacing = 2;
+    s.directions = 256;
+  });
+  return runs;
+}
+
+}  // namespace
+
+int run_quality3d(const QualityArgs& a) {
+  if (a.bounces != 1)
+    return fail(a.scene + ": --bounces " + std::to_string(a.bounces) +
+                ": the 3D study compares SPWI, which has one bounce until the world-space "
+                "probe grid gives it a radiance cache; use --bounces 1");
+  Expected<sl::Scene> scene = sl::load_scene(a.scene);
+  if (!scene) return fail(scene.error().message);
+  quality_detail::StudyOutput output{a};
+  if (Status s = output.prepare("3d/"); !s) return fail(s.error().message);
+  const int w = scene->camera.width, h = scene->camera.height;
+
+  // The reference, cached under a name that holds everything it depends on; its seed differs
+  // from the curve's so that their errors are independent.
+  study::Reference ref;
+  ref.spp = a.reference_spp;
+  ref.unit = "pixel";
+  char name[128];
+  std::snprintf(name, sizeof name, "pt3d-%016" PRIx64 "-b%d-%dspp.pfm", scene_hash(*scene),
+                a.bounces, a.reference_spp);
+  ref.path = (fs::path(output.cache) / name).string();
+  ImageRgb reference;
+  if (fs::exists(ref.path)) {
+    Expected<io::RawImage> raw = io::read_image(ref.path, w, h);
+    if (!raw || raw->channels != 3)
+      return fail(ref.path + ": unreadable cached reference; delete it");
+    reference = ImageRgb(w, h, std::move(raw->pixels));
+    std::printf("reference: %s (cached)\n", ref.path.c_str());
+  } else {
+    sl::RenderOptions o;
+    o.pt.spp = a.reference_spp;
+    o.pt.seed = 0x5eed;
+    o.threads = a.threads;
+    o.progress = quality_detail::reference_progress();
+    std::printf("reference: rendering %d spp...\n", a.reference_spp);
+    std::fflush(stdout);
+    Expected<sl::RenderResult> r = sl::render(*scene, o);
+    if (isatty(STDERR_FILENO)) std::fprintf(stderr, "\n");
+    if (!r) return fail(a.scene + ": " + r.error().message);
+    if (Status s = io::write_pfm(ref.path, r->radiance); !s) return fail(s.error().message);
+    ref.time_ms = r->time_ms;
+    reference = std::move(r->radiance);
+    std::printf("reference: %s (%.1f s)\n", ref.path.c_str(), ref.time_ms / 1e3);
+  }
+
+  std::vector<study::Row> rows;
+  std::vector<quality_detail::Montage> montages;
+  float default_t0 = 0;
+  for (Run& run : default_runs(a.max_spp, a.quick)) {
+    sl::RenderOptions o = run.options;
+    o.threads = a.threads;
+    if (run.t0_scale > 0) {
+      o.spwi.interval = float(run.t0_scale * default_t0);
+      run.label += " " + io::format_rounded(run.t0_scale) + "x (--interval " +
+                   io::format_rounded(o.spwi.interval) + ")";
+    }
+    Expected<sl::RenderResult> r = sl::render(*scene, o);
+    if (!r) return fail(a.scene + ": " + run.label + ": " + r.error().message);
+    // Every pixel counts: the camera's image, sky included.
+    Expected<ErrorMetrics> m = compare_images(r->radiance, reference);
+    if (!m) return fail(run.label + ": " + m.error().message);
+    study::Row row{run.label, run.curve, sl::to_string(o.method), r->time_ms, r->samples, *m};
+    std::printf("  %-44s %9.0f ms  rel. RMSE %8.4f%%  PSNR %5.1f dB\n", run.label.c_str(),
+                row.time_ms, 100 * m->relative_rmse, m->psnr);
+    std::fflush(stdout);
+    rows.push_back(row);
+    if (run.label == "spwi (defaults)") {
+      default_t0 = r->options.spwi.interval;
+      flatland::MontageOptions mo;
+      mo.test_label = "spwi (defaults)";
+      mo.reference_label = "path tracer, " + std::to_string(a.reference_spp) + " spp";
+      mo.radiance = true;
+      Expected<ImageRgb8> montage =
+          flatland::comparison_montage(r->radiance, reference, nullptr, mo);
+      if (!montage) return fail(montage.error().message);
+      montages.push_back(
+          {"spwi_vs_reference.png", "SPWI at its defaults against the reference", *montage});
+    }
+  }
+  return output.finish(rows, ref, montages);
+}

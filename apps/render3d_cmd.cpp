@@ -155,6 +155,7 @@ int render_scene_3d(const RenderArgs& a) {
                          {"cascades", used.spwi.cascades},
                          {"merge", sl::to_string(used.spwi.merge)},
                          {"sun", sl::to_string(used.spwi.sun)},
+                         {"gather", sl::to_string(used.spwi.gather)},
                          {"depth_bias", used.spwi.depth_bias},
                          {"overlap", used.spwi.overlap},
                          {"preaverage", used.spwi.preaverage},

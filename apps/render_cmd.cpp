@@ -327,6 +327,10 @@ std::unique_ptr<RenderCommand> add_render_command(CLI::App& app) {
     add_enum_option(render, "--sun", a.spwi.sun, {sl::SpwiSun::direct, sl::SpwiSun::cascades},
                     "3D spwi: the sun on visible surfaces: direct (a shadow ray per pixel), "
                     "cascades (the top cascade sees its disk)");
+    add_enum_option(render, "--gather", a.spwi.gather,
+                    {sl::SpwiGather::pixel, sl::SpwiGather::probe},
+                    "3D spwi: the final gather averages each probe's directions per pixel, over "
+                    "the pixel's hemisphere (pixel), or once per probe, over its own (probe)");
     render
         ->add_option("--depth-bias", a.spwi.depth_bias,
                      "3D spwi: probes moved to this fraction of their depth (seed 000: 0.98)")

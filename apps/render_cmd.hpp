@@ -54,8 +54,8 @@ int run_render(const RenderArgs& args);
 inline constexpr std::string_view k3dOptions[] = {"--width", "--height", "--aov"};
 // spwi's own options, and those it shares with 2D's cascades (read into `options.rc`).
 inline constexpr std::string_view kSpwiOptions[] = {
-    "--merge",       "--sun",      "--depth-bias",   "--merge-edge",
-    "--gather-edge", "--disjoint", "--gather-normal"};
+    "--merge",       "--sun",      "--depth-bias",    "--merge-edge",
+    "--gather-edge", "--disjoint", "--gather-normal", "--gather"};
 inline constexpr std::string_view kSpwiSharedOptions[] = {
     "--probe-spacing", "--directions", "--interval", "--cascades", "--preaverage"};
 // The 3D path tracer's (read into `options.pt`, as 2D's path tracer reads them).

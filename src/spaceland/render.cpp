@@ -149,6 +149,9 @@ const char* to_string(SpwiMerge m) {
   return "?";
 }
 
+const char* to_string(SpwiGather g) {
+  return g == SpwiGather::pixel ? "pixel" : "probe";
+}
 const char* to_string(SpwiSun s) {
   return s == SpwiSun::direct ? "direct" : "cascades";
 }

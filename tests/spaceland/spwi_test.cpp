@@ -113,19 +113,25 @@ TEST(Spwi, SphereLightOverAPlaneIsWithinItsMeasuredError) {
   }
 }
 
-// A floor lit only by an emitting quad behind the camera: screen-space methods see nothing of it;
-// world-space intervals bring its light to the floor in front.
-TEST(Spwi, LightFromBehindTheCameraReachesTheFloor) {
+// A floor lit only by an emitting disk behind the camera, facing the floor in front.
+Scene floor_lit_from_behind() {
   Scene s;
   s.camera = camera({0, 1, 0}, {0, 0, -3}, 48, 36, 60);
   add_floor(s, 100, {0.8f, 0.8f, 0.8f});
-  Disk lamp;  // behind the camera, facing the floor in front
+  Disk lamp;
   lamp.center = {0, 2, 2};
   lamp.normal = normalize(Vec3{0, -1, -1});
   lamp.radius = 0.7f;
   lamp.material = add_material(s, {0, 0, 0}, {10, 10, 10});
   lamp.object = add_object(s, "disk");
   s.disks.push_back(lamp);
+  return s;
+}
+
+// A floor lit only by an emitting disk behind the camera: screen-space methods see nothing of it;
+// world-space intervals bring its light to the floor in front.
+TEST(Spwi, LightFromBehindTheCameraReachesTheFloor) {
+  const Scene s = floor_lit_from_behind();
   const ImageRgb ref = render_ok(s, pt(256)).radiance;
   const ImageRgb img = render_ok(s, spwi(SpwiMerge::bilinear3d)).radiance;
   double got = 0, want = 0;
@@ -136,6 +142,36 @@ TEST(Spwi, LightFromBehindTheCameraReachesTheFloor) {
     }
   EXPECT_GT(want, 0.0);
   EXPECT_NEAR(got / want, 1.0, 0.25);
+}
+
+// --gather probe averages each probe's directions once, about the probe's normal: the closed
+// forms stay exact, and where every probe lies on the pixel's plane (a floor lit from behind the
+// camera) it gives the per-pixel gather's image to float rounding.
+TEST(Spwi, PerProbeGatherKeepsTheClosedFormsAndEqualsThePixelGatherOnAPlane) {
+  RenderOptions o = spwi(SpwiMerge::bilinear3d);
+  o.spwi.gather = SpwiGather::probe;
+  const RenderResult sky = render_ok(sky_plane(), o);
+  double worst = 0;
+  for (int j = 0; j < 48; ++j)
+    for (int i = 0; i < 64; ++i) {
+      const Rgb c = sky.radiance.at(i, j);
+      const double k = c.g < 0.8 ? 0.6 : 1.0;
+      worst = std::max({worst, std::abs(c.r / (1.5 * k) - 1), std::abs(c.b / (0.5 * k) - 1)});
+    }
+  EXPECT_LT(worst, 1e-5);
+
+  const Scene s = floor_lit_from_behind();
+  const ImageRgb per_probe = render_ok(s, o).radiance;
+  o.spwi.gather = SpwiGather::pixel;
+  const ImageRgb per_pixel = render_ok(s, o).radiance;
+  double lit = 0, differ = 0;
+  for (int j = 18; j < 36; ++j)  // the floor
+    for (int i = 0; i < 48; ++i) {
+      lit = std::max(lit, double(per_pixel.at(i, j).g));
+      differ = std::max(differ, double(std::abs(per_probe.at(i, j).g - per_pixel.at(i, j).g)));
+    }
+  EXPECT_GT(lit, 0.01);
+  EXPECT_LT(differ, 1e-5 * lit);
 }
 
 // Two closed rooms side by side; the light is in the one the camera is not in.

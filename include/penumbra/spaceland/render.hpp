@@ -36,6 +36,12 @@ enum class SpwiSun {
   cascades,  // seed 000: the sun's disk is in the sky the top cascade sees
 };
 
+// How the final gather averages a cascade-0 probe's directions (--gather).
+enum class SpwiGather {
+  pixel,  // seed 000 Alg. 11: per pixel, over the pixel's own hemisphere (4 x Q0 reads a pixel)
+  probe,  // once per probe, over the probe's hemisphere; a pixel reads 4 values
+};
+
 // What an image holds: the radiance (the methods' answer) or a G-buffer channel of the first hits
 // (the same for every method). Misses: depth +inf (EXR/PFM; PNG shows them black), normal 0,
 // albedo 0, position 0, emission the sky's radiance (the sun's disk included), object -1.
@@ -68,6 +74,7 @@ struct SpwiOptions {
                           // top cascade's interval runs to infinity
   SpwiMerge merge = SpwiMerge::bilinear3d;
   SpwiSun sun = SpwiSun::direct;
+  SpwiGather gather = SpwiGather::pixel;
   // Probes are moved towards the camera to this fraction of their depth (seed 000 Alg. 5 uses
   // 0.98 against surface acne; 1 keeps them on the surface, rays leave it by a robust offset).
   float depth_bias = 1;
@@ -145,5 +152,6 @@ const char* to_string(Method m);
 const char* to_string(Aov a);
 const char* to_string(SpwiMerge m);
 const char* to_string(SpwiSun s);
+const char* to_string(SpwiGather g);
 
 }  // namespace penumbra::spaceland

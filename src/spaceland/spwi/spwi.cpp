@@ -293,7 +293,8 @@ std::uint64_t Plan::bytes() const {
     largest = std::max(largest, rays(i));
     probe_bytes += probes(i) * sizeof(Probe) * (preaverage ? 5 : 1);
   }
-  return 2 * largest * sizeof(Rgb) + probe_bytes;
+  // Plus cascade 0's per-probe means (--gather probe), counted either way: 12 B a probe.
+  return 2 * largest * sizeof(Rgb) + probe_bytes + (cascades > 0 ? probes(0) * sizeof(Rgb) : 0);
 }
 
 namespace {
@@ -583,6 +584,47 @@ Expected<ImageRgb> render(const Scene& scene, const RayScene& rays, const GBuffe
   const std::uint64_t count = plan.probes(0);
   const bool sun_direct = o.sun == SpwiSun::direct && bg.has_sun();
   const Vec3 sun_dir = bg.sun_direction();
+  // --gather probe: each probe's cosine-weighted mean radiance about its own normal, once, so
+  // that a pixel reads 4 values instead of 4 x Q0 (exact where the pixel's normal is its
+  // probes', as on flat surfaces). kNoLight where the probe has none towards its hemisphere.
+  std::vector<Rgb> probe_mean;
+  if (o.gather == SpwiGather::probe) {
+    probe_mean.assign(count, kNoLight);
+    parallel_for(int(count), [&](int k) {
+      const Probe& pr = upper_probes[std::size_t(k)];
+      if (!pr.valid) return;
+      Rgb sum{};
+      float weight = 0;
+      for (std::size_t d = 0; d < dirs.size(); ++d) {
+        const float cos_t = dot(pr.n, dirs[d]);
+        const Rgb& r = upper[d * count + std::size_t(k)];
+        if (cos_t <= 0 || !holds_light(r)) continue;
+        sum += r * cos_t;
+        weight += cos_t;
+      }
+      if (weight > 0) probe_mean[std::size_t(k)] = sum * (1 / weight);
+    });
+  }
+  // A probe's cosine-weighted mean radiance over the hemisphere of normal n (--gather pixel) or
+  // its own (--gather probe); false where it has no light there.
+  auto probe_radiance = [&](int index, Vec3 n, Rgb& mean) {
+    if (!probe_mean.empty()) {
+      mean = probe_mean[std::size_t(index)];
+      return holds_light(mean);
+    }
+    Rgb sum{};
+    float weight = 0;
+    for (std::size_t d = 0; d < dirs.size(); ++d) {
+      const float cos_t = dot(n, dirs[d]);
+      const Rgb& r = upper[d * count + std::size_t(index)];
+      if (cos_t <= 0 || !holds_light(r)) continue;
+      sum += r * cos_t;
+      weight += cos_t;
+    }
+    if (!(weight > 0)) return false;
+    mean = sum * (1 / weight);
+    return true;
+  };
   ImageRgb img(g.width, g.height);
   parallel_for(g.height, [&](int y) {
     std::uint64_t local = 0;
@@ -623,20 +665,11 @@ Expected<ImageRgb> render(const Scene& scene, const RayScene& rays, const GBuffe
         Rgb e{};
         float used = 0;  // the weight of probes with light towards this pixel's hemisphere
         for (int j = 0; j < c.n; ++j) {
-          if (c.w[std::size_t(j)] <= 0) continue;
-          Rgb sum{};
-          float weight = 0;
-          for (std::size_t d = 0; d < dirs.size(); ++d) {
-            const float cos_t = dot(n, dirs[d]);
-            const Rgb& r = upper[d * count + std::size_t(c.index[std::size_t(j)])];
-            if (cos_t <= 0 || !holds_light(r)) continue;
-            sum += r * cos_t;
-            weight += cos_t;
-          }
-          if (weight > 0) {
-            e += sum * (c.w[std::size_t(j)] / weight);
-            used += c.w[std::size_t(j)];
-          }
+          Rgb mean;
+          if (c.w[std::size_t(j)] <= 0 || !probe_radiance(c.index[std::size_t(j)], n, mean))
+            continue;
+          e += mean * c.w[std::size_t(j)];
+          used += c.w[std::size_t(j)];
         }
         if (used > 0) l += albedo * e * (1 / used);
       }

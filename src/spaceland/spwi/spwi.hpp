@@ -37,7 +37,8 @@ struct Plan {
   // The interval cascade i traces: [0, t0] for cascade 0, [t0 4^(i-1), t0 4^i] above.
   float interval_start(int i) const { return i == 0 ? 0.0f : t0 * float(1u << (2 * (i - 1))); }
   float interval_end(int i) const { return t0 * float(1u << (2 * i)); }
-  // Working memory: two ping-pong buffers of the largest cascade (RGB floats) and the probes.
+  // Working memory: two ping-pong buffers of the largest cascade (RGB floats), the probes, and
+  // cascade 0's per-probe means.
   std::uint64_t bytes() const;
 };
 

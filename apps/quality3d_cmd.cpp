@@ -67,7 +67,8 @@ struct Run {
 
 // The path tracer at 1, 4, 16, ... samples per pixel, SPWI at its defaults, then (unless quick)
 // each merge, t0 from 0.25x to 2x, s0 and Q0 each way, pre-averaging, the thesis'
-// disjoint intervals and its gather without normals, the per-probe gather, and a dense setting.
+// disjoint intervals and its gather without normals, the per-probe gather, branching 16, and a
+// dense setting.
 std::vector<Run> default_runs(int max_spp, bool quick) {
   std::vector<Run> runs;
   for (int spp = 1; spp <= max_spp; spp *= 4) {
@@ -99,6 +100,7 @@ std::vector<Run> default_runs(int max_spp, bool quick) {
   spwi("spwi --disjoint", [](S& s) { s.overlap = false; });
   spwi("spwi --gather-normal 0", [](S& s) { s.gather_normal = 0; });
   spwi("spwi --gather probe", [](S& s) { s.gather = sl::SpwiGather::probe; });
+  spwi("spwi --branching 16", [](S& s) { s.branching = 16; });
   spwi("spwi --probe-spacing 2 --directions 256", [](S& s) {
     s.probe_spacing = 2;
     s.directions = 256;

@@ -86,6 +86,7 @@ int render_scene_3d(const RenderArgs& a) {
   if (given("--directions")) options.spwi.directions = a.options.rc.directions;
   if (given("--interval")) options.spwi.interval = a.options.rc.interval;
   if (given("--cascades")) options.spwi.cascades = a.options.rc.cascades;
+  if (given("--branching")) options.spwi.branching = a.options.rc.branching;
   if (given("--preaverage")) options.spwi.preaverage = a.options.rc.preaverage;
   options.aov = a.aov;
   // The shared options, with --time alone meaning no sample limit, as in 2D.
@@ -153,6 +154,7 @@ int render_scene_3d(const RenderArgs& a) {
                          {"directions", used.spwi.directions},
                          {"interval", used.spwi.interval},
                          {"cascades", used.spwi.cascades},
+                         {"branching", used.spwi.branching},
                          {"merge", sl::to_string(used.spwi.merge)},
                          {"sun", sl::to_string(used.spwi.sun)},
                          {"gather", sl::to_string(used.spwi.gather)},

@@ -57,7 +57,7 @@ inline constexpr std::string_view kSpwiOptions[] = {
     "--merge",       "--sun",      "--depth-bias",    "--merge-edge",
     "--gather-edge", "--disjoint", "--gather-normal", "--gather"};
 inline constexpr std::string_view kSpwiSharedOptions[] = {
-    "--probe-spacing", "--directions", "--interval", "--cascades", "--preaverage"};
+    "--probe-spacing", "--directions", "--interval", "--cascades", "--preaverage", "--branching"};
 // The 3D path tracer's (read into `options.pt`, as 2D's path tracer reads them).
 inline constexpr std::string_view kPtOptions[] = {"--spp", "--time", "--seed"};
 

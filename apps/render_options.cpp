@@ -50,8 +50,9 @@ void add_render_options(CLI::App* app, RenderOptions& options, RenderOptionFlags
     app->add_option("--directions", rc.directions, "Directions Q0 of a cascade-0 probe")
         ->check(CLI::Range(1, 64))
         ->capture_default_str();
-    app->add_option("--branching", rc.branching, "Angular branching per cascade")
-        ->check(CLI::IsMember({2, 4}))
+    app->add_option("--branching", rc.branching,
+                    "Angular branching per cascade: 2 or 4 (2D); 4 or 16 (3D spwi, default 4)")
+        ->check(CLI::IsMember({2, 4, 16}))
         ->capture_default_str();
     app->add_option(
            "--interval", rc.interval,

@@ -346,6 +346,7 @@ std::vector<SpwiRun> spwi_runs() {
   runs.push_back({"--probe-spacing 2", [](SpwiOptions& o) { o.probe_spacing = 2; }});
   runs.push_back({"--directions 256", [](SpwiOptions& o) { o.directions = 256; }});
   runs.push_back({"--preaverage", [](SpwiOptions& o) { o.preaverage = true; }});
+  runs.push_back({"--branching 16", [](SpwiOptions& o) { o.branching = 16; }});
   runs.push_back({"--disjoint", [](SpwiOptions& o) { o.overlap = false; }});
   runs.push_back({"--sun cascades", [](SpwiOptions& o) { o.sun = SpwiSun::cascades; }});
   return runs;

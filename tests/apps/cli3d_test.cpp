@@ -81,6 +81,18 @@ TEST_F(Cli3d, SpwiReportsItsDerivedIntervalAndCascades) {
   const auto b = run({"render", scene_, "--method", "spwi", "--bounces", "2", "-o", out("b.pfm")});
   EXPECT_EQ(b.status, 1);
   EXPECT_NE(b.err.find("world-space radiance cache"), std::string::npos) << b.err;
+  // --branching: 4 or 16 in 3D (2 or 4 in 2D), and the gather's choice, reported back.
+  const auto g = run({"render", scene_, "--method", "spwi", "--branching", "16", "--gather",
+                      "probe", "--json", "-o", out("g.pfm")});
+  ASSERT_EQ(g.status, 0) << g.err;
+  const nlohmann::json gp = nlohmann::json::parse(g.out)["parameters"];
+  EXPECT_EQ(gp["branching"], 16);
+  EXPECT_EQ(gp["gather"], "probe");
+  const auto two =
+      run({"render", scene_, "--method", "spwi", "--branching", "2", "-o", out("two.pfm")});
+  EXPECT_EQ(two.status, 1);
+  EXPECT_NE(two.err.find("`spwi.branching`: expected 4 or 16"), std::string::npos) << two.err;
+  EXPECT_FALSE(fs::exists(out("two.pfm")));
 }
 
 TEST_F(Cli3d, WidthAndHeightReplaceTheCameraSize) {

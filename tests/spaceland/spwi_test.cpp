@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <string>
 
 #include "penumbra/spaceland/render.hpp"
@@ -37,39 +38,70 @@ Scene sky_plane() {
   return s;
 }
 
+// The inside of an emitting box (albedo 0.6, Le (1, 0.5, 0.25)): one bounce gives Le (1 + a).
+Scene enclosure() {
+  Scene s;
+  s.camera = camera({0.1f, -0.2f, 0.3f}, {0.5f, 0.4f, -1}, 48, 36, 90);
+  add_box(s, {-1, -1.25f, -1.5f}, {1, 1.25f, 1.5f},
+          add_material(s, {0.6f, 0.6f, 0.6f}, {1, 0.5f, 0.25f}));
+  return s;
+}
+
+// Two closed rooms side by side; the light is in the one the camera is not in.
+Scene two_closed_rooms() {
+  Scene s;
+  s.camera = camera({0, 0, 0.5f}, {0.2f, -0.3f, -1}, 48, 36, 80);
+  const std::uint32_t wall = add_material(s, {0.7f, 0.7f, 0.7f});
+  add_box(s, {-1, -1, -1}, {1, 1, 1}, wall);
+  add_box(s, {1.05f, -1, -1}, {3, 1, 1}, wall);
+  Sphere light;
+  light.center = {2, 0, 0};
+  light.radius = 0.3f;
+  light.material = add_material(s, {0, 0, 0}, {50, 50, 50});
+  light.object = add_object(s, "sphere");
+  s.spheres.push_back(light);
+  return s;
+}
+
+// Largest relative deviation of channel r from `want` over the image.
+double worst_red(const ImageRgb& img, double want) {
+  double worst = 0;
+  for (int j = 0; j < img.height(); ++j)
+    for (int i = 0; i < img.width(); ++i)
+      worst = std::max(worst, std::abs(img.at(i, j).r / want - 1));
+  return worst;
+}
+
+// Largest relative deviation of sky_plane()'s image from its closed form: plane pixels a L, sky
+// pixels (the top rows) L.
+double sky_plane_error(const ImageRgb& img) {
+  double worst = 0;
+  for (int j = 0; j < img.height(); ++j)
+    for (int i = 0; i < img.width(); ++i) {
+      const Rgb c = img.at(i, j);
+      const double k = c.g < 0.8 ? 0.6 : 1.0;
+      worst = std::max({worst, std::abs(c.r / (1.5 * k) - 1), std::abs(c.g / (1.0 * k) - 1),
+                        std::abs(c.b / (0.5 * k) - 1)});
+    }
+  return worst;
+}
+
 TEST(Spwi, UniformSkyOverAnOpenPlaneIsExactInEveryMergeMode) {
   const Scene s = sky_plane();
   for (int pre = 0; pre < 2; ++pre)
     for (SpwiMerge m : kMerges) {
       if (pre == 1 && m == SpwiMerge::minmax) continue;  // refused: not combined yet
-      const RenderResult r = render_ok(s, spwi(m, pre == 1));
-      double worst = 0;
-      for (int j = 0; j < 48; ++j)
-        for (int i = 0; i < 64; ++i) {
-          const Rgb c = r.radiance.at(i, j);
-          // Plane pixels a L; sky pixels (the top rows) L.
-          const double k = c.g < 0.8 ? 0.6 : 1.0;
-          worst = std::max({worst, std::abs(c.r / (1.5 * k) - 1), std::abs(c.g / (1.0 * k) - 1),
-                            std::abs(c.b / (0.5 * k) - 1)});
-        }
-      EXPECT_LT(worst, 1e-5) << to_string(m) << (pre ? ", pre-averaged" : "");
+      EXPECT_LT(sky_plane_error(render_ok(s, spwi(m, pre == 1)).radiance), 1e-5)
+          << to_string(m) << (pre ? ", pre-averaged" : "");
     }
 }
 
 TEST(Spwi, EmittingEnclosureGivesLeTimesOnePlusAInEveryMergeMode) {
-  Scene s;
-  s.camera = camera({0.1f, -0.2f, 0.3f}, {0.5f, 0.4f, -1}, 48, 36, 90);
-  add_box(s, {-1, -1.25f, -1.5f}, {1, 1.25f, 1.5f},
-          add_material(s, {0.6f, 0.6f, 0.6f}, {1, 0.5f, 0.25f}));
+  const Scene s = enclosure();
   for (int pre = 0; pre < 2; ++pre)
     for (SpwiMerge m : kMerges) {
       if (pre == 1 && m == SpwiMerge::minmax) continue;  // refused: not combined yet
-      const RenderResult r = render_ok(s, spwi(m, pre == 1));
-      double worst = 0;
-      for (int j = 0; j < 36; ++j)
-        for (int i = 0; i < 48; ++i)
-          worst = std::max(worst, std::abs(r.radiance.at(i, j).r / 1.6 - 1));
-      EXPECT_LT(worst, 1e-5) << to_string(m);
+      EXPECT_LT(worst_red(render_ok(s, spwi(m, pre == 1)).radiance, 1.6), 1e-5) << to_string(m);
     }
 }
 
@@ -151,14 +183,7 @@ TEST(Spwi, PerProbeGatherKeepsTheClosedFormsAndEqualsThePixelGatherOnAPlane) {
   RenderOptions o = spwi(SpwiMerge::bilinear3d);
   o.spwi.gather = SpwiGather::probe;
   const RenderResult sky = render_ok(sky_plane(), o);
-  double worst = 0;
-  for (int j = 0; j < 48; ++j)
-    for (int i = 0; i < 64; ++i) {
-      const Rgb c = sky.radiance.at(i, j);
-      const double k = c.g < 0.8 ? 0.6 : 1.0;
-      worst = std::max({worst, std::abs(c.r / (1.5 * k) - 1), std::abs(c.b / (0.5 * k) - 1)});
-    }
-  EXPECT_LT(worst, 1e-5);
+  EXPECT_LT(sky_plane_error(sky.radiance), 1e-5);
 
   const Scene s = floor_lit_from_behind();
   const ImageRgb per_probe = render_ok(s, o).radiance;
@@ -174,19 +199,8 @@ TEST(Spwi, PerProbeGatherKeepsTheClosedFormsAndEqualsThePixelGatherOnAPlane) {
   EXPECT_LT(differ, 1e-5 * lit);
 }
 
-// Two closed rooms side by side; the light is in the one the camera is not in.
 TEST(Spwi, NoLightCrossesAClosedWallInAnyMergeModeWithOrWithoutPreAveraging) {
-  Scene s;
-  s.camera = camera({0, 0, 0.5f}, {0.2f, -0.3f, -1}, 48, 36, 80);
-  const std::uint32_t wall = add_material(s, {0.7f, 0.7f, 0.7f});
-  add_box(s, {-1, -1, -1}, {1, 1, 1}, wall);
-  add_box(s, {1.05f, -1, -1}, {3, 1, 1}, wall);
-  Sphere light;
-  light.center = {2, 0, 0};
-  light.radius = 0.3f;
-  light.material = add_material(s, {0, 0, 0}, {50, 50, 50});
-  light.object = add_object(s, "sphere");
-  s.spheres.push_back(light);
+  const Scene s = two_closed_rooms();
   for (int pre = 0; pre < 2; ++pre)
     for (SpwiMerge m : kMerges) {
       if (pre == 1 && m == SpwiMerge::minmax) continue;  // refused: not combined yet
@@ -195,6 +209,21 @@ TEST(Spwi, NoLightCrossesAClosedWallInAnyMergeModeWithOrWithoutPreAveraging) {
       for (std::size_t k = 0; k < img.size(); ++k) most = std::max(most, img.data()[k]);
       EXPECT_EQ(most, 0.0f) << to_string(m);
     }
+}
+
+// Branching 16 (map side x4, probe spacing x4, intervals x16 per cascade) keeps what the
+// thesis' 4 keeps: the closed forms exact and the wall closed, with each kind of merge.
+TEST(Spwi, BranchingSixteenKeepsTheClosedFormsExactAndTheWallClosed) {
+  for (SpwiMerge m : {SpwiMerge::bilinear3d, SpwiMerge::fix, SpwiMerge::minmax}) {
+    RenderOptions o = spwi(m);
+    o.spwi.branching = 16;
+    const RenderResult sky = render_ok(sky_plane(), o);
+    EXPECT_LE(sky.options.spwi.cascades, 6);
+    EXPECT_LT(sky_plane_error(sky.radiance), 1e-5) << to_string(m);
+    EXPECT_LT(worst_red(render_ok(enclosure(), o).radiance, 1.6), 1e-5) << to_string(m);
+    const ImageRgb dark = render_ok(two_closed_rooms(), o).radiance;
+    EXPECT_EQ(*std::max_element(dark.data(), dark.data() + dark.size()), 0.0f) << to_string(m);
+  }
 }
 
 TEST(Spwi, SameBitsOnOneAndTwoThreads) {
@@ -222,23 +251,26 @@ TEST(Spwi, RefusesWhatItCannotDo) {
     ASSERT_FALSE(r.ok()) << words;
     EXPECT_NE(r.error().message.find(words), std::string::npos) << r.error().message;
   };
-  RenderOptions o = spwi(SpwiMerge::bilinear);
-  o.bounces = 2;
-  refused(o, "world-space radiance cache", s);
-  o = spwi(SpwiMerge::bilinear);
-  o.spwi.directions = 12;
-  refused(o, "spwi.directions", s);
-  o.spwi.directions = 16;
-  o.spwi.depth_bias = 0;
-  refused(o, "spwi.depth_bias", s);
+  // Each case: what is changed from the defaults, and the words of the refusal.
+  const std::pair<std::function<void(RenderOptions&)>, const char*> cases[] = {
+      {[](RenderOptions& o) { o.bounces = 2; }, "world-space radiance cache"},
+      {[](RenderOptions& o) { o.spwi.directions = 12; }, "spwi.directions"},
+      {[](RenderOptions& o) { o.spwi.depth_bias = 0; }, "spwi.depth_bias"},
+      {[](RenderOptions& o) { o.max_memory = 1 << 16; }, "max_memory"},
+      {[](RenderOptions& o) { o.spwi.branching = 2; }, "`spwi.branching`: expected 4 or 16"},
+      {[](RenderOptions& o) { o.spwi.branching = 16, o.spwi.cascades = 7; },
+       "`spwi.cascades`: expected 0..6 with branching 16"},
+  };
+  for (const auto& [change, words] : cases) {
+    RenderOptions o = spwi(SpwiMerge::bilinear);
+    change(o);
+    refused(o, words, s);
+  }
   Scene fog = s;
   Medium m;
   m.extinction = {1, 1, 1};
   fog.media.push_back(m);
   refused(spwi(SpwiMerge::bilinear), "cannot carry fog", fog);
-  o = spwi(SpwiMerge::bilinear);
-  o.max_memory = 1 << 16;
-  refused(o, "max_memory", s);
 }
 
 }  // namespace

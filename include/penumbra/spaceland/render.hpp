@@ -64,14 +64,18 @@ struct PtOptions {
 
 // Screen-space probes with world-space intervals (docs/METHODS.md, "SPWI").
 struct SpwiOptions {
-  int probe_spacing = 4;  // s0: pixels between cascade-0 probes; cascade i uses s0 2^i
+  // With B the branching below:
+  int probe_spacing = 4;  // s0: pixels between cascade-0 probes; cascade i uses s0 sqrt(B)^i
   int directions = 64;    // Q0: directions of a cascade-0 probe (a square: 4, 16, 64, ...);
-                          // cascade i has Q0 4^i
-  float interval = 0;     // t0: cascade 0 traces [0, t0], cascade i [t0 4^(i-1), t0 4^i], in
+                          // cascade i has Q0 B^i
+  float interval = 0;     // t0: cascade 0 traces [0, t0], cascade i [t0 B^(i-1), t0 B^i], in
                           // world units (0: four probe spacings at the median depth)
-  int cascades = 0;       // 0: enough that the last interval reaches across the scene's bounds,
-                          // at most until the probe spacing passes the image's diagonal; the
-                          // top cascade's interval runs to infinity
+  // Directions per cascade multiply by this (4: the thesis, map side x2, probe spacing x2,
+  // intervals x4; 16: side x4, spacing x4, intervals x16, half the cascades).
+  int branching = 4;
+  int cascades = 0;  // 0: enough that the last interval reaches across the scene's bounds,
+                     // at most until the probe spacing passes the image's diagonal; the
+                     // top cascade's interval runs to infinity
   SpwiMerge merge = SpwiMerge::bilinear3d;
   SpwiSun sun = SpwiSun::direct;
   SpwiGather gather = SpwiGather::pixel;

@@ -23,11 +23,12 @@ namespace {
 constexpr int kMaxCascades = 12;
 
 // The most cascades worth having on a w x h image: until the probe spacing reaches the image's
-// diagonal (one probe for the whole screen). Past it a cascade only quadruples its directions.
-int screen_cascades(int w, int h, int s0) {
+// diagonal (one probe for the whole screen). Past it a cascade only multiplies its directions.
+// `step`: the spacing grows by 2^step per cascade.
+int screen_cascades(int w, int h, int s0, int step) {
   const double diagonal = std::sqrt(double(w) * w + double(h) * h);
   int n = 1;
-  while (n < kMaxCascades && double(s0) * double(1 << (n - 1)) < diagonal) ++n;
+  while (n < kMaxCascades / step && double(s0) * double(1 << (step * (n - 1))) < diagonal) ++n;
   return n;
 }
 
@@ -308,6 +309,7 @@ Plan options_plan(int width, int height, const SpwiOptions& o) {
   p.side = std::max(1, int(std::lround(std::sqrt(double(std::max(1, o.directions))))));
   p.preaverage = o.preaverage;
   p.layers = o.merge == SpwiMerge::minmax ? 2 : 1;
+  p.step = o.branching == 16 ? 2 : 1;
   return p;
 }
 
@@ -323,8 +325,8 @@ void add_grids(Plan& p) {
 
 std::uint64_t bytes_upper_bound(int width, int height, const SpwiOptions& o) {
   Plan p = options_plan(width, height, o);
-  p.cascades = o.cascades > 0 ? std::min(o.cascades, kMaxCascades)
-                              : screen_cascades(width, height, p.probe_spacing);
+  p.cascades = o.cascades > 0 ? std::min(o.cascades, kMaxCascades / p.step)
+                              : screen_cascades(width, height, p.probe_spacing, p.step);
   add_grids(p);
   return p.bytes();
 }
@@ -350,8 +352,15 @@ Status check(const Scene& scene, const RenderOptions& options) {
   if (!std::isfinite(o.interval) || o.interval < 0)
     return Error{"`spwi.interval`: expected a length > 0 in world units (0: derived), found " +
                  io::format_number(o.interval)};
-  if (o.cascades < 0 || o.cascades > kMaxCascades)
-    return Error{"`spwi.cascades`: expected 0..12 (0: derived), found " +
+  if (o.branching != 4 && o.branching != 16)
+    return Error{
+        "`spwi.branching`: expected 4 or 16 (directions per cascade multiply by it, "
+        "the octahedral map's side by 2 or 4), found " +
+        std::to_string(o.branching)};
+  const int most = o.branching == 16 ? kMaxCascades / 2 : kMaxCascades;
+  if (o.cascades < 0 || o.cascades > most)
+    return Error{"`spwi.cascades`: expected 0.." + std::to_string(most) + " with branching " +
+                 std::to_string(o.branching) + " (0: derived), found " +
                  std::to_string(o.cascades)};
   if (!(o.depth_bias > 0 && o.depth_bias <= 1))
     return Error{"`spwi.depth_bias`: expected a fraction in (0, 1], found " +
@@ -399,7 +408,7 @@ Plan make_plan(const Scene& scene, const GBuffer& g, const SpwiOptions& o) {
     b.lo = min(b.lo, scene.camera.position);
     b.hi = max(b.hi, scene.camera.position);
     const double reach = length(b.hi - b.lo);
-    const int most = screen_cascades(g.width, g.height, p.probe_spacing);
+    const int most = screen_cascades(g.width, g.height, p.probe_spacing, p.step);
     p.cascades = 1;
     while (p.cascades < most && double(p.interval_end(p.cascades - 1)) < reach) ++p.cascades;
   }
@@ -447,15 +456,16 @@ Expected<ImageRgb> render(const Scene& scene, const RayScene& rays, const GBuffe
     const int up = i + 1;
     const int up_side = top ? 0 : plan.map_side(up);
     const std::uint64_t up_count = top ? 0 : plan.probes(up);
-    // The upper radiance towards lower direction (u, v): the mean of its 2x2 children that hold
-    // light (the bilinear sample of the upper map at the lower cell's centre, which crosses no
-    // seam); false when none does.
+    // The upper radiance towards lower direction (u, v): the mean of its 2x2 children (4x4 with
+    // branching 16) that hold light (the bilinear sample of the upper map at the lower cell's
+    // centre, which crosses no seam; with 4x4, their box mean); false when none does.
+    const int split = 1 << plan.step;
     auto upper_mean = [&](int probe, int u, int v, Rgb& mean) {
       Rgb sum{};
       int n = 0;
-      for (int dv = 0; dv < 2; ++dv)
-        for (int du = 0; du < 2; ++du) {
-          const std::size_t d = std::size_t(2 * v + dv) * up_side + std::size_t(2 * u + du);
+      for (int dv = 0; dv < split; ++dv)
+        for (int du = 0; du < split; ++du) {
+          const std::size_t d = std::size_t(split * v + dv) * up_side + std::size_t(split * u + du);
           const Rgb& c = upper[d * up_count + std::size_t(probe)];
           if (!holds_light(c)) continue;
           sum += c;

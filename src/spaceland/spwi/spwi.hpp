@@ -26,17 +26,22 @@ struct Plan {
   int layers = 1;           // probes per tile: 2 with the min-max merge (nearest, farthest)
   std::vector<int> nx, ny;  // probe grid of each cascade
 
-  int spacing(int i) const { return probe_spacing << i; }
-  int map_side(int i) const { return side << i; }
+  int step = 1;  // log2 of the map side's growth per cascade: 1 (branching 4), 2 (16)
+
+  int spacing(int i) const { return probe_spacing << (step * i); }
+  int map_side(int i) const { return side << (step * i); }
   std::uint64_t probes(int i) const {
     return std::uint64_t(nx[std::size_t(i)]) * ny[std::size_t(i)] * std::uint64_t(layers);
   }
   std::uint64_t rays(int i) const {
     return probes(i) * std::uint64_t(map_side(i)) * std::uint64_t(map_side(i));
   }
-  // The interval cascade i traces: [0, t0] for cascade 0, [t0 4^(i-1), t0 4^i] above.
-  float interval_start(int i) const { return i == 0 ? 0.0f : t0 * float(1u << (2 * (i - 1))); }
-  float interval_end(int i) const { return t0 * float(1u << (2 * i)); }
+  // The interval cascade i traces: [0, t0] for cascade 0, [t0 B^(i-1), t0 B^i] above, B the
+  // branching (4: Alg. 6; 16: two of its steps at once).
+  float interval_start(int i) const {
+    return i == 0 ? 0.0f : t0 * float(1u << (2 * step * (i - 1)));
+  }
+  float interval_end(int i) const { return t0 * float(1u << (2 * step * i)); }
   // Working memory: two ping-pong buffers of the largest cascade (RGB floats), the probes, and
   // cascade 0's per-probe means.
   std::uint64_t bytes() const;

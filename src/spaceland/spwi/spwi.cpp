@@ -477,6 +477,13 @@ Expected<ImageRgb> render(const Scene& scene, const RayScene& rays, const GBuffe
     };
     parallel_for(plan.ny[std::size_t(i)], [&](int py) {
       std::uint64_t local = 0;
+      // A probe's rays as one stream, reused along the row.
+      std::vector<Ray> batch;
+      std::vector<Hit> batch_hits;
+      std::vector<std::uint8_t> batch_found;
+      std::vector<int> batch_cell;
+      batch.reserve(std::size_t(side) * side);
+      batch_cell.reserve(std::size_t(side) * side);
       for (int tile = py * nx, end = tile + nx; tile < end; ++tile)
         for (int layer = 0; layer < plan.layers; ++layer) {
           const int px = tile - py * nx;
@@ -501,6 +508,34 @@ Expected<ImageRgb> render(const Scene& scene, const RayScene& rays, const GBuffe
             if (o.merge == SpwiMerge::bilinear3d) bilinear3d(c, upper_probes, pr.p);
             merge = normalise(c, upper_probes);
           }
+          // This cascade's ray from probe `from` along d (from the probe with the overlap).
+          auto interval_ray = [&](const Probe& from, Vec3 d) {
+            return Ray{rays.spawn(from.p, from.n, d), d, o.overlap ? 0.0f : a, b};
+          };
+          // What the interval ray r (map cell (u, v)) brings, given its hit: the surface's
+          // emission, or the merge with the cascade above.
+          auto resolve = [&](const Ray& r, bool found, const Hit& hit, int u, int v) -> Rgb {
+            if (found) return hit.t >= a ? emission_at(scene, hit) : kNoLight;  // opaque
+            // The top cascade's misses see the sky; so do rays of a probe with no upper probe
+            // around it (only sky above it on screen).
+            if (!merge) return top_background(bg, r.direction, o.sun);
+            Rgb sum{}, got;
+            float weight = 0;
+            for (int j = 0; j < c.n; ++j)
+              if (c.w[std::size_t(j)] > 0 && upper_mean(c.index[std::size_t(j)], u, v, got)) {
+                sum += got * c.w[std::size_t(j)];
+                weight += c.w[std::size_t(j)];
+              }
+            if (weight > 0) return sum * (1 / weight);
+            // No upper probe has light for this direction (its rays met surfaces before their
+            // intervals, or the upper map has only directions into their surfaces): this ray
+            // continues itself, to infinity as the top cascade does.
+            ++local;
+            Hit rest_hit;
+            const Ray rest{r.origin, r.direction, b, std::numeric_limits<float>::infinity()};
+            return rays.intersect(rest, rest_hit) ? emission_at(scene, rest_hit)
+                                                  : top_background(bg, r.direction, o.sun);
+          };
           // The radiance probe `from` receives along d from this cascade's interval and, through
           // the merge, from beyond it.
           auto ray_value = [&](const Probe& from, Vec3 d, int u, int v) -> Rgb {
@@ -530,32 +565,38 @@ Expected<ImageRgb> render(const Scene& scene, const RayScene& rays, const GBuffe
               }
               return weight > 0 ? sum * (1 / weight) : kNoLight;
             }
-            const Ray r{rays.spawn(from.p, from.n, d), d, o.overlap ? 0.0f : a, b};
+            const Ray r = interval_ray(from, d);
             ++local;
-            if (rays.intersect(r, h))
-              return h.t >= a ? emission_at(scene, h) : kNoLight;  // opaque: nothing beyond
-            // The top cascade's misses see the sky; so do rays of a probe with no upper probe
-            // around it (only sky above it on screen).
-            if (!merge) return top_background(bg, d, o.sun);
-            Rgb sum{}, got;
-            float weight = 0;
-            for (int j = 0; j < c.n; ++j)
-              if (c.w[std::size_t(j)] > 0 && upper_mean(c.index[std::size_t(j)], u, v, got)) {
-                sum += got * c.w[std::size_t(j)];
-                weight += c.w[std::size_t(j)];
-              }
-            if (weight > 0) return sum * (1 / weight);
-            // No upper probe has light for this direction (its rays met surfaces before their
-            // intervals, or the upper map has only directions into their surfaces): this ray
-            // continues itself, to infinity as the top cascade does.
-            ++local;
-            const Ray rest{r.origin, d, b, std::numeric_limits<float>::infinity()};
-            return rays.intersect(rest, h) ? emission_at(scene, h) : top_background(bg, d, o.sun);
+            return resolve(r, rays.intersect(r, h), h, u, v);
           };
           // With the fix, a segment above cascade 0 starts where the cascade below aimed: at this
           // probe's interval start, not a sub-probe's, so only cascade 0 is pre-averaged there.
           const bool pre = o.preaverage && !(merge && o.merge == SpwiMerge::fix && a > 0);
           const std::array<Probe, 4>* subs = pre ? &sub_probes[std::size_t(tile)] : nullptr;
+          if (!subs && !(merge && o.merge == SpwiMerge::fix)) {
+            // One stream of the probe's rays: from one point, through neighbouring map cells in
+            // order, as the camera's rays are (Embree's coherent stream pays for those).
+            batch.clear();
+            batch_cell.clear();
+            for (int k = 0; k < side * side; ++k) {
+              if (dot(dirs[std::size_t(k)], pr.n) <= 0) {
+                lower[std::size_t(k) * count + q] = kNoLight;  // into the probe's own surface
+                continue;
+              }
+              batch.push_back(interval_ray(pr, dirs[std::size_t(k)]));
+              batch_cell.push_back(k);
+            }
+            batch_hits.resize(batch.size());
+            batch_found.resize(batch.size());
+            rays.intersect(batch, batch_hits, batch_found, true);
+            local += batch.size();
+            for (std::size_t j = 0; j < batch.size(); ++j) {
+              const int k = batch_cell[j];
+              lower[std::size_t(k) * count + q] =
+                  resolve(batch[j], batch_found[j] != 0, batch_hits[j], k % side, k / side);
+            }
+            continue;
+          }
           for (int v = 0; v < side; ++v)
             for (int u = 0; u < side; ++u) {
               const std::size_t k = std::size_t(v) * side + u;

@@ -3,6 +3,7 @@
 // tracer at --reference-spp, as error against time.
 #include <unistd.h>
 
+#include <algorithm>
 #include <cinttypes>
 #include <cmath>
 #include <cstdio>
@@ -58,17 +59,19 @@ std::uint64_t scene_hash(const sl::Scene& scene) {
 }
 
 // One configuration. `t0_scale` > 0: SPWI's interval is that multiple of the one the defaults
-// derived (known once the defaults have run, which come first).
+// derived; `cascades_delta`: that many cascades more than the defaults derived (both known once
+// the defaults have run, which come first).
 struct Run {
   std::string label, curve;
   sl::RenderOptions options;
   double t0_scale = 0;
+  int cascades_delta = 0;
 };
 
 // The path tracer at 1, 4, 16, ... samples per pixel, SPWI at its defaults, then (unless quick)
 // each merge, t0 from 0.25x to 2x, s0 and Q0 each way, pre-averaging, the thesis'
-// disjoint intervals and its gather without normals, the per-probe gather, branching 16, and a
-// dense setting.
+// disjoint intervals and its gather without normals, the per-probe gather, branching 16, the
+// depth bias, the bilateral thresholds and one cascade fewer and more, and a dense setting.
 std::vector<Run> default_runs(int max_spp, bool quick) {
   std::vector<Run> runs;
   for (int spp = 1; spp <= max_spp; spp *= 4) {
@@ -77,11 +80,12 @@ std::vector<Run> default_runs(int max_spp, bool quick) {
     o.pt.spp = spp;
     runs.push_back({"pt " + std::to_string(spp) + " spp", "pt nee", o});
   }
-  auto spwi = [&](const std::string& label, auto&& set, double t0_scale = 0) {
+  auto spwi = [&](const std::string& label, auto&& set, double t0_scale = 0,
+                  int cascades_delta = 0) {
     sl::RenderOptions o;
     o.method = sl::Method::spwi;
     set(o.spwi);
-    runs.push_back({label, "", o, t0_scale});
+    runs.push_back({label, "", o, t0_scale, cascades_delta});
   };
   using S = sl::SpwiOptions;
   spwi("spwi (defaults)", [](S&) {});
@@ -101,6 +105,22 @@ std::vector<Run> default_runs(int max_spp, bool quick) {
   spwi("spwi --gather-normal 0", [](S& s) { s.gather_normal = 0; });
   spwi("spwi --gather probe", [](S& s) { s.gather = sl::SpwiGather::probe; });
   spwi("spwi --branching 16", [](S& s) { s.branching = 16; });
+  // The thresholds and the bias the thesis picked by hand, and the derived cascade count.
+  spwi("spwi --depth-bias 0.98", [](S& s) { s.depth_bias = 0.98f; });
+  spwi("spwi --gather-edge 0.025", [](S& s) { s.gather_edge = 0.025f; });
+  spwi("spwi --gather-edge 0.1", [](S& s) { s.gather_edge = 0.1f; });
+  spwi("spwi --merge bilateral --merge-edge 0.05", [](S& s) {
+    s.merge = sl::SpwiMerge::bilateral;
+    s.merge_edge = 0.05f;
+  });
+  spwi("spwi --merge bilateral --merge-edge 0.2", [](S& s) {
+    s.merge = sl::SpwiMerge::bilateral;
+    s.merge_edge = 0.2f;
+  });
+  spwi(
+      "spwi cascades", [](S&) {}, 0, -1);
+  spwi(
+      "spwi cascades", [](S&) {}, 0, 1);
   spwi("spwi --probe-spacing 2 --directions 256", [](S& s) {
     s.probe_spacing = 2;
     s.directions = 256;
@@ -157,9 +177,15 @@ int run_quality3d(const QualityArgs& a) {
   std::vector<study::Row> rows;
   std::vector<quality_detail::Montage> montages;
   float default_t0 = 0;
+  int default_cascades = 0;
   for (Run& run : default_runs(a.max_spp, a.quick)) {
     sl::RenderOptions o = run.options;
     o.threads = a.threads;
+    if (run.cascades_delta != 0) {
+      o.spwi.cascades = std::max(1, default_cascades + run.cascades_delta);
+      run.label += (run.cascades_delta > 0 ? " +" : " ") + std::to_string(run.cascades_delta) +
+                   " (--cascades " + std::to_string(o.spwi.cascades) + ")";
+    }
     if (run.t0_scale > 0) {
       o.spwi.interval = float(run.t0_scale * default_t0);
       run.label += " " + io::format_rounded(run.t0_scale) + "x (--interval " +
@@ -177,6 +203,7 @@ int run_quality3d(const QualityArgs& a) {
     rows.push_back(row);
     if (run.label == "spwi (defaults)") {
       default_t0 = r->options.spwi.interval;
+      default_cascades = r->options.spwi.cascades;
       flatland::MontageOptions mo;
       mo.test_label = "spwi (defaults)";
       mo.reference_label = "path tracer, " + std::to_string(a.reference_spp) + " spp";

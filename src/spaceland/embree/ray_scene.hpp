@@ -53,8 +53,8 @@ class RayScene {
   // Any hit in (tmin, tmax): a shadow ray.
   bool occluded(const Ray& ray) const;
   // Many rays at once: hits[i] is filled where found[i] is 1. `coherent` (rays from one point
-  // through neighbouring pixels, in order) uses Embree's stream interface, faster for those and
-  // slower for scattered rays; the answers are the same either way.
+  // through neighbouring pixels or direction cells, in order) uses Embree's stream interface,
+  // faster for those and slower for scattered rays; the answers are the same either way.
   void intersect(std::span<const Ray> rays, std::span<Hit> hits, std::span<std::uint8_t> found,
                  bool coherent = false) const;
   void occluded(std::span<const Ray> rays, std::span<std::uint8_t> blocked) const;

@@ -1,0 +1,391 @@
+#include "spaceland/grid/voxels.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <string>
+
+#include "core/math.hpp"
+#include "core/parallel.hpp"
+#include "io/json_reader.hpp"
+#include "spaceland/color.hpp"
+
+namespace penumbra::spaceland::grid {
+
+namespace {
+
+constexpr int kPerAxis = 4;  // fog coverage: kPerAxis^3 points a voxel
+
+// Triangle-box overlap by the separating axis theorem (Akenine-Moeller 2001): the box's 3 axes,
+// the triangle's normal and the 9 cross products. The box is grown by a hair so that a triangle
+// lying exactly on a voxel face counts for the voxels on both sides (conservative).
+bool triangle_overlaps_box(const std::array<Vec3, 3>& tri, Vec3 centre, double half) {
+  half *= 1 + 1e-5;
+  double v[3][3];
+  for (int i = 0; i < 3; ++i)
+    for (int k = 0; k < 3; ++k) v[i][k] = double(tri[std::size_t(i)][k]) - double(centre[k]);
+  double e[3][3];
+  for (int k = 0; k < 3; ++k) {
+    e[0][k] = v[1][k] - v[0][k];
+    e[1][k] = v[2][k] - v[1][k];
+    e[2][k] = v[0][k] - v[2][k];
+  }
+  // An axis separates when the triangle's projection lies outside [-r, r], r the box's.
+  auto separates = [&](const double a[3]) {
+    const double p0 = a[0] * v[0][0] + a[1] * v[0][1] + a[2] * v[0][2];
+    const double p1 = a[0] * v[1][0] + a[1] * v[1][1] + a[2] * v[1][2];
+    const double p2 = a[0] * v[2][0] + a[1] * v[2][1] + a[2] * v[2][2];
+    const double r = half * (std::abs(a[0]) + std::abs(a[1]) + std::abs(a[2]));
+    return std::min({p0, p1, p2}) > r || std::max({p0, p1, p2}) < -r;
+  };
+  for (int k = 0; k < 3; ++k) {
+    const double axis[3] = {k == 0 ? 1.0 : 0.0, k == 1 ? 1.0 : 0.0, k == 2 ? 1.0 : 0.0};
+    if (separates(axis)) return false;
+  }
+  const double n[3] = {e[0][1] * e[1][2] - e[0][2] * e[1][1], e[0][2] * e[1][0] - e[0][0] * e[1][2],
+                       e[0][0] * e[1][1] - e[0][1] * e[1][0]};
+  if (separates(n)) return false;
+  for (int k = 0; k < 3; ++k)
+    for (int j = 0; j < 3; ++j) {
+      // The box axis k crossed with edge j.
+      double a[3] = {0, 0, 0};
+      const int k1 = (k + 1) % 3, k2 = (k + 2) % 3;
+      a[k1] = -e[j][k2];
+      a[k2] = e[j][k1];
+      if (a[0] == 0 && a[1] == 0 && a[2] == 0) continue;
+      if (separates(a)) return false;
+    }
+  return true;
+}
+
+// Distances from p to the nearest and the farthest point of the box [lo, hi].
+double nearest_distance(Vec3 p, Vec3 lo, Vec3 hi) {
+  double s = 0;
+  for (int k = 0; k < 3; ++k) {
+    const double d = std::max({double(lo[k]) - p[k], 0.0, double(p[k]) - hi[k]});
+    s += d * d;
+  }
+  return std::sqrt(s);
+}
+double farthest_distance(Vec3 p, Vec3 lo, Vec3 hi) {
+  double s = 0;
+  for (int k = 0; k < 3; ++k) {
+    const double d = std::max(std::abs(double(lo[k]) - p[k]), std::abs(double(hi[k]) - p[k]));
+    s += d * d;
+  }
+  return std::sqrt(s);
+}
+
+// Accumulates, per voxel, the surfaces' area-weighted emission and albedo.
+struct SurfaceSums {
+  std::vector<float> weight;
+  std::vector<Rgb> emission, albedo;
+};
+
+// The material's albedo times its texture's mean texel: a voxel is far coarser than a texel.
+std::vector<Rgb> mean_albedos(const Scene& scene) {
+  std::vector<Rgb> out;
+  for (const Material& m : scene.materials) {
+    Rgb a = m.albedo;
+    if (m.albedo_texture >= 0) {
+      const Texture& t = scene.textures[std::size_t(m.albedo_texture)];
+      double sum[3] = {0, 0, 0};
+      for (std::size_t k = 0; k < t.rgb.size(); ++k) sum[k % 3] += t.rgb[k];
+      const double n = std::max<std::size_t>(1, t.rgb.size() / 3);
+      a = a * Rgb{float(sum[0] / n), float(sum[1] / n), float(sum[2] / n)};
+    }
+    out.push_back(a);
+  }
+  return out;
+}
+
+// The axis-aligned bounds of a fog box (its 8 corners).
+Bounds box_bounds(const Medium& m) {
+  Bounds b{m.center, m.center};
+  for (int c = 0; c < 8; ++c) {
+    Vec3 p = m.center;
+    for (int k = 0; k < 3; ++k)
+      p = p + m.axes[std::size_t(k)] * (((c >> k) & 1) ? m.half_size[k] : -m.half_size[k]);
+    b.lo = min(b.lo, p);
+    b.hi = max(b.hi, p);
+  }
+  return b;
+}
+
+}  // namespace
+
+std::uint64_t voxel_bytes(std::uint64_t n) {
+  return n * 3 * sizeof(Rgb);
+}
+
+Bounds grid_bounds(const Scene& scene) {
+  Bounds b = scene_bounds(scene);
+  bool any = !scene.meshes.empty() || !scene.spheres.empty() || !scene.disks.empty();
+  for (const Medium& m : scene.media) {
+    const Bounds mb = box_bounds(m);
+    b.lo = any ? min(b.lo, mb.lo) : mb.lo;
+    b.hi = any ? max(b.hi, mb.hi) : mb.hi;
+    any = true;
+  }
+  return b;
+}
+
+float default_voxel_size(const Scene& scene, std::uint64_t max_bytes) {
+  const Bounds b = grid_bounds(scene);
+  const Vec3 e = b.hi - b.lo;
+  const double longest = std::max({double(e.x), double(e.y), double(e.z), 1e-6});
+  double size = longest / 128;
+  // Padded by a voxel on each side, as voxelise pads.
+  auto bytes = [&](double s) {
+    double n = 1;
+    for (int k = 0; k < 3; ++k) n *= std::ceil(std::max(double(e[k]), 0.0) / s) + 2;
+    return double(voxel_bytes(1)) * n;
+  };
+  while (bytes(size) > double(max_bytes)) size *= 1.25;
+  return float(size);
+}
+
+Expected<Voxels> voxelise(const Scene& scene, float size, std::uint64_t max_bytes) {
+  if (!(size > 0) || !std::isfinite(size))
+    return Error{"`grid.voxel`: expected a voxel size > 0 in world units, found " +
+                 io::format_number(size)};
+  const Bounds b = grid_bounds(scene);
+  Voxels v;
+  v.size = size;
+  v.origin = b.lo - Vec3{size, size, size};
+  double n = 1;
+  int dims[3];
+  for (int k = 0; k < 3; ++k) {
+    const double cells = std::ceil(std::max(double(b.hi[k] - b.lo[k]), 0.0) / size) + 2;
+    if (cells > double(1 << 20))
+      return Error{"`grid.voxel`: " + io::format_number(size) + " makes " +
+                   io::format_number(cells) + " voxels along an axis; use a larger voxel"};
+    dims[k] = int(cells);
+    n *= cells;
+  }
+  if (double(voxel_bytes(1)) * n > double(max_bytes))
+    return Error{"the voxel grid (" + std::to_string(dims[0]) + " x " + std::to_string(dims[1]) +
+                 " x " + std::to_string(dims[2]) + " voxels of " + io::format_number(size) +
+                 ") needs " + io::format_rounded(double(voxel_bytes(1)) * n / double(1 << 20)) +
+                 " MiB, more than the `max_memory` limit of " +
+                 io::format_rounded(double(max_bytes) / double(1 << 20)) +
+                 " MiB; use a larger --voxel"};
+  v.nx = dims[0], v.ny = dims[1], v.nz = dims[2];
+  const std::size_t count = std::size_t(v.count());
+  v.extinction.assign(count, Rgb{});
+  v.emission.assign(count, Rgb{});
+  v.albedo.assign(count, Rgb{});
+
+  // The voxel range [lo, hi] (inclusive) that a box of world corners [a, b] touches.
+  auto range = [&](Vec3 a, Vec3 c, std::array<int, 3>& lo, std::array<int, 3>& hi) {
+    const int dim[3] = {v.nx, v.ny, v.nz};
+    for (int k = 0; k < 3; ++k) {
+      lo[std::size_t(k)] =
+          std::clamp(int(std::floor((a[k] - v.origin[k]) / size)) - 1, 0, dim[k] - 1);
+      hi[std::size_t(k)] =
+          std::clamp(int(std::floor((c[k] - v.origin[k]) / size)) + 1, 0, dim[k] - 1);
+    }
+  };
+  auto voxel_lo = [&](int x, int y, int z) {
+    return v.origin + Vec3{float(x) * size, float(y) * size, float(z) * size};
+  };
+
+  // Surfaces: every voxel a surface touches, with its area share.
+  SurfaceSums sums;
+  sums.weight.assign(count, 0);
+  sums.emission.assign(count, Rgb{});
+  sums.albedo.assign(count, Rgb{});
+  const std::vector<Rgb> albedos = mean_albedos(scene);
+  std::vector<std::size_t> touched;
+  auto add = [&](double area, std::uint32_t material) {
+    if (touched.empty()) return;
+    const float w = float(area / double(touched.size()));
+    const Material& m = scene.materials[material];
+    for (std::size_t k : touched) {
+      sums.weight[k] += w;
+      sums.emission[k] += m.emission * w;
+      sums.albedo[k] += albedos[material] * w;
+    }
+  };
+  const double half = 0.5 * double(size);
+  for (const TriangleMesh& mesh : scene.meshes)
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+      const std::array<Vec3, 3> tri = {mesh.positions[mesh.triangles[t][0]],
+                                       mesh.positions[mesh.triangles[t][1]],
+                                       mesh.positions[mesh.triangles[t][2]]};
+      std::array<int, 3> lo, hi;
+      range(min(tri[0], min(tri[1], tri[2])), max(tri[0], max(tri[1], tri[2])), lo, hi);
+      touched.clear();
+      for (int z = lo[2]; z <= hi[2]; ++z)
+        for (int y = lo[1]; y <= hi[1]; ++y)
+          for (int x = lo[0]; x <= hi[0]; ++x) {
+            const Vec3 c = voxel_lo(x, y, z) + Vec3{float(half), float(half), float(half)};
+            if (triangle_overlaps_box(tri, c, half)) touched.push_back(v.index(x, y, z));
+          }
+      const Vec3 n = cross(tri[1] - tri[0], tri[2] - tri[0]);
+      add(0.5 * std::sqrt(double(dot(n, n))), mesh.materials[t]);
+    }
+  // A sphere: the voxels its surface passes through (nearest point inside, farthest outside).
+  for (const Sphere& s : scene.spheres) {
+    const Vec3 r{s.radius, s.radius, s.radius};
+    std::array<int, 3> lo, hi;
+    range(s.center - r, s.center + r, lo, hi);
+    touched.clear();
+    for (int z = lo[2]; z <= hi[2]; ++z)
+      for (int y = lo[1]; y <= hi[1]; ++y)
+        for (int x = lo[0]; x <= hi[0]; ++x) {
+          const Vec3 a = voxel_lo(x, y, z), c = a + Vec3{size, size, size};
+          if (nearest_distance(s.center, a, c) <= s.radius &&
+              farthest_distance(s.center, a, c) >= s.radius)
+            touched.push_back(v.index(x, y, z));
+        }
+    add(4 * kPi * double(s.radius) * s.radius, s.material);
+  }
+  // A disk: the voxels its plane crosses within its radius of its centre (a superset near the
+  // rim: conservative).
+  for (const Disk& d : scene.disks) {
+    const Vec3 r{d.radius, d.radius, d.radius};
+    std::array<int, 3> lo, hi;
+    range(d.center - r, d.center + r, lo, hi);
+    touched.clear();
+    const double reach =
+        half * (std::abs(d.normal.x) + std::abs(d.normal.y) + std::abs(d.normal.z)) * (1 + 1e-5);
+    for (int z = lo[2]; z <= hi[2]; ++z)
+      for (int y = lo[1]; y <= hi[1]; ++y)
+        for (int x = lo[0]; x <= hi[0]; ++x) {
+          const Vec3 a = voxel_lo(x, y, z), c = a + Vec3{size, size, size};
+          const Vec3 mid = a + Vec3{float(half), float(half), float(half)};
+          if (std::abs(double(dot(d.normal, mid - d.center))) <= reach &&
+              nearest_distance(d.center, a, c) <= d.radius)
+            touched.push_back(v.index(x, y, z));
+        }
+    add(kPi * double(d.radius) * d.radius, d.material);
+  }
+  for (std::size_t k = 0; k < count; ++k) {
+    if (!(sums.weight[k] > 0)) continue;
+    v.extinction[k] = {kOpaque, kOpaque, kOpaque};
+    v.emission[k] = sums.emission[k] * (1 / sums.weight[k]);
+    v.albedo[k] = sums.albedo[k] * (1 / sums.weight[k]);
+  }
+
+  // Fog: the coefficients of every box, times the fraction of the voxel's points inside it.
+  if (!scene.media.empty()) {
+    std::vector<Rgb> scattering(count, Rgb{});
+    for (const Medium& m : scene.media) {
+      const Bounds mb = box_bounds(m);
+      std::array<int, 3> lo, hi;
+      range(mb.lo, mb.hi, lo, hi);
+      const Rgb sigma_s = m.extinction * m.albedo;
+      parallel_for(hi[2] - lo[2] + 1, [&](int dz) {
+        const int z = lo[2] + dz;
+        for (int y = lo[1]; y <= hi[1]; ++y)
+          for (int x = lo[0]; x <= hi[0]; ++x) {
+            const std::size_t k = v.index(x, y, z);
+            if (v.opaque(k)) continue;
+            const Vec3 a = voxel_lo(x, y, z);
+            int inside = 0;
+            for (int i = 0; i < kPerAxis * kPerAxis * kPerAxis; ++i) {
+              const Vec3 p = a + Vec3{(float(i % kPerAxis) + 0.5f) / kPerAxis * size,
+                                      (float(i / kPerAxis % kPerAxis) + 0.5f) / kPerAxis * size,
+                                      (float(i / (kPerAxis * kPerAxis)) + 0.5f) / kPerAxis * size};
+              const Vec3 q = p - m.center;
+              bool in = true;
+              for (int j = 0; j < 3 && in; ++j)
+                in = std::abs(dot(q, m.axes[std::size_t(j)])) <= m.half_size[j];
+              inside += in;
+            }
+            if (inside == 0) continue;
+            const float f = float(inside) / float(kPerAxis * kPerAxis * kPerAxis);
+            v.extinction[k] += m.extinction * f;
+            v.emission[k] += m.emission * f;
+            scattering[k] += sigma_s * f;
+          }
+      });
+    }
+    for (std::size_t k = 0; k < count; ++k) {
+      if (v.opaque(k)) continue;
+      const Rgb& s = v.extinction[k];
+      v.albedo[k] = {s.r > 0 ? scattering[k].r / s.r : 0, s.g > 0 ? scattering[k].g / s.g : 0,
+                     s.b > 0 ? scattering[k].b / s.b : 0};
+    }
+  }
+  return v;
+}
+
+Segment march(const Voxels& v, Vec3 origin, Vec3 dir, float tmin, float tmax) {
+  Segment out;
+  out.t_end = tmax;
+  // Clip [tmin, tmax] to the grid's box (slabs).
+  double t0 = tmin, t1 = tmax;
+  const double dims[3] = {double(v.nx), double(v.ny), double(v.nz)};
+  for (int k = 0; k < 3; ++k) {
+    const double lo = v.origin[k], hi = lo + dims[k] * v.size;
+    if (dir[k] == 0) {
+      if (origin[k] < lo || origin[k] > hi) return out;
+      continue;
+    }
+    double a = (lo - origin[k]) / dir[k], b = (hi - origin[k]) / dir[k];
+    if (a > b) std::swap(a, b);
+    t0 = std::max(t0, a);
+    t1 = std::min(t1, b);
+  }
+  if (!(t0 < t1)) return out;
+  // The voxel at the entry (the middle of the first step decides it, so that an entry on a
+  // face does not round into the neighbour) and the DDA's state.
+  int cell[3], step[3];
+  double next[3], delta[3];
+  const double probe_t = t0 + 1e-9 * std::max(1.0, std::abs(t0));
+  for (int k = 0; k < 3; ++k) {
+    const double p = double(origin[k]) + probe_t * dir[k] - v.origin[k];
+    cell[k] = std::clamp(int(std::floor(p / v.size)), 0, int(dims[k]) - 1);
+    if (dir[k] > 0) {
+      step[k] = 1;
+      next[k] = (v.origin[k] + (cell[k] + 1.0) * v.size - origin[k]) / dir[k];
+      delta[k] = v.size / dir[k];
+    } else if (dir[k] < 0) {
+      step[k] = -1;
+      next[k] = (v.origin[k] + cell[k] * double(v.size) - origin[k]) / dir[k];
+      delta[k] = -v.size / dir[k];
+    } else {
+      step[k] = 0;
+      next[k] = delta[k] = std::numeric_limits<double>::infinity();
+    }
+  }
+  double t = t0;
+  while (t < t1) {
+    const int axis = next[0] < next[1] ? (next[0] < next[2] ? 0 : 2) : (next[1] < next[2] ? 1 : 2);
+    const double leave = std::min(next[axis], t1);
+    const std::size_t k = v.index(cell[0], cell[1], cell[2]);
+    if (v.opaque(k)) {
+      out.radiance += out.transmittance * v.emission[k];
+      out.transmittance = {0, 0, 0};
+      out.t_end = float(t);
+      out.blocked = true;
+      return out;
+    }
+    const float len = float(leave - t);
+    if (len > 0) {
+      const Rgb& s = v.extinction[k];
+      const Rgb& e = v.emission[k];
+      // Per channel: emission e per unit length seen through the voxel's own extinction.
+      const float sigma[3] = {s.r, s.g, s.b}, emit[3] = {e.r, e.g, e.b};
+      float gain[3], pass[3];
+      for (int c = 0; c < 3; ++c) {
+        const float tau = sigma[c] * len;
+        pass[c] = std::exp(-tau);
+        gain[c] = tau > 1e-4f ? emit[c] * (1 - pass[c]) / sigma[c]
+                              : emit[c] * len * (1 - 0.5f * tau);  // the same, without 0/0
+      }
+      out.radiance += out.transmittance * Rgb{gain[0], gain[1], gain[2]};
+      out.transmittance *= Rgb{pass[0], pass[1], pass[2]};
+    }
+    t = leave;
+    if (leave >= t1) break;
+    cell[axis] += step[axis];
+    if (cell[axis] < 0 || cell[axis] >= int(dims[axis])) break;
+    next[axis] += delta[axis];
+  }
+  return out;
+}
+
+}  // namespace penumbra::spaceland::grid

@@ -1,0 +1,171 @@
+// The voxel grid of the world-space probe grid: conservative surfaces (no ray through a wall one
+// voxel thick, at any tilt), fog boxes as partial extinction (Beer-Lambert and emission in closed
+// form), emitting surfaces seen through fog, and the memory limit.
+#include "spaceland/grid/voxels.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "spaceland/color.hpp"
+#include "spaceland/scene_builders.hpp"
+
+namespace penumbra::spaceland::grid {
+namespace {
+
+using namespace penumbra::spaceland::testing;
+
+constexpr std::uint64_t kGiB = std::uint64_t(1) << 30;
+
+// A square wall of zero thickness through the origin with normal n, 2 across, emitting Le.
+Scene thin_wall(Vec3 n, Rgb le) {
+  Scene s;
+  const std::uint32_t m = add_material(s, {0.5f, 0.5f, 0.5f}, le);
+  n = normalize(n);
+  const Vec3 u = normalize(cross(n, std::abs(n.x) < 0.9f ? Vec3{1, 0, 0} : Vec3{0, 1, 0}));
+  const Vec3 w = cross(n, u);
+  TriangleMesh mesh;
+  mesh.positions = {u * -1 + w * -1, u * 1 + w * -1, u * 1 + w * 1, u * -1 + w * 1};
+  mesh.triangles = {{0, 1, 2}, {0, 2, 3}};
+  mesh.materials = {m, m};
+  mesh.object = add_object(s, "wall");
+  s.meshes.push_back(mesh);
+  return s;
+}
+
+TEST(Voxels, NoRayCrossesAWallOneVoxelThickAtAnyTilt) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(-1, 1);
+  for (Vec3 n : {Vec3{0, 0, 1}, Vec3{1, 1, 0}, Vec3{0.3f, -0.5f, 0.8f}, Vec3{1, 2, 3}}) {
+    const Scene s = thin_wall(n, {2, 1, 0.5f});
+    const Expected<Voxels> v = voxelise(s, 0.1f, kGiB);
+    ASSERT_TRUE(v.ok()) << v.error().message;
+    const Vec3 nn = normalize(n);
+    int blocked = 0;
+    for (int i = 0; i < 2000; ++i) {
+      // From a point 0.5 in front of the wall's inner part to one 0.5 behind it.
+      const Vec3 on = Vec3{u(rng), u(rng), u(rng)} * 0.4f;
+      const Vec3 a = on - nn * dot(on, nn) + nn * 0.5f + Vec3{u(rng), u(rng), u(rng)} * 0.3f;
+      const Vec3 b = on - nn * dot(on, nn) - nn * 0.5f + Vec3{u(rng), u(rng), u(rng)} * 0.3f;
+      const Vec3 d = b - a;
+      const float len = length(d);
+      const Segment seg = march(*v, a, d * (1 / len), 0, len);
+      blocked += seg.blocked;
+      // What the wall's voxel gives: its emission, nothing behind it.
+      if (seg.blocked) {
+        EXPECT_NEAR(seg.radiance.r, 2.0f, 1e-5f);
+        EXPECT_EQ(seg.transmittance.g, 0.0f);
+      }
+    }
+    EXPECT_EQ(blocked, 2000) << n.x << " " << n.y << " " << n.z;
+  }
+}
+
+// A fog box aligned with the voxels, and one half a voxel off: Beer-Lambert and the fog's own
+// emission along an axis, against the closed forms.
+TEST(Voxels, FogIsBeerLambertWithEmissionInClosedForm) {
+  for (float offset : {0.0f, 0.05f}) {
+    Scene s;
+    Medium m;
+    m.center = {offset, 0, 0};
+    m.half_size = {1, 0.5f, 0.5f};
+    m.extinction = {0.5f, 1, 2};
+    m.albedo = {0.3f, 0.3f, 0.3f};
+    m.emission = {1, 2, 3};
+    s.media.push_back(m);
+    const Expected<Voxels> v = voxelise(s, 0.1f, kGiB);
+    ASSERT_TRUE(v.ok()) << v.error().message;
+    // Along x through the box's middle: 2 units of fog.
+    const Segment seg = march(*v, {-5, 0.01f, 0.02f}, {1, 0, 0}, 0, 10);
+    EXPECT_FALSE(seg.blocked);
+    const float sigma[3] = {0.5f, 1, 2}, e[3] = {1, 2, 3};
+    for (int c = 0; c < 3; ++c) {
+      const double t = std::exp(-2.0 * sigma[c]);
+      EXPECT_NEAR(channel(seg.transmittance, c), t, 1e-5 * (1 + t)) << c << " offset " << offset;
+      EXPECT_NEAR(channel(seg.radiance, c), e[c] * (1 - t) / sigma[c], 2e-5) << c;
+    }
+    // The albedo is the box's, where the box covers a voxel at all.
+    const std::size_t k = v->index(v->nx / 2, v->ny / 2, v->nz / 2);
+    EXPECT_NEAR(v->albedo[k].r, 0.3f, 1e-6f);
+  }
+}
+
+// An emitting wall behind a fog slab: its radiance arrives times the slab's transmittance.
+TEST(Voxels, AnEmittingWallIsSeenThroughTheFog) {
+  Scene s = thin_wall({1, 0, 0}, {4, 4, 4});
+  for (Vec3& p : s.meshes[0].positions) p.x += 3;  // the wall at x = 3
+  Medium m;
+  m.center = {0, 0, 0};
+  m.half_size = {1, 2, 2};
+  m.extinction = {1, 1, 1};
+  s.media.push_back(m);
+  const Expected<Voxels> v = voxelise(s, 0.1f, kGiB);
+  ASSERT_TRUE(v.ok()) << v.error().message;
+  const Segment seg = march(*v, {-3, 0.03f, 0.01f}, {1, 0, 0}, 0, 100);
+  ASSERT_TRUE(seg.blocked);
+  EXPECT_NEAR(seg.radiance.r, 4 * std::exp(-2.0), 1e-4);
+  // The wall's voxel starts within a voxel before the wall.
+  EXPECT_NEAR(seg.t_end, 6.0f, 0.1f + 1e-4f);
+  EXPECT_GE(seg.t_end, 5.9f - 1e-4f);
+}
+
+// Spheres and disks are rasterised as shells and as their plane within the radius.
+TEST(Voxels, SpheresAndDisksBlockWhatCrossesThem) {
+  Scene s;
+  const std::uint32_t m = add_material(s, {0.2f, 0.4f, 0.6f});
+  s.spheres.push_back({{0, 0, 0}, 1, m, add_object(s, "sphere")});
+  Disk d;
+  d.center = {0, 0, 3};
+  d.normal = normalize(Vec3{0, 1, 1});
+  d.radius = 0.8f;
+  d.material = m;
+  d.object = add_object(s, "disk");
+  s.disks.push_back(d);
+  const Expected<Voxels> v = voxelise(s, 0.05f, kGiB);
+  ASSERT_TRUE(v.ok()) << v.error().message;
+  // Through the sphere's centre: blocked at its shell, within a voxel diagonal of r = 1.
+  const Segment a = march(*v, {-3, 0.01f, 0.02f}, {1, 0, 0}, 0, 6);
+  ASSERT_TRUE(a.blocked);
+  EXPECT_NEAR(a.t_end, 2.0f, 0.05f * std::sqrt(3.0f) + 1e-4f);
+  // The sphere's inside is not filled: from its centre a ray leaves through the shell.
+  const Segment inside = march(*v, {0, 0, 0}, {0, 1, 0}, 0, 3);
+  ASSERT_TRUE(inside.blocked);
+  EXPECT_GT(inside.t_end, 0.9f);
+  // The disk: blocked through its middle, free beside it.
+  EXPECT_TRUE(march(*v, {0, -2, 3}, {0, 1, 0}, 0, 4).blocked);
+  EXPECT_FALSE(march(*v, {1.2f, -2, 3}, {0, 1, 0}, 0, 4).blocked);
+  const std::size_t k =
+      v->index(int((0.98f - v->origin.x) / v->size), int((0.01f - v->origin.y) / v->size),
+               int((0.01f - v->origin.z) / v->size));
+  ASSERT_TRUE(v->opaque(k));
+  EXPECT_NEAR(v->albedo[k].g, 0.4f, 1e-6f);
+}
+
+TEST(Voxels, SizesAndTheMemoryLimit) {
+  const Scene s = thin_wall({0, 0, 1}, {1, 1, 1});
+  const Expected<Voxels> v = voxelise(s, 0.25f, kGiB);
+  ASSERT_TRUE(v.ok());
+  // The wall spans [-1, 1]^2 x {0}: 8 voxels and a padding voxel each side, 1 + 2 along z.
+  EXPECT_EQ(v->nx, 10);
+  EXPECT_EQ(v->ny, 10);
+  EXPECT_EQ(v->nz, 2);
+  EXPECT_EQ(voxel_bytes(v->count()), v->count() * 36);
+  // The default: the longest side over 128, unless that passes the limit.
+  EXPECT_NEAR(default_voxel_size(s, kGiB), 2.0f / 128, 1e-6f);
+  EXPECT_GT(default_voxel_size(s, 1 << 16), 2.0f / 128 * 4);
+  const std::uint64_t small = 1 << 16;
+  const Expected<Voxels> fits = voxelise(s, default_voxel_size(s, small), small);
+  EXPECT_TRUE(fits.ok());
+  const Expected<Voxels> big = voxelise(s, 0.001f, small);
+  ASSERT_FALSE(big.ok());
+  EXPECT_NE(big.error().message.find("max_memory"), std::string::npos) << big.error().message;
+  for (float bad : {0.0f, -1.0f, std::nanf("")}) {
+    const Expected<Voxels> r = voxelise(s, bad, kGiB);
+    ASSERT_FALSE(r.ok());
+    EXPECT_NE(r.error().message.find("`grid.voxel`"), std::string::npos);
+  }
+}
+
+}  // namespace
+}  // namespace penumbra::spaceland::grid

@@ -9,6 +9,7 @@
 #include <array>
 #include <cmath>
 #include <numbers>
+#include <vector>
 
 #include "penumbra/vec3.hpp"
 
@@ -53,6 +54,14 @@ inline std::array<int, 2> cell_of(Vec3 d, int side) {
   const int i = std::clamp(int((uv[0] + 1) * 0.5f * side), 0, side - 1);
   const int j = std::clamp(int((uv[1] + 1) * 0.5f * side), 0, side - 1);
   return {i, j};
+}
+
+// Every cell's centre direction of a side x side map, row by row (index j * side + i).
+inline std::vector<Vec3> map_directions(int side) {
+  std::vector<Vec3> dirs(std::size_t(side) * side);
+  for (int j = 0; j < side; ++j)
+    for (int i = 0; i < side; ++i) dirs[std::size_t(j) * side + i] = cell_direction(i, j, side);
+  return dirs;
 }
 
 }  // namespace penumbra::octahedral

@@ -98,6 +98,23 @@ inline RenderResult render_ok(const Scene& s, const RenderOptions& o) {
   return r.ok() ? *r : RenderResult{};
 }
 
+// Two closed rooms side by side, [-1, 1]^3 and [1 + gap, 3] x [-1, 1]^2 (gap 0: one shared wall),
+// walls of albedo 0.7; a sphere light (radius 0.3, Le 50) in the second; the camera in the first.
+inline Scene two_closed_rooms(float gap) {
+  Scene s;
+  s.camera = camera({0, 0, 0.5f}, {0.2f, -0.3f, -1}, 48, 36, 80);
+  const std::uint32_t wall = add_material(s, {0.7f, 0.7f, 0.7f});
+  add_box(s, {-1, -1, -1}, {1, 1, 1}, wall);
+  add_box(s, {1 + gap, -1, -1}, {3, 1, 1}, wall);
+  Sphere light;
+  light.center = {2, 0, 0};
+  light.radius = 0.3f;
+  light.material = add_material(s, {0, 0, 0}, {50, 50, 50});
+  light.object = add_object(s, "sphere");
+  s.spheres.push_back(light);
+  return s;
+}
+
 // Each pixel's first hit: its world position and its object (-1 for the sky), through render's
 // AOVs (the renderer's own G-buffer, so a closed form is evaluated where the pixel looks).
 struct FirstHits {

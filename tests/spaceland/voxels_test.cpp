@@ -146,10 +146,11 @@ TEST(Voxels, SizesAndTheMemoryLimit) {
   const Scene s = thin_wall({0, 0, 1}, {1, 1, 1});
   const Expected<Voxels> v = voxelise(s, 0.25f, kGiB);
   ASSERT_TRUE(v.ok());
-  // The wall spans [-1, 1]^2 x {0}: 8 voxels and a padding voxel each side, 1 + 2 along z.
-  EXPECT_EQ(v->nx, 10);
-  EXPECT_EQ(v->ny, 10);
-  EXPECT_EQ(v->nz, 2);
+  // The wall spans [-1, 1]^2 x {0}: 8 voxels and the padding each side; none but the padding
+  // along z.
+  EXPECT_EQ(v->nx, 8 + 2 * kPadding);
+  EXPECT_EQ(v->ny, 8 + 2 * kPadding);
+  EXPECT_EQ(v->nz, 2 * kPadding);
   EXPECT_EQ(voxel_bytes(v->count()), v->count() * 36);
   // The default: the longest side over 128, unless that passes the limit.
   EXPECT_NEAR(default_voxel_size(s, kGiB), 2.0f / 128, 1e-6f);

@@ -135,10 +135,10 @@ float default_voxel_size(const Scene& scene, std::uint64_t max_bytes) {
   const Vec3 e = b.hi - b.lo;
   const double longest = std::max({double(e.x), double(e.y), double(e.z), 1e-6});
   double size = longest / 128;
-  // Padded by a voxel on each side, as voxelise pads.
+  // Padded as voxelise pads.
   auto bytes = [&](double s) {
     double n = 1;
-    for (int k = 0; k < 3; ++k) n *= std::ceil(std::max(double(e[k]), 0.0) / s) + 2;
+    for (int k = 0; k < 3; ++k) n *= std::ceil(std::max(double(e[k]), 0.0) / s) + 2 * kPadding;
     return double(voxel_bytes(1)) * n;
   };
   while (bytes(size) > double(max_bytes)) size *= 1.25;
@@ -152,11 +152,11 @@ Expected<Voxels> voxelise(const Scene& scene, float size, std::uint64_t max_byte
   const Bounds b = grid_bounds(scene);
   Voxels v;
   v.size = size;
-  v.origin = b.lo - Vec3{size, size, size};
+  v.origin = b.lo - Vec3{size, size, size} * float(kPadding);
   double n = 1;
   int dims[3];
   for (int k = 0; k < 3; ++k) {
-    const double cells = std::ceil(std::max(double(b.hi[k] - b.lo[k]), 0.0) / size) + 2;
+    const double cells = std::ceil(std::max(double(b.hi[k] - b.lo[k]), 0.0) / size) + 2 * kPadding;
     if (cells > double(1 << 20))
       return Error{"`grid.voxel`: " + io::format_number(size) + " makes " +
                    io::format_number(cells) + " voxels along an axis; use a larger voxel"};

@@ -15,6 +15,9 @@
 namespace penumbra::spaceland::grid {
 
 inline constexpr float kOpaque = std::numeric_limits<float>::infinity();
+// Free voxels around the scene's bounds on every side: room for probes in front of the outermost
+// surfaces (a floor's probes sit above it, the conservative rasterisation takes a voxel).
+inline constexpr int kPadding = 4;
 
 struct Voxels {
   Vec3 origin;     // the lowest corner of voxel (0, 0, 0)
@@ -42,7 +45,7 @@ Bounds grid_bounds(const Scene& scene);
 // more than `max_bytes`.
 float default_voxel_size(const Scene& scene, std::uint64_t max_bytes);
 
-// Voxelises the scene with voxels of `size` (world units) over grid_bounds, padded by one voxel.
+// Voxelises the scene with voxels of `size` (world units) over grid_bounds, padded by kPadding.
 // A surface voxel takes the area-weighted mean emission and albedo (times its texture's mean) of
 // the surfaces in it; a fog voxel the coefficients of the boxes covering it, times the fraction
 // they cover (4^3 points a voxel; overlapping boxes add). Refuses (Error, nothing allocated) a

@@ -271,15 +271,6 @@ std::vector<Probe> place_probes(const Scene& scene, const GBuffer& g, const Plan
   return probes;
 }
 
-// The cell directions of a side x side map, in storage order (v rows of u).
-std::vector<Vec3> map_directions(int side) {
-  std::vector<Vec3> dirs(std::size_t(side) * side);
-  for (int v = 0; v < side; ++v)
-    for (int u = 0; u < side; ++u)
-      dirs[std::size_t(v) * side + u] = octahedral::cell_direction(u, v, side);
-  return dirs;
-}
-
 // What a ray that leaves the scene sees from the top cascade: the sky, with the sun's disk when
 // the cascades carry the sun.
 Rgb top_background(const Background& bg, Vec3 d, SpwiSun sun) {
@@ -446,7 +437,7 @@ Expected<ImageRgb> render(const Scene& scene, const RayScene& rays, const GBuffe
     if (o.preaverage) sub_probes = place_sub_probes(scene, g, plan, i, o.depth_bias);
     const int side = plan.map_side(i), nx = plan.nx[std::size_t(i)];
     const std::uint64_t count = plan.probes(i);
-    const std::vector<Vec3> dirs = map_directions(side);
+    const std::vector<Vec3> dirs = octahedral::map_directions(side);
     lower.assign(std::size_t(plan.rays(i)), Rgb{});
     const bool top = i == plan.cascades - 1;
     // The top cascade's interval runs to infinity: its misses see the sky, whatever the reach
@@ -631,7 +622,7 @@ Expected<ImageRgb> render(const Scene& scene, const RayScene& rays, const GBuffe
   // cosine-weighted mean radiance over the pixel's hemisphere.
   Stopwatch watch;
   const int side = plan.map_side(0);
-  const std::vector<Vec3> dirs = map_directions(side);
+  const std::vector<Vec3> dirs = octahedral::map_directions(side);
   const std::uint64_t count = plan.probes(0);
   const bool sun_direct = o.sun == SpwiSun::direct && bg.has_sun();
   const Vec3 sun_dir = bg.sun_direction();

@@ -1,0 +1,323 @@
+#include "spaceland/grid/grid.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+
+#include "core/octahedral.hpp"
+#include "core/parallel.hpp"
+#include "io/json_reader.hpp"
+#include "spaceland/color.hpp"
+
+namespace penumbra::spaceland::grid {
+
+namespace {
+
+constexpr int kMaxCascades = 12;
+constexpr float kInfinity = std::numeric_limits<float>::infinity();
+
+// A ray of an upper cascade that met a surface before its interval: what lies beyond is not on
+// the lower probe's ray, so no lower ray takes it.
+constexpr Rgb kNoLight{-1, 0, 0};
+bool holds_light(const Rgb& c) {
+  return c.r >= 0;
+}
+
+// The voxel a probe of spacing s sits in, along one axis: the middle of its block.
+int probe_voxel(int a, int s) {
+  return a * s + s / 2;
+}
+
+// The 8 probes of a cascade around world point p and their trilinear weights (corners outside
+// the grid clamped onto it).
+struct Corners {
+  std::array<std::uint64_t, 8> index{};
+  std::array<float, 8> w{};
+};
+Corners corners(const Voxels& v, const CascadePlan& c, Vec3 p) {
+  int lo[3];
+  float f[3];
+  const int n[3] = {c.nx, c.ny, c.nz};
+  for (int k = 0; k < 3; ++k) {
+    const double g = ((double(p[k]) - v.origin[k]) / v.size - 0.5 - c.spacing / 2) / c.spacing;
+    const double a = std::floor(g);
+    lo[k] = int(a);
+    f[k] = float(g - a);
+    if (lo[k] < 0) lo[k] = 0, f[k] = 0;
+    if (lo[k] >= n[k] - 1) lo[k] = std::max(0, n[k] - 1), f[k] = 0;
+  }
+  Corners out;
+  for (int j = 0; j < 8; ++j) {
+    const int x = std::min(lo[0] + (j & 1), c.nx - 1),
+              y = std::min(lo[1] + ((j >> 1) & 1), c.ny - 1),
+              z = std::min(lo[2] + ((j >> 2) & 1), c.nz - 1);
+    out.index[std::size_t(j)] = (std::uint64_t(z) * c.ny + y) * c.nx + x;
+    out.w[std::size_t(j)] = ((j & 1) ? f[0] : 1 - f[0]) * (((j >> 1) & 1) ? f[1] : 1 - f[1]) *
+                            (((j >> 2) & 1) ? f[2] : 1 - f[2]);
+  }
+  return out;
+}
+
+Vec3 position_of(const Voxels& v, const CascadePlan& c, std::uint64_t q) {
+  const int x = int(q % std::uint64_t(c.nx)),
+            y = int(q / std::uint64_t(c.nx) % std::uint64_t(c.ny)),
+            z = int(q / (std::uint64_t(c.nx) * c.ny));
+  const int idx[3] = {probe_voxel(x, c.spacing), probe_voxel(y, c.spacing),
+                      probe_voxel(z, c.spacing)};
+  return v.origin + Vec3{(float(idx[0]) + 0.5f) * v.size, (float(idx[1]) + 0.5f) * v.size,
+                         (float(idx[2]) + 0.5f) * v.size};
+}
+
+// Whether the probe's own voxel is free (inside the grid: probes past its end are clamped).
+bool probe_free(const Voxels& v, const CascadePlan& c, std::uint64_t q) {
+  const int x = int(q % std::uint64_t(c.nx)),
+            y = int(q / std::uint64_t(c.nx) % std::uint64_t(c.ny)),
+            z = int(q / (std::uint64_t(c.nx) * c.ny));
+  return !v.opaque(v.index(std::min(probe_voxel(x, c.spacing), v.nx - 1),
+                           std::min(probe_voxel(y, c.spacing), v.ny - 1),
+                           std::min(probe_voxel(z, c.spacing), v.nz - 1)));
+}
+
+}  // namespace
+
+std::uint64_t CascadePlan::bytes() const {
+  return probes() * std::uint64_t(side) * std::uint64_t(side) * sizeof(Rgb);
+}
+
+Expected<std::vector<CascadePlan>> plan_cascades(const Voxels& v, const GridOptions& o) {
+  if (o.probe_spacing < 1 || o.probe_spacing > 64)
+    return Error{"`grid.probe_spacing`: expected 1..64 voxels, found " +
+                 std::to_string(o.probe_spacing)};
+  const int side = int(std::lround(std::sqrt(double(std::max(0, o.directions)))));
+  if (o.directions < 4 || side * side != o.directions || (side & (side - 1)) != 0)
+    return Error{
+        "`grid.directions`: expected the square of a power of two (4, 16, 64, ...), found " +
+        std::to_string(o.directions)};
+  if (!std::isfinite(o.interval) || o.interval < 0)
+    return Error{"`grid.interval`: expected a length > 0 in world units (0: derived), found " +
+                 io::format_number(o.interval)};
+  if (o.cascades < 0 || o.cascades > kMaxCascades)
+    return Error{"`grid.cascades`: expected 0..12 (0: derived), found " +
+                 std::to_string(o.cascades)};
+  const float t0 = o.interval > 0 ? o.interval : float(o.probe_spacing) * v.size;
+  const double diagonal =
+      double(v.size) * std::sqrt(double(v.nx) * v.nx + double(v.ny) * v.ny + double(v.nz) * v.nz);
+  int n = o.cascades;
+  if (n == 0) {
+    n = 1;
+    while (n < kMaxCascades && double(t0) * double(1 << (n - 1)) < diagonal) ++n;
+  }
+  std::vector<CascadePlan> plan;
+  for (int i = 0; i < n; ++i) {
+    CascadePlan c;
+    c.spacing = o.probe_spacing << i;
+    c.nx = (v.nx + c.spacing - 1) / c.spacing;
+    c.ny = (v.ny + c.spacing - 1) / c.spacing;
+    c.nz = (v.nz + c.spacing - 1) / c.spacing;
+    c.side = side << i;
+    c.t_start = i == 0 ? 0.0f : t0 * float(1 << (i - 1));
+    c.t_end = i == n - 1 ? kInfinity : t0 * float(1 << i);
+    plan.push_back(c);
+  }
+  return plan;
+}
+
+Vec3 Solution::probe_position(int i, int x, int y, int z) const {
+  const CascadePlan& c = plan_[std::size_t(i)];
+  return position_of(*voxels_, c, (std::uint64_t(z) * c.ny + y) * c.nx + x);
+}
+
+Expected<Solution> solve(const Voxels& v, const Background& bg, const GridOptions& o,
+                         std::uint64_t max_bytes) {
+  Expected<std::vector<CascadePlan>> planned = plan_cascades(v, o);
+  if (!planned) return planned.error();
+  const std::vector<CascadePlan>& plan = *planned;
+  std::uint64_t need = 0;
+  for (std::size_t i = 0; i < plan.size(); ++i)
+    need = std::max(need, plan[i].bytes() + (i + 1 < plan.size() ? plan[i + 1].bytes() : 0));
+  if (need > max_bytes)
+    return Error{"the probe grid's cascades need " +
+                 io::format_rounded(double(need) / double(1 << 20)) +
+                 " MiB, more than the `max_memory` limit of " +
+                 io::format_rounded(double(max_bytes) / double(1 << 20)) +
+                 " MiB; use a larger --voxel or fewer --directions"};
+
+  std::vector<Rgb> upper, lower;
+  for (int i = int(plan.size()) - 1; i >= 0; --i) {
+    const CascadePlan& c = plan[std::size_t(i)];
+    const bool top = i == int(plan.size()) - 1;
+    const std::vector<Vec3> dirs = octahedral::map_directions(c.side);
+    const std::size_t nd = dirs.size();
+    const std::uint64_t count = c.probes();
+    lower.assign(std::size_t(count) * nd, Rgb{});
+    const CascadePlan* up = top ? nullptr : &plan[std::size_t(i) + 1];
+    const int up_side = top ? 0 : up->side;
+    parallel_for(c.nz, [&](int z) {
+      for (int y = 0; y < c.ny; ++y)
+        for (int x = 0; x < c.nx; ++x) {
+          const std::uint64_t q = (std::uint64_t(z) * c.ny + y) * c.nx + x;
+          Rgb* out = &lower[std::size_t(q) * nd];
+          if (!probe_free(v, c, q)) {
+            std::fill(out, out + nd, kNoLight);
+            continue;
+          }
+          const Vec3 p = position_of(v, c, q);
+          Corners around;
+          if (!top) {
+            around = corners(v, *up, p);
+            // An upper probe this one cannot see (across a wall or a floor) would bring light
+            // from the other side: it takes no part (the 2D cascades weigh by visibility too).
+            for (int j = 0; j < 8; ++j) {
+              if (around.w[std::size_t(j)] <= 0) continue;
+              const Vec3 to = position_of(v, *up, around.index[std::size_t(j)]) - p;
+              const float dist = length(to);
+              if (dist > 0 && march(v, p, to * (1 / dist), 0, dist).blocked)
+                around.w[std::size_t(j)] = 0;
+            }
+          }
+          for (int dv = 0; dv < c.side; ++dv)
+            for (int du = 0; du < c.side; ++du) {
+              const std::size_t d = std::size_t(dv) * c.side + du;
+              const Vec3 dir = dirs[d];
+              // From the probe to the interval's start: a surface there leaves this ray
+              // unusable for the cascade below.
+              if (c.t_start > 0 && march(v, p, dir, 0, c.t_start).blocked) {
+                out[d] = kNoLight;
+                continue;
+              }
+              const Segment s = march(v, p, dir, c.t_start, c.t_end);
+              if (s.blocked) {
+                out[d] = s.radiance;
+                continue;
+              }
+              if (top) {
+                out[d] = s.radiance + s.transmittance * bg(dir);
+                continue;
+              }
+              // The upper probes around this one, each through the mean of its 2x2 children of
+              // this direction that hold light.
+              Rgb sum{};
+              float weight = 0;
+              for (int j = 0; j < 8; ++j) {
+                const float w = around.w[std::size_t(j)];
+                if (w <= 0) continue;
+                Rgb mean{};
+                int n = 0;
+                for (int cv = 0; cv < 2; ++cv)
+                  for (int cu = 0; cu < 2; ++cu) {
+                    const std::size_t ud =
+                        std::size_t(2 * dv + cv) * std::size_t(up_side) + std::size_t(2 * du + cu);
+                    const Rgb& u = upper[std::size_t(around.index[std::size_t(j)]) *
+                                             (std::size_t(up_side) * up_side) +
+                                         ud];
+                    if (!holds_light(u)) continue;
+                    mean += u;
+                    ++n;
+                  }
+                if (n == 0) continue;
+                sum += mean * (w / float(n));
+                weight += w;
+              }
+              if (weight > 0) {
+                out[d] = s.radiance + s.transmittance * (sum * (1 / weight));
+                continue;
+              }
+              // No upper probe has light this way: the ray continues itself to the sky.
+              const Segment rest = march(v, p, dir, c.t_end, kInfinity);
+              out[d] = s.radiance +
+                       s.transmittance *
+                           (rest.radiance + (rest.blocked ? Rgb{} : rest.transmittance * bg(dir)));
+            }
+        }
+    });
+    std::swap(upper, lower);
+  }
+
+  Solution sol;
+  sol.voxels_ = &v;
+  sol.plan_ = plan;
+  sol.dirs_ = octahedral::map_directions(plan[0].side);
+  sol.radiance_ = std::move(upper);
+  sol.valid_.resize(std::size_t(plan[0].probes()));
+  for (std::uint64_t q = 0; q < plan[0].probes(); ++q)
+    sol.valid_[std::size_t(q)] = probe_free(v, plan[0], q);
+  return sol;
+}
+
+bool Solution::mean_radiance(Vec3 p, Vec3 n, Rgb& out) const {
+  const Voxels& v = *voxels_;
+  const CascadePlan& c = plan_[0];
+  const std::size_t nd = dirs_.size();
+  // p's continuous probe coordinates (probe a at a).
+  double g[3];
+  for (int k = 0; k < 3; ++k)
+    g[k] = ((double(p[k]) - v.origin[k]) / v.size - 0.5 - c.spacing / 2) / c.spacing;
+  const int dims[3] = {c.nx, c.ny, c.nz};
+  // Where p's surface ends along its normal: the first free voxel within 4 voxels. Probes must
+  // see its centre; p itself lies in its surface's opaque voxels.
+  Vec3 free_point = p + n * (2 * v.size);
+  for (int step = 1; step <= 8; ++step) {
+    const Vec3 q = p + n * (0.5f * float(step) * v.size);
+    int at[3];
+    bool inside = true;
+    for (int k = 0; k < 3 && inside; ++k) {
+      at[k] = int(std::floor((q[k] - v.origin[k]) / v.size));
+      inside = at[k] >= 0 && at[k] < (k == 0 ? v.nx : k == 1 ? v.ny : v.nz);
+    }
+    if (!inside) break;
+    if (!v.opaque(v.index(at[0], at[1], at[2]))) {
+      // Its centre, not q, which may lie on the face of the opaque voxel before it.
+      free_point = v.origin + Vec3{(float(at[0]) + 0.5f) * v.size, (float(at[1]) + 0.5f) * v.size,
+                                   (float(at[2]) + 0.5f) * v.size};
+      break;
+    }
+  }
+  // A tent of `radius` probe spacings: the 8 probes around p (trilinear weights) first; where
+  // none of them serves (they sit in the surface's own voxels, or behind it), the 64 around it.
+  for (int radius = 1; radius <= 2; ++radius) {
+    int lo[3];
+    for (int k = 0; k < 3; ++k) lo[k] = int(std::floor(g[k])) - (radius - 1);
+    Rgb sum{};
+    float weight = 0;
+    for (int dz = 0; dz < 2 * radius; ++dz)
+      for (int dy = 0; dy < 2 * radius; ++dy)
+        for (int dx = 0; dx < 2 * radius; ++dx) {
+          const int at[3] = {lo[0] + dx, lo[1] + dy, lo[2] + dz};
+          float w = 1;
+          for (int k = 0; k < 3; ++k) {
+            if (at[k] < 0 || at[k] >= dims[k]) w = 0;
+            w *= std::max(0.0f, float(1 - std::abs(g[k] - at[k]) / radius));
+          }
+          if (w <= 0) continue;
+          const std::uint64_t q = (std::uint64_t(at[2]) * c.ny + at[1]) * c.nx + at[0];
+          if (!valid_[std::size_t(q)]) continue;
+          const Vec3 probe = position_of(v, c, q);
+          // In front of the surface, and seeing it (from the free point): no light from behind a
+          // wall, however thin.
+          if (dot(p - probe, n) >= 0) continue;
+          const Vec3 to = probe - free_point;
+          const float dist = length(to);
+          if (dist > 0 && march(v, free_point, to * (1 / dist), 0, dist).blocked) continue;
+          Rgb mean{};
+          float cos_sum = 0;
+          for (std::size_t d = 0; d < nd; ++d) {
+            const float cos_t = dot(n, dirs_[d]);
+            const Rgb& r = radiance_[std::size_t(q) * nd + d];
+            if (cos_t <= 0 || !holds_light(r)) continue;
+            mean += r * cos_t;
+            cos_sum += cos_t;
+          }
+          if (!(cos_sum > 0)) continue;
+          sum += mean * (w / cos_sum);
+          weight += w;
+        }
+    if (weight > 0) {
+      out = sum * (1 / weight);
+      return true;
+    }
+  }
+  return false;
+}
+
+}  // namespace penumbra::spaceland::grid

@@ -1,0 +1,70 @@
+// The world-space probe grid (seed 001 sections 2.5.2 and 4.3): a regular 3D grid of probes per
+// cascade over the voxels, the probe spacing doubling and the directions quadrupling per cascade
+// (each cascade about half the memory of the one below), intervals doubling, merged top down.
+// Like SPWI's cascades, those above 0 trace from their probe and mark rays that meet a surface
+// before their interval unusable, and a lower ray with no usable upper ray continues itself: no
+// light leaks through a wall next to an upper probe, and closed forms stay exact.
+//
+// Under way (issue 19): one bounce, trilinear merging; the command line does not offer it yet.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "penumbra/error.hpp"
+#include "penumbra/spaceland/scene.hpp"
+#include "spaceland/camera.hpp"
+#include "spaceland/grid/voxels.hpp"
+
+namespace penumbra::spaceland::grid {
+
+struct GridOptions {
+  int probe_spacing = 2;  // s0: voxels between cascade-0 probes; cascade i uses s0 2^i
+  int directions = 16;    // Q0: a square of a power of two; cascade i has Q0 4^i
+  float interval = 0;     // t0, world units: cascade 0 traces [0, t0], cascade i
+                          // [t0 2^(i-1), t0 2^i] (0: one cascade-0 probe spacing)
+  int cascades = 0;       // 0: until an interval reaches across the grid (the top one then runs
+                          // out of the grid, to the sky)
+};
+
+struct CascadePlan {
+  int nx = 0, ny = 0, nz = 0;  // probes along each axis
+  int spacing = 1;             // voxels between probes
+  int side = 1;                // the direction map is side x side
+  float t_start = 0, t_end = 0;
+  std::uint64_t probes() const { return std::uint64_t(nx) * std::uint64_t(ny) * std::uint64_t(nz); }
+  // Radiance per probe and direction (RGB floats).
+  std::uint64_t bytes() const;
+};
+
+// The cascades for a grid of voxels. Errors: options out of range.
+Expected<std::vector<CascadePlan>> plan_cascades(const Voxels& v, const GridOptions& o);
+
+// The merged radiance of cascade 0: per probe, the radiance arriving along each direction.
+class Solution {
+ public:
+  // The cosine-weighted mean radiance over the hemisphere of unit normal n at surface point p
+  // (irradiance / pi), from the cascade-0 probes around p that lie in front of its surface and
+  // see it; false when none does.
+  bool mean_radiance(Vec3 p, Vec3 n, Rgb& out) const;
+
+  const std::vector<CascadePlan>& cascades() const { return plan_; }
+  Vec3 probe_position(int i, int x, int y, int z) const;
+
+ private:
+  friend Expected<Solution> solve(const Voxels&, const Background&, const GridOptions&,
+                                  std::uint64_t);
+  const Voxels* voxels_ = nullptr;
+  std::vector<CascadePlan> plan_;
+  std::vector<Vec3> dirs_;
+  std::vector<Rgb> radiance_;        // cascade 0, probe-major: [probe * directions + d]
+  std::vector<std::uint8_t> valid_;  // cascade-0 probes outside opaque voxels
+};
+
+// Traces and merges every cascade, top down. Refuses (Error) plans whose memory passes
+// `max_bytes` (two cascades' radiance at once: the largest and the one above it).
+Expected<Solution> solve(const Voxels& v, const Background& bg, const GridOptions& o,
+                         std::uint64_t max_bytes);
+
+}  // namespace penumbra::spaceland::grid

@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 #include <string_view>
+#include <tuple>
 
 #include "core/timer.hpp"
 #include "io/json_reader.hpp"
@@ -64,17 +65,27 @@ int render_scene_3d(const RenderArgs& a) {
     for (const CLI::Option* opt : a.app->get_options()) {
       const std::string name = opt->get_name();
       if (opt->count() == 0 || listed(name, kCommon) || listed(name, k3dOptions)) continue;
-      const bool pt = listed(name, kPtOptions),
-                 spwi = listed(name, kSpwiOptions) || listed(name, kSpwiSharedOptions);
-      if (!pt && !spwi) {
+      // The 3D methods that read it.
+      std::string readers;
+      bool read = false;
+      for (const auto& [method, own, shared] :
+           {std::tuple{sl::Method::pt, listed(name, kPtOptions), false},
+            std::tuple{sl::Method::spwi, listed(name, kSpwiOptions),
+                       listed(name, kSpwiSharedOptions)},
+            std::tuple{sl::Method::grid, listed(name, kGridOptions),
+                       listed(name, kGridSharedOptions)}})
+        if (own || shared) {
+          readers += std::string(readers.empty() ? "--method " : " or ") + sl::to_string(method);
+          read = read || options.method == method;
+        }
+      if (readers.empty()) {
         std::cerr << "penumbra render: " << name << " applies to 2D scenes only (" << a.scene
                   << " is a 3D scene)\n";
         return kUsage;
       }
-      if ((pt && options.method != sl::Method::pt) ||
-          (spwi && options.method != sl::Method::spwi)) {
-        std::cerr << "penumbra render: " << name << " applies to --method " << (pt ? "pt" : "spwi")
-                  << " only, not " << sl::to_string(options.method) << "\n";
+      if (!read) {
+        std::cerr << "penumbra render: " << name << " applies to " << readers << " only, not "
+                  << sl::to_string(options.method) << "\n";
         return kUsage;
       }
     }
@@ -88,6 +99,12 @@ int render_scene_3d(const RenderArgs& a) {
   if (given("--cascades")) options.spwi.cascades = a.options.rc.cascades;
   if (given("--branching")) options.spwi.branching = a.options.rc.branching;
   if (given("--preaverage")) options.spwi.preaverage = a.options.rc.preaverage;
+  // grid: the same for its own.
+  options.grid = a.grid;
+  if (given("--probe-spacing")) options.grid.probe_spacing = a.options.rc.probe_spacing;
+  if (given("--directions")) options.grid.directions = a.options.rc.directions;
+  if (given("--interval")) options.grid.interval = a.options.rc.interval;
+  if (given("--cascades")) options.grid.cascades = a.options.rc.cascades;
   options.aov = a.aov;
   // The shared options, with --time alone meaning no sample limit, as in 2D.
   penumbra::flatland::RenderOptions shared = a.options;
@@ -164,6 +181,12 @@ int render_scene_3d(const RenderArgs& a) {
                          {"merge_edge", used.spwi.merge_edge},
                          {"gather_edge", used.spwi.gather_edge},
                          {"gather_normal", used.spwi.gather_normal}});
+    if (options.method == sl::Method::grid)
+      parameters.update({{"voxel", used.grid.voxel},
+                         {"probe_spacing", used.grid.probe_spacing},
+                         {"directions", used.grid.directions},
+                         {"interval", used.grid.interval},
+                         {"cascades", used.grid.cascades}});
     nlohmann::json j = {{"method", sl::to_string(options.method)},
                         {"dimensions", 3},
                         {"device", result->device},
@@ -196,6 +219,11 @@ int render_scene_3d(const RenderArgs& a) {
       std::printf(", %d cascades, t0 %s, merge %s, sun %s\n", result->options.spwi.cascades,
                   penumbra::io::format_rounded(result->options.spwi.interval).c_str(),
                   sl::to_string(options.spwi.merge), sl::to_string(options.spwi.sun));
+    else if (options.method == sl::Method::grid)
+      std::printf(", voxel %s, %d cascades, t0 %s\n",
+                  penumbra::io::format_rounded(result->options.grid.voxel).c_str(),
+                  result->options.grid.cascades,
+                  penumbra::io::format_rounded(result->options.grid.interval).c_str());
     else
       std::printf(", %llu samples per pixel, %d bounce%s\n", (unsigned long long)result->samples,
                   options.bounces, options.bounces == 1 ? "" : "s");

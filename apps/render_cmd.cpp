@@ -103,6 +103,8 @@ const CLI::Option* given_3d_option(const RenderArgs& a) {
       if (name == n) return opt;
     for (std::string_view n : kSpwiOptions)
       if (name == n) return opt;
+    for (std::string_view n : kGridOptions)
+      if (name == n) return opt;
   }
   return nullptr;
 }
@@ -327,6 +329,12 @@ std::unique_ptr<RenderCommand> add_render_command(CLI::App& app) {
     add_enum_option(render, "--sun", a.spwi.sun, {sl::SpwiSun::direct, sl::SpwiSun::cascades},
                     "3D spwi: the sun on visible surfaces: direct (a shadow ray per pixel), "
                     "cascades (the top cascade sees its disk)");
+    render
+        ->add_option("--voxel", a.grid.voxel,
+                     "3D grid: voxel size in world units (0: the scene's longest side over 128, "
+                     "larger if that passes a quarter of --max-memory)")
+        ->check(CLI::NonNegativeNumber)
+        ->capture_default_str();
     add_enum_option(render, "--gather", a.spwi.gather,
                     {sl::SpwiGather::pixel, sl::SpwiGather::probe},
                     "3D spwi: the final gather averages each probe's directions per pixel, over "

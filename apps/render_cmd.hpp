@@ -24,6 +24,7 @@ struct RenderArgs {
   // 3D spwi: its own options (those in kSpwiSharedOptions are read into 2D's `options.rc` and
   // copied when given).
   penumbra::spaceland::SpwiOptions spwi;
+  penumbra::spaceland::GridOptions grid;
   bool disjoint = false;  // --disjoint: spwi's thesis intervals (SpwiOptions::overlap off)
   std::vector<std::string> outputs;
   std::string max_memory = "8G";
@@ -58,6 +59,10 @@ inline constexpr std::string_view kSpwiOptions[] = {
     "--gather-edge", "--disjoint", "--gather-normal", "--gather"};
 inline constexpr std::string_view kSpwiSharedOptions[] = {
     "--probe-spacing", "--directions", "--interval", "--cascades", "--preaverage", "--branching"};
+// The probe grid's own options, and those it shares with 2D's cascades.
+inline constexpr std::string_view kGridOptions[] = {"--voxel"};
+inline constexpr std::string_view kGridSharedOptions[] = {"--probe-spacing", "--directions",
+                                                          "--interval", "--cascades"};
 // The 3D path tracer's (read into `options.pt`, as 2D's path tracer reads them).
 inline constexpr std::string_view kPtOptions[] = {"--spp", "--time", "--seed"};
 

@@ -21,6 +21,19 @@ Rgb emission_at(const Scene& scene, const Hit& hit) {
   return scene.materials[hit.material].emission;
 }
 
+Rgb direct_sun(const Scene& scene, const RayScene& tracer, Vec3 sun_direction, const Hit& hit,
+               Rgb albedo, std::uint64_t& rays) {
+  const float cos_s = dot(hit.shading_normal, sun_direction);
+  if (!(cos_s > 0) || !(dot(hit.geometric_normal, sun_direction) > 0)) return {};
+  ++rays;
+  const Ray r{tracer.spawn(hit.position, hit.geometric_normal, sun_direction), sun_direction, 0,
+              std::numeric_limits<float>::infinity()};
+  if (tracer.occluded(r)) return {};
+  const float k = float(cos_s / kPi);
+  return {albedo.r * scene.sun.irradiance.r * k, albedo.g * scene.sun.irradiance.g * k,
+          albedo.b * scene.sun.irradiance.b * k};
+}
+
 void face_towards(Hit& hit, Vec3 d) {
   if (dot(hit.geometric_normal, d) > 0) hit.geometric_normal = -hit.geometric_normal;
   if (dot(hit.shading_normal, d) > 0) hit.shading_normal = -hit.shading_normal;

@@ -2,12 +2,15 @@
 // method that shades the visible surfaces (and written out by --aov).
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 #include <vector>
 
+#include "core/parallel.hpp"
 #include "penumbra/image.hpp"
 #include "penumbra/spaceland/render.hpp"
 #include "penumbra/spaceland/scene.hpp"
+#include "spaceland/camera.hpp"
 #include "spaceland/embree/ray_scene.hpp"
 
 namespace penumbra::spaceland {
@@ -15,6 +18,12 @@ namespace penumbra::spaceland {
 // The albedo (texture included) and the emission of the surface at a hit.
 Rgb albedo_at(const Scene& scene, const Hit& hit);
 Rgb emission_at(const Scene& scene, const Hit& hit);
+
+// The sun's direct light reflected at a visible hit (normals faced to the camera): albedo E cos /
+// pi where one shadow ray towards the sun's centre reaches it (hard shadows), else 0. Counts the
+// shadow ray in `rays` when it traces one.
+Rgb direct_sun(const Scene& scene, const RayScene& tracer, Vec3 sun_direction, const Hit& hit,
+               Rgb albedo, std::uint64_t& rays);
 
 // Turns a hit's normals to the side the ray arrives from (surfaces are two-sided).
 void face_towards(Hit& hit, Vec3 ray_direction);
@@ -38,5 +47,25 @@ GBuffer make_gbuffer(const Scene& scene, const RayScene& rays);
 
 // A G-buffer channel as an image (Aov::radiance is not one).
 ImageRgb aov_image(const Scene& scene, const GBuffer& g, Aov aov);
+
+// The camera's image shaded in parallel rows: a pixel that sees the sky shows `bg`, one that
+// hits a surface shade(x, y, k, hit, rays) (k = y * width + x; `rays` counts the rays the
+// shading traces, summed into `traced`).
+template <class Shade>
+ImageRgb shade_pixels(const GBuffer& g, const Background& bg, std::uint64_t& traced,
+                      Shade&& shade) {
+  ImageRgb img(g.width, g.height);
+  std::atomic<std::uint64_t> count{0};
+  parallel_for(g.height, [&](int y) {
+    std::uint64_t local = 0;
+    for (int x = 0; x < g.width; ++x) {
+      const std::size_t k = std::size_t(y) * std::size_t(g.width) + std::size_t(x);
+      img.set(x, y, g.found[k] ? shade(x, y, k, g.hits[k], local) : bg(g.directions[k]));
+    }
+    count.fetch_add(local, std::memory_order_relaxed);
+  });
+  traced = count.load();
+  return img;
+}
 
 }  // namespace penumbra::spaceland

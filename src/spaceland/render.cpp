@@ -11,6 +11,8 @@
 #include "io/json_reader.hpp"
 #include "spaceland/embree/ray_scene.hpp"
 #include "spaceland/gbuffer.hpp"
+#include "spaceland/grid/grid.hpp"
+#include "spaceland/grid/voxels.hpp"
 #include "spaceland/pt/pt.hpp"
 #include "spaceland/spwi/spwi.hpp"
 
@@ -48,16 +50,43 @@ Expected<ImageRgb> pt_solve(const Scene& scene, const RayScene& rays, const GBuf
   return img;
 }
 
+// What every method's stats report alike.
+template <class Stats>
+void take_common(Stats& stats, Solved& out) {
+  out.stages = std::move(stats.stages);
+  out.rays = stats.rays;
+  out.memory_bytes = stats.memory_bytes;
+}
+
 Expected<ImageRgb> spwi_solve(const Scene& scene, const RayScene& rays, const GBuffer& g,
                               const RenderOptions& options, Solved& out) {
   spwi::Stats stats;
   Expected<ImageRgb> img = spwi::render(scene, rays, g, options, stats);
-  out.stages = stats.stages;
-  out.rays = stats.rays;
-  out.memory_bytes = stats.memory_bytes;
+  take_common(stats, out);
   out.derived.spwi.interval = stats.plan.t0;
   out.derived.spwi.cascades = stats.plan.cascades;
   return img;
+}
+
+Expected<ImageRgb> grid_solve(const Scene& scene, const RayScene& rays, const GBuffer& g,
+                              const RenderOptions& options, Solved& out) {
+  grid::Stats stats;
+  Expected<ImageRgb> img = grid::render(scene, rays, g, options, stats);
+  take_common(stats, out);
+  out.derived.grid.voxel = stats.voxel;
+  out.derived.grid.interval = stats.t0;
+  out.derived.grid.cascades = stats.cascades;
+  return img;
+}
+
+// The voxels; the cascades' share is checked when they are planned (the grid's size is known
+// only once the voxel size is).
+std::uint64_t grid_bytes(const Scene& scene, const RenderOptions& options) {
+  const float size = grid::voxel_size(scene, options);
+  const Bounds b = grid::grid_bounds(scene);
+  double n = 1;
+  for (int k = 0; k < 3; ++k) n *= std::ceil((b.hi[k] - b.lo[k]) / size) + 2 * grid::kPadding;
+  return std::uint64_t(std::min(n * double(grid::voxel_bytes(1)), 1.8e19));
 }
 
 Status no_check(const Scene&, const RenderOptions&) {
@@ -89,6 +118,12 @@ const MethodEntry kMethods[] = {
      spwi::check,
      spwi_bytes,
      spwi_solve},
+    {{Method::grid, "grid",
+      "the world-space probe grid (seed 001 4.3): radiance cascades over the scene's voxels, "
+      "direct light (under way)"},
+     grid::check,
+     grid_bytes,
+     grid_solve},
 };
 
 const MethodEntry& entry(Method m) {

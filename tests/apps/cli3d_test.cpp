@@ -95,6 +95,34 @@ TEST_F(Cli3d, SpwiReportsItsDerivedIntervalAndCascades) {
   EXPECT_FALSE(fs::exists(out("two.pfm")));
 }
 
+TEST_F(Cli3d, GridReportsItsVoxelsAndIsRefusedItsOthersOptions) {
+  const auto r = run({"render", scene_, "--method", "grid", "--voxel", "0.25", "--directions", "16",
+                      "--json", "-o", out("g.pfm")});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["method"], "grid");
+  const nlohmann::json& p = j["parameters"];
+  EXPECT_FLOAT_EQ(p["voxel"].get<float>(), 0.25f);
+  EXPECT_EQ(p["directions"], 16);
+  EXPECT_GT(p["interval"].get<double>(), 0.0);
+  EXPECT_GE(p["cascades"].get<int>(), 2);
+  EXPECT_TRUE(j["stages"].contains("voxelise"));
+  // --voxel belongs to the grid, --merge to spwi.
+  auto bad = run({"render", scene_, "--method", "spwi", "--voxel", "0.25", "-o", out("x.pfm")});
+  EXPECT_EQ(bad.status, 2);
+  EXPECT_NE(bad.err.find("--voxel applies to --method grid only, not spwi"), std::string::npos)
+      << bad.err;
+  bad = run({"render", scene_, "--method", "grid", "--merge", "fix", "-o", out("x.pfm")});
+  EXPECT_EQ(bad.status, 2);
+  EXPECT_NE(bad.err.find("--merge applies to --method spwi only, not grid"), std::string::npos)
+      << bad.err;
+  // --directions belongs to both.
+  bad = run({"render", scene_, "--method", "pt", "--directions", "16", "-o", out("x.pfm")});
+  EXPECT_NE(bad.err.find("applies to --method spwi or grid only, not pt"), std::string::npos)
+      << bad.err;
+  EXPECT_FALSE(fs::exists(out("x.pfm")));
+}
+
 TEST_F(Cli3d, WidthAndHeightReplaceTheCameraSize) {
   const auto r = run({"render", scene_, "--spp", "1", "--width", "20", "--height", "10", "-o",
                       out("b.pfm"), "-q"});
@@ -127,7 +155,7 @@ TEST_F(Cli3d, OptionsOfTheOtherWorldAreRefused) {
   // Options of the other 3D method.
   r = run({"render", scene_, "--probe-spacing", "2", "-o", out("x.png")});
   EXPECT_EQ(r.status, 2);
-  EXPECT_NE(r.err.find("--probe-spacing applies to --method spwi only, not pt"), std::string::npos)
+  EXPECT_NE(r.err.find("--probe-spacing applies to --method spwi or grid only, not pt"), std::string::npos)
       << r.err;
   r = run({"render", scene_, "--method", "spwi", "--spp", "4", "-o", out("x.png")});
   EXPECT_EQ(r.status, 2);

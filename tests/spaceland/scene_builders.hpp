@@ -106,12 +106,7 @@ inline Scene two_closed_rooms(float gap) {
   const std::uint32_t wall = add_material(s, {0.7f, 0.7f, 0.7f});
   add_box(s, {-1, -1, -1}, {1, 1, 1}, wall);
   add_box(s, {1 + gap, -1, -1}, {3, 1, 1}, wall);
-  Sphere light;
-  light.center = {2, 0, 0};
-  light.radius = 0.3f;
-  light.material = add_material(s, {0, 0, 0}, {50, 50, 50});
-  light.object = add_object(s, "sphere");
-  s.spheres.push_back(light);
+  add_sphere(s, {2, 0, 0}, 0.3f, add_material(s, {0, 0, 0}, {50, 50, 50}));
   return s;
 }
 

@@ -17,6 +17,7 @@ namespace penumbra::spaceland {
 enum class Method {
   pt,    // the reference path tracer: converges to the exact radiance the format defines
   spwi,  // screen-space probes with world-space intervals (seed 000, seed 001 section 4.5)
+  grid,  // the world-space probe grid (seed 001 section 4.3): radiance cascades over voxels
 };
 
 // How a ray of an SPWI cascade continues into the probes of the cascade above (--merge).
@@ -97,10 +98,23 @@ struct SpwiOptions {
   float gather_normal = 1;
 };
 
+// The world-space probe grid (docs/METHODS.md, "The world-space probe grid").
+struct GridOptions {
+  float voxel = 0;        // voxel size, world units (0: the scene's longest side over 128, larger
+                          // when that grid would pass a quarter of max_memory)
+  int probe_spacing = 2;  // s0: voxels between cascade-0 probes; cascade i uses s0 2^i
+  int directions = 16;    // Q0: a square of a power of two; cascade i has Q0 4^i
+  float interval = 0;     // t0, world units: cascade 0 traces [0, t0], cascade i
+                          // [t0 2^(i-1), t0 2^i] (0: four cascade-0 probe spacings)
+  int cascades = 0;       // 0: until an interval reaches across the grid; the top one runs out
+                          // of the grid, to the sky
+};
+
 struct RenderOptions {
   Method method = Method::pt;
   PtOptions pt;
   SpwiOptions spwi;
+  GridOptions grid;
   Aov aov = Aov::radiance;
   int bounces = 1;  // 1: direct light only; N: N-1 more diffuse bounces
   int threads = 0;  // 0: all hardware threads

@@ -2,11 +2,14 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <limits>
 
+#include "core/math.hpp"
 #include "core/octahedral.hpp"
 #include "core/parallel.hpp"
+#include "core/timer.hpp"
 #include "io/json_reader.hpp"
 #include "spaceland/color.hpp"
 
@@ -100,7 +103,10 @@ Expected<std::vector<CascadePlan>> plan_cascades(const Voxels& v, const GridOpti
   if (o.cascades < 0 || o.cascades > kMaxCascades)
     return Error{"`grid.cascades`: expected 0..12 (0: derived), found " +
                  std::to_string(o.cascades)};
-  const float t0 = o.interval > 0 ? o.interval : float(o.probe_spacing) * v.size;
+  // Four probe spacings: the upper probes' spacing stays a half of the distance where their
+  // interval starts. At one spacing (twice the distance) shadows wash out: a probe in an umbra
+  // takes the light its upper neighbours beside the occluder see (measured, docs/QUALITY.md).
+  const float t0 = o.interval > 0 ? o.interval : 4 * float(o.probe_spacing) * v.size;
   const double diagonal =
       double(v.size) * std::sqrt(double(v.nx) * v.nx + double(v.ny) * v.ny + double(v.nz) * v.nz);
   int n = o.cascades;
@@ -123,6 +129,13 @@ Expected<std::vector<CascadePlan>> plan_cascades(const Voxels& v, const GridOpti
   return plan;
 }
 
+std::uint64_t cascades_bytes(const std::vector<CascadePlan>& plan) {
+  std::uint64_t need = 0;
+  for (std::size_t i = 0; i < plan.size(); ++i)
+    need = std::max(need, plan[i].bytes() + (i + 1 < plan.size() ? plan[i + 1].bytes() : 0));
+  return need;
+}
+
 Vec3 Solution::probe_position(int i, int x, int y, int z) const {
   const CascadePlan& c = plan_[std::size_t(i)];
   return position_of(*voxels_, c, (std::uint64_t(z) * c.ny + y) * c.nx + x);
@@ -133,9 +146,7 @@ Expected<Solution> solve(const Voxels& v, const Background& bg, const GridOption
   Expected<std::vector<CascadePlan>> planned = plan_cascades(v, o);
   if (!planned) return planned.error();
   const std::vector<CascadePlan>& plan = *planned;
-  std::uint64_t need = 0;
-  for (std::size_t i = 0; i < plan.size(); ++i)
-    need = std::max(need, plan[i].bytes() + (i + 1 < plan.size() ? plan[i + 1].bytes() : 0));
+  const std::uint64_t need = cascades_bytes(plan);
   if (need > max_bytes)
     return Error{"the probe grid's cascades need " +
                  io::format_rounded(double(need) / double(1 << 20)) +
@@ -192,7 +203,7 @@ Expected<Solution> solve(const Voxels& v, const Background& bg, const GridOption
                 continue;
               }
               if (top) {
-                out[d] = s.radiance + s.transmittance * bg(dir);
+                out[d] = s.radiance + s.transmittance * bg.sky(dir);
                 continue;
               }
               // The upper probes around this one, each through the mean of its 2x2 children of
@@ -225,9 +236,9 @@ Expected<Solution> solve(const Voxels& v, const Background& bg, const GridOption
               }
               // No upper probe has light this way: the ray continues itself to the sky.
               const Segment rest = march(v, p, dir, c.t_end, kInfinity);
-              out[d] = s.radiance +
-                       s.transmittance *
-                           (rest.radiance + (rest.blocked ? Rgb{} : rest.transmittance * bg(dir)));
+              out[d] = s.radiance + s.transmittance *
+                                        (rest.radiance +
+                                         (rest.blocked ? Rgb{} : rest.transmittance * bg.sky(dir)));
             }
         }
     });
@@ -245,7 +256,7 @@ Expected<Solution> solve(const Voxels& v, const Background& bg, const GridOption
   return sol;
 }
 
-bool Solution::mean_radiance(Vec3 p, Vec3 n, Rgb& out) const {
+bool Solution::mean_radiance(Vec3 p, Vec3 n, Rgb& out, const RayScene* rays) const {
   const Voxels& v = *voxels_;
   const CascadePlan& c = plan_[0];
   const std::size_t nd = dirs_.size();
@@ -254,28 +265,32 @@ bool Solution::mean_radiance(Vec3 p, Vec3 n, Rgb& out) const {
   for (int k = 0; k < 3; ++k)
     g[k] = ((double(p[k]) - v.origin[k]) / v.size - 0.5 - c.spacing / 2) / c.spacing;
   const int dims[3] = {c.nx, c.ny, c.nz};
-  // Where p's surface ends along its normal: the first free voxel within 4 voxels. Probes must
-  // see its centre; p itself lies in its surface's opaque voxels.
+  // The free voxel nearest p in front of its surface (within 2 voxels each way): probes must see
+  // its centre, p itself lies in its surface's opaque voxels (near an edge, in the other
+  // surface's too, so a step along the normal alone may not leave them).
   Vec3 free_point = p + n * (2 * v.size);
-  for (int step = 1; step <= 8; ++step) {
-    const Vec3 q = p + n * (0.5f * float(step) * v.size);
+  {
     int at[3];
-    bool inside = true;
-    for (int k = 0; k < 3 && inside; ++k) {
-      at[k] = int(std::floor((q[k] - v.origin[k]) / v.size));
-      inside = at[k] >= 0 && at[k] < (k == 0 ? v.nx : k == 1 ? v.ny : v.nz);
-    }
-    if (!inside) break;
-    if (!v.opaque(v.index(at[0], at[1], at[2]))) {
-      // Its centre, not q, which may lie on the face of the opaque voxel before it.
-      free_point = v.origin + Vec3{(float(at[0]) + 0.5f) * v.size, (float(at[1]) + 0.5f) * v.size,
-                                   (float(at[2]) + 0.5f) * v.size};
-      break;
-    }
+    const int vdims[3] = {v.nx, v.ny, v.nz};
+    for (int k = 0; k < 3; ++k) at[k] = int(std::floor((p[k] - v.origin[k]) / v.size));
+    float best = kInfinity;
+    for (int dz = -2; dz <= 2; ++dz)
+      for (int dy = -2; dy <= 2; ++dy)
+        for (int dx = -2; dx <= 2; ++dx) {
+          const int q[3] = {at[0] + dx, at[1] + dy, at[2] + dz};
+          if (q[0] < 0 || q[1] < 0 || q[2] < 0 || q[0] >= vdims[0] || q[1] >= vdims[1] ||
+              q[2] >= vdims[2] || v.opaque(v.index(q[0], q[1], q[2])))
+            continue;
+          const Vec3 centre =
+              v.origin + Vec3{(float(q[0]) + 0.5f) * v.size, (float(q[1]) + 0.5f) * v.size,
+                              (float(q[2]) + 0.5f) * v.size};
+          const float d = length(centre - p);
+          if (dot(centre - p, n) > 0.25f * v.size && d < best) best = d, free_point = centre;
+        }
   }
   // A tent of `radius` probe spacings: the 8 probes around p (trilinear weights) first; where
   // none of them serves (they sit in the surface's own voxels, or behind it), the 64 around it.
-  for (int radius = 1; radius <= 2; ++radius) {
+  for (int radius = 1; radius <= 4; radius *= 2) {
     int lo[3];
     for (int k = 0; k < 3; ++k) lo[k] = int(std::floor(g[k])) - (radius - 1);
     Rgb sum{};
@@ -296,9 +311,15 @@ bool Solution::mean_radiance(Vec3 p, Vec3 n, Rgb& out) const {
           // In front of the surface, and seeing it (from the free point): no light from behind a
           // wall, however thin.
           if (dot(p - probe, n) >= 0) continue;
-          const Vec3 to = probe - free_point;
-          const float dist = length(to);
-          if (dist > 0 && march(v, free_point, to * (1 / dist), 0, dist).blocked) continue;
+          if (rays) {
+            // The exact surfaces: near an edge the free voxel may lie past the other surface.
+            const Vec3 start = rays->spawn(p, n, probe - p);
+            if (rays->occluded(Ray{start, probe - start, 0, 1})) continue;
+          } else {
+            const Vec3 to = probe - free_point;
+            const float dist = length(to);
+            if (dist > 0 && march(v, free_point, to * (1 / dist), 0, dist).blocked) continue;
+          }
           Rgb mean{};
           float cos_sum = 0;
           for (std::size_t d = 0; d < nd; ++d) {
@@ -318,6 +339,66 @@ bool Solution::mean_radiance(Vec3 p, Vec3 n, Rgb& out) const {
     }
   }
   return false;
+}
+
+Status check(const Scene& scene, const RenderOptions& options) {
+  if (options.bounces > 1)
+    return Error{
+        "`bounces`: the probe grid computes direct light only (1 bounce) for now; its "
+        "later bounces (iterating the voxels' radiance) are still to come; use --method pt "
+        "for more bounces"};
+  if (!scene.media.empty())
+    return Error{"the probe grid does not shade fog in the camera's image yet: the scene has " +
+                 std::to_string(scene.media.size()) + " medium box(es); use --method pt"};
+  const GridOptions& o = options.grid;
+  if (!std::isfinite(o.voxel) || o.voxel < 0)
+    return Error{"`grid.voxel`: expected a voxel size > 0 in world units (0: derived), found " +
+                 io::format_number(o.voxel)};
+  Voxels probe;
+  probe.nx = probe.ny = probe.nz = 1;
+  probe.size = 1;
+  Expected<std::vector<CascadePlan>> plan = plan_cascades(probe, o);
+  return plan ? Status{} : Status{plan.error()};
+}
+
+float voxel_size(const Scene& scene, const RenderOptions& options) {
+  return options.grid.voxel > 0 ? options.grid.voxel
+                                : default_voxel_size(scene, options.max_memory / 4);
+}
+
+Expected<ImageRgb> render(const Scene& scene, const RayScene& rays, const GBuffer& g,
+                          const RenderOptions& options, Stats& stats) {
+  Stopwatch watch;
+  // A quarter of the limit for the voxels, the rest for the cascades (and what render holds).
+  Expected<Voxels> voxels = voxelise(scene, voxel_size(scene, options), options.max_memory / 4);
+  if (!voxels) return voxels.error();
+  stats.stages.push_back({"voxelise", watch.ms()});
+  stats.voxel = voxels->size;
+  watch.restart();
+  const Background bg(scene);
+  const std::uint64_t voxel_memory = voxel_bytes(voxels->count());
+  Expected<Solution> sol = solve(*voxels, bg, options.grid,
+                                 options.max_memory - std::min(options.max_memory, voxel_memory));
+  if (!sol) return sol.error();
+  stats.stages.push_back({"cascades", watch.ms()});
+  stats.cascades = int(sol->cascades().size());
+  stats.t0 = sol->cascades()[0].t_end;
+  stats.memory_bytes = voxel_memory + cascades_bytes(sol->cascades());
+  watch.restart();
+
+  const Vec3 sun_dir = bg.sun_direction();
+  ImageRgb img = shade_pixels(g, bg, stats.rays,
+                              [&](int, int, std::size_t, const Hit& h, std::uint64_t& local) {
+                                const Rgb albedo = albedo_at(scene, h);
+                                Rgb l = emission_at(scene, h), mean;
+                                if (sol->mean_radiance(h.position, h.geometric_normal, mean, &rays))
+                                  l += albedo * mean;
+                                if (bg.has_sun())
+                                  l += direct_sun(scene, rays, sun_dir, h, albedo, local);
+                                return l;
+                              });
+  stats.stages.push_back({"gather", watch.ms()});
+  return img;
 }
 
 }  // namespace penumbra::spaceland::grid

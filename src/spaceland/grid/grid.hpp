@@ -5,7 +5,7 @@
 // before their interval unusable, and a lower ray with no usable upper ray continues itself: no
 // light leaks through a wall next to an upper probe, and closed forms stay exact.
 //
-// Under way (issue 19): one bounce, trilinear merging; the command line does not offer it yet.
+// Under way (issue 19): one bounce, trilinear merging, no fog in the camera image yet.
 #pragma once
 
 #include <cstdint>
@@ -13,20 +13,14 @@
 #include <vector>
 
 #include "penumbra/error.hpp"
+#include "penumbra/spaceland/render.hpp"
 #include "penumbra/spaceland/scene.hpp"
 #include "spaceland/camera.hpp"
+#include "spaceland/embree/ray_scene.hpp"
+#include "spaceland/gbuffer.hpp"
 #include "spaceland/grid/voxels.hpp"
 
 namespace penumbra::spaceland::grid {
-
-struct GridOptions {
-  int probe_spacing = 2;  // s0: voxels between cascade-0 probes; cascade i uses s0 2^i
-  int directions = 16;    // Q0: a square of a power of two; cascade i has Q0 4^i
-  float interval = 0;     // t0, world units: cascade 0 traces [0, t0], cascade i
-                          // [t0 2^(i-1), t0 2^i] (0: one cascade-0 probe spacing)
-  int cascades = 0;       // 0: until an interval reaches across the grid (the top one then runs
-                          // out of the grid, to the sky)
-};
 
 struct CascadePlan {
   int nx = 0, ny = 0, nz = 0;  // probes along each axis
@@ -46,8 +40,9 @@ class Solution {
  public:
   // The cosine-weighted mean radiance over the hemisphere of unit normal n at surface point p
   // (irradiance / pi), from the cascade-0 probes around p that lie in front of its surface and
-  // see it; false when none does.
-  bool mean_radiance(Vec3 p, Vec3 n, Rgb& out) const;
+  // see it; false when none does. Whether a probe sees p: with `rays`, an exact shadow ray from
+  // p; without, a march through the voxels from the free voxel nearest p in front of it.
+  bool mean_radiance(Vec3 p, Vec3 n, Rgb& out, const RayScene* rays = nullptr) const;
 
   const std::vector<CascadePlan>& cascades() const { return plan_; }
   Vec3 probe_position(int i, int x, int y, int z) const;
@@ -62,9 +57,33 @@ class Solution {
   std::vector<std::uint8_t> valid_;  // cascade-0 probes outside opaque voxels
 };
 
-// Traces and merges every cascade, top down. Refuses (Error) plans whose memory passes
+// Traces and merges every cascade, top down; rays that leave the grid see the sky (the sun is
+// the renderer's, one shadow ray per pixel). Refuses (Error) plans whose memory passes
 // `max_bytes` (two cascades' radiance at once: the largest and the one above it).
 Expected<Solution> solve(const Voxels& v, const Background& bg, const GridOptions& o,
                          std::uint64_t max_bytes);
+
+// Working bytes of two cascades' radiance at once, the largest pair.
+std::uint64_t cascades_bytes(const std::vector<CascadePlan>& plan);
+
+// Options and scenes the method cannot do yet: more than one bounce, fog.
+Status check(const Scene& scene, const RenderOptions& options);
+
+// The voxel size the render uses: options.grid.voxel, or the default for a quarter of
+// options.max_memory.
+float voxel_size(const Scene& scene, const RenderOptions& options);
+
+struct Stats {
+  std::vector<StageTime> stages;  // voxelise, cascades, gather
+  std::uint64_t rays = 0;         // shadow rays towards the sun (the cascades march voxels)
+  std::uint64_t memory_bytes = 0;
+  float voxel = 0, t0 = 0;
+  int cascades = 0;
+};
+
+// The camera's image: each pixel's first hit shows its emission, plus albedo times the mean
+// radiance the probes around it bring, plus the sun through one shadow ray.
+Expected<ImageRgb> render(const Scene& scene, const RayScene& rays, const GBuffer& g,
+                          const RenderOptions& options, Stats& stats);
 
 }  // namespace penumbra::spaceland::grid

@@ -667,69 +667,53 @@ Expected<ImageRgb> render(const Scene& scene, const RayScene& rays, const GBuffe
     mean = sum * (1 / weight);
     return true;
   };
-  ImageRgb img(g.width, g.height);
-  parallel_for(g.height, [&](int y) {
-    std::uint64_t local = 0;
-    for (int x = 0; x < g.width; ++x) {
-      const std::size_t k = std::size_t(y) * g.width + x;
-      if (!g.found[k]) {
-        img.set(x, y, bg(g.directions[k]));
-        continue;
-      }
-      const Hit& h = g.hits[k];
-      const Vec3 n = h.shading_normal;
-      Rgb l = emission_at(scene, h);
-      const Rgb albedo = albedo_at(scene, h);
-      const float depth = g.linear_depth(k);
-      Corners c;
-      if (o.merge == SpwiMerge::minmax) {
-        c = minmax_corners(corners(x + 0.5, y + 0.5, plan.spacing(0), plan.nx[0], plan.ny[0]),
-                           upper_probes, depth);
-      } else {
-        c = valid_corners(x + 0.5, y + 0.5, plan.spacing(0), plan.nx[0], plan.ny[0], upper_probes);
-        bilateral(c, upper_probes, depth, o.gather_edge);
-      }
-      if (o.gather_normal > 0) {
-        // Probes on surfaces facing elsewhere (the front of a block, for a pixel on its top)
-        // gather light the pixel does not see: weighted by cos^p of the normals' angle, unless
-        // that leaves no probe.
-        Corners facing = c;
-        float left = 0;
-        for (int j = 0; j < c.n; ++j) {
-          const Vec3 pn = upper_probes[std::size_t(c.index[std::size_t(j)])].n;
-          facing.w[std::size_t(j)] *=
-              std::pow(std::max(0.0f, dot(pn, h.geometric_normal)), o.gather_normal);
-          left += facing.w[std::size_t(j)];
+  std::uint64_t sun_rays = 0;
+  ImageRgb img = shade_pixels(
+      g, bg, sun_rays, [&](int x, int y, std::size_t k, const Hit& h, std::uint64_t& local) {
+        const Vec3 n = h.shading_normal;
+        Rgb l = emission_at(scene, h);
+        const Rgb albedo = albedo_at(scene, h);
+        const float depth = g.linear_depth(k);
+        Corners c;
+        if (o.merge == SpwiMerge::minmax) {
+          c = minmax_corners(corners(x + 0.5, y + 0.5, plan.spacing(0), plan.nx[0], plan.ny[0]),
+                             upper_probes, depth);
+        } else {
+          c = valid_corners(x + 0.5, y + 0.5, plan.spacing(0), plan.nx[0], plan.ny[0],
+                            upper_probes);
+          bilateral(c, upper_probes, depth, o.gather_edge);
         }
-        if (left > 0) c = facing;
-      }
-      if (normalise(c, upper_probes)) {
-        Rgb e{};
-        float used = 0;  // the weight of probes with light towards this pixel's hemisphere
-        for (int j = 0; j < c.n; ++j) {
-          Rgb mean;
-          if (c.w[std::size_t(j)] <= 0 || !probe_radiance(c.index[std::size_t(j)], n, mean))
-            continue;
-          e += mean * c.w[std::size_t(j)];
-          used += c.w[std::size_t(j)];
+        if (o.gather_normal > 0) {
+          // Probes on surfaces facing elsewhere (the front of a block, for a pixel on its top)
+          // gather light the pixel does not see: weighted by cos^p of the normals' angle, unless
+          // that leaves no probe.
+          Corners facing = c;
+          float left = 0;
+          for (int j = 0; j < c.n; ++j) {
+            const Vec3 pn = upper_probes[std::size_t(c.index[std::size_t(j)])].n;
+            facing.w[std::size_t(j)] *=
+                std::pow(std::max(0.0f, dot(pn, h.geometric_normal)), o.gather_normal);
+            left += facing.w[std::size_t(j)];
+          }
+          if (left > 0) c = facing;
         }
-        if (used > 0) l += albedo * e * (1 / used);
-      }
-      if (sun_direct) {
-        const float cos_s = dot(n, sun_dir);
-        if (cos_s > 0 && dot(h.geometric_normal, sun_dir) > 0) {
-          ++local;
-          const Ray r{rays.spawn(h.position, h.geometric_normal, sun_dir), sun_dir, 0,
-                      std::numeric_limits<float>::infinity()};
-          if (!rays.occluded(r)) l += albedo * scene.sun.irradiance * float(cos_s / kPi);
+        if (normalise(c, upper_probes)) {
+          Rgb e{};
+          float used = 0;  // the weight of probes with light towards this pixel's hemisphere
+          for (int j = 0; j < c.n; ++j) {
+            Rgb mean;
+            if (c.w[std::size_t(j)] <= 0 || !probe_radiance(c.index[std::size_t(j)], n, mean))
+              continue;
+            e += mean * c.w[std::size_t(j)];
+            used += c.w[std::size_t(j)];
+          }
+          if (used > 0) l += albedo * e * (1 / used);
         }
-      }
-      img.set(x, y, l);
-    }
-    ray_count.fetch_add(local, std::memory_order_relaxed);
-  });
+        if (sun_direct) l += direct_sun(scene, rays, sun_dir, h, albedo, local);
+        return l;
+      });
   stats.stages.push_back({"gather", watch.ms()});
-  stats.rays = ray_count.load();
+  stats.rays = ray_count.load() + sun_rays;
   return img;
 }
 

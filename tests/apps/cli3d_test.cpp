@@ -155,7 +155,8 @@ TEST_F(Cli3d, OptionsOfTheOtherWorldAreRefused) {
   // Options of the other 3D method.
   r = run({"render", scene_, "--probe-spacing", "2", "-o", out("x.png")});
   EXPECT_EQ(r.status, 2);
-  EXPECT_NE(r.err.find("--probe-spacing applies to --method spwi or grid only, not pt"), std::string::npos)
+  EXPECT_NE(r.err.find("--probe-spacing applies to --method spwi or grid only, not pt"),
+            std::string::npos)
       << r.err;
   r = run({"render", scene_, "--method", "spwi", "--spp", "4", "-o", out("x.png")});
   EXPECT_EQ(r.status, 2);

@@ -364,9 +364,11 @@ Segment march(const Voxels& v, Vec3 origin, Vec3 dir, float tmin, float tmax) {
       return out;
     }
     const float len = float(leave - t);
-    if (len > 0) {
-      const Rgb& s = v.extinction[k];
-      const Rgb& e = v.emission[k];
+    const Rgb& s = v.extinction[k];
+    const Rgb& e = v.emission[k];
+    // An empty voxel leaves the segment as it is (transmittance 1, no light): skip the arithmetic.
+    const bool empty = is_black(s) && is_black(e);
+    if (len > 0 && !empty) {
       // Per channel: emission e per unit length seen through the voxel's own extinction.
       const float sigma[3] = {s.r, s.g, s.b}, emit[3] = {e.r, e.g, e.b};
       float gain[3], pass[3];

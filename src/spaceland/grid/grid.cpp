@@ -341,12 +341,44 @@ bool Solution::mean_radiance(Vec3 p, Vec3 n, Rgb& out, const RayScene* rays) con
   return false;
 }
 
+void add_bounce(Voxels& v, const Solution& sol, const std::vector<Rgb>& base) {
+  std::vector<Rgb> next(v.emission.size());
+  parallel_for(v.nz, [&](int z) {
+    for (int y = 0; y < v.ny; ++y)
+      for (int x = 0; x < v.nx; ++x) {
+        const std::size_t k = v.index(x, y, z);
+        next[k] = base[k];
+        if (!v.opaque(k)) continue;
+        // The outward normal: towards the free 6-neighbours.
+        Vec3 n{};
+        int free_axes[3] = {0, 0, 0};
+        const int at[3] = {x, y, z}, dims[3] = {v.nx, v.ny, v.nz};
+        for (int axis = 0; axis < 3; ++axis)
+          for (int s : {-1, 1}) {
+            int q[3] = {at[0], at[1], at[2]};
+            q[axis] += s;
+            if (q[axis] < 0 || q[axis] >= dims[axis] || v.opaque(v.index(q[0], q[1], q[2])))
+              continue;
+            n[axis] += float(s);
+            free_axes[axis] += 1;
+          }
+        if (free_axes[0] == 2 || free_axes[1] == 2 || free_axes[2] == 2) continue;
+        const float len = length(n);
+        if (!(len > 0)) continue;
+        const Vec3 centre = v.origin + Vec3{(float(x) + 0.5f) * v.size, (float(y) + 0.5f) * v.size,
+                                            (float(z) + 0.5f) * v.size};
+        Rgb mean;
+        if (sol.mean_radiance(centre, n * (1 / len), mean)) next[k] += v.albedo[k] * mean;
+      }
+  });
+  v.emission = std::move(next);
+}
+
 Status check(const Scene& scene, const RenderOptions& options) {
-  if (options.bounces > 1)
+  if (options.bounces > 1 && scene.has_sun)
     return Error{
-        "`bounces`: the probe grid computes direct light only (1 bounce) for now; its "
-        "later bounces (iterating the voxels' radiance) are still to come; use --method pt "
-        "for more bounces"};
+        "`bounces`: the probe grid does not carry the sun into later bounces yet; use "
+        "--bounces 1 or --method pt"};
   if (!scene.media.empty())
     return Error{"the probe grid does not shade fog in the camera's image yet: the scene has " +
                  std::to_string(scene.media.size()) + " medium box(es); use --method pt"};
@@ -377,10 +409,22 @@ Expected<ImageRgb> render(const Scene& scene, const RayScene& rays, const GBuffe
   watch.restart();
   const Background bg(scene);
   const std::uint64_t voxel_memory = voxel_bytes(voxels->count());
-  Expected<Solution> sol = solve(*voxels, bg, options.grid,
-                                 options.max_memory - std::min(options.max_memory, voxel_memory));
+  const std::uint64_t left = options.max_memory - std::min(options.max_memory, voxel_memory);
+  Expected<Solution> sol = solve(*voxels, bg, options.grid, left);
   if (!sol) return sol.error();
   stats.stages.push_back({"cascades", watch.ms()});
+  // Later bounces: the surfaces' own emission plus what the last solution brings them, solved
+  // again (the voxels' light after b bounces gives the pixels b + 1).
+  if (options.bounces > 1) {
+    const std::vector<Rgb> base = voxels->emission;
+    for (int b = 1; b < options.bounces; ++b) {
+      watch.restart();
+      add_bounce(*voxels, *sol, base);
+      sol = solve(*voxels, bg, options.grid, left);
+      if (!sol) return sol.error();
+      stats.stages.push_back({"bounce " + std::to_string(b + 1), watch.ms()});
+    }
+  }
   stats.cascades = int(sol->cascades().size());
   stats.t0 = sol->cascades()[0].t_end;
   stats.memory_bytes = voxel_memory + cascades_bytes(sol->cascades());

@@ -63,10 +63,16 @@ class Solution {
 Expected<Solution> solve(const Voxels& v, const Background& bg, const GridOptions& o,
                          std::uint64_t max_bytes);
 
+// One more bounce: every surface voxel's emission becomes `base` (its own) plus its albedo times
+// the mean radiance the solution brings to it, about the normal its free 6-neighbours give (a
+// voxel with free neighbours on opposite sides, a wall one voxel thick, keeps `base`: one value
+// cannot hold two sides).
+void add_bounce(Voxels& v, const Solution& sol, const std::vector<Rgb>& base);
+
 // Working bytes of two cascades' radiance at once, the largest pair.
 std::uint64_t cascades_bytes(const std::vector<CascadePlan>& plan);
 
-// Options and scenes the method cannot do yet: more than one bounce, fog.
+// Options and scenes the method cannot do yet: fog, and more than one bounce under the sun.
 Status check(const Scene& scene, const RenderOptions& options);
 
 // The voxel size the render uses: options.grid.voxel, or the default for a quarter of
@@ -82,7 +88,8 @@ struct Stats {
 };
 
 // The camera's image: each pixel's first hit shows its emission, plus albedo times the mean
-// radiance the probes around it bring, plus the sun through one shadow ray.
+// radiance the probes around it bring, plus the sun through one shadow ray. With N bounces the
+// cascades are solved N times, each after add_bounce with the last solution.
 Expected<ImageRgb> render(const Scene& scene, const RayScene& rays, const GBuffer& g,
                           const RenderOptions& options, Stats& stats);
 

@@ -93,8 +93,12 @@ Status no_check(const Scene&, const RenderOptions&) {
   return {};
 }
 
+std::uint64_t grid_bytes(const Scene& scene, const RenderOptions& options);
+
+// Its later bounces come from the probe grid's radiance cache: its voxels too.
 std::uint64_t spwi_bytes(const Scene& scene, const RenderOptions& options) {
-  return spwi::bytes_upper_bound(scene.camera.width, scene.camera.height, options.spwi);
+  return spwi::bytes_upper_bound(scene.camera.width, scene.camera.height, options.spwi) +
+         (options.bounces > 1 ? grid_bytes(scene, options) : 0);
 }
 
 // The method table (docs/ARCHITECTURE.md): name, help, the method's own option check, its

@@ -80,6 +80,24 @@ TEST(Spwi, UniformSkyOverAnOpenPlaneIsExactInEveryMergeMode) {
     }
 }
 
+// Later bounces from the probe grid's radiance cache: the enclosure gives Le (1 + a + ... + a^N).
+TEST(Spwi, BouncesFromTheGridsRadianceCacheGiveTheEnclosure) {
+  const Scene s = enclosure();
+  double want = 1.6, a_n = 0.6;
+  for (int bounces = 2; bounces <= 3; ++bounces) {
+    a_n *= 0.6;
+    want += a_n;
+    RenderOptions o = spwi(SpwiMerge::bilinear3d);
+    o.bounces = bounces;
+    o.grid.voxel = 0.05f;
+    const RenderResult r = render_ok(s, o);
+    EXPECT_LT(worst_red(r.radiance, want), 0.01) << bounces << " bounces";
+    bool cached = false;
+    for (const StageTime& st : r.stages) cached = cached || st.name == "radiance cache";
+    EXPECT_TRUE(cached);
+  }
+}
+
 TEST(Spwi, EmittingEnclosureGivesLeTimesOnePlusAInEveryMergeMode) {
   const Scene s = enclosure();
   for (int pre = 0; pre < 2; ++pre)
@@ -237,7 +255,6 @@ TEST(Spwi, RefusesWhatItCannotDo) {
   };
   // Each case: what is changed from the defaults, and the words of the refusal.
   const std::pair<std::function<void(RenderOptions&)>, const char*> cases[] = {
-      {[](RenderOptions& o) { o.bounces = 2; }, "world-space radiance cache"},
       {[](RenderOptions& o) { o.spwi.directions = 12; }, "spwi.directions"},
       {[](RenderOptions& o) { o.spwi.depth_bias = 0; }, "spwi.depth_bias"},
       {[](RenderOptions& o) { o.max_memory = 1 << 16; }, "max_memory"},
@@ -250,6 +267,12 @@ TEST(Spwi, RefusesWhatItCannotDo) {
     change(o);
     refused(o, words, s);
   }
+  Scene sunny = s;
+  sunny.has_sun = true;
+  sunny.sun.irradiance = {1, 1, 1};
+  RenderOptions two = spwi(SpwiMerge::bilinear);
+  two.bounces = 2;
+  refused(two, "does not carry the sun yet", sunny);
   Scene fog = s;
   Medium m;
   m.extinction = {1, 1, 1};

@@ -341,8 +341,10 @@ bool Solution::mean_radiance(Vec3 p, Vec3 n, Rgb& out, const RayScene* rays) con
   return false;
 }
 
-void add_bounce(Voxels& v, const Solution& sol, const std::vector<Rgb>& base) {
+void add_bounce(Voxels& v, const Solution& sol, const std::vector<Rgb>& base,
+                std::vector<Vec3>* normals) {
   std::vector<Rgb> next(v.emission.size());
+  if (normals) normals->assign(v.emission.size(), Vec3{});
   parallel_for(v.nz, [&](int z) {
     for (int y = 0; y < v.ny; ++y)
       for (int x = 0; x < v.nx; ++x) {
@@ -368,10 +370,58 @@ void add_bounce(Voxels& v, const Solution& sol, const std::vector<Rgb>& base) {
         const Vec3 centre = v.origin + Vec3{(float(x) + 0.5f) * v.size, (float(y) + 0.5f) * v.size,
                                             (float(z) + 0.5f) * v.size};
         Rgb mean;
-        if (sol.mean_radiance(centre, n * (1 / len), mean)) next[k] += v.albedo[k] * mean;
+        if (sol.mean_radiance(centre, n * (1 / len), mean)) {
+          next[k] += v.albedo[k] * mean;
+          if (normals) (*normals)[k] = n * (1 / len);
+        }
       }
   });
   v.emission = std::move(next);
+}
+
+Rgb RadianceCache::reflected(Vec3 p, Vec3 n) const {
+  const Voxels& v = voxels_;
+  int at[3];
+  const int dims[3] = {v.nx, v.ny, v.nz};
+  for (int k = 0; k < 3; ++k) at[k] = int(std::floor((p[k] - v.origin[k]) / v.size));
+  float best = kInfinity;
+  Rgb out{};
+  for (int dz = -1; dz <= 1; ++dz)
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) {
+        const int q[3] = {at[0] + dx, at[1] + dy, at[2] + dz};
+        if (q[0] < 0 || q[1] < 0 || q[2] < 0 || q[0] >= dims[0] || q[1] >= dims[1] ||
+            q[2] >= dims[2])
+          continue;
+        const std::size_t k = v.index(q[0], q[1], q[2]);
+        if (!v.opaque(k) || !(dot(normals_[k], n) > 0.5f)) continue;
+        const float d = float(dx * dx + dy * dy + dz * dz);
+        if (d < best) best = d, out = reflected_[k];
+      }
+  return out;
+}
+
+Expected<RadianceCache> radiance_cache(const Scene& scene, const RenderOptions& options,
+                                       int bounces) {
+  Expected<Voxels> voxels = voxelise(scene, voxel_size(scene, options), options.max_memory / 4);
+  if (!voxels) return voxels.error();
+  const Background bg(scene);
+  const std::uint64_t left =
+      options.max_memory - std::min(options.max_memory, voxel_bytes(voxels->count()));
+  RadianceCache cache;
+  cache.voxels_ = std::move(*voxels);
+  Voxels& v = cache.voxels_;
+  const std::vector<Rgb> base = v.emission;
+  for (int b = 0; b < bounces; ++b) {
+    Expected<Solution> sol = solve(v, bg, options.grid, left);
+    if (!sol) return sol.error();
+    add_bounce(v, *sol, base, &cache.normals_);
+  }
+  cache.reflected_.resize(base.size());
+  for (std::size_t k = 0; k < base.size(); ++k)
+    cache.reflected_[k] = {v.emission[k].r - base[k].r, v.emission[k].g - base[k].g,
+                           v.emission[k].b - base[k].b};
+  return cache;
 }
 
 Status check(const Scene& scene, const RenderOptions& options) {

@@ -67,7 +67,32 @@ Expected<Solution> solve(const Voxels& v, const Background& bg, const GridOption
 // the mean radiance the solution brings to it, about the normal its free 6-neighbours give (a
 // voxel with free neighbours on opposite sides, a wall one voxel thick, keeps `base`: one value
 // cannot hold two sides).
-void add_bounce(Voxels& v, const Solution& sol, const std::vector<Rgb>& base);
+// `normals`, when given, receives each surface voxel's normal (zero where it has none).
+void add_bounce(Voxels& v, const Solution& sol, const std::vector<Rgb>& base,
+                std::vector<Vec3>* normals = nullptr);
+
+// The world-space radiance cache other methods take their later bounces from: per surface voxel,
+// the light its surfaces reflect after `bounces` bounces (albedo times the mean radiance the
+// grid brings them), on top of what they emit.
+class RadianceCache {
+ public:
+  // The reflected radiance at surface point p towards the side of unit normal n: the nearest
+  // surface voxel around p whose own normal faces n's way (a surface on a voxel face marks the
+  // voxels on both sides, and near an edge the other surface's too); 0 where there is none.
+  Rgb reflected(Vec3 p, Vec3 n) const;
+  std::uint64_t bytes() const { return voxel_bytes(voxels_.count()) + reflected_.size() * 24; }
+
+ private:
+  friend Expected<RadianceCache> radiance_cache(const Scene&, const RenderOptions&, int);
+  Voxels voxels_;
+  std::vector<Rgb> reflected_;
+  std::vector<Vec3> normals_;
+};
+
+// Voxelises the scene and solves the grid `bounces` times (options.grid, a quarter of
+// options.max_memory for the voxels).
+Expected<RadianceCache> radiance_cache(const Scene& scene, const RenderOptions& options,
+                                       int bounces);
 
 // Working bytes of two cascades' radiance at once, the largest pair.
 std::uint64_t cascades_bytes(const std::vector<CascadePlan>& plan);

@@ -5,6 +5,7 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -15,6 +16,7 @@
 #include "io/json_reader.hpp"
 #include "spaceland/camera.hpp"
 #include "spaceland/color.hpp"
+#include "spaceland/grid/grid.hpp"
 
 namespace penumbra::spaceland::spwi {
 
@@ -324,11 +326,12 @@ std::uint64_t bytes_upper_bound(int width, int height, const SpwiOptions& o) {
 
 Status check(const Scene& scene, const RenderOptions& options) {
   const SpwiOptions& o = options.spwi;
-  if (options.bounces > 1)
+  if (options.bounces > 1 && scene.has_sun)
     return Error{
-        "`bounces`: spwi computes direct light only (1 bounce): its later bounces need a "
-        "world-space radiance cache, which the world-space probe grid will provide; use "
-        "--method pt for more bounces"};
+        "`bounces`: spwi's later bounces come from the probe grid's radiance cache, which does "
+        "not carry the sun yet; use --bounces 1 or --method pt"};
+  if (options.bounces > 1)
+    if (Status s = grid::check(scene, options); !s) return s;
   if (!scene.media.empty())
     return Error{"spwi cannot carry fog: the scene has " + std::to_string(scene.media.size()) +
                  " medium box(es); use --method pt"};
@@ -424,6 +427,28 @@ Expected<ImageRgb> render(const Scene& scene, const RayScene& rays, const GBuffe
                  "max_memory` limit of " + mib(options.max_memory)};
 
   const Background bg(scene);
+  // Later bounces: what the surfaces the rays meet reflect, from the probe grid's radiance cache
+  // (seed 001 4.3 as a world-space cache), on top of what they emit.
+  std::optional<grid::RadianceCache> cache;
+  if (options.bounces > 1) {
+    Stopwatch watch;
+    Expected<grid::RadianceCache> built = grid::radiance_cache(scene, options, options.bounces - 1);
+    if (!built) return built.error();
+    cache = std::move(*built);
+    stats.memory_bytes += cache->bytes();
+    stats.stages.push_back({"radiance cache", watch.ms()});
+  }
+  // What a ray along `dir` sees at its hit: the emission, and with a cache the reflected light
+  // on the side the ray comes from.
+  auto surface = [&](const Hit& hit, Vec3 dir) {
+    Rgb l = emission_at(scene, hit);
+    if (cache) {
+      const Vec3 n =
+          dot(hit.geometric_normal, dir) < 0 ? hit.geometric_normal : -hit.geometric_normal;
+      l += cache->reflected(hit.position, n);
+    }
+    return l;
+  };
   std::atomic<std::uint64_t> ray_count{0};
   std::vector<Rgb> upper, lower;
   std::vector<Probe> upper_probes;
@@ -506,7 +531,7 @@ Expected<ImageRgb> render(const Scene& scene, const RayScene& rays, const GBuffe
           // What the interval ray r (map cell (u, v)) brings, given its hit: the surface's
           // emission, or the merge with the cascade above.
           auto resolve = [&](const Ray& r, bool found, const Hit& hit, int u, int v) -> Rgb {
-            if (found) return hit.t >= a ? emission_at(scene, hit) : kNoLight;  // opaque
+            if (found) return hit.t >= a ? surface(hit, r.direction) : kNoLight;  // opaque
             // The top cascade's misses see the sky; so do rays of a probe with no upper probe
             // around it (only sky above it on screen).
             if (!merge) return top_background(bg, r.direction, o.sun);
@@ -524,7 +549,7 @@ Expected<ImageRgb> render(const Scene& scene, const RayScene& rays, const GBuffe
             ++local;
             Hit rest_hit;
             const Ray rest{r.origin, r.direction, b, std::numeric_limits<float>::infinity()};
-            return rays.intersect(rest, rest_hit) ? emission_at(scene, rest_hit)
+            return rays.intersect(rest, rest_hit) ? surface(rest_hit, r.direction)
                                                   : top_background(bg, r.direction, o.sun);
           };
           // The radiance probe `from` receives along d from this cascade's interval and, through
@@ -548,7 +573,7 @@ Expected<ImageRgb> render(const Scene& scene, const RayScene& rays, const GBuffe
                 Rgb got;
                 ++local;
                 if (rays.intersect(r, h))
-                  got = emission_at(scene, h);
+                  got = surface(h, r.direction);
                 else if (!upper_mean(c.index[std::size_t(j)], u, v, got))
                   continue;
                 sum += got * c.w[std::size_t(j)];

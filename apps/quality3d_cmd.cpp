@@ -133,8 +133,8 @@ std::vector<Run> default_runs(int max_spp, bool quick) {
 int run_quality3d(const QualityArgs& a) {
   if (a.bounces != 1)
     return fail(a.scene + ": --bounces " + std::to_string(a.bounces) +
-                ": the 3D study compares SPWI, which has one bounce until the world-space "
-                "probe grid gives it a radiance cache; use --bounces 1");
+                ": the 3D study runs at one bounce for now (SPWI's later bounces come from the "
+                "probe grid's radiance cache, which has no study yet); use --bounces 1");
   Expected<sl::Scene> scene = sl::load_scene(a.scene);
   if (!scene) return fail(scene.error().message);
   quality_detail::StudyOutput output{a};

@@ -118,13 +118,13 @@ const MethodEntry kMethods[] = {
      pt_solve},
     {{Method::spwi, "spwi",
       "screen-space probes with world-space intervals (seed 000): radiance cascades on the "
-      "G-buffer, direct light"},
+      "G-buffer, later bounces from the probe grid's radiance cache"},
      spwi::check,
      spwi_bytes,
      spwi_solve},
     {{Method::grid, "grid",
-      "the world-space probe grid (seed 001 4.3): radiance cascades over the scene's voxels, "
-      "direct light (under way)"},
+      "the world-space probe grid (seed 001 4.3): radiance cascades over the scene's voxels "
+      "(under way)"},
      grid::check,
      grid_bytes,
      grid_solve},

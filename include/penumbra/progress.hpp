@@ -1,7 +1,9 @@
-// Progress of a progressive method (a path tracer), reported between its passes in either world.
+// What a render reports of its course in either world: progress between the passes of a
+// progressive method (a path tracer), and the time each stage took.
 #pragma once
 
 #include <cstdint>
+#include <string>
 
 namespace penumbra {
 
@@ -10,6 +12,12 @@ struct RenderProgress {
   std::uint64_t target = 0;   // samples asked for (0: until the time is up)
   double elapsed_s = 0;
   double fraction = 0;  // of the work asked for (samples or time), 0..1
+};
+
+// One stage of a render (rasterise, a cascade, the G-buffer, ...) and its time.
+struct StageTime {
+  std::string name;
+  double ms = 0;
 };
 
 }  // namespace penumbra

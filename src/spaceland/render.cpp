@@ -82,18 +82,14 @@ Expected<ImageRgb> grid_solve(const Scene& scene, const RayScene& rays, const GB
 // The voxels; the cascades' share is checked when they are planned (the grid's size is known
 // only once the voxel size is).
 std::uint64_t grid_bytes(const Scene& scene, const RenderOptions& options) {
-  const float size = grid::voxel_size(scene, options);
-  const Bounds b = grid::grid_bounds(scene);
-  double n = 1;
-  for (int k = 0; k < 3; ++k) n *= std::ceil((b.hi[k] - b.lo[k]) / size) + 2 * grid::kPadding;
-  return std::uint64_t(std::min(n * double(grid::voxel_bytes(1)), 1.8e19));
+  const std::array<double, 3> d =
+      grid::grid_dims(grid::grid_bounds(scene), grid::voxel_size(scene, options));
+  return std::uint64_t(std::min(d[0] * d[1] * d[2] * double(grid::voxel_bytes(1)), 1.8e19));
 }
 
 Status no_check(const Scene&, const RenderOptions&) {
   return {};
 }
-
-std::uint64_t grid_bytes(const Scene& scene, const RenderOptions& options);
 
 // Its later bounces come from the probe grid's radiance cache: its voxels too.
 std::uint64_t spwi_bytes(const Scene& scene, const RenderOptions& options) {

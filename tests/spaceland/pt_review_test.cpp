@@ -142,18 +142,8 @@ Scene nested_scene(const Nested& n) {
   const float r = 1.3f;
   // Inside the outer sphere, looking at the inner one: both fill part of the image.
   s.camera = camera(c + Vec3{0.1f, 0.05f, 0.8f} * r, c - Vec3{0, 0, 1}, 24, 18, 110);
-  Sphere outer;
-  outer.center = c;
-  outer.radius = r;
-  outer.material = add_material(s, rgb(n.a_b), rgb(n.le_b));
-  outer.object = add_object(s, "sphere");
-  s.spheres.push_back(outer);
-  Sphere inner;
-  inner.center = c;
-  inner.radius = float(n.rho) * r;
-  inner.material = add_material(s, rgb(n.a_s), rgb(n.le_s));
-  inner.object = add_object(s, "sphere");
-  s.spheres.push_back(inner);
+  add_sphere(s, c, r, add_material(s, rgb(n.a_b), rgb(n.le_b)));
+  add_sphere(s, c, float(n.rho) * r, add_material(s, rgb(n.a_s), rgb(n.le_s)));
   return s;
 }
 
@@ -204,12 +194,7 @@ TEST(SpacelandPtReview, AbsorbingFogInsideAnEmittingSphereGivesItsClosedForm) {
   const float r = 1.3f;
   s.camera = camera(o, o + Vec3{0.3f, 0.2f, -1}, 16, 12, 60);
   const double le = 1, a = 0.8, sigma = 0.5;
-  Sphere wall;
-  wall.center = o;
-  wall.radius = r;
-  wall.material = add_material(s, {float(a), float(a), float(a)}, {float(le), 1, 1});
-  wall.object = add_object(s, "sphere");
-  s.spheres.push_back(wall);
+  add_sphere(s, o, r, add_material(s, {float(a), float(a), float(a)}, {float(le), 1, 1}));
   Medium m;
   m.center = o;
   m.half_size = {2, 2, 2};
@@ -293,12 +278,7 @@ Lamps lamps() {
   q.materials.assign(2, add_material(s, {0.3f, 0.3f, 0.3f}, l.le_quad));
   q.object = add_object(s, "quad");
   s.meshes.push_back(q);
-  Sphere sp;
-  sp.center = l.sphere_c;
-  sp.radius = l.sphere_r;
-  sp.material = add_material(s, {0.3f, 0.3f, 0.3f}, l.le_sphere);
-  sp.object = add_object(s, "sphere");
-  s.spheres.push_back(sp);
+  add_sphere(s, l.sphere_c, l.sphere_r, add_material(s, {0.3f, 0.3f, 0.3f}, l.le_sphere));
   return l;
 }
 

@@ -90,12 +90,7 @@ Scene sphere_light_scene(Rgb sky) {
 
 TEST(SpacelandPt, SphereLightOverAPlaneGivesALeRSquaredCosOverDSquared) {
   Scene s = sphere_light_scene({0, 0, 0});
-  Sphere light;
-  light.center = {0.3f, 2, -0.5f};
-  light.radius = 0.5f;
-  light.material = add_material(s, {0, 0, 0}, {4, 3, 2});
-  light.object = add_object(s, "sphere");
-  s.spheres.push_back(light);
+  const Sphere light = add_sphere(s, {0.3f, 2, -0.5f}, 0.5f, add_material(s, {0, 0, 0}, {4, 3, 2}));
   const RenderResult r = render_ok(s, pt(64));
   const FirstHits hits = first_hits(s);
   const ImageRgb &pos = hits.position, &obj = hits.object;
@@ -121,12 +116,7 @@ TEST(SpacelandPt, SphereLightOverAPlaneGivesALeRSquaredCosOverDSquared) {
 TEST(SpacelandPt, UniformSkyOverAPlaneLosesTheCapABlackSphereHides) {
   const float sky = 2;
   Scene s = sphere_light_scene({sky, sky, sky});
-  Sphere blocker;
-  blocker.center = {0.3f, 1.5f, -0.5f};
-  blocker.radius = 0.5f;
-  blocker.material = add_material(s, {0, 0, 0});
-  blocker.object = add_object(s, "sphere");
-  s.spheres.push_back(blocker);
+  const Sphere blocker = add_sphere(s, {0.3f, 1.5f, -0.5f}, 0.5f, add_material(s, {0, 0, 0}));
   const FirstHits hits = first_hits(s);
   const ImageRgb &pos = hits.position, &obj = hits.object;
   // Relative RMS error over the plane's pixels at n samples.

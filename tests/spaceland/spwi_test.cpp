@@ -115,12 +115,7 @@ TEST(Spwi, SphereLightOverAPlaneIsWithinItsMeasuredError) {
   Scene s;
   s.camera = camera({0, 3, 4}, {0, 0, 0}, 96, 72, 50);
   add_floor(s, 1000, {0.5f, 0.5f, 0.5f});
-  Sphere light;
-  light.center = {0.3f, 2, -0.5f};
-  light.radius = 0.5f;
-  light.material = add_material(s, {0, 0, 0}, {4, 4, 4});
-  light.object = add_object(s, "sphere");
-  s.spheres.push_back(light);
+  const Sphere light = add_sphere(s, {0.3f, 2, -0.5f}, 0.5f, add_material(s, {0, 0, 0}, {4, 4, 4}));
   const FirstHits hits = first_hits(s);
   const ImageRgb &pos = hits.position, &obj = hits.object;
   const double measured[] = {0.259, 0.273, 0.260, 0.268, 0.285};
@@ -230,12 +225,7 @@ TEST(Spwi, BranchingSixteenKeepsTheClosedFormsExactAndTheWallClosed) {
 
 TEST(Spwi, SameBitsOnOneAndTwoThreads) {
   Scene s = sky_plane();
-  Sphere ball;
-  ball.center = {0, 0.5f, -1};
-  ball.radius = 0.5f;
-  ball.material = add_material(s, {0.3f, 0.8f, 0.3f}, {1, 0, 0});
-  ball.object = add_object(s, "sphere");
-  s.spheres.push_back(ball);
+  add_sphere(s, {0, 0.5f, -1}, 0.5f, add_material(s, {0.3f, 0.8f, 0.3f}, {1, 0, 0}));
   for (SpwiMerge m : kMerges) {
     RenderOptions o = spwi(m);
     o.threads = 1;

@@ -102,10 +102,7 @@ struct RenderOptions {
   const std::atomic<bool>* cancel = nullptr;
 };
 
-struct StageTime {
-  std::string name;
-  double ms = 0;
-};
+using penumbra::StageTime;
 
 struct RenderResult {
   ImageRgb fluence;                    // linear RGB fluence at every cell centre

@@ -125,10 +125,7 @@ struct RenderOptions {
   const std::atomic<bool>* cancel = nullptr;
 };
 
-struct StageTime {
-  std::string name;
-  double ms = 0;
-};
+using penumbra::StageTime;
 
 struct RenderResult {
   ImageRgb radiance;               // the camera's image: linear RGB (or the AOV asked for)

@@ -62,24 +62,24 @@ Corners corners(const Voxels& v, const CascadePlan& c, Vec3 p) {
   return out;
 }
 
-Vec3 position_of(const Voxels& v, const CascadePlan& c, std::uint64_t q) {
+// The voxel probe q of cascade c sits in (past the grid's end where the counts round up).
+std::array<int, 3> probe_cell(const CascadePlan& c, std::uint64_t q) {
   const int x = int(q % std::uint64_t(c.nx)),
             y = int(q / std::uint64_t(c.nx) % std::uint64_t(c.ny)),
             z = int(q / (std::uint64_t(c.nx) * c.ny));
-  const int idx[3] = {probe_voxel(x, c.spacing), probe_voxel(y, c.spacing),
-                      probe_voxel(z, c.spacing)};
-  return v.origin + Vec3{(float(idx[0]) + 0.5f) * v.size, (float(idx[1]) + 0.5f) * v.size,
-                         (float(idx[2]) + 0.5f) * v.size};
+  return {probe_voxel(x, c.spacing), probe_voxel(y, c.spacing), probe_voxel(z, c.spacing)};
+}
+
+Vec3 position_of(const Voxels& v, const CascadePlan& c, std::uint64_t q) {
+  const std::array<int, 3> cell = probe_cell(c, q);
+  return v.centre(cell[0], cell[1], cell[2]);
 }
 
 // Whether the probe's own voxel is free (inside the grid: probes past its end are clamped).
 bool probe_free(const Voxels& v, const CascadePlan& c, std::uint64_t q) {
-  const int x = int(q % std::uint64_t(c.nx)),
-            y = int(q / std::uint64_t(c.nx) % std::uint64_t(c.ny)),
-            z = int(q / (std::uint64_t(c.nx) * c.ny));
-  return !v.opaque(v.index(std::min(probe_voxel(x, c.spacing), v.nx - 1),
-                           std::min(probe_voxel(y, c.spacing), v.ny - 1),
-                           std::min(probe_voxel(z, c.spacing), v.nz - 1)));
+  const std::array<int, 3> cell = probe_cell(c, q);
+  return !v.opaque(v.index(std::min(cell[0], v.nx - 1), std::min(cell[1], v.ny - 1),
+                           std::min(cell[2], v.nz - 1)));
 }
 
 }  // namespace
@@ -88,7 +88,10 @@ std::uint64_t CascadePlan::bytes() const {
   return probes() * std::uint64_t(side) * std::uint64_t(side) * sizeof(Rgb);
 }
 
-Expected<std::vector<CascadePlan>> plan_cascades(const Voxels& v, const GridOptions& o) {
+namespace {
+
+// The cascade options' ranges (the voxel size is voxelise's to check).
+Status check_cascade_options(const GridOptions& o) {
   if (o.probe_spacing < 1 || o.probe_spacing > 64)
     return Error{"`grid.probe_spacing`: expected 1..64 voxels, found " +
                  std::to_string(o.probe_spacing)};
@@ -103,6 +106,14 @@ Expected<std::vector<CascadePlan>> plan_cascades(const Voxels& v, const GridOpti
   if (o.cascades < 0 || o.cascades > kMaxCascades)
     return Error{"`grid.cascades`: expected 0..12 (0: derived), found " +
                  std::to_string(o.cascades)};
+  return {};
+}
+
+}  // namespace
+
+Expected<std::vector<CascadePlan>> plan_cascades(const Voxels& v, const GridOptions& o) {
+  if (Status s = check_cascade_options(o); !s) return s.error();
+  const int side = int(std::lround(std::sqrt(double(o.directions))));
   // Four probe spacings: the upper probes' spacing stays a half of the distance where their
   // interval starts. At one spacing (twice the distance) shadows wash out: a probe in an umbra
   // takes the light its upper neighbours beside the occluder see (measured, docs/QUALITY.md).
@@ -134,11 +145,6 @@ std::uint64_t cascades_bytes(const std::vector<CascadePlan>& plan) {
   for (std::size_t i = 0; i < plan.size(); ++i)
     need = std::max(need, plan[i].bytes() + (i + 1 < plan.size() ? plan[i + 1].bytes() : 0));
   return need;
-}
-
-Vec3 Solution::probe_position(int i, int x, int y, int z) const {
-  const CascadePlan& c = plan_[std::size_t(i)];
-  return position_of(*voxels_, c, (std::uint64_t(z) * c.ny + y) * c.nx + x);
 }
 
 Expected<Solution> solve(const Voxels& v, const Background& bg, const GridOptions& o,
@@ -265,11 +271,11 @@ bool Solution::mean_radiance(Vec3 p, Vec3 n, Rgb& out, const RayScene* rays) con
   for (int k = 0; k < 3; ++k)
     g[k] = ((double(p[k]) - v.origin[k]) / v.size - 0.5 - c.spacing / 2) / c.spacing;
   const int dims[3] = {c.nx, c.ny, c.nz};
-  // The free voxel nearest p in front of its surface (within 2 voxels each way): probes must see
-  // its centre, p itself lies in its surface's opaque voxels (near an edge, in the other
-  // surface's too, so a step along the normal alone may not leave them).
+  // Without exact rays: the free voxel nearest p in front of its surface (within 2 voxels each
+  // way), whose centre probes must see; p itself lies in its surface's opaque voxels (near an
+  // edge, in the other surface's too, so a step along the normal alone may not leave them).
   Vec3 free_point = p + n * (2 * v.size);
-  {
+  if (!rays) {
     int at[3];
     const int vdims[3] = {v.nx, v.ny, v.nz};
     for (int k = 0; k < 3; ++k) at[k] = int(std::floor((p[k] - v.origin[k]) / v.size));
@@ -281,9 +287,7 @@ bool Solution::mean_radiance(Vec3 p, Vec3 n, Rgb& out, const RayScene* rays) con
           if (q[0] < 0 || q[1] < 0 || q[2] < 0 || q[0] >= vdims[0] || q[1] >= vdims[1] ||
               q[2] >= vdims[2] || v.opaque(v.index(q[0], q[1], q[2])))
             continue;
-          const Vec3 centre =
-              v.origin + Vec3{(float(q[0]) + 0.5f) * v.size, (float(q[1]) + 0.5f) * v.size,
-                              (float(q[2]) + 0.5f) * v.size};
+          const Vec3 centre = v.centre(q[0], q[1], q[2]);
           const float d = length(centre - p);
           if (dot(centre - p, n) > 0.25f * v.size && d < best) best = d, free_point = centre;
         }
@@ -367,8 +371,7 @@ void add_bounce(Voxels& v, const Solution& sol, const std::vector<Rgb>& base,
         if (free_axes[0] == 2 || free_axes[1] == 2 || free_axes[2] == 2) continue;
         const float len = length(n);
         if (!(len > 0)) continue;
-        const Vec3 centre = v.origin + Vec3{(float(x) + 0.5f) * v.size, (float(y) + 0.5f) * v.size,
-                                            (float(z) + 0.5f) * v.size};
+        const Vec3 centre = v.centre(x, y, z);
         Rgb mean;
         if (sol.mean_radiance(centre, n * (1 / len), mean)) {
           next[k] += v.albedo[k] * mean;
@@ -421,6 +424,9 @@ Expected<RadianceCache> radiance_cache(const Scene& scene, const RenderOptions& 
   for (std::size_t k = 0; k < base.size(); ++k)
     cache.reflected_[k] = {v.emission[k].r - base[k].r, v.emission[k].g - base[k].g,
                            v.emission[k].b - base[k].b};
+  // Lookups need only where the surfaces are (the extinction's opaque mark).
+  std::vector<Rgb>().swap(v.emission);
+  std::vector<Rgb>().swap(v.albedo);
   return cache;
 }
 
@@ -436,11 +442,7 @@ Status check(const Scene& scene, const RenderOptions& options) {
   if (!std::isfinite(o.voxel) || o.voxel < 0)
     return Error{"`grid.voxel`: expected a voxel size > 0 in world units (0: derived), found " +
                  io::format_number(o.voxel)};
-  Voxels probe;
-  probe.nx = probe.ny = probe.nz = 1;
-  probe.size = 1;
-  Expected<std::vector<CascadePlan>> plan = plan_cascades(probe, o);
-  return plan ? Status{} : Status{plan.error()};
+  return check_cascade_options(o);
 }
 
 float voxel_size(const Scene& scene, const RenderOptions& options) {

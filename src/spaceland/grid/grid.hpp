@@ -45,7 +45,6 @@ class Solution {
   bool mean_radiance(Vec3 p, Vec3 n, Rgb& out, const RayScene* rays = nullptr) const;
 
   const std::vector<CascadePlan>& cascades() const { return plan_; }
-  Vec3 probe_position(int i, int x, int y, int z) const;
 
  private:
   friend Expected<Solution> solve(const Voxels&, const Background&, const GridOptions&,
@@ -80,7 +79,8 @@ class RadianceCache {
   // surface voxel around p whose own normal faces n's way (a surface on a voxel face marks the
   // voxels on both sides, and near an edge the other surface's too); 0 where there is none.
   Rgb reflected(Vec3 p, Vec3 n) const;
-  std::uint64_t bytes() const { return voxel_bytes(voxels_.count()) + reflected_.size() * 24; }
+  // The opacity marks (the voxels' extinction), the reflected light and the normals.
+  std::uint64_t bytes() const { return reflected_.size() * (sizeof(Rgb) * 2 + sizeof(Vec3)); }
 
  private:
   friend Expected<RadianceCache> radiance_cache(const Scene&, const RenderOptions&, int);

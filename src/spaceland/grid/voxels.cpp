@@ -130,16 +130,21 @@ Bounds grid_bounds(const Scene& scene) {
   return b;
 }
 
+std::array<double, 3> grid_dims(const Bounds& b, double size) {
+  std::array<double, 3> d;
+  for (int k = 0; k < 3; ++k)
+    d[std::size_t(k)] = std::ceil(std::max(double(b.hi[k]) - b.lo[k], 0.0) / size) + 2 * kPadding;
+  return d;
+}
+
 float default_voxel_size(const Scene& scene, std::uint64_t max_bytes) {
   const Bounds b = grid_bounds(scene);
   const Vec3 e = b.hi - b.lo;
   const double longest = std::max({double(e.x), double(e.y), double(e.z), 1e-6});
   double size = longest / 128;
-  // Padded as voxelise pads.
   auto bytes = [&](double s) {
-    double n = 1;
-    for (int k = 0; k < 3; ++k) n *= std::ceil(std::max(double(e[k]), 0.0) / s) + 2 * kPadding;
-    return double(voxel_bytes(1)) * n;
+    const std::array<double, 3> d = grid_dims(b, s);
+    return double(voxel_bytes(1)) * d[0] * d[1] * d[2];
   };
   while (bytes(size) > double(max_bytes)) size *= 1.25;
   return float(size);
@@ -155,8 +160,9 @@ Expected<Voxels> voxelise(const Scene& scene, float size, std::uint64_t max_byte
   v.origin = b.lo - Vec3{size, size, size} * float(kPadding);
   double n = 1;
   int dims[3];
+  const std::array<double, 3> counts = grid_dims(b, size);
   for (int k = 0; k < 3; ++k) {
-    const double cells = std::ceil(std::max(double(b.hi[k] - b.lo[k]), 0.0) / size) + 2 * kPadding;
+    const double cells = counts[std::size_t(k)];
     if (cells > double(1 << 20))
       return Error{"`grid.voxel`: " + io::format_number(size) + " makes " +
                    io::format_number(cells) + " voxels along an axis; use a larger voxel"};
@@ -219,7 +225,7 @@ Expected<Voxels> voxelise(const Scene& scene, float size, std::uint64_t max_byte
       for (int z = lo[2]; z <= hi[2]; ++z)
         for (int y = lo[1]; y <= hi[1]; ++y)
           for (int x = lo[0]; x <= hi[0]; ++x) {
-            const Vec3 c = voxel_lo(x, y, z) + Vec3{float(half), float(half), float(half)};
+            const Vec3 c = v.centre(x, y, z);
             if (triangle_overlaps_box(tri, c, half)) touched.push_back(v.index(x, y, z));
           }
       const Vec3 n = cross(tri[1] - tri[0], tri[2] - tri[0]);
@@ -254,7 +260,7 @@ Expected<Voxels> voxelise(const Scene& scene, float size, std::uint64_t max_byte
       for (int y = lo[1]; y <= hi[1]; ++y)
         for (int x = lo[0]; x <= hi[0]; ++x) {
           const Vec3 a = voxel_lo(x, y, z), c = a + Vec3{size, size, size};
-          const Vec3 mid = a + Vec3{float(half), float(half), float(half)};
+          const Vec3 mid = v.centre(x, y, z);
           if (std::abs(double(dot(d.normal, mid - d.center))) <= reach &&
               nearest_distance(d.center, a, c) <= d.radius)
             touched.push_back(v.index(x, y, z));

@@ -5,6 +5,7 @@
 // 2D cells: Beer-Lambert with a source, opaque voxels ending it.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <limits>
 #include <vector>
@@ -33,6 +34,10 @@ struct Voxels {
   }
   std::uint64_t count() const { return std::uint64_t(nx) * std::uint64_t(ny) * std::uint64_t(nz); }
   bool opaque(std::size_t k) const { return extinction[k].r == kOpaque; }
+  Vec3 centre(int x, int y, int z) const {
+    return origin +
+           Vec3{(float(x) + 0.5f) * size, (float(y) + 0.5f) * size, (float(z) + 0.5f) * size};
+  }
 };
 
 // Bytes a grid of n voxels holds.
@@ -40,6 +45,10 @@ std::uint64_t voxel_bytes(std::uint64_t n);
 
 // What voxelise covers: the surfaces' and the fog boxes' bounds.
 Bounds grid_bounds(const Scene& scene);
+
+// Voxels along each axis of a grid of voxels of `size` over `b`, the padding included (as
+// doubles: a size too small for the counts to fit is the caller's to refuse).
+std::array<double, 3> grid_dims(const Bounds& b, double size);
 
 // The default voxel size: the bounds' longest side over 128, larger where such a grid would take
 // more than `max_bytes`.

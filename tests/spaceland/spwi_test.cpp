@@ -257,12 +257,6 @@ TEST(Spwi, RefusesWhatItCannotDo) {
     change(o);
     refused(o, words, s);
   }
-  Scene sunny = s;
-  sunny.has_sun = true;
-  sunny.sun.irradiance = {1, 1, 1};
-  RenderOptions two = spwi(SpwiMerge::bilinear);
-  two.bounces = 2;
-  refused(two, "does not carry the sun yet", sunny);
   Scene fog = s;
   Medium m;
   m.extinction = {1, 1, 1};

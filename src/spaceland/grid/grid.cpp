@@ -256,10 +256,73 @@ Expected<Solution> solve(const Voxels& v, const Background& bg, const GridOption
   sol.plan_ = plan;
   sol.dirs_ = octahedral::map_directions(plan[0].side);
   sol.radiance_ = std::move(upper);
+  const std::size_t nd = sol.dirs_.size();
   sol.valid_.resize(std::size_t(plan[0].probes()));
-  for (std::uint64_t q = 0; q < plan[0].probes(); ++q)
+  sol.sphere_.resize(std::size_t(plan[0].probes()));
+  for (std::uint64_t q = 0; q < plan[0].probes(); ++q) {
     sol.valid_[std::size_t(q)] = probe_free(v, plan[0], q);
+    if (!sol.valid_[std::size_t(q)]) continue;
+    // Equal-area cells: the plain mean is the mean over the sphere.
+    Rgb sum{};
+    for (std::size_t d = 0; d < nd; ++d) sum += sol.radiance_[std::size_t(q) * nd + d];
+    sol.sphere_[std::size_t(q)] = sum * (1 / float(nd));
+  }
   return sol;
+}
+
+bool Solution::sphere_radiance(Vec3 p, Rgb& out) const {
+  const Voxels& v = *voxels_;
+  const CascadePlan& c = plan_[0];
+  const int dims[3] = {c.nx, c.ny, c.nz}, vdims[3] = {v.nx, v.ny, v.nz};
+  double g[3];
+  int own[3];
+  for (int k = 0; k < 3; ++k) {
+    g[k] = ((double(p[k]) - v.origin[k]) / v.size - 0.5 - c.spacing / 2) / c.spacing;
+    own[k] = std::clamp(int(std::floor((p[k] - v.origin[k]) / v.size)), 0, vdims[k] - 1);
+  }
+  // The 8 probes around p first, the 64 where none of those serves.
+  for (int radius = 1; radius <= 2; radius *= 2) {
+    Rgb sum{};
+    float weight = 0;
+    int lo[3];
+    for (int k = 0; k < 3; ++k) lo[k] = int(std::floor(g[k])) - (radius - 1);
+    for (int dz = 0; dz < 2 * radius; ++dz)
+      for (int dy = 0; dy < 2 * radius; ++dy)
+        for (int dx = 0; dx < 2 * radius; ++dx) {
+          const int at[3] = {lo[0] + dx, lo[1] + dy, lo[2] + dz};
+          float w = 1;
+          for (int k = 0; k < 3; ++k) {
+            if (at[k] < 0 || at[k] >= dims[k]) w = 0;
+            w *= std::max(0.0f, float(1 - std::abs(g[k] - at[k]) / radius));
+          }
+          if (w <= 0) continue;
+          const std::uint64_t q = (std::uint64_t(at[2]) * c.ny + at[1]) * c.nx + at[0];
+          if (!valid_[std::size_t(q)]) continue;
+          // Marched from the probe: the only opaque voxel it may meet is p's own (p close to a
+          // surface lies in the surface's voxels).
+          const Vec3 probe = position_of(v, c, q);
+          const Vec3 to = p - probe;
+          const float dist = length(to);
+          if (dist > 0) {
+            const Vec3 dir = to * (1 / dist);
+            const Segment s = march(v, probe, dir, 0, dist);
+            if (s.blocked) {
+              const Vec3 in = probe + dir * (s.t_end + 1e-3f * v.size);
+              bool mine = true;
+              for (int k = 0; k < 3; ++k)
+                mine = mine && int(std::floor((in[k] - v.origin[k]) / v.size)) == own[k];
+              if (!mine) continue;
+            }
+          }
+          sum += sphere_[std::size_t(q)] * w;
+          weight += w;
+        }
+    if (weight > 0) {
+      out = sum * (1 / weight);
+      return true;
+    }
+  }
+  return false;
 }
 
 bool Solution::mean_radiance(Vec3 p, Vec3 n, Rgb& out, const RayScene* rays) const {
@@ -345,41 +408,96 @@ bool Solution::mean_radiance(Vec3 p, Vec3 n, Rgb& out, const RayScene* rays) con
   return false;
 }
 
-void add_bounce(Voxels& v, const Solution& sol, const std::vector<Rgb>& base,
+SunLight::SunLight(const Scene& scene, const RayScene& rays) : rays_(&rays), media_(scene) {
+  const Background bg(scene);
+  on_ = bg.has_sun();
+  if (!on_) return;
+  dir_ = bg.sun_direction();
+  irradiance_ = scene.sun.irradiance;
+}
+
+Rgb SunLight::at(Vec3 p, std::uint64_t& rays) const {
+  ++rays;
+  const Ray r{p, dir_, 0, kInfinity};
+  if (rays_->occluded(r)) return {};
+  return media_.empty() ? irradiance_ : irradiance_ * media_.transmittance(r, kInfinity);
+}
+
+void add_bounce(Voxels& v, const Solution& sol, const std::vector<Rgb>& base, const SunLight* sun,
                 std::vector<Vec3>* normals) {
-  std::vector<Rgb> next(v.emission.size());
+  // Written aside: the solution marches these voxels meanwhile.
+  std::vector<Rgb> next(v.emission.size()), minus(v.emission.size());
+  std::vector<std::uint8_t> thin(v.emission.size(), 0);
   if (normals) normals->assign(v.emission.size(), Vec3{});
+  const bool sunlit = sun && sun->on();
   parallel_for(v.nz, [&](int z) {
+    std::uint64_t rays = 0;
     for (int y = 0; y < v.ny; ++y)
       for (int x = 0; x < v.nx; ++x) {
         const std::size_t k = v.index(x, y, z);
-        next[k] = base[k];
-        if (!v.opaque(k)) continue;
-        // The outward normal: towards the free 6-neighbours.
-        Vec3 n{};
-        int free_axes[3] = {0, 0, 0};
-        const int at[3] = {x, y, z}, dims[3] = {v.nx, v.ny, v.nz};
-        for (int axis = 0; axis < 3; ++axis)
-          for (int s : {-1, 1}) {
-            int q[3] = {at[0], at[1], at[2]};
-            q[axis] += s;
-            if (q[axis] < 0 || q[axis] >= dims[axis] || v.opaque(v.index(q[0], q[1], q[2])))
-              continue;
-            n[axis] += float(s);
-            free_axes[axis] += 1;
-          }
-        if (free_axes[0] == 2 || free_axes[1] == 2 || free_axes[2] == 2) continue;
-        const float len = length(n);
-        if (!(len > 0)) continue;
+        next[k] = minus[k] = base[k];
         const Vec3 centre = v.centre(x, y, z);
-        Rgb mean;
-        if (sol.mean_radiance(centre, n * (1 / len), mean)) {
-          next[k] += v.albedo[k] * mean;
-          if (normals) (*normals)[k] = n * (1 / len);
+        if (!v.opaque(k)) {
+          // Fog re-emits what it scatters: sigma_s times the sphere's mean radiance.
+          if (is_black(v.extinction[k]) || is_black(v.albedo[k])) continue;
+          Rgb in{};
+          if (!sol.sphere_radiance(centre, in)) in = {};
+          if (sunlit) in += sun->at(centre, rays) * float(1 / (4 * kPi));
+          next[k] += v.extinction[k] * v.albedo[k] * in;
+          continue;
         }
+        // The free 6-neighbours: the outward normal points towards them.
+        bool open[3][2] = {};
+        int thin_axis = -1, thin_count = 0;
+        const int at[3] = {x, y, z}, dims[3] = {v.nx, v.ny, v.nz};
+        for (int axis = 0; axis < 3; ++axis) {
+          for (int side = 0; side < 2; ++side) {
+            int q[3] = {at[0], at[1], at[2]};
+            q[axis] += side ? 1 : -1;
+            open[axis][side] =
+                q[axis] >= 0 && q[axis] < dims[axis] && !v.opaque(v.index(q[0], q[1], q[2]));
+          }
+          if (open[axis][0] && open[axis][1]) thin_axis = axis, ++thin_count;
+        }
+        // A voxel one voxel thin along two axes (a rod) has no side to tell: it keeps `base`.
+        if (thin_count > 1) continue;
+        // The light leaving towards one side: albedo times the mean radiance about the normal of
+        // the free faces on that side (`drop`: the thin axis's face on the other side), plus the
+        // sun's E cos / pi where a shadow ray from one voxel out along that normal reaches it.
+        auto reflected = [&](int drop_axis, int drop_side, Vec3& normal) {
+          Vec3 n{};
+          for (int axis = 0; axis < 3; ++axis)
+            for (int side = 0; side < 2; ++side)
+              if (open[axis][side] && !(axis == drop_axis && side == drop_side))
+                n[axis] += side ? 1.0f : -1.0f;
+          const float len = length(n);
+          normal = {};
+          if (!(len > 0)) return Rgb{};
+          normal = n * (1 / len);
+          Rgb out{}, mean;
+          if (sol.mean_radiance(centre, normal, mean)) out += v.albedo[k] * mean;
+          const float cos_s = sunlit ? dot(normal, sun->direction()) : 0.0f;
+          if (cos_s > 0)
+            out += v.albedo[k] * sun->at(centre + n * v.size, rays) * float(cos_s / kPi);
+          return out;
+        };
+        Vec3 normal;
+        if (thin_axis < 0) {
+          next[k] += reflected(-1, -1, normal);
+          minus[k] = next[k];
+        } else {
+          // Both sides: towards + (the - face dropped) and towards -.
+          Vec3 other;
+          next[k] += reflected(thin_axis, 0, normal);
+          minus[k] += reflected(thin_axis, 1, other);
+          thin[k] = std::uint8_t(1 + thin_axis);
+        }
+        if (normals) (*normals)[k] = normal;
       }
   });
   v.emission = std::move(next);
+  v.emission_minus = std::move(minus);
+  v.thin = std::move(thin);
 }
 
 Rgb RadianceCache::reflected(Vec3 p, Vec3 n) const {
@@ -397,47 +515,56 @@ Rgb RadianceCache::reflected(Vec3 p, Vec3 n) const {
             q[2] >= dims[2])
           continue;
         const std::size_t k = v.index(q[0], q[1], q[2]);
-        if (!v.opaque(k) || !(dot(normals_[k], n) > 0.5f)) continue;
+        if (!v.opaque(k)) continue;
+        // A wall one voxel thick: the side n lies on, its normal mirrored for the - side.
+        Vec3 normal = normals_[k];
+        bool minus = false;
+        if (v.thin[k]) {
+          const int axis = v.thin[k] - 1;
+          minus = n[axis] < 0;
+          if (minus) normal[axis] = -normal[axis];
+        }
+        if (!(dot(normal, n) > 0.5f)) continue;
         const float d = float(dx * dx + dy * dy + dz * dz);
-        if (d < best) best = d, out = reflected_[k];
+        if (d < best) best = d, out = minus ? reflected_minus_[k] : reflected_[k];
       }
   return out;
 }
 
-Expected<RadianceCache> radiance_cache(const Scene& scene, const RenderOptions& options,
-                                       int bounces) {
+Expected<RadianceCache> radiance_cache(const Scene& scene, const RayScene& rays,
+                                       const RenderOptions& options, int bounces) {
   Expected<Voxels> voxels = voxelise(scene, voxel_size(scene, options), options.max_memory / 4);
   if (!voxels) return voxels.error();
   const Background bg(scene);
   const std::uint64_t left =
-      options.max_memory - std::min(options.max_memory, voxel_bytes(voxels->count()));
+      options.max_memory - std::min(options.max_memory, voxel_bytes(voxels->count(), true));
   RadianceCache cache;
   cache.voxels_ = std::move(*voxels);
   Voxels& v = cache.voxels_;
   const std::vector<Rgb> base = v.emission;
+  const SunLight sun(scene, rays);
   for (int b = 0; b < bounces; ++b) {
     Expected<Solution> sol = solve(v, bg, options.grid, left);
     if (!sol) return sol.error();
-    add_bounce(v, *sol, base, &cache.normals_);
+    add_bounce(v, *sol, base, &sun, &cache.normals_);
   }
   cache.reflected_.resize(base.size());
-  for (std::size_t k = 0; k < base.size(); ++k)
+  cache.reflected_minus_.resize(base.size());
+  for (std::size_t k = 0; k < base.size(); ++k) {
     cache.reflected_[k] = {v.emission[k].r - base[k].r, v.emission[k].g - base[k].g,
                            v.emission[k].b - base[k].b};
-  // Lookups need only where the surfaces are (the extinction's opaque mark).
+    cache.reflected_minus_[k] = {v.emission_minus[k].r - base[k].r,
+                                 v.emission_minus[k].g - base[k].g,
+                                 v.emission_minus[k].b - base[k].b};
+  }
+  // Lookups need only where the surfaces are (the extinction's opaque mark) and the thin walls.
   std::vector<Rgb>().swap(v.emission);
+  std::vector<Rgb>().swap(v.emission_minus);
   std::vector<Rgb>().swap(v.albedo);
   return cache;
 }
 
-Status check(const Scene& scene, const RenderOptions& options) {
-  if (options.bounces > 1 && scene.has_sun)
-    return Error{
-        "`bounces`: the probe grid does not carry the sun into later bounces yet; use "
-        "--bounces 1 or --method pt"};
-  if (!scene.media.empty())
-    return Error{"the probe grid does not shade fog in the camera's image yet: the scene has " +
-                 std::to_string(scene.media.size()) + " medium box(es); use --method pt"};
+Status check(const Scene&, const RenderOptions& options) {
   const GridOptions& o = options.grid;
   if (!std::isfinite(o.voxel) || o.voxel < 0)
     return Error{"`grid.voxel`: expected a voxel size > 0 in world units (0: derived), found " +
@@ -450,6 +577,47 @@ float voxel_size(const Scene& scene, const RenderOptions& options) {
                                 : default_voxel_size(scene, options.max_memory / 4);
 }
 
+namespace {
+
+// The light reaching the camera along pixel k's ray: `behind` (what its hit, or the sky, sends)
+// through the fog, plus what the fog emits and scatters towards the camera, integrated a voxel's
+// length at a time (Beer-Lambert within each step, the in-scattered radiance at its middle).
+Rgb through_fog(const Media& media, const Solution& sol, const SunLight& sun, float step,
+                Vec3 origin, Vec3 dir, float t_end, Rgb behind, std::vector<MediumPiece>& pieces,
+                std::uint64_t& rays) {
+  media.pieces(Ray{origin, dir, 0, t_end}, t_end, pieces);
+  Rgb l{}, tr{1, 1, 1};
+  const float sun_share = float(1 / (4 * kPi));
+  for (const MediumPiece& piece : pieces) {
+    const float len = piece.t1 - piece.t0;
+    if (!(len > 0)) continue;
+    const int steps = int(std::clamp(std::ceil(double(len) / step), 1.0, 4096.0));
+    const float dt = len / float(steps);
+    const float sigma[3] = {piece.sigma_t.r, piece.sigma_t.g, piece.sigma_t.b};
+    float pass[3];
+    for (int c = 0; c < 3; ++c) pass[c] = std::exp(-sigma[c] * dt);
+    const Rgb through{pass[0], pass[1], pass[2]};
+    for (int i = 0; i < steps; ++i) {
+      const Vec3 x = origin + dir * (piece.t0 + (float(i) + 0.5f) * dt);
+      Rgb in{};
+      if (!is_black(piece.sigma_s)) {
+        if (!sol.sphere_radiance(x, in)) in = {};
+        if (sun.on()) in += sun.at(x, rays) * sun_share;
+      }
+      const Rgb source = piece.emission + piece.sigma_s * in;
+      const float src[3] = {source.r, source.g, source.b};
+      float gain[3];
+      for (int c = 0; c < 3; ++c)
+        gain[c] = sigma[c] * dt > 1e-4f ? src[c] * (1 - pass[c]) / sigma[c] : src[c] * dt;
+      l += tr * Rgb{gain[0], gain[1], gain[2]};
+      tr *= through;
+    }
+  }
+  return l + tr * behind;
+}
+
+}  // namespace
+
 Expected<ImageRgb> render(const Scene& scene, const RayScene& rays, const GBuffer& g,
                           const RenderOptions& options, Stats& stats) {
   Stopwatch watch;
@@ -460,18 +628,19 @@ Expected<ImageRgb> render(const Scene& scene, const RayScene& rays, const GBuffe
   stats.voxel = voxels->size;
   watch.restart();
   const Background bg(scene);
-  const std::uint64_t voxel_memory = voxel_bytes(voxels->count());
+  const SunLight sun(scene, rays);
+  const std::uint64_t voxel_memory = voxel_bytes(voxels->count(), options.bounces > 1);
   const std::uint64_t left = options.max_memory - std::min(options.max_memory, voxel_memory);
   Expected<Solution> sol = solve(*voxels, bg, options.grid, left);
   if (!sol) return sol.error();
   stats.stages.push_back({"cascades", watch.ms()});
-  // Later bounces: the surfaces' own emission plus what the last solution brings them, solved
-  // again (the voxels' light after b bounces gives the pixels b + 1).
+  // Later bounces: the surfaces' and the fog's own emission plus what the last solution (and the
+  // sun) brings them, solved again (the voxels' light after b bounces gives the pixels b + 1).
   if (options.bounces > 1) {
     const std::vector<Rgb> base = voxels->emission;
     for (int b = 1; b < options.bounces; ++b) {
       watch.restart();
-      add_bounce(*voxels, *sol, base);
+      add_bounce(*voxels, *sol, base, &sun);
       sol = solve(*voxels, bg, options.grid, left);
       if (!sol) return sol.error();
       stats.stages.push_back({"bounce " + std::to_string(b + 1), watch.ms()});
@@ -482,17 +651,38 @@ Expected<ImageRgb> render(const Scene& scene, const RayScene& rays, const GBuffe
   stats.memory_bytes = voxel_memory + cascades_bytes(sol->cascades());
   watch.restart();
 
+  const Media media(scene);
   const Vec3 sun_dir = bg.sun_direction();
-  ImageRgb img = shade_pixels(g, bg, stats.rays,
-                              [&](int, int, std::size_t, const Hit& h, std::uint64_t& local) {
-                                const Rgb albedo = albedo_at(scene, h);
-                                Rgb l = emission_at(scene, h), mean;
-                                if (sol->mean_radiance(h.position, h.geometric_normal, mean, &rays))
-                                  l += albedo * mean;
-                                if (bg.has_sun())
-                                  l += direct_sun(scene, rays, sun_dir, h, albedo, local);
-                                return l;
-                              });
+  ImageRgb img = shade_pixels(
+      g, bg, stats.rays, [&](int, int, std::size_t, const Hit& h, std::uint64_t& local) {
+        const Rgb albedo = albedo_at(scene, h);
+        Rgb l = emission_at(scene, h), mean;
+        if (sol->mean_radiance(h.position, h.geometric_normal, mean, &rays)) l += albedo * mean;
+        if (bg.has_sun()) {
+          Rgb direct = direct_sun(scene, rays, sun_dir, h, albedo, local);
+          if (!media.empty() && !is_black(direct))
+            direct *= media.transmittance(Ray{h.position, sun_dir, 0, kInfinity}, kInfinity);
+          l += direct;
+        }
+        return l;
+      });
+  if (!media.empty()) {
+    // The fog between the camera and what each pixel shows.
+    std::atomic<std::uint64_t> traced{0};
+    parallel_for(g.height, [&](int y) {
+      std::vector<MediumPiece> pieces;
+      std::uint64_t local = 0;
+      for (int x = 0; x < g.width; ++x) {
+        const std::size_t k = std::size_t(y) * std::size_t(g.width) + std::size_t(x);
+        const float t_end = g.found[k] ? g.hits[k].t : kInfinity;
+        img.set(x, y,
+                through_fog(media, *sol, sun, voxels->size, scene.camera.position, g.directions[k],
+                            t_end, img.at(x, y), pieces, local));
+      }
+      traced.fetch_add(local, std::memory_order_relaxed);
+    });
+    stats.rays += traced.load();
+  }
   stats.stages.push_back({"gather", watch.ms()});
   return img;
 }

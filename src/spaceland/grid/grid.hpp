@@ -5,7 +5,9 @@
 // before their interval unusable, and a lower ray with no usable upper ray continues itself: no
 // light leaks through a wall next to an upper probe, and closed forms stay exact.
 //
-// Under way (issue 19): one bounce, trilinear merging, no fog in the camera image yet.
+// Fog: the cascades march it (Beer-Lambert with a source), the camera's rays integrate what it
+// scatters towards them from the probes' mean radiance, and later bounces make each fog voxel
+// re-emit its scattering coefficient times that mean radiance.
 #pragma once
 
 #include <cstdint>
@@ -19,6 +21,7 @@
 #include "spaceland/embree/ray_scene.hpp"
 #include "spaceland/gbuffer.hpp"
 #include "spaceland/grid/voxels.hpp"
+#include "spaceland/media.hpp"
 
 namespace penumbra::spaceland::grid {
 
@@ -43,6 +46,10 @@ class Solution {
   // see it; false when none does. Whether a probe sees p: with `rays`, an exact shadow ray from
   // p; without, a march through the voxels from the free voxel nearest p in front of it.
   bool mean_radiance(Vec3 p, Vec3 n, Rgb& out, const RayScene* rays = nullptr) const;
+  // The mean radiance over the whole sphere at a point in free space or fog (what an isotropic
+  // medium scatters, per unit scattering coefficient), from the cascade-0 probes around p that
+  // the voxels let it see; false when none does.
+  bool sphere_radiance(Vec3 p, Rgb& out) const;
 
   const std::vector<CascadePlan>& cascades() const { return plan_; }
 
@@ -53,6 +60,7 @@ class Solution {
   std::vector<CascadePlan> plan_;
   std::vector<Vec3> dirs_;
   std::vector<Rgb> radiance_;        // cascade 0, probe-major: [probe * directions + d]
+  std::vector<Rgb> sphere_;          // cascade 0: each probe's mean over its directions
   std::vector<std::uint8_t> valid_;  // cascade-0 probes outside opaque voxels
 };
 
@@ -62,13 +70,36 @@ class Solution {
 Expected<Solution> solve(const Voxels& v, const Background& bg, const GridOptions& o,
                          std::uint64_t max_bytes);
 
+// The sun's light reaching a point: its irradiance (normal to it) where an exact shadow ray
+// passes, times the fog's transmittance on the way.
+class SunLight {
+ public:
+  SunLight(const Scene& scene, const RayScene& rays);
+  bool on() const { return on_; }
+  Vec3 direction() const { return dir_; }
+  Rgb irradiance() const { return irradiance_; }
+  // The irradiance normal to the sun reaching p, leaving from p (a free point; `rays` counts).
+  Rgb at(Vec3 p, std::uint64_t& rays) const;
+
+ private:
+  const RayScene* rays_;
+  Media media_;
+  bool on_ = false;
+  Vec3 dir_{};
+  Rgb irradiance_{};
+};
+
 // One more bounce: every surface voxel's emission becomes `base` (its own) plus its albedo times
-// the mean radiance the solution brings to it, about the normal its free 6-neighbours give (a
-// voxel with free neighbours on opposite sides, a wall one voxel thick, keeps `base`: one value
-// cannot hold two sides).
-// `normals`, when given, receives each surface voxel's normal (zero where it has none).
+// the mean radiance the solution brings to it, about the normal its free 6-neighbours give, plus
+// the sun's light reflected (when `sun` is on); a voxel with free neighbours on both sides of
+// one axis (a wall one voxel thick) gets a value for each side (Voxels::thin; a voxel thin along
+// two axes, a rod, keeps `base`); a fog voxel's
+// becomes `base` plus its scattering coefficient times the sphere's mean radiance there (the sun's
+// irradiance over 4 pi included).
+// `normals`, when given, receives each surface voxel's normal (a thin wall's + side's; zero
+// where it has none).
 void add_bounce(Voxels& v, const Solution& sol, const std::vector<Rgb>& base,
-                std::vector<Vec3>* normals = nullptr);
+                const SunLight* sun = nullptr, std::vector<Vec3>* normals = nullptr);
 
 // The world-space radiance cache other methods take their later bounces from: per surface voxel,
 // the light its surfaces reflect after `bounces` bounces (albedo times the mean radiance the
@@ -77,27 +108,33 @@ class RadianceCache {
  public:
   // The reflected radiance at surface point p towards the side of unit normal n: the nearest
   // surface voxel around p whose own normal faces n's way (a surface on a voxel face marks the
-  // voxels on both sides, and near an edge the other surface's too); 0 where there is none.
+  // voxels on both sides, and near an edge the other surface's too; a wall one voxel thick holds
+  // both sides); 0 where there is none.
   Rgb reflected(Vec3 p, Vec3 n) const;
-  // The opacity marks (the voxels' extinction), the reflected light and the normals.
-  std::uint64_t bytes() const { return reflected_.size() * (sizeof(Rgb) * 2 + sizeof(Vec3)); }
+  // The opacity marks (the voxels' extinction), the reflected light (two sides), the normals and
+  // the thin walls' marks.
+  std::uint64_t bytes() const {
+    return reflected_.size() * (sizeof(Rgb) * 3 + sizeof(Vec3) + sizeof(std::uint8_t));
+  }
 
  private:
-  friend Expected<RadianceCache> radiance_cache(const Scene&, const RenderOptions&, int);
+  friend Expected<RadianceCache> radiance_cache(const Scene&, const RayScene&, const RenderOptions&,
+                                                int);
   Voxels voxels_;
-  std::vector<Rgb> reflected_;
-  std::vector<Vec3> normals_;
+  std::vector<Rgb> reflected_;        // towards the + side of a thin wall's axis, or any side
+  std::vector<Rgb> reflected_minus_;  // thin walls: towards the - side
+  std::vector<Vec3> normals_;         // thin walls: the + side's
 };
 
 // Voxelises the scene and solves the grid `bounces` times (options.grid, a quarter of
-// options.max_memory for the voxels).
-Expected<RadianceCache> radiance_cache(const Scene& scene, const RenderOptions& options,
-                                       int bounces);
+// options.max_memory for the voxels); `rays` carry the sun to the voxels.
+Expected<RadianceCache> radiance_cache(const Scene& scene, const RayScene& rays,
+                                       const RenderOptions& options, int bounces);
 
 // Working bytes of two cascades' radiance at once, the largest pair.
 std::uint64_t cascades_bytes(const std::vector<CascadePlan>& plan);
 
-// Options and scenes the method cannot do yet: fog, and more than one bounce under the sun.
+// The grid's options out of range.
 Status check(const Scene& scene, const RenderOptions& options);
 
 // The voxel size the render uses: options.grid.voxel, or the default for a quarter of
@@ -113,8 +150,11 @@ struct Stats {
 };
 
 // The camera's image: each pixel's first hit shows its emission, plus albedo times the mean
-// radiance the probes around it bring, plus the sun through one shadow ray. With N bounces the
-// cascades are solved N times, each after add_bounce with the last solution.
+// radiance the probes around it bring, plus the sun through one shadow ray (and the fog's
+// transmittance). With N bounces the cascades are solved N times, each after add_bounce with the
+// last solution. Through fog, the camera ray takes the fog's transmittance and, a voxel's length
+// at a time, what the fog emits and scatters towards it (its scattering coefficient times
+// sphere_radiance, plus the sun's irradiance over 4 pi where it reaches).
 Expected<ImageRgb> render(const Scene& scene, const RayScene& rays, const GBuffer& g,
                           const RenderOptions& options, Stats& stats);
 

@@ -114,8 +114,8 @@ Bounds box_bounds(const Medium& m) {
 
 }  // namespace
 
-std::uint64_t voxel_bytes(std::uint64_t n) {
-  return n * 3 * sizeof(Rgb);
+std::uint64_t voxel_bytes(std::uint64_t n, bool sides) {
+  return n * (3 * sizeof(Rgb) + (sides ? sizeof(Rgb) + sizeof(std::uint8_t) : 0));
 }
 
 Bounds grid_bounds(const Scene& scene) {
@@ -363,7 +363,7 @@ Segment march(const Voxels& v, Vec3 origin, Vec3 dir, float tmin, float tmax) {
     const double leave = std::min(next[axis], t1);
     const std::size_t k = v.index(cell[0], cell[1], cell[2]);
     if (v.opaque(k)) {
-      out.radiance += out.transmittance * v.emission[k];
+      out.radiance += out.transmittance * v.emission_towards(k, dir);
       out.transmittance = {0, 0, 0};
       out.t_end = float(t);
       out.blocked = true;

@@ -28,20 +28,31 @@ struct Voxels {
   std::vector<Rgb> extinction;  // per world unit; kOpaque (every channel) where a surface is
   std::vector<Rgb> emission;    // surfaces: emitted radiance; fog: radiance emitted per unit length
   std::vector<Rgb> albedo;      // surfaces: their mean albedo; fog: single-scattering albedo
+  // Once bounces give the surfaces their reflected light (add_bounce), a surface voxel free on
+  // both sides of an axis (a wall one voxel thick) holds one value per side: `thin` is 1 + that
+  // axis (0 elsewhere), `emission` the light it sends towards the axis's + side and
+  // `emission_minus` towards its - side. Empty before the first bounce.
+  std::vector<std::uint8_t> thin;
+  std::vector<Rgb> emission_minus;
 
   std::size_t index(int x, int y, int z) const {
     return (std::size_t(z) * std::size_t(ny) + std::size_t(y)) * std::size_t(nx) + std::size_t(x);
   }
   std::uint64_t count() const { return std::uint64_t(nx) * std::uint64_t(ny) * std::uint64_t(nz); }
   bool opaque(std::size_t k) const { return extinction[k].r == kOpaque; }
+  // What surface voxel k sends back along a ray travelling along `dir`.
+  const Rgb& emission_towards(std::size_t k, Vec3 dir) const {
+    if (thin.empty() || thin[k] == 0) return emission[k];
+    return dir[thin[k] - 1] > 0 ? emission_minus[k] : emission[k];
+  }
   Vec3 centre(int x, int y, int z) const {
     return origin +
            Vec3{(float(x) + 0.5f) * size, (float(y) + 0.5f) * size, (float(z) + 0.5f) * size};
   }
 };
 
-// Bytes a grid of n voxels holds.
-std::uint64_t voxel_bytes(std::uint64_t n);
+// Bytes a grid of n voxels holds; `sides`: with the thin walls' second values (bounces).
+std::uint64_t voxel_bytes(std::uint64_t n, bool sides = false);
 
 // What voxelise covers: the surfaces' and the fog boxes' bounds.
 Bounds grid_bounds(const Scene& scene);

@@ -326,10 +326,6 @@ std::uint64_t bytes_upper_bound(int width, int height, const SpwiOptions& o) {
 
 Status check(const Scene& scene, const RenderOptions& options) {
   const SpwiOptions& o = options.spwi;
-  if (options.bounces > 1 && scene.has_sun)
-    return Error{
-        "`bounces`: spwi's later bounces come from the probe grid's radiance cache, which does "
-        "not carry the sun yet; use --bounces 1 or --method pt"};
   if (options.bounces > 1)
     if (Status s = grid::check(scene, options); !s) return s;
   if (!scene.media.empty())
@@ -432,7 +428,8 @@ Expected<ImageRgb> render(const Scene& scene, const RayScene& rays, const GBuffe
   std::optional<grid::RadianceCache> cache;
   if (options.bounces > 1) {
     Stopwatch watch;
-    Expected<grid::RadianceCache> built = grid::radiance_cache(scene, options, options.bounces - 1);
+    Expected<grid::RadianceCache> built =
+        grid::radiance_cache(scene, rays, options, options.bounces - 1);
     if (!built) return built.error();
     cache = std::move(*built);
     stats.memory_bytes += cache->bytes();

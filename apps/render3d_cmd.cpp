@@ -105,6 +105,18 @@ int render_scene_3d(const RenderArgs& a) {
   if (given("--directions")) options.grid.directions = a.options.rc.directions;
   if (given("--interval")) options.grid.interval = a.options.rc.interval;
   if (given("--cascades")) options.grid.cascades = a.options.rc.cascades;
+  // Extension on with --extend, tracing --extend-length voxels (cells in 2D); the fix off unless
+  // --fix bilinear (2D's default is on: there every merge takes it).
+  if (given("--extend") || given("--extend-length"))
+    options.grid.extend_length = a.options.rc.extend_length;
+  if (given("--fix")) {
+    if (a.options.rc.fix == penumbra::flatland::MergeFix::nearest) {
+      std::cerr << "penumbra render: --fix nearest applies to 2D scenes only; the 3D grid takes "
+                   "--fix bilinear or none\n";
+      return kUsage;
+    }
+    options.grid.fix = a.options.rc.fix == penumbra::flatland::MergeFix::bilinear;
+  }
   options.aov = a.aov;
   // The shared options, with --time alone meaning no sample limit, as in 2D.
   penumbra::flatland::RenderOptions shared = a.options;
@@ -186,7 +198,9 @@ int render_scene_3d(const RenderArgs& a) {
                          {"probe_spacing", used.grid.probe_spacing},
                          {"directions", used.grid.directions},
                          {"interval", used.grid.interval},
-                         {"cascades", used.grid.cascades}});
+                         {"cascades", used.grid.cascades},
+                         {"extend_length", used.grid.extend_length},
+                         {"fix", used.grid.fix ? "bilinear" : "none"}});
     nlohmann::json j = {{"method", sl::to_string(options.method)},
                         {"dimensions", 3},
                         {"device", result->device},

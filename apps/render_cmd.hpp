@@ -61,8 +61,9 @@ inline constexpr std::string_view kSpwiSharedOptions[] = {
     "--probe-spacing", "--directions", "--interval", "--cascades", "--preaverage", "--branching"};
 // The probe grid's own options, and those it shares with 2D's cascades.
 inline constexpr std::string_view kGridOptions[] = {"--voxel"};
-inline constexpr std::string_view kGridSharedOptions[] = {"--probe-spacing", "--directions",
-                                                          "--interval", "--cascades"};
+inline constexpr std::string_view kGridSharedOptions[] = {
+    "--probe-spacing", "--directions",    "--interval", "--cascades",
+    "--extend",        "--extend-length", "--fix"};
 // The 3D path tracer's (read into `options.pt`, as 2D's path tracer reads them).
 inline constexpr std::string_view kPtOptions[] = {"--spp", "--time", "--seed"};
 

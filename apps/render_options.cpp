@@ -64,11 +64,14 @@ void add_render_options(CLI::App* app, RenderOptions& options, RenderOptionFlags
         ->check(CLI::Range(0, 16))
         ->capture_default_str();
     add_enum_option(app, "--fix", rc.fix, {MergeFix::bilinear, MergeFix::none, MergeFix::nearest},
-                    "Merge: bilinear (fix), none (vanilla), nearest");
+                    "Merge: bilinear (fix), none (vanilla), nearest; 3D grid: bilinear or none "
+                    "(default there: none)");
     app->add_flag("--preaverage", rc.preaverage,
                   "Trace a 2x2 sub-probe neighbourhood and store the average");
-    app->add_flag("--extend", rc.extend, "Build long intervals by extending a short traced one");
-    app->add_option("--extend-length", rc.extend_length, "Traced length before extension, cells")
+    app->add_flag("--extend", rc.extend,
+                  "Build long intervals by extending a short traced one (2D; 3D grid)");
+    app->add_option("--extend-length", rc.extend_length,
+                    "Traced length before extension: cells (2D), voxels (3D grid)")
         ->check(real_range(1, 1e6))
         ->capture_default_str();
   }

@@ -108,8 +108,24 @@ TEST_F(Cli3d, GridReportsItsVoxelsAndIsRefusedItsOthersOptions) {
   EXPECT_GT(p["interval"].get<double>(), 0.0);
   EXPECT_GE(p["cascades"].get<int>(), 2);
   EXPECT_TRUE(j["stages"].contains("voxelise"));
+  EXPECT_EQ(p["extend_length"], 0);
+  EXPECT_EQ(p["fix"], "none");
+  // Extension and the fix, shared with 2D's cascades; 2D's nearest merge is not the grid's.
+  const auto e = run({"render", scene_, "--method", "grid", "--voxel", "0.25", "--extend",
+                      "--extend-length", "4", "--fix", "bilinear", "--json", "-o", out("e.pfm")});
+  ASSERT_EQ(e.status, 0) << e.err;
+  const nlohmann::json je = nlohmann::json::parse(e.out);
+  EXPECT_EQ(je["parameters"]["extend_length"], 4);
+  EXPECT_EQ(je["parameters"]["fix"], "bilinear");
+  auto bad = run({"render", scene_, "--method", "grid", "--fix", "nearest", "-o", out("x.pfm")});
+  EXPECT_EQ(bad.status, 2);
+  EXPECT_NE(bad.err.find("--fix nearest applies to 2D scenes only"), std::string::npos) << bad.err;
+  bad = run({"render", scene_, "--method", "grid", "--extend", "--extend-length", "0.5", "-o",
+             out("x.pfm")});
+  EXPECT_EQ(bad.status, 2);
+  EXPECT_NE(bad.err.find("--extend-length"), std::string::npos) << bad.err;
   // --voxel belongs to the grid, --merge to spwi.
-  auto bad = run({"render", scene_, "--method", "spwi", "--voxel", "0.25", "-o", out("x.pfm")});
+  bad = run({"render", scene_, "--method", "spwi", "--voxel", "0.25", "-o", out("x.pfm")});
   EXPECT_EQ(bad.status, 2);
   EXPECT_NE(bad.err.find("--voxel applies to --method grid only, not spwi"), std::string::npos)
       << bad.err;
@@ -150,9 +166,9 @@ TEST_F(Cli3d, DepthAovIsTheDistanceAlongTheViewDirection) {
 }
 
 TEST_F(Cli3d, OptionsOfTheOtherWorldAreRefused) {
-  auto r = run({"render", scene_, "--fix", "none", "-o", out("x.png")});
+  auto r = run({"render", scene_, "--storage", "f16", "-o", out("x.png")});
   EXPECT_EQ(r.status, 2);
-  EXPECT_NE(r.err.find("--fix applies to 2D scenes only"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("--storage applies to 2D scenes only"), std::string::npos) << r.err;
   // Options of the other 3D method.
   r = run({"render", scene_, "--probe-spacing", "2", "-o", out("x.png")});
   EXPECT_EQ(r.status, 2);

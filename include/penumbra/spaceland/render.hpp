@@ -108,6 +108,15 @@ struct GridOptions {
                           // [t0 2^(i-1), t0 2^i] (0: four cascade-0 probe spacings)
   int cascades = 0;       // 0: until an interval reaches across the grid; the top one runs out
                           // of the grid, to the sky
+  // Interval extension (seed 001 eq. 16): 0 traces every interval whole; L > 0 traces each
+  // cascade's intervals for about L voxels (the length over a power of two) and doubles them by
+  // merging each with itself shifted along its direction, interpolated from the cascade's own
+  // probes, until they reach their length (the top cascade, open to the sky, is traced whole).
+  float extend_length = 0;
+  // The bilinear fix (seed 001 section 2.4, in 3D): each ray of a probe runs from its interval's
+  // start to each of the 8 upper probes' interval starts (one per child direction), instead of
+  // merging its own interval with the upper probes' (32 traced pieces a ray instead of 1).
+  bool fix = false;
 };
 
 struct RenderOptions {

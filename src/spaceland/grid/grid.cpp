@@ -106,6 +106,12 @@ Status check_cascade_options(const GridOptions& o) {
   if (o.cascades < 0 || o.cascades > kMaxCascades)
     return Error{"`grid.cascades`: expected 0..12 (0: derived), found " +
                  std::to_string(o.cascades)};
+  if (!std::isfinite(o.extend_length) || o.extend_length < 0 ||
+      (o.extend_length > 0 && o.extend_length < 1))
+    return Error{
+        "`grid.extend_length`: expected a traced length of at least 1 voxel (0: no "
+        "extension), found " +
+        io::format_number(o.extend_length)};
   return {};
 }
 
@@ -140,19 +146,109 @@ Expected<std::vector<CascadePlan>> plan_cascades(const Voxels& v, const GridOpti
   return plan;
 }
 
-std::uint64_t cascades_bytes(const std::vector<CascadePlan>& plan) {
+int extension_doublings(const CascadePlan& c, const GridOptions& o, float voxel, bool top) {
+  if (top || o.extend_length <= 0) return 0;
+  const double len = double(c.t_end - c.t_start) / voxel;
+  int n = 0;
+  while (n < 20 && len / double(1 << n) > double(o.extend_length) * (1 + 1e-6)) ++n;
+  return n;
+}
+
+std::uint64_t cascades_bytes(const std::vector<CascadePlan>& plan, const GridOptions& o) {
   std::uint64_t need = 0;
-  for (std::size_t i = 0; i < plan.size(); ++i)
-    need = std::max(need, plan[i].bytes() + (i + 1 < plan.size() ? plan[i + 1].bytes() : 0));
+  for (std::size_t i = 0; i < plan.size(); ++i) {
+    // Extending holds the cascade's intervals and transmittances twice (a doubling reads one
+    // pair and writes the other) and a byte a ray, besides its merged radiance.
+    const bool top = i + 1 == plan.size();
+    const std::uint64_t rays = plan[i].bytes() / sizeof(Rgb);
+    const std::uint64_t extension = o.extend_length > 0 && !top ? rays * (4 * sizeof(Rgb) + 1) : 0;
+    need = std::max(need,
+                    plan[i].bytes() + extension + (i + 1 < plan.size() ? plan[i + 1].bytes() : 0));
+  }
   return need;
 }
+
+namespace {
+
+// A cascade's intervals traced short and doubled by extension (seed 001 eq. 16):
+// L_[a, a+2x](p) = L_[a, a+x](p) + T_[a, a+x](p) L_[a, a+x](p + x w), and T likewise, where the
+// shifted interval comes trilinearly from the cascade's own probes of the same direction (a point
+// past the grid's box sees nothing along w: the box is convex). `before` marks the rays with a
+// surface between the probe and the interval's start.
+struct Extended {
+  std::vector<Rgb> radiance, transmittance;
+  std::vector<std::uint8_t> before;
+};
+
+Extended extend_cascade(const Voxels& v, const CascadePlan& c, const std::vector<Vec3>& dirs,
+                        int doublings, bool check_before) {
+  const std::size_t nd = dirs.size(), count = std::size_t(c.probes());
+  Extended e;
+  e.radiance.resize(count * nd);
+  e.transmittance.resize(count * nd);
+  e.before.assign(count * nd, 0);
+  const float piece = (c.t_end - c.t_start) / float(1 << doublings);
+  parallel_for(int(count / std::size_t(c.nx)), [&](int row) {
+    for (int x = 0; x < c.nx; ++x) {
+      const std::uint64_t q = std::uint64_t(row) * c.nx + x;
+      const Vec3 p = position_of(v, c, q);
+      for (std::size_t d = 0; d < nd; ++d) {
+        const std::size_t k = std::size_t(q) * nd + d;
+        if (check_before && c.t_start > 0) e.before[k] = march(v, p, dirs[d], 0, c.t_start).blocked;
+        const Segment s = march(v, p, dirs[d], c.t_start, c.t_start + piece);
+        e.radiance[k] = s.radiance;
+        e.transmittance[k] = s.blocked ? Rgb{} : s.transmittance;
+      }
+    }
+  });
+  const double box[3] = {double(v.nx) * v.size, double(v.ny) * v.size, double(v.nz) * v.size};
+  std::vector<Rgb> radiance(count * nd), transmittance(count * nd);
+  for (int j = 0; j < doublings; ++j) {
+    const float shift = piece * float(1 << j);
+    parallel_for(int(count / std::size_t(c.nx)), [&](int row) {
+      for (int x = 0; x < c.nx; ++x) {
+        const std::uint64_t q = std::uint64_t(row) * c.nx + x;
+        const Vec3 p = position_of(v, c, q);
+        for (std::size_t d = 0; d < nd; ++d) {
+          const std::size_t k = std::size_t(q) * nd + d;
+          radiance[k] = e.radiance[k];
+          transmittance[k] = e.transmittance[k];
+          if (is_black(e.transmittance[k])) continue;
+          const Vec3 at = p + dirs[d] * shift;
+          bool inside = true;
+          for (int a = 0; a < 3; ++a) {
+            const double u = double(at[a]) - v.origin[a];
+            inside = inside && u >= 0 && u <= box[a];
+          }
+          if (!inside) continue;  // nothing out there: T = 1, no light
+          const Corners around = corners(v, c, at);
+          Rgb l{}, t{};
+          for (int a = 0; a < 8; ++a) {
+            const float w = around.w[std::size_t(a)];
+            if (w <= 0) continue;
+            const std::size_t kk = std::size_t(around.index[std::size_t(a)]) * nd + d;
+            l += e.radiance[kk] * w;
+            t += e.transmittance[kk] * w;
+          }
+          radiance[k] += e.transmittance[k] * l;
+          transmittance[k] *= t;
+        }
+      }
+    });
+    std::swap(radiance, e.radiance);
+    std::swap(transmittance, e.transmittance);
+  }
+  return e;
+}
+
+}  // namespace
 
 Expected<Solution> solve(const Voxels& v, const Background& bg, const GridOptions& o,
                          std::uint64_t max_bytes) {
   Expected<std::vector<CascadePlan>> planned = plan_cascades(v, o);
   if (!planned) return planned.error();
   const std::vector<CascadePlan>& plan = *planned;
-  const std::uint64_t need = cascades_bytes(plan);
+  const std::uint64_t need = cascades_bytes(plan, o);
   if (need > max_bytes)
     return Error{"the probe grid's cascades need " +
                  io::format_rounded(double(need) / double(1 << 20)) +
@@ -170,12 +266,25 @@ Expected<Solution> solve(const Voxels& v, const Background& bg, const GridOption
     lower.assign(std::size_t(count) * nd, Rgb{});
     const CascadePlan* up = top ? nullptr : &plan[std::size_t(i) + 1];
     const int up_side = top ? 0 : up->side;
+    const std::vector<Vec3> up_dirs =
+        top ? std::vector<Vec3>{} : octahedral::map_directions(up_side);
+    // The fix traces from each interval's start to the upper probes': no ray needs to know
+    // whether a surface lies before its interval, and probes inside surfaces still serve the
+    // cascade below as corners (their intervals may start in free space).
+    const bool fix = o.fix && !top;
+    const int doublings = fix ? 0 : extension_doublings(c, o, v.size, top);
+    const Extended ext = doublings > 0 ? extend_cascade(v, c, dirs, doublings, true) : Extended{};
+    // What an upper probe sends along its child direction ud (for the fix: all of them).
+    auto upper_at = [&](std::uint64_t q, std::size_t ud) -> const Rgb& {
+      return upper[std::size_t(q) * (std::size_t(up_side) * up_side) + ud];
+    };
     parallel_for(c.nz, [&](int z) {
       for (int y = 0; y < c.ny; ++y)
         for (int x = 0; x < c.nx; ++x) {
           const std::uint64_t q = (std::uint64_t(z) * c.ny + y) * c.nx + x;
           Rgb* out = &lower[std::size_t(q) * nd];
-          if (!probe_free(v, c, q)) {
+          const bool free = probe_free(v, c, q);
+          if (!free && !(o.fix && i > 0)) {
             std::fill(out, out + nd, kNoLight);
             continue;
           }
@@ -197,13 +306,54 @@ Expected<Solution> solve(const Voxels& v, const Background& bg, const GridOption
             for (int du = 0; du < c.side; ++du) {
               const std::size_t d = std::size_t(dv) * c.side + du;
               const Vec3 dir = dirs[d];
-              // From the probe to the interval's start: a surface there leaves this ray
-              // unusable for the cascade below.
-              if (c.t_start > 0 && march(v, p, dir, 0, c.t_start).blocked) {
-                out[d] = kNoLight;
+              if (fix) {
+                // Each child direction to each upper probe's interval start, then that probe's
+                // light along the child direction.
+                Rgb sum{};
+                float weight = 0;
+                for (int j = 0; j < 8; ++j) {
+                  const float w = around.w[std::size_t(j)];
+                  if (w <= 0) continue;
+                  const std::uint64_t uq = around.index[std::size_t(j)];
+                  const Vec3 upper_probe = position_of(v, *up, uq);
+                  Rgb mean{};
+                  for (int cv = 0; cv < 2; ++cv)
+                    for (int cu = 0; cu < 2; ++cu) {
+                      const std::size_t ud = std::size_t(2 * dv + cv) * std::size_t(up_side) +
+                                             std::size_t(2 * du + cu);
+                      const Vec3 from = p + up_dirs[ud] * c.t_start;
+                      const Vec3 to = upper_probe + up_dirs[ud] * up->t_start - from;
+                      const float dist = length(to);
+                      const Segment s =
+                          dist > 0 ? march(v, from, to * (1 / dist), 0, dist) : Segment{};
+                      mean +=
+                          s.blocked ? s.radiance : s.radiance + s.transmittance * upper_at(uq, ud);
+                    }
+                  sum += mean * (w / 4);
+                  weight += w;
+                }
+                out[d] = weight > 0 ? sum * (1 / weight) : Rgb{};
                 continue;
               }
-              const Segment s = march(v, p, dir, c.t_start, c.t_end);
+              // From the probe to the interval's start: a surface there leaves this ray
+              // unusable for the cascade below.
+              Segment s;
+              if (doublings > 0) {
+                const std::size_t k = std::size_t(q) * nd + d;
+                if (ext.before[k]) {
+                  out[d] = kNoLight;
+                  continue;
+                }
+                s.radiance = ext.radiance[k];
+                s.transmittance = ext.transmittance[k];
+                s.blocked = is_black(s.transmittance);
+              } else {
+                if (!o.fix && c.t_start > 0 && march(v, p, dir, 0, c.t_start).blocked) {
+                  out[d] = kNoLight;
+                  continue;
+                }
+                s = march(v, p, dir, c.t_start, c.t_end);
+              }
               if (s.blocked) {
                 out[d] = s.radiance;
                 continue;
@@ -225,9 +375,7 @@ Expected<Solution> solve(const Voxels& v, const Background& bg, const GridOption
                   for (int cu = 0; cu < 2; ++cu) {
                     const std::size_t ud =
                         std::size_t(2 * dv + cv) * std::size_t(up_side) + std::size_t(2 * du + cu);
-                    const Rgb& u = upper[std::size_t(around.index[std::size_t(j)]) *
-                                             (std::size_t(up_side) * up_side) +
-                                         ud];
+                    const Rgb& u = upper_at(around.index[std::size_t(j)], ud);
                     if (!holds_light(u)) continue;
                     mean += u;
                     ++n;
@@ -648,7 +796,7 @@ Expected<ImageRgb> render(const Scene& scene, const RayScene& rays, const GBuffe
   }
   stats.cascades = int(sol->cascades().size());
   stats.t0 = sol->cascades()[0].t_end;
-  stats.memory_bytes = voxel_memory + cascades_bytes(sol->cascades());
+  stats.memory_bytes = voxel_memory + cascades_bytes(sol->cascades(), options.grid);
   watch.restart();
 
   const Media media(scene);

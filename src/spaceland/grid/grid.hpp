@@ -131,8 +131,12 @@ class RadianceCache {
 Expected<RadianceCache> radiance_cache(const Scene& scene, const RayScene& rays,
                                        const RenderOptions& options, int bounces);
 
-// Working bytes of two cascades' radiance at once, the largest pair.
-std::uint64_t cascades_bytes(const std::vector<CascadePlan>& plan);
+// Working bytes of two cascades' radiance at once, the largest pair (with extension, the lower
+// one's intervals twice over besides).
+std::uint64_t cascades_bytes(const std::vector<CascadePlan>& plan, const GridOptions& o);
+
+// How many times cascade c's traced intervals are doubled (0: traced whole).
+int extension_doublings(const CascadePlan& c, const GridOptions& o, float voxel, bool top);
 
 // The grid's options out of range.
 Status check(const Scene& scene, const RenderOptions& options);

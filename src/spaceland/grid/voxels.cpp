@@ -115,7 +115,8 @@ Bounds box_bounds(const Medium& m) {
 }  // namespace
 
 std::uint64_t voxel_bytes(std::uint64_t n, bool sides) {
-  return n * (3 * sizeof(Rgb) + (sides ? sizeof(Rgb) + sizeof(std::uint8_t) : 0));
+  return n * (3 * sizeof(Rgb) + sizeof(std::uint8_t) +
+              (sides ? sizeof(Rgb) + sizeof(std::uint8_t) : 0));
 }
 
 Bounds grid_bounds(const Scene& scene) {
@@ -315,7 +316,40 @@ Expected<Voxels> voxelise(const Scene& scene, float size, std::uint64_t max_byte
                      s.b > 0 ? scattering[k].b / s.b : 0};
     }
   }
+  build_distance_field(v);
   return v;
+}
+
+void build_distance_field(Voxels& v) {
+  // The chessboard distance transform in two raster passes over the 26-neighbourhood (exact for
+  // this metric): forward from the 13 neighbours already visited, backward from the other 13.
+  const std::size_t count = std::size_t(v.count());
+  v.skip.assign(count, 255);
+  for (std::size_t k = 0; k < count; ++k)
+    if (!is_black(v.extinction[k]) || !is_black(v.emission[k])) v.skip[k] = 0;
+  auto pass = [&](int sign) {
+    const int z0 = sign > 0 ? 0 : v.nz - 1, y0 = sign > 0 ? 0 : v.ny - 1,
+              x0 = sign > 0 ? 0 : v.nx - 1;
+    for (int z = z0; z >= 0 && z < v.nz; z += sign)
+      for (int y = y0; y >= 0 && y < v.ny; y += sign)
+        for (int x = x0; x >= 0 && x < v.nx; x += sign) {
+          std::uint8_t& d = v.skip[v.index(x, y, z)];
+          if (d == 0) continue;
+          int best = d;
+          // The neighbours before this voxel in the pass's order.
+          for (int dz = -1; dz <= 0; ++dz)
+            for (int dy = -1; dy <= 1; ++dy)
+              for (int dx = -1; dx <= 1; ++dx) {
+                if (dz == 0 && (dy > 0 || (dy == 0 && dx >= 0))) continue;
+                const int qx = x + sign * dx, qy = y + sign * dy, qz = z + sign * dz;
+                if (qx < 0 || qy < 0 || qz < 0 || qx >= v.nx || qy >= v.ny || qz >= v.nz) continue;
+                best = std::min(best, v.skip[v.index(qx, qy, qz)] + 1);
+              }
+          d = std::uint8_t(best);
+        }
+  };
+  pass(1);
+  pass(-1);
 }
 
 Segment march(const Voxels& v, Vec3 origin, Vec3 dir, float tmin, float tmax) {
@@ -339,29 +373,57 @@ Segment march(const Voxels& v, Vec3 origin, Vec3 dir, float tmin, float tmax) {
   // The voxel at the entry (the middle of the first step decides it, so that an entry on a
   // face does not round into the neighbour) and the DDA's state.
   int cell[3], step[3];
-  double next[3], delta[3];
+  double next[3];
+  // Where the ray leaves voxel `c` along axis a, always from the same expression (the walk and
+  // the leaps over empty space break ties at voxel edges alike).
+  auto boundary = [&](int a, int c) {
+    return (v.origin[a] + double(c + (step[a] > 0 ? 1 : 0)) * v.size - origin[a]) / dir[a];
+  };
   const double probe_t = t0 + 1e-9 * std::max(1.0, std::abs(t0));
   for (int k = 0; k < 3; ++k) {
     const double p = double(origin[k]) + probe_t * dir[k] - v.origin[k];
     cell[k] = std::clamp(int(std::floor(p / v.size)), 0, int(dims[k]) - 1);
-    if (dir[k] > 0) {
-      step[k] = 1;
-      next[k] = (v.origin[k] + (cell[k] + 1.0) * v.size - origin[k]) / dir[k];
-      delta[k] = v.size / dir[k];
-    } else if (dir[k] < 0) {
-      step[k] = -1;
-      next[k] = (v.origin[k] + cell[k] * double(v.size) - origin[k]) / dir[k];
-      delta[k] = -v.size / dir[k];
-    } else {
-      step[k] = 0;
-      next[k] = delta[k] = std::numeric_limits<double>::infinity();
-    }
+    step[k] = dir[k] > 0 ? 1 : dir[k] < 0 ? -1 : 0;
+    next[k] = step[k] ? boundary(k, cell[k]) : std::numeric_limits<double>::infinity();
   }
   double t = t0;
+  const bool skipping = !v.skip.empty();
   while (t < t1) {
+    const std::size_t k = v.index(cell[0], cell[1], cell[2]);
+    if (skipping && v.skip[k] >= 2) {
+      // Nothing within d - 1 voxels of this one (chessboard): leap to the last voxel of that
+      // cube along the ray, and walk on from there one voxel at a time (a leap straight out of
+      // the cube could cut past the corner of a voxel the walk would enter).
+      const int r = v.skip[k] - 1;
+      double leave = t1;
+      for (int a = 0; a < 3; ++a) {
+        if (step[a] == 0) continue;
+        const double face = v.origin[a] + double(cell[a] + (step[a] > 0 ? r + 1 : -r)) * v.size;
+        leave = std::min(leave, (face - origin[a]) / dir[a]);
+      }
+      if (leave >= t1) break;
+      // A point an eighth of a voxel (along every axis at most) before the exit: in one of the
+      // cube's voxels the ray crosses last.
+      const double at = leave - 0.125 * double(v.size) /
+                                    std::max({std::abs(double(dir[0])), std::abs(double(dir[1])),
+                                              std::abs(double(dir[2]))});
+      const int from[3] = {cell[0], cell[1], cell[2]};
+      bool moved = false;
+      for (int a = 0; a < 3; ++a) {
+        if (step[a] == 0) continue;
+        const double p = double(origin[a]) + at * dir[a] - v.origin[a];
+        cell[a] = std::clamp(int(std::floor(p / v.size)), from[a] - r, from[a] + r);
+        moved = moved || cell[a] != from[a];
+        next[a] = boundary(a, cell[a]);
+      }
+      if (moved) {
+        t = std::max(t, at);
+        continue;
+      }
+      // Still in the first voxel (a ray leaving through a cube's corner region): step as usual.
+    }
     const int axis = next[0] < next[1] ? (next[0] < next[2] ? 0 : 2) : (next[1] < next[2] ? 1 : 2);
     const double leave = std::min(next[axis], t1);
-    const std::size_t k = v.index(cell[0], cell[1], cell[2]);
     if (v.opaque(k)) {
       out.radiance += out.transmittance * v.emission_towards(k, dir);
       out.transmittance = {0, 0, 0};
@@ -391,7 +453,7 @@ Segment march(const Voxels& v, Vec3 origin, Vec3 dir, float tmin, float tmax) {
     if (leave >= t1) break;
     cell[axis] += step[axis];
     if (cell[axis] < 0 || cell[axis] >= int(dims[axis])) break;
-    next[axis] += delta[axis];
+    next[axis] = boundary(axis, cell[axis]);
   }
   return out;
 }

@@ -1,6 +1,6 @@
 // `penumbra bench-quality` on a 3D scene: the path tracer's curve (1, 4, 16, ... samples per
-// pixel) and SPWI at its defaults and each variant docs/QUALITY.md studies, against the path
-// tracer at --reference-spp, as error against time.
+// pixel), SPWI and the probe grid at their defaults and each variant docs/QUALITY.md studies,
+// against the path tracer at --reference-spp, as error against time, at --bounces.
 #include <unistd.h>
 
 #include <algorithm>
@@ -58,20 +58,49 @@ std::uint64_t scene_hash(const sl::Scene& scene) {
   return h;
 }
 
-// One configuration. `t0_scale` > 0: SPWI's interval is that multiple of the one the defaults
-// derived; `cascades_delta`: that many cascades more than the defaults derived (both known once
-// the defaults have run, which come first).
+// One configuration. `t0_scale` > 0: the method's interval is that multiple of the one its
+// defaults derived; `cascades_delta`: that many cascades more than the defaults derived;
+// `voxel_scale` > 0: the grid's voxel that multiple of its default (all known once the method's
+// defaults have run, which come first).
 struct Run {
   std::string label, curve;
   sl::RenderOptions options;
   double t0_scale = 0;
   int cascades_delta = 0;
+  double voxel_scale = 0;
 };
+
+// The probe grid at its defaults, then (unless quick) the voxel at half and twice its size, s0
+// and Q0 each way, t0 at half and twice, the bilinear fix and interval extension.
+void add_grid_runs(std::vector<Run>& runs, bool quick) {
+  auto grid = [&](const std::string& label, auto&& set, double t0_scale = 0,
+                  double voxel_scale = 0) {
+    sl::RenderOptions o;
+    o.method = sl::Method::grid;
+    set(o.grid);
+    runs.push_back({label, "", o, t0_scale, 0, voxel_scale});
+  };
+  using G = sl::GridOptions;
+  grid("grid (defaults)", [](G&) {});
+  if (quick) return;
+  for (double k : {0.5, 2.0})
+    grid(
+        "grid voxel", [](G&) {}, 0, k);
+  grid("grid --probe-spacing 1", [](G& g) { g.probe_spacing = 1; });
+  grid("grid --probe-spacing 4", [](G& g) { g.probe_spacing = 4; });
+  grid("grid --directions 64", [](G& g) { g.directions = 64; });
+  for (double k : {0.5, 2.0})
+    grid(
+        "grid t0", [](G&) {}, k);
+  grid("grid --fix bilinear", [](G& g) { g.fix = true; });
+  grid("grid --extend", [](G& g) { g.extend_length = 8; });
+}
 
 // The path tracer at 1, 4, 16, ... samples per pixel, SPWI at its defaults, then (unless quick)
 // each merge, t0 from 0.25x to 2x, s0 and Q0 each way, pre-averaging, the thesis'
 // disjoint intervals and its gather without normals, the per-probe gather, branching 16, the
-// depth bias, the bilateral thresholds and one cascade fewer and more, and a dense setting.
+// depth bias, the bilateral thresholds and one cascade fewer and more, and a dense setting; then
+// the probe grid's runs.
 std::vector<Run> default_runs(int max_spp, bool quick) {
   std::vector<Run> runs;
   for (int spp = 1; spp <= max_spp; spp *= 4) {
@@ -89,7 +118,10 @@ std::vector<Run> default_runs(int max_spp, bool quick) {
   };
   using S = sl::SpwiOptions;
   spwi("spwi (defaults)", [](S&) {});
-  if (quick) return runs;
+  if (quick) {
+    add_grid_runs(runs, true);
+    return runs;
+  }
   for (sl::SpwiMerge m : {sl::SpwiMerge::bilinear, sl::SpwiMerge::bilateral, sl::SpwiMerge::fix,
                           sl::SpwiMerge::minmax})
     spwi(std::string("spwi --merge ") + sl::to_string(m), [m](S& s) { s.merge = m; });
@@ -125,20 +157,19 @@ std::vector<Run> default_runs(int max_spp, bool quick) {
     s.probe_spacing = 2;
     s.directions = 256;
   });
+  add_grid_runs(runs, false);
   return runs;
 }
 
 }  // namespace
 
 int run_quality3d(const QualityArgs& a) {
-  if (a.bounces != 1)
-    return fail(a.scene + ": --bounces " + std::to_string(a.bounces) +
-                ": the 3D study runs at one bounce for now (SPWI's later bounces come from the "
-                "probe grid's radiance cache, which has no study yet); use --bounces 1");
   Expected<sl::Scene> scene = sl::load_scene(a.scene);
   if (!scene) return fail(scene.error().message);
   quality_detail::StudyOutput output{a};
-  if (Status s = output.prepare("3d/"); !s) return fail(s.error().message);
+  // One section per scene and bounce count.
+  if (Status s = output.prepare("3d/", a.bounces > 1 ? "-b" + std::to_string(a.bounces) : ""); !s)
+    return fail(s.error().message);
   const int w = scene->camera.width, h = scene->camera.height;
 
   // The reference, cached under a name that holds everything it depends on; its seed differs
@@ -176,22 +207,38 @@ int run_quality3d(const QualityArgs& a) {
 
   std::vector<study::Row> rows;
   std::vector<quality_detail::Montage> montages;
-  float default_t0 = 0;
+  float default_t0 = 0, grid_t0 = 0, grid_voxel = 0;
   int default_cascades = 0;
+  std::vector<sl::Method> refused;  // methods whose defaults refused the scene (spwi: fog)
   for (Run& run : default_runs(a.max_spp, a.quick)) {
     sl::RenderOptions o = run.options;
     o.threads = a.threads;
+    o.bounces = a.bounces;
+    if (std::find(refused.begin(), refused.end(), o.method) != refused.end()) continue;
+    const bool grid = o.method == sl::Method::grid;
     if (run.cascades_delta != 0) {
       o.spwi.cascades = std::max(1, default_cascades + run.cascades_delta);
       run.label += (run.cascades_delta > 0 ? " +" : " ") + std::to_string(run.cascades_delta) +
                    " (--cascades " + std::to_string(o.spwi.cascades) + ")";
     }
     if (run.t0_scale > 0) {
-      o.spwi.interval = float(run.t0_scale * default_t0);
-      run.label += " " + io::format_rounded(run.t0_scale) + "x (--interval " +
-                   io::format_rounded(o.spwi.interval) + ")";
+      float& t0 = grid ? o.grid.interval : o.spwi.interval;
+      t0 = float(run.t0_scale * (grid ? grid_t0 : default_t0));
+      run.label +=
+          " " + io::format_rounded(run.t0_scale) + "x (--interval " + io::format_rounded(t0) + ")";
+    }
+    if (run.voxel_scale > 0) {
+      o.grid.voxel = float(run.voxel_scale * grid_voxel);
+      run.label += " " + io::format_rounded(run.voxel_scale) + "x (--voxel " +
+                   io::format_rounded(o.grid.voxel) + ")";
     }
     Expected<sl::RenderResult> r = sl::render(*scene, o);
+    if (!r && run.label.find("(defaults)") != std::string::npos) {
+      // A method that cannot carry the scene (SPWI and fog): its runs are left out, said here.
+      std::printf("  %-44s refused: %s\n", run.label.c_str(), r.error().message.c_str());
+      refused.push_back(o.method);
+      continue;
+    }
     if (!r) return fail(a.scene + ": " + run.label + ": " + r.error().message);
     // Every pixel counts: the camera's image, sky included.
     Expected<ErrorMetrics> m = compare_images(r->radiance, reference);
@@ -204,15 +251,24 @@ int run_quality3d(const QualityArgs& a) {
     if (run.label == "spwi (defaults)") {
       default_t0 = r->options.spwi.interval;
       default_cascades = r->options.spwi.cascades;
+    }
+    if (run.label == "grid (defaults)") {
+      grid_t0 = r->options.grid.interval;
+      grid_voxel = r->options.grid.voxel;
+    }
+    if (run.label == "spwi (defaults)" || run.label == "grid (defaults)") {
       flatland::MontageOptions mo;
-      mo.test_label = "spwi (defaults)";
+      mo.test_label = run.label;
       mo.reference_label = "path tracer, " + std::to_string(a.reference_spp) + " spp";
       mo.radiance = true;
       Expected<ImageRgb8> montage =
           flatland::comparison_montage(r->radiance, reference, nullptr, mo);
       if (!montage) return fail(montage.error().message);
+      const std::string method = sl::to_string(o.method);
       montages.push_back(
-          {"spwi_vs_reference.png", "SPWI at its defaults against the reference", *montage});
+          {method + "_vs_reference.png",
+           std::string(grid ? "the probe grid" : "SPWI") + " at its defaults against the reference",
+           *montage});
     }
   }
   return output.finish(rows, ref, montages);

@@ -78,8 +78,8 @@ std::function<void(const RenderProgress&)> reference_progress() {
   };
 }
 
-Status StudyOutput::prepare(const std::string& prefix) {
-  section = prefix + fs::path(args.scene).stem().string();
+Status StudyOutput::prepare(const std::string& prefix, const std::string& suffix) {
+  section = prefix + fs::path(args.scene).stem().string() + suffix;
   if (!args.doc.empty())
     if (Expected<std::string> d = spliced_doc(""); !d) return d.error();
   cache = args.cache.empty() ? (fs::path(args.out) / "cache").string() : args.cache;

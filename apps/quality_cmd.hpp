@@ -57,12 +57,12 @@ std::function<void(const penumbra::RenderProgress&)> reference_progress();
 struct StudyOutput {
   explicit StudyOutput(const QualityArgs& a) : args(a) {}
   const QualityArgs& args;
-  std::string section;  // `prefix` and the scene file's name without .json
+  std::string section;  // `prefix`, the scene file's name without .json, `suffix`
   std::string cache;    // the cached references' folder
 
   // Checks the document has the section's markers and creates the folders. 3D scenes' sections
   // have the prefix "3d/", so that scenes/cornell.json and scenes/3d/cornell.json differ.
-  penumbra::Status prepare(const std::string& prefix = "");
+  penumbra::Status prepare(const std::string& prefix = "", const std::string& suffix = "");
   // Equal-error times and the reference's own error into `rows` and `ref`; writes the CSV, the
   // table, the plot and `montages`, then the document's section. Returns the exit code.
   int finish(std::vector<penumbra::study::Row>& rows, penumbra::study::Reference& ref,

@@ -150,12 +150,13 @@ Scene plane(float albedo, float radius = 1000) {
   return s;
 }
 
-Case sphere_light() {
-  Case c{"sphere light",
+Case sphere_light(float radius = 1000) {
+  Case c{radius < 1000 ? "sphere light, plane radius " + fmt("%g", radius) : "sphere light",
          "a sphere of radius 0.4 at (-0.4, 1.6, 0.2) emitting Le = (5, 4, 3) over the plane y = 0 "
-         "(a disk of radius 1000) of albedo 0.7; black sky; 96x72",
+         "(a disk of radius " +
+             fmt("%g", radius) + ") of albedo 0.7; black sky; 96x72",
          "a Le (r / d)^2 cos(theta), d the distance to the centre",
-         plane(0.7f),
+         plane(0.7f, radius),
          1,
          {}};
   const Vec3 o{-0.4f, 1.6f, 0.2f};
@@ -172,14 +173,15 @@ Case sphere_light() {
 // The plane's radius sets the scene's scale, and with it the offset of rays leaving the plane
 // (RayScene::spawn): 1000 as in the other scenes, or 20 to show what that offset costs.
 Case sky(float radius) {
-  Case c{radius < 1000 ? "sky, black sphere, plane radius 20" : "sky, black sphere",
-         "a uniform sky L = (1.5, 1, 0.5) over the plane y = 0 (a disk of radius " +
-             fmt("%g", radius) +
-             ") of albedo 0.6; a black sphere of radius 0.6 at (0.5, 1.2, -0.3); 96x72",
-         "a L (1 - (r / d)^2 cos(theta))",
-         plane(0.6f, radius),
-         1,
-         {}};
+  Case c{
+      radius < 1000 ? "sky, black sphere, plane radius " + fmt("%g", radius) : "sky, black sphere",
+      "a uniform sky L = (1.5, 1, 0.5) over the plane y = 0 (a disk of radius " +
+          fmt("%g", radius) +
+          ") of albedo 0.6; a black sphere of radius 0.6 at (0.5, 1.2, -0.3); 96x72",
+      "a L (1 - (r / d)^2 cos(theta))",
+      plane(0.6f, radius),
+      1,
+      {}};
   c.picture = radius >= 1000;
   const Rgb l{1.5f, 1, 0.5f};
   c.scene.sky = {l, l, l};
@@ -374,6 +376,54 @@ Expected<std::string> spwi_table(const Case& c, std::ostringstream& csv) {
        << fmt("%.3g%%", 100 * m.rel_rmse) << " | " << fmt("%+.2g%%", 100 * m.rel_bias) << " | "
        << fmt("%.3g%%", 100 * m.max_rel) << " | " << fmt("%.0f", r->time_ms) << " |\n";
     csv << '"' << c.name << "\",\"" << run.label << "\"," << fmt("%.6g", r->options.spwi.interval)
+        << ',' << fmt("%.6g", m.rel_rmse) << ',' << fmt("%.6g", m.rel_bias) << ','
+        << fmt("%.6g", m.max_rel) << ',' << fmt("%.1f", r->time_ms) << '\n';
+  }
+  md << "\n";
+  return md.str();
+}
+
+// The probe grid on the closed-form scenes: its defaults, the voxel at half and twice its size,
+// s0 and Q0 each way, the bilinear fix and interval extension; a markdown table per scene (at
+// the scene's bounce count).
+struct GridRun {
+  std::string label;
+  std::function<void(GridOptions&)> set;
+  double voxel_scale = 0;
+};
+
+Expected<std::string> grid_table(const Case& c, std::ostringstream& csv) {
+  Expected<std::vector<std::optional<Rgb>>> want = closed_form(c);
+  if (!want) return want.error();
+  const std::vector<GridRun> runs = {
+      {"defaults", {}},
+      {"voxel 0.5x", {}, 0.5},
+      {"voxel 2x", {}, 2.0},
+      {"--probe-spacing 1", [](GridOptions& g) { g.probe_spacing = 1; }},
+      {"--probe-spacing 4", [](GridOptions& g) { g.probe_spacing = 4; }},
+      {"--directions 64", [](GridOptions& g) { g.directions = 64; }},
+      {"--fix bilinear", [](GridOptions& g) { g.fix = true; }},
+      {"--extend", [](GridOptions& g) { g.extend_length = 8; }}};
+  std::ostringstream md;
+  md << "**" << c.name << "** (the probe grid, " << c.bounces
+     << (c.bounces > 1 ? " bounces" : " bounce") << ").\n\n"
+     << "| configuration | voxel | rel. RMSE | rel. bias | max rel. error | time (ms) |\n"
+     << "| --- | ---: | ---: | ---: | ---: | ---: |\n";
+  float default_voxel = 0;
+  for (const GridRun& run : runs) {
+    RenderOptions o;
+    o.method = Method::grid;
+    o.bounces = c.bounces;
+    if (run.set) run.set(o.grid);
+    if (run.voxel_scale > 0) o.grid.voxel = float(run.voxel_scale * default_voxel);
+    Expected<RenderResult> r = render(c.scene, o);
+    if (!r) return Error{c.name + ", " + run.label + ": " + r.error().message};
+    if (default_voxel == 0) default_voxel = r->options.grid.voxel;  // the defaults run first
+    const Metrics m = measure(r->radiance, *want);
+    md << "| " << run.label << " | " << fmt("%.3g", r->options.grid.voxel) << " | "
+       << fmt("%.3g%%", 100 * m.rel_rmse) << " | " << fmt("%+.2g%%", 100 * m.rel_bias) << " | "
+       << fmt("%.3g%%", 100 * m.max_rel) << " | " << fmt("%.0f", r->time_ms) << " |\n";
+    csv << '"' << c.name << "\",\"" << run.label << "\"," << fmt("%.6g", r->options.grid.voxel)
         << ',' << fmt("%.6g", m.rel_rmse) << ',' << fmt("%.6g", m.rel_bias) << ','
         << fmt("%.6g", m.max_rel) << ',' << fmt("%.1f", r->time_ms) << '\n';
   }
@@ -599,9 +649,11 @@ int main(int argc, char** argv) {
   app.add_option("folder", dir, "Where the CSV, the plot and the pictures go (must exist)")
       ->required();
   app.add_flag("--quick", quick, "Up to 64 samples per pixel instead of 1024");
-  bool spwi_only = false;
+  bool spwi_only = false, grid_only = false;
   app.add_flag("--spwi-only", spwi_only,
                "Only SPWI's table (spwi3d.md, spwi3d.csv), not the path tracer's curves");
+  app.add_flag("--grid-only", grid_only,
+               "Only the probe grid's table (grid3d.md, grid3d.csv), not the path tracer's");
   try {
     app.parse(argc, argv);
   } catch (const CLI::Success& e) {
@@ -615,6 +667,41 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "%s\n", st.error().message.c_str());
       return kCannotWrite;
     }
+
+  // The probe grid: the enclosures at 1 to 4 bounces (with fog, and a sphere's), the sphere
+  // light and the sky over planes small enough for its voxels, the sun, the fog slabs.
+  if (grid_only) {
+    std::ostringstream md, csv;
+    csv << "scene,configuration,voxel,relative_rmse,relative_bias,max_relative_error,time_ms\n";
+    md << "The probe grid against the closed forms: relative RMSE over the pixels the closed "
+          "form covers, defaults unless the row says otherwise.\n\n";
+    std::vector<Case> cases;
+    for (int n = 1; n <= 4; ++n) cases.push_back(enclosure(n, Shell::box));
+    cases.push_back(enclosure(4, Shell::box_fog));
+    cases.push_back(enclosure(4, Shell::sphere));
+    cases.push_back(sphere_light(4));
+    cases.push_back(sky(4));
+    cases.push_back(sun());
+    cases.push_back(slab(false));
+    cases.push_back(slab(true));
+    for (const Case& c : cases) {
+      Expected<std::string> table = grid_table(c, csv);
+      if (!table) {
+        std::fprintf(stderr, "%s\n", table.error().message.c_str());
+        return 1;
+      }
+      std::fputs(table->c_str(), stdout);
+      std::fflush(stdout);
+      md << *table;
+    }
+    if (Status st = io::write_text_files(
+            {{dir + "/grid3d.csv", csv.str()}, {dir + "/grid3d.md", md.str()}});
+        !st) {
+      std::fprintf(stderr, "%s\n", st.error().message.c_str());
+      return kCannotWrite;
+    }
+    return 0;
+  }
 
   // SPWI on the one-bounce scenes without fog.
   {

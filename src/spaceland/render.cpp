@@ -84,7 +84,8 @@ Expected<ImageRgb> grid_solve(const Scene& scene, const RayScene& rays, const GB
 std::uint64_t grid_bytes(const Scene& scene, const RenderOptions& options) {
   const std::array<double, 3> d =
       grid::grid_dims(grid::grid_bounds(scene), grid::voxel_size(scene, options));
-  return std::uint64_t(std::min(d[0] * d[1] * d[2] * double(grid::voxel_bytes(1)), 1.8e19));
+  return std::uint64_t(
+      std::min(d[0] * d[1] * d[2] * double(grid::voxel_bytes(1, options.bounces > 1)), 1.8e19));
 }
 
 Status no_check(const Scene&, const RenderOptions&) {
@@ -119,8 +120,8 @@ const MethodEntry kMethods[] = {
      spwi_bytes,
      spwi_solve},
     {{Method::grid, "grid",
-      "the world-space probe grid (seed 001 4.3): radiance cascades over the scene's voxels "
-      "(under way)"},
+      "the world-space probe grid (seed 001 4.3): radiance cascades over the scene's voxels, "
+      "fog and light shafts, later bounces, the radiance cache spwi's come from"},
      grid::check,
      grid_bytes,
      grid_solve},

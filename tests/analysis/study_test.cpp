@@ -163,8 +163,9 @@ TEST(Study, CommandWritesEverythingAndReusesTheReference) {
   EXPECT_FALSE(fs::exists(dir.file("none")));
 }
 
-// The same command on a 3D scene: the path tracer's curve and SPWI's variants, every pixel counted.
-TEST(Study, ThreeDSceneComparesSpwiWithThePathTracer) {
+// The same command on a 3D scene: the path tracer's curve, SPWI's and the probe grid's variants,
+// every pixel counted; at two bounces, and with fog (which SPWI cannot carry).
+TEST(Study, ThreeDSceneComparesSpwiAndTheGridWithThePathTracer) {
   testing::TestDir dir("study3d");
   const std::string text = R"({
     "penumbra": 1, "dimensions": 3,
@@ -181,13 +182,15 @@ TEST(Study, ThreeDSceneComparesSpwiWithThePathTracer) {
                                          "--reference-spp", "64"};
   testing::CliResult r = testing::run_cli(args, dir.root());
   ASSERT_EQ(r.status, 0) << r.err;
-  for (const char* f :
-       {"quality.csv", "quality.md", "quality.svg", "quality.png", "spwi_vs_reference.png"})
+  for (const char* f : {"quality.csv", "quality.md", "quality.svg", "quality.png",
+                        "spwi_vs_reference.png", "grid_vs_reference.png"})
     EXPECT_TRUE(fs::is_regular_file(fs::path(out) / f)) << f;
   const std::string md = testing::slurp(fs::path(out) / "quality.md");
   EXPECT_NE(md.find("64 samples per pixel"), std::string::npos) << md;
-  for (const char* label : {"| pt 16 spp |", "| spwi (defaults) |", "| spwi --merge fix |",
-                            "| spwi t0 2x (--interval ", "| spwi --preaverage |"})
+  for (const char* label :
+       {"| pt 16 spp |", "| spwi (defaults) |", "| spwi --merge fix |", "| spwi t0 2x (--interval ",
+        "| spwi --preaverage |", "| grid (defaults) |", "| grid voxel 0.5x (--voxel ",
+        "| grid --fix bilinear |", "| grid --extend |", "| grid t0 2x (--interval "})
     EXPECT_NE(md.find(label), std::string::npos) << label << "\n" << md;
   // The path tracer's error falls with its samples (the curve the equal-error times read).
   std::vector<double> pt;
@@ -202,22 +205,36 @@ TEST(Study, ThreeDSceneComparesSpwiWithThePathTracer) {
   ASSERT_EQ(pt.size(), 3u);
   EXPECT_GT(pt[0], 1.5 * pt[1]);
   EXPECT_GT(pt[1], 1.5 * pt[2]);
-  // The reference is cached, and a changed sky needs a new one.
-  r = testing::run_cli(args, dir.root());
+  // The reference is cached, and a changed sky needs a new one (the variants left out).
+  std::vector<std::string> quick = args;
+  quick.push_back("--quick");
+  r = testing::run_cli(quick, dir.root());
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_NE(r.out.find("(cached)"), std::string::npos) << r.out;
   std::string brighter = text;
   brighter.replace(brighter.find("[0.1, 0.1, 0.2]"), 15, "[0.2, 0.1, 0.2]");
   dir.write("s3.json", brighter);
-  r = testing::run_cli(args, dir.root());
+  r = testing::run_cli(quick, dir.root());
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_NE(r.out.find("rendering 64 spp"), std::string::npos) << r.out;
-  // SPWI has one bounce for now: more is refused before anything is rendered.
-  r = testing::run_cli({"bench-quality", scene, "-o", dir.file("b2"), "--bounces", "2"},
+  // Two bounces: the reference and every method at two; a fog scene leaves SPWI out, said so.
+  std::string foggy = text;
+  foggy.replace(foggy.find("\"objects\""), 0,
+                R"("media": [ { "type": "box", "center": [0, 0.5, 0], "size": [2, 1, 2],
+                                "extinction": 0.5, "albedo": [0.8, 0.8, 0.8] } ],
+                )");
+  const std::string fog = dir.write("fog3.json", foggy);
+  r = testing::run_cli({"bench-quality", fog, "-o", dir.file("b2"), "--bounces", "2", "--quick",
+                        "--reference-spp", "16"},
                        dir.root());
-  EXPECT_EQ(r.status, 1);
-  EXPECT_NE(r.err.find("s3.json: --bounces 2"), std::string::npos) << r.err;
-  EXPECT_FALSE(fs::exists(dir.file("b2")));
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("spwi (defaults)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("refused: spwi cannot carry fog"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("-b2-16spp.pfm"), std::string::npos) << r.out;
+  const std::string md2 = testing::slurp(fs::path(dir.file("b2")) / "quality.md");
+  EXPECT_NE(md2.find("| grid (defaults) |"), std::string::npos) << md2;
+  EXPECT_EQ(md2.find("| spwi"), std::string::npos) << md2;
+  EXPECT_TRUE(fs::is_regular_file(fs::path(dir.file("b2")) / "grid_vs_reference.png"));
 }
 
 }  // namespace

@@ -257,7 +257,9 @@ Expected<Solution> solve(const Voxels& v, const Background& bg, const GridOption
                  " MiB; use a larger --voxel or fewer --directions"};
 
   std::vector<Rgb> upper, lower;
+  std::vector<double> ms(plan.size());
   for (int i = int(plan.size()) - 1; i >= 0; --i) {
+    Stopwatch watch;
     const CascadePlan& c = plan[std::size_t(i)];
     const bool top = i == int(plan.size()) - 1;
     const std::vector<Vec3> dirs = octahedral::map_directions(c.side);
@@ -397,9 +399,11 @@ Expected<Solution> solve(const Voxels& v, const Background& bg, const GridOption
         }
     });
     std::swap(upper, lower);
+    ms[std::size_t(i)] = watch.ms();
   }
 
   Solution sol;
+  sol.cascade_ms_ = std::move(ms);
   sol.voxels_ = &v;
   sol.plan_ = plan;
   sol.dirs_ = octahedral::map_directions(plan[0].side);
@@ -728,7 +732,7 @@ float voxel_size(const Scene& scene, const RenderOptions& options) {
 namespace {
 
 // The light reaching the camera along pixel k's ray: `behind` (what its hit, or the sky, sends)
-// through the fog, plus what the fog emits and scatters towards the camera, integrated a voxel's
+// through the fog, plus what the fog emits and scatters towards the camera, integrated a step's
 // length at a time (Beer-Lambert within each step, the in-scattered radiance at its middle).
 Rgb through_fog(const Media& media, const Solution& sol, const SunLight& sun, float step,
                 Vec3 origin, Vec3 dir, float t_end, Rgb behind, std::vector<MediumPiece>& pieces,
@@ -815,7 +819,9 @@ Expected<ImageRgb> render(const Scene& scene, const RayScene& rays, const GBuffe
         return l;
       });
   if (!media.empty()) {
-    // The fog between the camera and what each pixel shows.
+    // The fog between the camera and what each pixel shows, a probe spacing a step (the
+    // in-scattered light's own resolution).
+    const float step = voxels->size * float(options.grid.probe_spacing);
     std::atomic<std::uint64_t> traced{0};
     parallel_for(g.height, [&](int y) {
       std::vector<MediumPiece> pieces;
@@ -824,8 +830,8 @@ Expected<ImageRgb> render(const Scene& scene, const RayScene& rays, const GBuffe
         const std::size_t k = std::size_t(y) * std::size_t(g.width) + std::size_t(x);
         const float t_end = g.found[k] ? g.hits[k].t : kInfinity;
         img.set(x, y,
-                through_fog(media, *sol, sun, voxels->size, scene.camera.position, g.directions[k],
-                            t_end, img.at(x, y), pieces, local));
+                through_fog(media, *sol, sun, step, scene.camera.position, g.directions[k], t_end,
+                            img.at(x, y), pieces, local));
       }
       traced.fetch_add(local, std::memory_order_relaxed);
     });

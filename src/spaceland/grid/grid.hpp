@@ -52,6 +52,8 @@ class Solution {
   bool sphere_radiance(Vec3 p, Rgb& out) const;
 
   const std::vector<CascadePlan>& cascades() const { return plan_; }
+  // Milliseconds each cascade took to trace and merge (extension included), cascade 0 first.
+  const std::vector<double>& cascade_ms() const { return cascade_ms_; }
 
  private:
   friend Expected<Solution> solve(const Voxels&, const Background&, const GridOptions&,
@@ -62,6 +64,7 @@ class Solution {
   std::vector<Rgb> radiance_;        // cascade 0, probe-major: [probe * directions + d]
   std::vector<Rgb> sphere_;          // cascade 0: each probe's mean over its directions
   std::vector<std::uint8_t> valid_;  // cascade-0 probes outside opaque voxels
+  std::vector<double> cascade_ms_;
 };
 
 // Traces and merges every cascade, top down; rays that leave the grid see the sky (the sun is
@@ -156,7 +159,7 @@ struct Stats {
 // The camera's image: each pixel's first hit shows its emission, plus albedo times the mean
 // radiance the probes around it bring, plus the sun through one shadow ray (and the fog's
 // transmittance). With N bounces the cascades are solved N times, each after add_bounce with the
-// last solution. Through fog, the camera ray takes the fog's transmittance and, a voxel's length
+// last solution. Through fog, the camera ray takes the fog's transmittance and, a probe spacing
 // at a time, what the fog emits and scatters towards it (its scattering coefficient times
 // sphere_radiance, plus the sun's irradiance over 4 pi where it reaches).
 Expected<ImageRgb> render(const Scene& scene, const RayScene& rays, const GBuffer& g,

@@ -191,6 +191,7 @@ int run_quality3d(const QualityArgs& a) {
   } else {
     sl::RenderOptions o;
     o.pt.spp = a.reference_spp;
+    o.bounces = a.bounces;
     o.pt.seed = 0x5eed;
     o.threads = a.threads;
     o.progress = quality_detail::reference_progress();

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "bench_scenes.hpp"
+#include "core/median.hpp"
 #include "core/timer.hpp"
 #include "flatland/hrc/hrc.hpp"
 #include "penumbra/flatland/render.hpp"
@@ -24,12 +25,6 @@ namespace {
 
 using namespace penumbra;
 using namespace penumbra::flatland;
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n == 0 ? 0.0 : n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 
 // Bytes HRC's passes must move at least (4 values per T element, 3 per R element, of `value`
 // bytes each), over the four quadrants.

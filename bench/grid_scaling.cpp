@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "core/median.hpp"
 #include "core/timer.hpp"
 #include "penumbra/spaceland/scene.hpp"
 #include "spaceland/camera.hpp"
@@ -22,12 +23,6 @@ namespace {
 
 using namespace penumbra;
 using namespace penumbra::spaceland;
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n == 0 ? 0.0 : n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 
 struct Timed {
   double total = 0;

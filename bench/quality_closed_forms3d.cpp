@@ -331,104 +331,86 @@ Expected<std::vector<std::optional<Rgb>>> closed_form(const Case& c) {
   return want;
 }
 
-// SPWI (one bounce) on the closed-form scenes it can render: each merge, then the settings
-// docs/QUALITY.md studies, as a markdown table per scene. `t0_scale` > 0: that multiple of the
-// interval the defaults derived.
-struct SpwiRun {
+// A configuration of a method's table: what it changes from the defaults, given the options
+// the defaults' render used (which run first: derived lengths are known then).
+struct TableRun {
   std::string label;
-  std::function<void(SpwiOptions&)> set;
-  double t0_scale = 0;
+  std::function<void(RenderOptions&, const RenderOptions& defaults)> set;
 };
 
-std::vector<SpwiRun> spwi_runs() {
-  std::vector<SpwiRun> runs = {{"defaults (bilinear3d)", [](SpwiOptions&) {}}};
-  for (SpwiMerge m : {SpwiMerge::bilinear, SpwiMerge::bilateral, SpwiMerge::fix, SpwiMerge::minmax})
-    runs.push_back({std::string("--merge ") + to_string(m), [m](SpwiOptions& o) { o.merge = m; }});
-  for (double k : {0.25, 0.5, 2.0}) runs.push_back({"t0 " + fmt("%g", k) + "x", {}, k});
-  runs.push_back({"--probe-spacing 2", [](SpwiOptions& o) { o.probe_spacing = 2; }});
-  runs.push_back({"--directions 256", [](SpwiOptions& o) { o.directions = 256; }});
-  runs.push_back({"--preaverage", [](SpwiOptions& o) { o.preaverage = true; }});
-  runs.push_back({"--branching 16", [](SpwiOptions& o) { o.branching = 16; }});
-  runs.push_back({"--disjoint", [](SpwiOptions& o) { o.overlap = false; }});
-  runs.push_back({"--sun cascades", [](SpwiOptions& o) { o.sun = SpwiSun::cascades; }});
-  return runs;
-}
-
-// The table of one scene; `csv` gets a line per run.
-Expected<std::string> spwi_table(const Case& c, std::ostringstream& csv) {
+// One scene's table for `method` at the scene's bounce count: a row per run; `column` names the
+// derived length shown (t0 or the voxel) and reads it from the options used. `csv` gets a line
+// per run.
+Expected<std::string> method_table(const Case& c, Method method, const std::string& title,
+                                   const std::vector<TableRun>& runs, const char* column,
+                                   float (*length)(const RenderOptions&), std::ostringstream& csv) {
   Expected<std::vector<std::optional<Rgb>>> want = closed_form(c);
   if (!want) return want.error();
   std::ostringstream md;
-  md << "**" << c.name << "** (SPWI, one bounce).\n\n"
-     << "| configuration | t0 | rel. RMSE | rel. bias | max rel. error | time (ms) |\n"
+  md << "**" << c.name << "** (" << title << ", " << c.bounces
+     << (c.bounces > 1 ? " bounces" : " bounce") << ").\n\n"
+     << "| configuration | " << column
+     << " | rel. RMSE | rel. bias | max rel. error | time (ms) |\n"
      << "| --- | ---: | ---: | ---: | ---: | ---: |\n";
-  float default_t0 = 0;
-  for (const SpwiRun& run : spwi_runs()) {
+  RenderOptions defaults;
+  for (std::size_t k = 0; k < runs.size(); ++k) {
     RenderOptions o;
-    o.method = Method::spwi;
-    if (run.set) run.set(o.spwi);
-    if (run.t0_scale > 0) o.spwi.interval = float(run.t0_scale * default_t0);
+    o.method = method;
+    o.bounces = c.bounces;
+    if (k > 0) runs[k].set(o, defaults);
     Expected<RenderResult> r = render(c.scene, o);
-    if (!r) return Error{c.name + ", " + run.label + ": " + r.error().message};
-    if (default_t0 == 0) default_t0 = r->options.spwi.interval;  // the defaults run first
+    if (!r) return Error{c.name + ", " + runs[k].label + ": " + r.error().message};
+    if (k == 0) defaults = r->options;
     const Metrics m = measure(r->radiance, *want);
-    md << "| " << run.label << " | " << fmt("%.3g", r->options.spwi.interval) << " | "
+    const RenderOptions& used = r->options;
+    md << "| " << runs[k].label << " | " << fmt("%.3g", length(used)) << " | "
        << fmt("%.3g%%", 100 * m.rel_rmse) << " | " << fmt("%+.2g%%", 100 * m.rel_bias) << " | "
        << fmt("%.3g%%", 100 * m.max_rel) << " | " << fmt("%.0f", r->time_ms) << " |\n";
-    csv << '"' << c.name << "\",\"" << run.label << "\"," << fmt("%.6g", r->options.spwi.interval)
-        << ',' << fmt("%.6g", m.rel_rmse) << ',' << fmt("%.6g", m.rel_bias) << ','
+    csv << '"' << c.name << "\",\"" << runs[k].label << "\"," << fmt("%.6g", length(used)) << ','
+        << fmt("%.6g", m.rel_rmse) << ',' << fmt("%.6g", m.rel_bias) << ','
         << fmt("%.6g", m.max_rel) << ',' << fmt("%.1f", r->time_ms) << '\n';
   }
   md << "\n";
   return md.str();
+}
+
+// SPWI (one bounce) on the closed-form scenes it can render: each merge, then the settings
+// docs/QUALITY.md studies.
+Expected<std::string> spwi_table(const Case& c, std::ostringstream& csv) {
+  using O = RenderOptions;
+  std::vector<TableRun> runs = {{"defaults (bilinear3d)", {}}};
+  for (SpwiMerge m : {SpwiMerge::bilinear, SpwiMerge::bilateral, SpwiMerge::fix, SpwiMerge::minmax})
+    runs.push_back(
+        {std::string("--merge ") + to_string(m), [m](O& o, const O&) { o.spwi.merge = m; }});
+  for (double k : {0.25, 0.5, 2.0})
+    runs.push_back({"t0 " + fmt("%g", k) + "x",
+                    [k](O& o, const O& d) { o.spwi.interval = float(k * d.spwi.interval); }});
+  runs.push_back({"--probe-spacing 2", [](O& o, const O&) { o.spwi.probe_spacing = 2; }});
+  runs.push_back({"--directions 256", [](O& o, const O&) { o.spwi.directions = 256; }});
+  runs.push_back({"--preaverage", [](O& o, const O&) { o.spwi.preaverage = true; }});
+  runs.push_back({"--branching 16", [](O& o, const O&) { o.spwi.branching = 16; }});
+  runs.push_back({"--disjoint", [](O& o, const O&) { o.spwi.overlap = false; }});
+  runs.push_back({"--sun cascades", [](O& o, const O&) { o.spwi.sun = SpwiSun::cascades; }});
+  return method_table(
+      c, Method::spwi, "SPWI", runs, "t0", [](const O& o) { return o.spwi.interval; }, csv);
 }
 
 // The probe grid on the closed-form scenes: its defaults, the voxel at half and twice its size,
-// s0 and Q0 each way, the bilinear fix and interval extension; a markdown table per scene (at
-// the scene's bounce count).
-struct GridRun {
-  std::string label;
-  std::function<void(GridOptions&)> set;
-  double voxel_scale = 0;
-};
-
+// s0 and Q0 each way, the bilinear fix and interval extension.
 Expected<std::string> grid_table(const Case& c, std::ostringstream& csv) {
-  Expected<std::vector<std::optional<Rgb>>> want = closed_form(c);
-  if (!want) return want.error();
-  const std::vector<GridRun> runs = {
+  using O = RenderOptions;
+  const std::vector<TableRun> runs = {
       {"defaults", {}},
-      {"voxel 0.5x", {}, 0.5},
-      {"voxel 2x", {}, 2.0},
-      {"--probe-spacing 1", [](GridOptions& g) { g.probe_spacing = 1; }},
-      {"--probe-spacing 4", [](GridOptions& g) { g.probe_spacing = 4; }},
-      {"--directions 64", [](GridOptions& g) { g.directions = 64; }},
-      {"--fix bilinear", [](GridOptions& g) { g.fix = true; }},
-      {"--extend", [](GridOptions& g) { g.extend_length = 8; }}};
-  std::ostringstream md;
-  md << "**" << c.name << "** (the probe grid, " << c.bounces
-     << (c.bounces > 1 ? " bounces" : " bounce") << ").\n\n"
-     << "| configuration | voxel | rel. RMSE | rel. bias | max rel. error | time (ms) |\n"
-     << "| --- | ---: | ---: | ---: | ---: | ---: |\n";
-  float default_voxel = 0;
-  for (const GridRun& run : runs) {
-    RenderOptions o;
-    o.method = Method::grid;
-    o.bounces = c.bounces;
-    if (run.set) run.set(o.grid);
-    if (run.voxel_scale > 0) o.grid.voxel = float(run.voxel_scale * default_voxel);
-    Expected<RenderResult> r = render(c.scene, o);
-    if (!r) return Error{c.name + ", " + run.label + ": " + r.error().message};
-    if (default_voxel == 0) default_voxel = r->options.grid.voxel;  // the defaults run first
-    const Metrics m = measure(r->radiance, *want);
-    md << "| " << run.label << " | " << fmt("%.3g", r->options.grid.voxel) << " | "
-       << fmt("%.3g%%", 100 * m.rel_rmse) << " | " << fmt("%+.2g%%", 100 * m.rel_bias) << " | "
-       << fmt("%.3g%%", 100 * m.max_rel) << " | " << fmt("%.0f", r->time_ms) << " |\n";
-    csv << '"' << c.name << "\",\"" << run.label << "\"," << fmt("%.6g", r->options.grid.voxel)
-        << ',' << fmt("%.6g", m.rel_rmse) << ',' << fmt("%.6g", m.rel_bias) << ','
-        << fmt("%.6g", m.max_rel) << ',' << fmt("%.1f", r->time_ms) << '\n';
-  }
-  md << "\n";
-  return md.str();
+      {"voxel 0.5x", [](O& o, const O& d) { o.grid.voxel = 0.5f * d.grid.voxel; }},
+      {"voxel 2x", [](O& o, const O& d) { o.grid.voxel = 2 * d.grid.voxel; }},
+      {"--probe-spacing 1", [](O& o, const O&) { o.grid.probe_spacing = 1; }},
+      {"--probe-spacing 4", [](O& o, const O&) { o.grid.probe_spacing = 4; }},
+      {"--directions 64", [](O& o, const O&) { o.grid.directions = 64; }},
+      {"--fix bilinear", [](O& o, const O&) { o.grid.fix = true; }},
+      {"--extend", [](O& o, const O&) { o.grid.extend_length = 8; }}};
+  return method_table(
+      c, Method::grid, "the probe grid", runs, "voxel", [](const O& o) { return o.grid.voxel; },
+      csv);
 }
 
 // Exponent k of error ~ spp^-k, least squares in log-log over the rows with an error above 0.

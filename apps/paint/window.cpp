@@ -19,6 +19,7 @@
 #include <mutex>
 #include <type_traits>
 
+#include "core/median.hpp"
 #include "core/timer.hpp"
 #include "io/image_io.hpp"
 #include "io/path_util.hpp"
@@ -34,13 +35,6 @@ namespace {
 
 constexpr int kFailure = 1;
 constexpr int kInterrupted = 130;  // SIGINT or SIGTERM: the outputs were still written
-
-double median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 
 // GLFW reports errors through a callback, possibly on the worker thread (glfwPostEmptyEvent).
 std::mutex glfw_error_mutex;

@@ -231,6 +231,41 @@ TEST(Study, ThreeDSceneComparesSpwiAndTheGridWithThePathTracer) {
   EXPECT_NE(r.out.find("spwi (defaults)"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("refused: spwi cannot carry fog"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("-b2-16spp.pfm"), std::string::npos) << r.out;
+  // The reference has the two bounces: inside a white box lit by a lamp, its mean is the
+  // two-bounce image's, not the one-bounce one's.
+  const std::string box = dir.write("box3.json", R"({
+    "penumbra": 1, "dimensions": 3,
+    "camera": { "position": [0, 0, 0.8], "look_at": [0, -0.3, -1], "fov_y": 70, "width": 16,
+                "height": 12 },
+    "materials": { "white": { "albedo": [0.8, 0.8, 0.8] }, "lamp": { "emission": [5, 5, 5] } },
+    "objects": [ { "type": "box", "center": [0, 0, 0], "size": [2, 2, 2], "material": "white" },
+                 { "type": "sphere", "center": [0, 0.6, -0.3], "radius": 0.15,
+                   "material": "lamp" } ]
+  })");
+  r = testing::run_cli({"bench-quality", box, "-o", dir.file("box"), "--bounces", "2", "--quick",
+                        "--reference-spp", "64", "--cache", dir.file("box_cache")},
+                       dir.root());
+  ASSERT_EQ(r.status, 0) << r.err;
+  auto mean = [](const std::string& path) {
+    const Expected<ImageRgb> img = read_rgb_image(path);
+    EXPECT_TRUE(img.ok()) << path;
+    double sum = 0;
+    for (std::size_t k = 0; img.ok() && k < img->size(); ++k) sum += img->data()[k];
+    return img.ok() ? sum / double(img->size()) : 0.0;
+  };
+  std::string cached;
+  for (const auto& f : fs::directory_iterator(dir.file("box_cache"))) cached = f.path().string();
+  EXPECT_NE(cached.find("-b2-64spp.pfm"), std::string::npos) << cached;
+  for (const char* b : {"1", "2"}) {
+    const auto rr = testing::run_cli({"render", box, "--bounces", b, "--spp", "64", "-q", "-o",
+                                      dir.file(std::string("box_b") + b + ".pfm")},
+                                     dir.root());
+    ASSERT_EQ(rr.status, 0) << rr.err;
+  }
+  const double ref = mean(cached), one = mean(dir.file("box_b1.pfm")),
+               two = mean(dir.file("box_b2.pfm"));
+  EXPECT_GT(two, 1.3 * one);
+  EXPECT_LT(std::abs(ref - two), 0.1 * std::abs(two - one)) << ref << " " << one << " " << two;
   const std::string md2 = testing::slurp(fs::path(dir.file("b2")) / "quality.md");
   EXPECT_NE(md2.find("| grid (defaults) |"), std::string::npos) << md2;
   EXPECT_EQ(md2.find("| spwi"), std::string::npos) << md2;

@@ -26,23 +26,14 @@ RenderOptions grid_options(float voxel, int bounces = 1) {
   return o;
 }
 
-// The path tracer's fog-filled enclosure: along any ray (1 - T)(Le + a L') + T (Le + a L') =
-// Le + a L', so every pixel is Le (1 + a + ... + a^N) at N bounces. The fog box covers part of
-// the voxels it crosses (its faces lie off the voxel faces): extinction and emission scale
-// together, so the answer holds there too.
+// The path tracer's fog-filled enclosure (scene_builders.hpp: furnace): every pixel is
+// Le (1 + a + ... + a^N) at N bounces. The fog box covers part of the voxels it crosses (its
+// faces lie off the voxel faces): extinction and emission scale together, so the answer holds
+// there too.
 TEST(GridFog, EnclosureFilledWithMatchingFogGivesTheGeometricSeries) {
-  Scene s;
-  s.camera = camera({0.1f, -0.2f, 0.3f}, {0.5f, 0.4f, -1}, 24, 18, 90);
-  const Rgb le{1.0f, 0.5f, 0.25f};
-  const float a = 0.6f;
-  add_box(s, {-1, -1, -1}, {1, 1.5f, 2}, add_material(s, {a, a, a}, le));
-  Medium m;
-  m.center = {0, 0.2f, 0.4f};
-  m.half_size = {0.8f, 1.0f, 1.2f};
-  m.extinction = {0.5f, 1.0f, 2.0f};
-  m.albedo = {a, a, a};
-  m.emission = {m.extinction.r * le.r, m.extinction.g * le.g, m.extinction.b * le.b};
-  s.media.push_back(m);
+  const Scene s = furnace(true, 24, 18);
+  const Rgb le = s.materials[0].emission;
+  const float a = s.materials[0].albedo.r;
   double want = 1, a_n = 1;
   for (int bounces = 1; bounces <= 4; ++bounces) {
     a_n *= a;
@@ -59,25 +50,13 @@ TEST(GridFog, EnclosureFilledWithMatchingFogGivesTheGeometricSeries) {
   }
 }
 
-// Absorbing grey fog inside an emitting sphere of radius R, seen from its centre at one bounce:
-// the camera ray's transmittance exp(-sigma R) times Le + a/pi E, where the irradiance through
-// the fog is E = 2 pi Le int_0^1 exp(-2 sigma R mu) mu dmu (the chord along cos theta = mu is
-// 2 R mu). The sphere's voxels stand in for its curved surface: measured within 3%.
+// Absorbing grey fog inside an emitting sphere (scene_builders.hpp: absorbing_fog_sphere), one
+// bounce: Beer-Lambert on the camera ray and on the light reaching the wall. The sphere's voxels
+// stand in for its curved surface: measured within 3%.
 TEST(GridFog, AbsorbingFogInsideAnEmittingSphereGivesBeerLambert) {
-  Scene s;
-  const Vec3 o{2.1f, 1.7f, -0.9f};
-  const float r = 1.3f;
-  s.camera = camera(o, o + Vec3{0.3f, 0.2f, -1}, 16, 12, 60);
-  const double le = 1, a = 0.8, sigma = 0.5;
-  add_sphere(s, o, r, add_material(s, {float(a), float(a), float(a)}, {float(le), 1, 1}));
-  Medium m;
-  m.center = o;
-  m.half_size = {2, 2, 2};
-  m.extinction = {float(sigma), float(sigma), float(sigma)};
-  s.media.push_back(m);
-  const double k = 2 * sigma * r;
-  const double e = 2 * kPi * le * (1 - std::exp(-k) * (1 + k)) / (k * k);
-  const double want = std::exp(-sigma * r) * (le + a / kPi * e);
+  FogSphere f = absorbing_fog_sphere();
+  Scene& s = f.scene;
+  const double want = f.want, le = 1, a = 0.8;
   const RenderResult got = render_ok(s, grid_options(0.05f));
   double mean = 0;
   for (int j = 0; j < 12; ++j)

@@ -184,25 +184,12 @@ TEST(SpacelandPtReview, NestedEmittingReflectingSpheresGiveTheirRecursion) {
   expect_nested(n, 128, 0.004, 0.03);
 }
 
-// Absorbing grey fog inside an emitting sphere of radius R (off the origin, as above), seen from
-// its centre (bounces 1): the camera ray passes with probability T(R) and the wall point's
-// irradiance through the fog is 2 pi Le int_0^1 exp(-2 sigma R mu) mu dmu (the chord along
-// cos theta = mu is 2 R mu long).
+// Absorbing grey fog inside an emitting sphere (scene_builders.hpp: absorbing_fog_sphere): the
+// camera ray passes with probability T(R), the wall point's irradiance comes through the fog.
 TEST(SpacelandPtReview, AbsorbingFogInsideAnEmittingSphereGivesItsClosedForm) {
-  Scene s;
-  const Vec3 o{2.1f, 1.7f, -0.9f};
-  const float r = 1.3f;
-  s.camera = camera(o, o + Vec3{0.3f, 0.2f, -1}, 16, 12, 60);
-  const double le = 1, a = 0.8, sigma = 0.5;
-  add_sphere(s, o, r, add_material(s, {float(a), float(a), float(a)}, {float(le), 1, 1}));
-  Medium m;
-  m.center = o;
-  m.half_size = {2, 2, 2};
-  m.extinction = {float(sigma), float(sigma), float(sigma)};
-  s.media.push_back(m);
-  const double k = 2 * sigma * r;
-  const double e = 2 * kPi * le * (1 - std::exp(-k) * (1 + k)) / (k * k);
-  const double want = std::exp(-sigma * r) * (le + a / kPi * e);
+  const FogSphere f = absorbing_fog_sphere();
+  const Scene& s = f.scene;
+  const double want = f.want;
   const int spp = 256;
   const ImageRgb img = render_image(s, pt(spp));
   const Check c = compare(
@@ -210,7 +197,7 @@ TEST(SpacelandPtReview, AbsorbingFogInsideAnEmittingSphereGivesItsClosedForm) {
   // The camera ray passes (weight 1) with probability p = T or is absorbed: over 16 x 12 x spp
   // samples the mean's relative standard error is sqrt((1 - p) / (p N)) = 0.0044; the NEE part
   // adds a little. Four of those.
-  const double p = std::exp(-sigma * r), se = std::sqrt((1 - p) / (p * 16 * 12 * spp));
+  const double p = f.transmittance, se = std::sqrt((1 - p) / (p * 16 * 12 * spp));
   std::printf("fog sphere: mean ratio - 1 = %+.5f (standard error %.5f)\n", c.mean_ratio - 1, se);
   EXPECT_NEAR(c.mean_ratio, 1.0, 4 * se);
 }

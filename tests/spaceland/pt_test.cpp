@@ -27,29 +27,8 @@ double geometric_sum(double a, int n) {
   return s;
 }
 
-// An enclosure whose walls all emit Le and reflect a: the image is Le (1 + a + ... + a^N).
-Scene furnace(bool fog) {
-  Scene s;
-  s.camera = camera({0.1f, -0.2f, 0.3f}, {0.5f, 0.4f, -1}, 12, 9, 90);
-  const Rgb le{1.0f, 0.5f, 0.25f};
-  const float a = 0.6f;
-  add_box(s, {-1, -1, -1}, {1, 1.5f, 2}, add_material(s, {a, a, a}, le));
-  if (fog) {
-    // Fog that reflects as the walls do and emits sigma Le per unit length keeps the same
-    // answer: along any ray, (1 - T)(Le + a L') + T (Le + a L') = Le + a L'.
-    Medium m;
-    m.center = {0, 0.2f, 0.4f};
-    m.half_size = {0.8f, 1.0f, 1.2f};
-    m.extinction = {0.5f, 1.0f, 2.0f};
-    m.albedo = {a, a, a};
-    m.emission = {m.extinction.r * le.r, m.extinction.g * le.g, m.extinction.b * le.b};
-    s.media.push_back(m);
-  }
-  return s;
-}
-
 void expect_furnace(bool fog, int spp, double tolerance) {
-  const Scene s = furnace(fog);
+  const Scene s = furnace(fog, 12, 9);
   const Rgb le = s.materials[0].emission;
   for (int n = 1; n <= 4; ++n) {
     const RenderResult r = render_ok(s, pt(spp, n));
@@ -237,7 +216,7 @@ TEST(SpacelandPt, EmittingFogGivesItsClosedForm) {
 }
 
 TEST(SpacelandPt, SameBitsOnOneAndTwoThreadsAndDependsOnTheSeed) {
-  Scene s = furnace(true);
+  Scene s = furnace(true, 12, 9);
   s.has_sun = true;
   s.sun.irradiance = {1, 1, 1};
   RenderOptions o = pt(8, 3);
@@ -253,7 +232,7 @@ TEST(SpacelandPt, SameBitsOnOneAndTwoThreadsAndDependsOnTheSeed) {
 }
 
 TEST(SpacelandPt, CancelStopsAfterAPassWithTheSamplesSoFar) {
-  const Scene s = furnace(false);
+  const Scene s = furnace(false, 12, 9);
   std::atomic<bool> cancel{true};
   RenderOptions o = pt(1000);
   o.cancel = &cancel;
@@ -264,7 +243,7 @@ TEST(SpacelandPt, CancelStopsAfterAPassWithTheSamplesSoFar) {
 }
 
 TEST(SpacelandPt, RefusesBadOptionsAndWorkPastTheMemoryLimit) {
-  const Scene s = furnace(false);
+  const Scene s = furnace(false, 12, 9);
   RenderOptions o = pt(0);
   Expected<RenderResult> r = render(s, o);
   ASSERT_FALSE(r.ok());

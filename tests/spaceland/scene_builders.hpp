@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdint>
 #include <string>
 
@@ -108,6 +109,58 @@ inline Scene two_closed_rooms(float gap) {
   add_box(s, {1 + gap, -1, -1}, {3, 1, 1}, wall);
   add_sphere(s, {2, 0, 0}, 0.3f, add_material(s, {0, 0, 0}, {50, 50, 50}));
   return s;
+}
+
+// An enclosure whose walls all emit Le = (1, 0.5, 0.25) and reflect a = 0.6: every pixel is
+// Le (1 + a + ... + a^N) at N bounces. With `fog`, a fog box inside that reflects as the walls
+// do and emits sigma Le per unit length keeps the same answer: along any ray,
+// (1 - T)(Le + a L') + T (Le + a L') = Le + a L'. The camera inside, w x h pixels.
+inline Scene furnace(bool fog, int w, int h) {
+  Scene s;
+  s.camera = camera({0.1f, -0.2f, 0.3f}, {0.5f, 0.4f, -1}, w, h, 90);
+  const Rgb le{1.0f, 0.5f, 0.25f};
+  const float a = 0.6f;
+  add_box(s, {-1, -1, -1}, {1, 1.5f, 2}, add_material(s, {a, a, a}, le));
+  if (fog) {
+    Medium m;
+    m.center = {0, 0.2f, 0.4f};
+    m.half_size = {0.8f, 1.0f, 1.2f};
+    m.extinction = {0.5f, 1.0f, 2.0f};
+    m.albedo = {a, a, a};
+    m.emission = {m.extinction.r * le.r, m.extinction.g * le.g, m.extinction.b * le.b};
+    s.media.push_back(m);
+  }
+  return s;
+}
+
+// Absorbing grey fog (sigma 0.5) inside a sphere of radius R = 1.3 emitting Le = 1 with albedo
+// a = 0.8, seen from its centre (16 x 12 pixels) at one bounce: every pixel is the wall's
+// radiance through the fog, exp(-sigma R) (Le + a / pi E), where the wall point's irradiance
+// through the fog is E = 2 pi Le int_0^1 exp(-2 sigma R mu) mu dmu (the chord along
+// cos theta = mu is 2 R mu long).
+struct FogSphere {
+  Scene scene;
+  double want = 0;
+  double transmittance = 0;  // exp(-sigma R), the camera ray's
+};
+inline FogSphere absorbing_fog_sphere() {
+  FogSphere f;
+  Scene& s = f.scene;
+  const Vec3 o{2.1f, 1.7f, -0.9f};
+  const float r = 1.3f;
+  s.camera = camera(o, o + Vec3{0.3f, 0.2f, -1}, 16, 12, 60);
+  const double le = 1, a = 0.8, sigma = 0.5, pi = 3.14159265358979323846;
+  add_sphere(s, o, r, add_material(s, {float(a), float(a), float(a)}, {float(le), 1, 1}));
+  Medium m;
+  m.center = o;
+  m.half_size = {2, 2, 2};
+  m.extinction = {float(sigma), float(sigma), float(sigma)};
+  s.media.push_back(m);
+  const double k = 2 * sigma * r;
+  const double e = 2 * pi * le * (1 - std::exp(-k) * (1 + k)) / (k * k);
+  f.transmittance = std::exp(-sigma * r);
+  f.want = f.transmittance * (le + a / pi * e);
+  return f;
 }
 
 // Each pixel's first hit: its world position and its object (-1 for the sky), through render's

@@ -422,22 +422,25 @@ Expected<Solution> solve(const Voxels& v, const Background& bg, const GridOption
   return sol;
 }
 
-bool Solution::sphere_radiance(Vec3 p, Rgb& out) const {
-  const Voxels& v = *voxels_;
-  const CascadePlan& c = plan_[0];
-  const int dims[3] = {c.nx, c.ny, c.nz}, vdims[3] = {v.nx, v.ny, v.nz};
+namespace {
+
+// The weighted mean of what the cascade-0 probes around p give: a tent of `radius` probe
+// spacings, the 8 probes around p (trilinear weights) first, then 2 and up to `max_radius`
+// spacings where none of those serves. `serve(q, probe, value)` says whether probe q (at world
+// position `probe`, outside opaque voxels) takes part, and with what value.
+template <class Serve>
+bool tent(const Voxels& v, const CascadePlan& c, const std::vector<std::uint8_t>& valid, Vec3 p,
+          int max_radius, Serve&& serve, Rgb& out) {
+  const int dims[3] = {c.nx, c.ny, c.nz};
+  // p's continuous probe coordinates (probe a at a).
   double g[3];
-  int own[3];
-  for (int k = 0; k < 3; ++k) {
+  for (int k = 0; k < 3; ++k)
     g[k] = ((double(p[k]) - v.origin[k]) / v.size - 0.5 - c.spacing / 2) / c.spacing;
-    own[k] = std::clamp(int(std::floor((p[k] - v.origin[k]) / v.size)), 0, vdims[k] - 1);
-  }
-  // The 8 probes around p first, the 64 where none of those serves.
-  for (int radius = 1; radius <= 2; radius *= 2) {
-    Rgb sum{};
-    float weight = 0;
+  for (int radius = 1; radius <= max_radius; radius *= 2) {
     int lo[3];
     for (int k = 0; k < 3; ++k) lo[k] = int(std::floor(g[k])) - (radius - 1);
+    Rgb sum{};
+    float weight = 0;
     for (int dz = 0; dz < 2 * radius; ++dz)
       for (int dy = 0; dy < 2 * radius; ++dy)
         for (int dx = 0; dx < 2 * radius; ++dx) {
@@ -449,24 +452,10 @@ bool Solution::sphere_radiance(Vec3 p, Rgb& out) const {
           }
           if (w <= 0) continue;
           const std::uint64_t q = (std::uint64_t(at[2]) * c.ny + at[1]) * c.nx + at[0];
-          if (!valid_[std::size_t(q)]) continue;
-          // Marched from the probe: the only opaque voxel it may meet is p's own (p close to a
-          // surface lies in the surface's voxels).
-          const Vec3 probe = position_of(v, c, q);
-          const Vec3 to = p - probe;
-          const float dist = length(to);
-          if (dist > 0) {
-            const Vec3 dir = to * (1 / dist);
-            const Segment s = march(v, probe, dir, 0, dist);
-            if (s.blocked) {
-              const Vec3 in = probe + dir * (s.t_end + 1e-3f * v.size);
-              bool mine = true;
-              for (int k = 0; k < 3; ++k)
-                mine = mine && int(std::floor((in[k] - v.origin[k]) / v.size)) == own[k];
-              if (!mine) continue;
-            }
-          }
-          sum += sphere_[std::size_t(q)] * w;
+          if (!valid[std::size_t(q)]) continue;
+          Rgb value;
+          if (!serve(q, position_of(v, c, q), value)) continue;
+          sum += value * w;
           weight += w;
         }
     if (weight > 0) {
@@ -477,15 +466,37 @@ bool Solution::sphere_radiance(Vec3 p, Rgb& out) const {
   return false;
 }
 
+}  // namespace
+
+bool Solution::sphere_radiance(Vec3 p, Rgb& out) const {
+  const Voxels& v = *voxels_;
+  const int vdims[3] = {v.nx, v.ny, v.nz};
+  int own[3];
+  for (int k = 0; k < 3; ++k)
+    own[k] = std::clamp(int(std::floor((p[k] - v.origin[k]) / v.size)), 0, vdims[k] - 1);
+  auto serve = [&](std::uint64_t q, Vec3 probe, Rgb& value) {
+    // Marched from the probe: the only opaque voxel it may meet is p's own (p close to a surface
+    // lies in the surface's voxels).
+    const Vec3 to = p - probe;
+    const float dist = length(to);
+    if (dist > 0) {
+      const Vec3 dir = to * (1 / dist);
+      const Segment s = march(v, probe, dir, 0, dist);
+      if (s.blocked) {
+        const Vec3 in = probe + dir * (s.t_end + 1e-3f * v.size);
+        for (int k = 0; k < 3; ++k)
+          if (int(std::floor((in[k] - v.origin[k]) / v.size)) != own[k]) return false;
+      }
+    }
+    value = sphere_[std::size_t(q)];
+    return true;
+  };
+  return tent(v, plan_[0], valid_, p, 2, serve, out);
+}
+
 bool Solution::mean_radiance(Vec3 p, Vec3 n, Rgb& out, const RayScene* rays) const {
   const Voxels& v = *voxels_;
-  const CascadePlan& c = plan_[0];
   const std::size_t nd = dirs_.size();
-  // p's continuous probe coordinates (probe a at a).
-  double g[3];
-  for (int k = 0; k < 3; ++k)
-    g[k] = ((double(p[k]) - v.origin[k]) / v.size - 0.5 - c.spacing / 2) / c.spacing;
-  const int dims[3] = {c.nx, c.ny, c.nz};
   // Without exact rays: the free voxel nearest p in front of its surface (within 2 voxels each
   // way), whose centre probes must see; p itself lies in its surface's opaque voxels (near an
   // edge, in the other surface's too, so a step along the normal alone may not leave them).
@@ -507,57 +518,35 @@ bool Solution::mean_radiance(Vec3 p, Vec3 n, Rgb& out, const RayScene* rays) con
           if (dot(centre - p, n) > 0.25f * v.size && d < best) best = d, free_point = centre;
         }
   }
-  // A tent of `radius` probe spacings: the 8 probes around p (trilinear weights) first; where
-  // none of them serves (they sit in the surface's own voxels, or behind it), the 64 around it.
-  for (int radius = 1; radius <= 4; radius *= 2) {
-    int lo[3];
-    for (int k = 0; k < 3; ++k) lo[k] = int(std::floor(g[k])) - (radius - 1);
-    Rgb sum{};
-    float weight = 0;
-    for (int dz = 0; dz < 2 * radius; ++dz)
-      for (int dy = 0; dy < 2 * radius; ++dy)
-        for (int dx = 0; dx < 2 * radius; ++dx) {
-          const int at[3] = {lo[0] + dx, lo[1] + dy, lo[2] + dz};
-          float w = 1;
-          for (int k = 0; k < 3; ++k) {
-            if (at[k] < 0 || at[k] >= dims[k]) w = 0;
-            w *= std::max(0.0f, float(1 - std::abs(g[k] - at[k]) / radius));
-          }
-          if (w <= 0) continue;
-          const std::uint64_t q = (std::uint64_t(at[2]) * c.ny + at[1]) * c.nx + at[0];
-          if (!valid_[std::size_t(q)]) continue;
-          const Vec3 probe = position_of(v, c, q);
-          // In front of the surface, and seeing it (from the free point): no light from behind a
-          // wall, however thin.
-          if (dot(p - probe, n) >= 0) continue;
-          if (rays) {
-            // The exact surfaces: near an edge the free voxel may lie past the other surface.
-            const Vec3 start = rays->spawn(p, n, probe - p);
-            if (rays->occluded(Ray{start, probe - start, 0, 1})) continue;
-          } else {
-            const Vec3 to = probe - free_point;
-            const float dist = length(to);
-            if (dist > 0 && march(v, free_point, to * (1 / dist), 0, dist).blocked) continue;
-          }
-          Rgb mean{};
-          float cos_sum = 0;
-          for (std::size_t d = 0; d < nd; ++d) {
-            const float cos_t = dot(n, dirs_[d]);
-            const Rgb& r = radiance_[std::size_t(q) * nd + d];
-            if (cos_t <= 0 || !holds_light(r)) continue;
-            mean += r * cos_t;
-            cos_sum += cos_t;
-          }
-          if (!(cos_sum > 0)) continue;
-          sum += mean * (w / cos_sum);
-          weight += w;
-        }
-    if (weight > 0) {
-      out = sum * (1 / weight);
-      return true;
+  auto serve = [&](std::uint64_t q, Vec3 probe, Rgb& value) {
+    // In front of the surface, and seeing it (from the free point): no light from behind a
+    // wall, however thin.
+    if (dot(p - probe, n) >= 0) return false;
+    if (rays) {
+      // The exact surfaces: near an edge the free voxel may lie past the other surface.
+      const Vec3 start = rays->spawn(p, n, probe - p);
+      if (rays->occluded(Ray{start, probe - start, 0, 1})) return false;
+    } else {
+      const Vec3 to = probe - free_point;
+      const float dist = length(to);
+      if (dist > 0 && march(v, free_point, to * (1 / dist), 0, dist).blocked) return false;
     }
-  }
-  return false;
+    Rgb mean{};
+    float cos_sum = 0;
+    for (std::size_t d = 0; d < nd; ++d) {
+      const float cos_t = dot(n, dirs_[d]);
+      const Rgb& r = radiance_[std::size_t(q) * nd + d];
+      if (cos_t <= 0 || !holds_light(r)) continue;
+      mean += r * cos_t;
+      cos_sum += cos_t;
+    }
+    if (!(cos_sum > 0)) return false;
+    value = mean * (1 / cos_sum);
+    return true;
+  };
+  // Where none of the 8 probes around p serves (they sit in the surface's own voxels, or behind
+  // it), up to 4 probe spacings out.
+  return tent(v, plan_[0], valid_, p, 4, serve, out);
 }
 
 SunLight::SunLight(const Scene& scene, const RayScene& rays) : rays_(&rays), media_(scene) {

@@ -48,17 +48,23 @@ bench: build
 	@$(BUILD)/bin/penumbra_bench --benchmark_counters_tabular=true
 
 # The quality studies in docs/QUALITY.md (minutes: the path-traced references are cached; the
-# 3D closed forms, about 35 s on 2 cores, write docs/quality/3d/quality3d.md and spwi3d.md).
-# The 3D scenes of SPWI's study (a reference of 1024 spp each, about 20 s; then 20 s of runs).
-QUALITY_3D = cornell offscreen bunny_sky bunny_lights two_rooms four_cubes
+# 3D closed forms, about 35 s on 2 cores, write docs/quality/3d/quality3d.md and spwi3d.md; the
+# probe grid's, about 6 min, grid3d.md). The 3D scenes of the SPWI and probe grid study (a
+# reference of 1024 spp each, 20-50 s; then 1-5 min of runs), and the Cornell box at 2 to 4
+# bounces.
+QUALITY_3D = cornell offscreen bunny_sky bunny_lights two_rooms four_cubes fog_shaft
 quality: build
 	@$(BUILD)/bin/penumbra bench-quality scenes/occluder.json -o docs/quality/occluder --doc docs/QUALITY.md --cache $(BUILD)/quality-cache
 	@$(BUILD)/bin/penumbra bench-quality scenes/cornell.json --bounces 2 --reference-spp 2048 --max-spp 64 -o docs/quality/cornell --doc docs/QUALITY.md --cache $(BUILD)/quality-cache
 	@$(BUILD)/bin/penumbra bench-quality scenes/pinhole.json --reference-spp 4096 --max-spp 64 -o docs/quality/pinhole --doc docs/QUALITY.md --cache $(BUILD)/quality-cache
 	@$(BUILD)/bin/penumbra bench-quality scenes/fog.json --max-spp 64 -o docs/quality/fog --doc docs/QUALITY.md --cache $(BUILD)/quality-cache
 	@$(BUILD)/bin/penumbra_quality3d docs/quality/3d > /dev/null
+	@$(BUILD)/bin/penumbra_quality3d docs/quality/3d --grid-only > /dev/null
 	@for s in $(QUALITY_3D); do \
 	  $(BUILD)/bin/penumbra bench-quality scenes/3d/$$s.json -o docs/quality/3d/study/$$s --doc docs/QUALITY.md --cache $(BUILD)/quality-cache || exit 1; \
+	done
+	@for b in 2 3 4; do \
+	  $(BUILD)/bin/penumbra bench-quality scenes/3d/cornell.json --bounces $$b -o docs/quality/3d/study/cornell-b$$b --doc docs/QUALITY.md --cache $(BUILD)/quality-cache || exit 1; \
 	done
 
 install: build

@@ -650,13 +650,35 @@ int main(int argc, char** argv) {
       return kCannotWrite;
     }
 
+  // A method's tables on `cases`, to stdout as they come and to <dir>/<name>.md and .csv.
+  auto tables = [&](const std::vector<Case>& cases, const std::string& name, const char* column,
+                    const char* intro, auto&& table) -> int {
+    std::ostringstream md, csv;
+    csv << "scene,configuration," << column
+        << ",relative_rmse,relative_bias,max_relative_error,time_ms\n";
+    md << intro << " against the closed forms: relative RMSE over the pixels the closed form "
+       << "covers, defaults unless the row says otherwise.\n\n";
+    for (const Case& c : cases) {
+      Expected<std::string> t = table(c, csv);
+      if (!t) {
+        std::fprintf(stderr, "%s\n", t.error().message.c_str());
+        return 1;
+      }
+      std::fputs(t->c_str(), stdout);
+      std::fflush(stdout);
+      md << *t;
+    }
+    if (Status st = io::write_text_files(
+            {{dir + "/" + name + ".csv", csv.str()}, {dir + "/" + name + ".md", md.str()}});
+        !st) {
+      std::fprintf(stderr, "%s\n", st.error().message.c_str());
+      return kCannotWrite;
+    }
+    return 0;
+  };
   // The probe grid: the enclosures at 1 to 4 bounces (with fog, and a sphere's), the sphere
   // light and the sky over planes small enough for its voxels, the sun, the fog slabs.
   if (grid_only) {
-    std::ostringstream md, csv;
-    csv << "scene,configuration,voxel,relative_rmse,relative_bias,max_relative_error,time_ms\n";
-    md << "The probe grid against the closed forms: relative RMSE over the pixels the closed "
-          "form covers, defaults unless the row says otherwise.\n\n";
     std::vector<Case> cases;
     for (int n = 1; n <= 4; ++n) cases.push_back(enclosure(n, Shell::box));
     cases.push_back(enclosure(4, Shell::box_fog));
@@ -666,50 +688,14 @@ int main(int argc, char** argv) {
     cases.push_back(sun());
     cases.push_back(slab(false));
     cases.push_back(slab(true));
-    for (const Case& c : cases) {
-      Expected<std::string> table = grid_table(c, csv);
-      if (!table) {
-        std::fprintf(stderr, "%s\n", table.error().message.c_str());
-        return 1;
-      }
-      std::fputs(table->c_str(), stdout);
-      std::fflush(stdout);
-      md << *table;
-    }
-    if (Status st = io::write_text_files(
-            {{dir + "/grid3d.csv", csv.str()}, {dir + "/grid3d.md", md.str()}});
-        !st) {
-      std::fprintf(stderr, "%s\n", st.error().message.c_str());
-      return kCannotWrite;
-    }
-    return 0;
+    return tables(cases, "grid3d", "voxel", "The probe grid", grid_table);
   }
-
   // SPWI on the one-bounce scenes without fog.
-  {
-    std::ostringstream md, csv;
-    csv << "scene,configuration,t0,relative_rmse,relative_bias,max_relative_error,time_ms\n";
-    md << "SPWI against the closed forms: relative RMSE over the pixels the closed form covers, "
-          "defaults unless the row says otherwise.\n\n";
-    for (const Case& c : {enclosure(1, Shell::box), enclosure(1, Shell::sphere), sphere_light(),
-                          sky(1000), sun()}) {
-      Expected<std::string> table = spwi_table(c, csv);
-      if (!table) {
-        std::fprintf(stderr, "%s\n", table.error().message.c_str());
-        return 1;
-      }
-      std::fputs(table->c_str(), stdout);
-      std::fflush(stdout);
-      md << *table;
-    }
-    if (Status st = io::write_text_files(
-            {{dir + "/spwi3d.csv", csv.str()}, {dir + "/spwi3d.md", md.str()}});
-        !st) {
-      std::fprintf(stderr, "%s\n", st.error().message.c_str());
-      return kCannotWrite;
-    }
-    if (spwi_only) return 0;
-  }
+  if (int code = tables(
+          {enclosure(1, Shell::box), enclosure(1, Shell::sphere), sphere_light(), sky(1000), sun()},
+          "spwi3d", "t0", "SPWI", spwi_table);
+      code != 0 || spwi_only)
+    return code;
 
   std::vector<Case> cases;
   for (int n = 1; n <= 4; ++n) cases.push_back(enclosure(n, Shell::box));

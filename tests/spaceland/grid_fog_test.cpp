@@ -2,7 +2,8 @@
 // with fog that reflects and emits as its walls do gives Le (1 + a + ... + a^N); absorbing fog
 // inside an emitting sphere (Beer-Lambert on the camera ray and on the light reaching the wall);
 // a fog box lit by the sun (single scattering); the sun's light carried into the second bounce
-// (a wall lit by a sunlit floor), by the grid and by SPWI through the grid's radiance cache.
+// (a wall lit by a sunlit floor), by the grid and by SPWI through the grid's radiance cache; the
+// same bits on any thread count.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -154,6 +155,26 @@ TEST(GridFog, TheSunReachesTheSecondBounce) {
     EXPECT_NEAR((two - one) / lit, 1.0, 0.02) << to_string(method);
     EXPECT_NEAR((two - one) / bounce, 1.0, 0.1) << to_string(method) << ": F = " << f;
   }
+}
+
+// Fog, the sun and a later bounce together: the same bits on 1 and 2 threads.
+TEST(GridFog, SameBitsOnOneAndTwoThreads) {
+  Scene s;
+  s.has_sun = true;
+  s.sun.direction = normalize(Vec3{0.5f, 1, 0.2f});
+  s.sun.irradiance = {3, 3, 3};
+  s.sky = {{0.2f, 0.3f, 0.5f}, {0.2f, 0.3f, 0.5f}, {0.2f, 0.3f, 0.5f}};
+  add_box(s, {-2, -0.2f, -2}, {2, 0, 2}, add_material(s, {0.6f, 0.5f, 0.4f}));
+  add_box(s, {-0.5f, 0, -0.5f}, {0.5f, 1, 0.5f}, add_material(s, {0.5f, 0.5f, 0.5f}));
+  Medium m;
+  m.center = {0, 1, 0};
+  m.half_size = {2, 1, 2};
+  m.extinction = {0.3f, 0.4f, 0.5f};
+  m.albedo = {0.8f, 0.8f, 0.8f};
+  s.media.push_back(m);
+  s.camera = camera({3, 1.5f, 3}, {0, 0.5f, 0}, 24, 18, 60);
+  const ImageRgb one = same_bits_on_one_and_two_threads(s, grid_options(0.1f, 2));
+  EXPECT_GT(one.at(12, 9).r, 0.0f);
 }
 
 }  // namespace

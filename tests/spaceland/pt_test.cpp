@@ -220,12 +220,7 @@ TEST(SpacelandPt, SameBitsOnOneAndTwoThreadsAndDependsOnTheSeed) {
   s.has_sun = true;
   s.sun.irradiance = {1, 1, 1};
   RenderOptions o = pt(8, 3);
-  o.threads = 1;
-  const ImageRgb one = render_ok(s, o).radiance;
-  o.threads = 2;
-  const ImageRgb two = render_ok(s, o).radiance;
-  ASSERT_EQ(one.size(), two.size());
-  EXPECT_TRUE(std::equal(one.data(), one.data() + one.size(), two.data()));
+  const ImageRgb one = same_bits_on_one_and_two_threads(s, o);
   o.pt.seed = 7;
   const ImageRgb other = render_ok(s, o).radiance;
   EXPECT_FALSE(std::equal(one.data(), one.data() + one.size(), other.data()));

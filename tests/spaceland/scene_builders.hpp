@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <string>
@@ -97,6 +98,18 @@ inline RenderResult render_ok(const Scene& s, const RenderOptions& o) {
   Expected<RenderResult> r = render(s, o);
   EXPECT_TRUE(r.ok()) << (r.ok() ? "" : r.error().message);
   return r.ok() ? *r : RenderResult{};
+}
+
+// Renders on 1 and on 2 threads and expects the same bits; returns the image.
+inline ImageRgb same_bits_on_one_and_two_threads(const Scene& s, RenderOptions o) {
+  o.threads = 1;
+  const ImageRgb one = render_ok(s, o).radiance;
+  o.threads = 2;
+  const ImageRgb two = render_ok(s, o).radiance;
+  EXPECT_EQ(one.size(), two.size());
+  EXPECT_TRUE(one.size() == two.size() &&
+              std::equal(one.data(), one.data() + one.size(), two.data()));
+  return one;
 }
 
 // Two closed rooms side by side, [-1, 1]^3 and [1 + gap, 3] x [-1, 1]^2 (gap 0: one shared wall),

@@ -180,6 +180,19 @@ struct Extended {
   std::vector<std::uint8_t> before;
 };
 
+// Calls ray(q, p, d, k) for every probe q of cascade c (at world position p) and direction d
+// (k = q * nd + d), rows of probes in parallel.
+template <class Ray>
+void for_each_ray(const Voxels& v, const CascadePlan& c, std::size_t nd, Ray&& ray) {
+  parallel_for(int(c.probes() / std::uint64_t(c.nx)), [&](int row) {
+    for (int x = 0; x < c.nx; ++x) {
+      const std::uint64_t q = std::uint64_t(row) * c.nx + x;
+      const Vec3 p = position_of(v, c, q);
+      for (std::size_t d = 0; d < nd; ++d) ray(q, p, d, std::size_t(q) * nd + d);
+    }
+  });
+}
+
 Extended extend_cascade(const Voxels& v, const CascadePlan& c, const std::vector<Vec3>& dirs,
                         int doublings, bool check_before) {
   const std::size_t nd = dirs.size(), count = std::size_t(c.probes());
@@ -188,52 +201,36 @@ Extended extend_cascade(const Voxels& v, const CascadePlan& c, const std::vector
   e.transmittance.resize(count * nd);
   e.before.assign(count * nd, 0);
   const float piece = (c.t_end - c.t_start) / float(1 << doublings);
-  parallel_for(int(count / std::size_t(c.nx)), [&](int row) {
-    for (int x = 0; x < c.nx; ++x) {
-      const std::uint64_t q = std::uint64_t(row) * c.nx + x;
-      const Vec3 p = position_of(v, c, q);
-      for (std::size_t d = 0; d < nd; ++d) {
-        const std::size_t k = std::size_t(q) * nd + d;
-        if (check_before && c.t_start > 0) e.before[k] = march(v, p, dirs[d], 0, c.t_start).blocked;
-        const Segment s = march(v, p, dirs[d], c.t_start, c.t_start + piece);
-        e.radiance[k] = s.radiance;
-        e.transmittance[k] = s.blocked ? Rgb{} : s.transmittance;
-      }
-    }
+  for_each_ray(v, c, nd, [&](std::uint64_t, Vec3 p, std::size_t d, std::size_t k) {
+    if (check_before && c.t_start > 0) e.before[k] = march(v, p, dirs[d], 0, c.t_start).blocked;
+    const Segment s = march(v, p, dirs[d], c.t_start, c.t_start + piece);
+    e.radiance[k] = s.radiance;
+    e.transmittance[k] = s.blocked ? Rgb{} : s.transmittance;
   });
   const double box[3] = {double(v.nx) * v.size, double(v.ny) * v.size, double(v.nz) * v.size};
   std::vector<Rgb> radiance(count * nd), transmittance(count * nd);
   for (int j = 0; j < doublings; ++j) {
     const float shift = piece * float(1 << j);
-    parallel_for(int(count / std::size_t(c.nx)), [&](int row) {
-      for (int x = 0; x < c.nx; ++x) {
-        const std::uint64_t q = std::uint64_t(row) * c.nx + x;
-        const Vec3 p = position_of(v, c, q);
-        for (std::size_t d = 0; d < nd; ++d) {
-          const std::size_t k = std::size_t(q) * nd + d;
-          radiance[k] = e.radiance[k];
-          transmittance[k] = e.transmittance[k];
-          if (is_black(e.transmittance[k])) continue;
-          const Vec3 at = p + dirs[d] * shift;
-          bool inside = true;
-          for (int a = 0; a < 3; ++a) {
-            const double u = double(at[a]) - v.origin[a];
-            inside = inside && u >= 0 && u <= box[a];
-          }
-          if (!inside) continue;  // nothing out there: T = 1, no light
-          const Corners around = corners(v, c, at);
-          Rgb l{}, t{};
-          for (int a = 0; a < 8; ++a) {
-            const float w = around.w[std::size_t(a)];
-            if (w <= 0) continue;
-            const std::size_t kk = std::size_t(around.index[std::size_t(a)]) * nd + d;
-            l += e.radiance[kk] * w;
-            t += e.transmittance[kk] * w;
-          }
-          radiance[k] += e.transmittance[k] * l;
-          transmittance[k] *= t;
-        }
+    for_each_ray(v, c, nd, [&](std::uint64_t, Vec3 p, std::size_t d, std::size_t k) {
+      radiance[k] = e.radiance[k];
+      transmittance[k] = e.transmittance[k];
+      if (is_black(e.transmittance[k])) return;
+      const Vec3 at = p + dirs[d] * shift;
+      for (int a = 0; a < 3; ++a) {
+        const double u = double(at[a]) - v.origin[a];
+        if (u < 0 || u > box[a]) return;  // nothing out there: T = 1, no light
       }
+      const Corners around = corners(v, c, at);
+      Rgb l{}, t{};
+      for (int a = 0; a < 8; ++a) {
+        const float w = around.w[std::size_t(a)];
+        if (w <= 0) continue;
+        const std::size_t kk = std::size_t(around.index[std::size_t(a)]) * nd + d;
+        l += e.radiance[kk] * w;
+        t += e.transmittance[kk] * w;
+      }
+      radiance[k] += e.transmittance[k] * l;
+      transmittance[k] *= t;
     });
     std::swap(radiance, e.radiance);
     std::swap(transmittance, e.transmittance);

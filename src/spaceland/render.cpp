@@ -209,6 +209,8 @@ Status check_options(const RenderOptions& o) {
           "`pt.spp` is 0 (no limit) and no `pt.seconds` is given: the render would "
           "never end"};
   }
+  // The grid's options (ranges and combinations) before any scene is read.
+  if (o.method == Method::grid) return grid::check_options(o.grid);
   return {};
 }
 

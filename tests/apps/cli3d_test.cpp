@@ -112,12 +112,18 @@ TEST_F(Cli3d, GridReportsItsVoxelsAndIsRefusedItsOthersOptions) {
   EXPECT_EQ(p["fix"], "none");
   // Extension and the fix, shared with 2D's cascades; 2D's nearest merge is not the grid's.
   const auto e = run({"render", scene_, "--method", "grid", "--voxel", "0.25", "--extend",
-                      "--extend-length", "4", "--fix", "bilinear", "--json", "-o", out("e.pfm")});
+                      "--extend-length", "4", "--json", "-o", out("e.pfm")});
   ASSERT_EQ(e.status, 0) << e.err;
-  const nlohmann::json je = nlohmann::json::parse(e.out);
-  EXPECT_EQ(je["parameters"]["extend_length"], 4);
-  EXPECT_EQ(je["parameters"]["fix"], "bilinear");
-  auto bad = run({"render", scene_, "--method", "grid", "--fix", "nearest", "-o", out("x.pfm")});
+  EXPECT_EQ(nlohmann::json::parse(e.out)["parameters"]["extend_length"], 4);
+  const auto f = run({"render", scene_, "--method", "grid", "--voxel", "0.25", "--fix", "bilinear",
+                      "--json", "-o", out("f.pfm")});
+  ASSERT_EQ(f.status, 0) << f.err;
+  EXPECT_EQ(nlohmann::json::parse(f.out)["parameters"]["fix"], "bilinear");
+  auto bad = run(
+      {"render", scene_, "--method", "grid", "--extend", "--fix", "bilinear", "-o", out("x.pfm")});
+  EXPECT_EQ(bad.status, 2);
+  EXPECT_NE(bad.err.find("use one or the other"), std::string::npos) << bad.err;
+  bad = run({"render", scene_, "--method", "grid", "--fix", "nearest", "-o", out("x.pfm")});
   EXPECT_EQ(bad.status, 2);
   EXPECT_NE(bad.err.find("--fix nearest applies to 2D scenes only"), std::string::npos) << bad.err;
   bad = run({"render", scene_, "--method", "grid", "--extend", "--extend-length", "0.5", "-o",

@@ -196,6 +196,12 @@ TEST(Grid, RenderGivesTheEnclosureAndRefusesBadOptions) {
   }
   o.grid.directions = 12;
   EXPECT_FALSE(render(s, o).ok());
+  o.grid.directions = 16;
+  o.grid.fix = true;
+  o.grid.extend_length = 8;
+  const Expected<RenderResult> both = render(s, o);
+  ASSERT_FALSE(both.ok());
+  EXPECT_NE(both.error().message.find("use one or the other"), std::string::npos);
 }
 
 // The bilinear fix and interval extension against the same closed forms. The fix (each ray
@@ -210,6 +216,7 @@ TEST(Grid, TheFixAndExtensionKeepTheClosedForms) {
     o.fix = fix;
     o.extend_length = fix ? 0 : 2;
     const char* name = fix ? "fix" : "extension";
+    // Extension must double something here (cascade 1's interval is 8 voxels at s0 2).
     Scene enclosure;
     add_box(enclosure, {-1, -1.25f, -1.5f}, {1, 1.25f, 1.5f},
             add_material(enclosure, {0.6f, 0.6f, 0.6f}, {1, 0.5f, 0.25f}));
@@ -217,6 +224,9 @@ TEST(Grid, TheFixAndExtensionKeepTheClosedForms) {
     sky.sky = {{1.5f, 1, 0.5f}, {1.5f, 1, 0.5f}, {1.5f, 1, 0.5f}};
     add_box(sky, {-3, -0.2f, -3}, {3, 0, 3}, add_material(sky, {0.6f, 0.6f, 0.6f}));
     const Voxels ve = voxels_of(enclosure, 0.1f), vs = voxels_of(sky, 0.1f);
+    const Expected<std::vector<CascadePlan>> plan = plan_cascades(vs, o);
+    ASSERT_TRUE(plan.ok());
+    EXPECT_EQ(extension_doublings((*plan)[1], o, vs.size, false) > 0, !fix) << name;
     const Solution se = solved(enclosure, ve, o), ss = solved(sky, vs, o);
     for (float x : {-1.5f, 0.0f, 0.7f})
       for (float z : {-1.0f, 0.0f, 1.2f}) {
@@ -233,10 +243,13 @@ TEST(Grid, TheFixAndExtensionKeepTheClosedForms) {
     Rgb lit, dark;
     ASSERT_TRUE(sr.mean_radiance({2, -1, 0}, {0, 1, 0}, lit));
     EXPECT_GT(lit.r, 5.0f);
+    int seen = 0;
     for (float y : {-0.8f, 0.0f, 0.8f})
       if (sr.mean_radiance({1, y, 0.3f}, {-1, 0, 0}, dark)) {
         EXPECT_LT(dark.r, 1e-3f * lit.r) << name;
+        ++seen;
       }
+    EXPECT_GT(seen, 0) << name;
     Scene umbra;
     add_box(umbra, {-3, -0.1f, -3}, {3, 0, 3}, add_material(umbra, {0.5f, 0.5f, 0.5f}));
     add_box(umbra, {-0.6f, 0.8f, -0.6f}, {0.6f, 1.0f, 0.6f},
@@ -262,6 +275,9 @@ TEST(Grid, ExtensionComposesFogIntervals) {
   const Voxels v = voxels_of(s, 0.1f);
   GridOptions extended;
   extended.extend_length = 2;
+  const Expected<std::vector<CascadePlan>> plan = plan_cascades(v, extended);
+  ASSERT_TRUE(plan.ok());
+  EXPECT_EQ(extension_doublings((*plan)[1], extended, v.size, false), 2);
   const Solution whole = solved(s, v), doubled = solved(s, v, extended);
   for (Vec3 p : {Vec3{0, 0, 0}, Vec3{0.5f, -0.3f, 0.2f}, Vec3{-1, 1, 0.5f}}) {
     Rgb a, b;

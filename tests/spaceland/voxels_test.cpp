@@ -154,7 +154,7 @@ TEST(Voxels, SizesAndTheMemoryLimit) {
   EXPECT_EQ(v->ny, 8 + 2 * kPadding);
   EXPECT_EQ(v->nz, 2 * kPadding);
   EXPECT_EQ(voxel_bytes(v->count()), v->count() * 37);
-  EXPECT_EQ(voxel_bytes(v->count(), true), v->count() * 50);
+  EXPECT_EQ(voxel_bytes(v->count(), true), v->count() * 87);
   // The default: the longest side over 128, unless that passes the limit.
   EXPECT_NEAR(default_voxel_size(s, kGiB), 2.0f / 128, 1e-6f);
   EXPECT_GT(default_voxel_size(s, 1 << 16), 2.0f / 128 * 4);
@@ -240,6 +240,29 @@ TEST(Voxels, EmptySpaceSkippingChangesNothing) {
     ended += a.blocked;
   }
   EXPECT_GT(ended, 1000);  // many end on a surface voxel, after leaps
+}
+
+// A wall one voxel thick holding a value per side: a ray travelling +x sees the - side's value,
+// one travelling -x the + side's, one along the wall either (it enters through another face).
+TEST(Voxels, AThinWallShowsTheSideARayComesFrom) {
+  const Scene s = thin_wall({1, 0, 0}, {1, 1, 1});
+  Expected<Voxels> v = voxelise(s, 0.3f, kGiB);  // x = 0 lies inside a voxel: one voxel thick
+  ASSERT_TRUE(v.ok());
+  v->thin.assign(v->emission.size(), 0);
+  v->emission_minus = v->emission;
+  for (std::size_t k = 0; k < v->emission.size(); ++k)
+    if (v->opaque(k)) {
+      v->thin[k] = 1;  // thin along x
+      v->emission[k] = {5, 0, 0};
+      v->emission_minus[k] = {0, 0, 7};
+    }
+  const Segment from_minus = march(*v, {-1, 0.1f, 0.05f}, {1, 0, 0}, 0, 2);
+  const Segment from_plus = march(*v, {1, 0.1f, 0.05f}, {-1, 0, 0}, 0, 2);
+  ASSERT_TRUE(from_minus.blocked && from_plus.blocked);
+  EXPECT_EQ(from_minus.radiance.b, 7.0f);
+  EXPECT_EQ(from_minus.radiance.r, 0.0f);
+  EXPECT_EQ(from_plus.radiance.r, 5.0f);
+  EXPECT_EQ(from_plus.radiance.b, 0.0f);
 }
 
 }  // namespace

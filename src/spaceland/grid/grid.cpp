@@ -106,6 +106,10 @@ Status check_cascade_options(const GridOptions& o) {
   if (o.cascades < 0 || o.cascades > kMaxCascades)
     return Error{"`grid.cascades`: expected 0..12 (0: derived), found " +
                  std::to_string(o.cascades)};
+  if (o.fix && o.extend_length > 0)
+    return Error{
+        "`grid.extend_length`: extension doubles a probe's own intervals, which the bilinear fix "
+        "does not use (it traces to the upper probes instead): use one or the other"};
   if (!std::isfinite(o.extend_length) || o.extend_length < 0 ||
       (o.extend_length > 0 && o.extend_length < 1))
     return Error{
@@ -147,21 +151,23 @@ Expected<std::vector<CascadePlan>> plan_cascades(const Voxels& v, const GridOpti
 }
 
 int extension_doublings(const CascadePlan& c, const GridOptions& o, float voxel, bool top) {
-  if (top || o.extend_length <= 0) return 0;
+  if (top || o.fix || o.extend_length <= 0) return 0;
   const double len = double(c.t_end - c.t_start) / voxel;
   int n = 0;
   while (n < 20 && len / double(1 << n) > double(o.extend_length) * (1 + 1e-6)) ++n;
   return n;
 }
 
-std::uint64_t cascades_bytes(const std::vector<CascadePlan>& plan, const GridOptions& o) {
+std::uint64_t cascades_bytes(const std::vector<CascadePlan>& plan, const GridOptions& o,
+                             float voxel) {
   std::uint64_t need = 0;
   for (std::size_t i = 0; i < plan.size(); ++i) {
     // Extending holds the cascade's intervals and transmittances twice (a doubling reads one
     // pair and writes the other) and a byte a ray, besides its merged radiance.
     const bool top = i + 1 == plan.size();
     const std::uint64_t rays = plan[i].bytes() / sizeof(Rgb);
-    const std::uint64_t extension = o.extend_length > 0 && !top ? rays * (4 * sizeof(Rgb) + 1) : 0;
+    const std::uint64_t extension =
+        extension_doublings(plan[i], o, voxel, top) > 0 ? rays * (4 * sizeof(Rgb) + 1) : 0;
     need = std::max(need,
                     plan[i].bytes() + extension + (i + 1 < plan.size() ? plan[i + 1].bytes() : 0));
   }
@@ -245,7 +251,7 @@ Expected<Solution> solve(const Voxels& v, const Background& bg, const GridOption
   Expected<std::vector<CascadePlan>> planned = plan_cascades(v, o);
   if (!planned) return planned.error();
   const std::vector<CascadePlan>& plan = *planned;
-  const std::uint64_t need = cascades_bytes(plan, o);
+  const std::uint64_t need = cascades_bytes(plan, o, v.size);
   if (need > max_bytes)
     return Error{"the probe grid's cascades need " +
                  io::format_rounded(double(need) / double(1 << 20)) +
@@ -268,10 +274,9 @@ Expected<Solution> solve(const Voxels& v, const Background& bg, const GridOption
     const std::vector<Vec3> up_dirs =
         top ? std::vector<Vec3>{} : octahedral::map_directions(up_side);
     // The fix traces from each interval's start to the upper probes': no ray needs to know
-    // whether a surface lies before its interval, and probes inside surfaces still serve the
-    // cascade below as corners (their intervals may start in free space).
+    // whether a surface lies before its interval.
     const bool fix = o.fix && !top;
-    const int doublings = fix ? 0 : extension_doublings(c, o, v.size, top);
+    const int doublings = extension_doublings(c, o, v.size, top);
     const Extended ext = doublings > 0 ? extend_cascade(v, c, dirs, doublings, true) : Extended{};
     // What an upper probe sends along its child direction ud (for the fix: all of them).
     auto upper_at = [&](std::uint64_t q, std::size_t ud) -> const Rgb& {
@@ -282,8 +287,8 @@ Expected<Solution> solve(const Voxels& v, const Background& bg, const GridOption
         for (int x = 0; x < c.nx; ++x) {
           const std::uint64_t q = (std::uint64_t(z) * c.ny + y) * c.nx + x;
           Rgb* out = &lower[std::size_t(q) * nd];
-          const bool free = probe_free(v, c, q);
-          if (!free && !(o.fix && i > 0)) {
+          // A probe inside a surface serves no one (those above: no probe below sees it).
+          if (!probe_free(v, c, q)) {
             std::fill(out, out + nd, kNoLight);
             continue;
           }
@@ -312,8 +317,8 @@ Expected<Solution> solve(const Voxels& v, const Background& bg, const GridOption
                 float weight = 0;
                 for (int j = 0; j < 8; ++j) {
                   const float w = around.w[std::size_t(j)];
-                  if (w <= 0) continue;
                   const std::uint64_t uq = around.index[std::size_t(j)];
+                  if (w <= 0 || !holds_light(upper_at(uq, 0))) continue;
                   const Vec3 upper_probe = position_of(v, *up, uq);
                   Rgb mean{};
                   for (int cv = 0; cv < 2; ++cv)
@@ -331,7 +336,13 @@ Expected<Solution> solve(const Voxels& v, const Background& bg, const GridOption
                   sum += mean * (w / 4);
                   weight += w;
                 }
-                out[d] = weight > 0 ? sum * (1 / weight) : Rgb{};
+                if (weight > 0) {
+                  out[d] = sum * (1 / weight);
+                  continue;
+                }
+                // No upper probe seen: the ray traces its interval and on to the sky.
+                const Segment rest = march(v, p, dir, c.t_start, kInfinity);
+                out[d] = rest.radiance + (rest.blocked ? Rgb{} : rest.transmittance * bg.sky(dir));
                 continue;
               }
               // From the probe to the interval's start: a surface there leaves this ray
@@ -561,13 +572,14 @@ Rgb SunLight::at(Vec3 p, std::uint64_t& rays) const {
   return media_.empty() ? irradiance_ : irradiance_ * media_.transmittance(r, kInfinity);
 }
 
-void add_bounce(Voxels& v, const Solution& sol, const std::vector<Rgb>& base, const SunLight* sun,
-                std::vector<Vec3>* normals) {
+std::uint64_t add_bounce(Voxels& v, const Solution& sol, const std::vector<Rgb>& base,
+                         const SunLight* sun, std::vector<Vec3>* normals) {
   // Written aside: the solution marches these voxels meanwhile.
   std::vector<Rgb> next(v.emission.size()), minus(v.emission.size());
   std::vector<std::uint8_t> thin(v.emission.size(), 0);
   if (normals) normals->assign(v.emission.size(), Vec3{});
   const bool sunlit = sun && sun->on();
+  std::atomic<std::uint64_t> traced{0};
   parallel_for(v.nz, [&](int z) {
     std::uint64_t rays = 0;
     for (int y = 0; y < v.ny; ++y)
@@ -632,10 +644,12 @@ void add_bounce(Voxels& v, const Solution& sol, const std::vector<Rgb>& base, co
         }
         if (normals) (*normals)[k] = normal;
       }
+    traced.fetch_add(rays, std::memory_order_relaxed);
   });
   v.emission = std::move(next);
   v.emission_minus = std::move(minus);
   v.thin = std::move(thin);
+  return traced.load();
 }
 
 Rgb RadianceCache::reflected(Vec3 p, Vec3 n) const {
@@ -671,6 +685,7 @@ Rgb RadianceCache::reflected(Vec3 p, Vec3 n) const {
 
 Expected<RadianceCache> radiance_cache(const Scene& scene, const RayScene& rays,
                                        const RenderOptions& options, int bounces) {
+  if (bounces < 1) return Error{"the radiance cache holds at least one bounce"};
   Expected<Voxels> voxels = voxelise(scene, voxel_size(scene, options), options.max_memory / 4);
   if (!voxels) return voxels.error();
   const Background bg(scene);
@@ -699,15 +714,19 @@ Expected<RadianceCache> radiance_cache(const Scene& scene, const RayScene& rays,
   std::vector<Rgb>().swap(v.emission);
   std::vector<Rgb>().swap(v.emission_minus);
   std::vector<Rgb>().swap(v.albedo);
+  std::vector<std::uint8_t>().swap(v.skip);
   return cache;
 }
 
-Status check(const Scene&, const RenderOptions& options) {
-  const GridOptions& o = options.grid;
+Status check_options(const GridOptions& o) {
   if (!std::isfinite(o.voxel) || o.voxel < 0)
     return Error{"`grid.voxel`: expected a voxel size > 0 in world units (0: derived), found " +
                  io::format_number(o.voxel)};
   return check_cascade_options(o);
+}
+
+Status check(const Scene&, const RenderOptions& options) {
+  return check_options(options.grid);
 }
 
 float voxel_size(const Scene& scene, const RenderOptions& options) {
@@ -778,7 +797,8 @@ Expected<ImageRgb> render(const Scene& scene, const RayScene& rays, const GBuffe
     const std::vector<Rgb> base = voxels->emission;
     for (int b = 1; b < options.bounces; ++b) {
       watch.restart();
-      add_bounce(*voxels, *sol, base, &sun);
+      stats.rays += add_bounce(*voxels, *sol, base, &sun);
+      *sol = Solution{};  // its radiance freed before the next solve's
       sol = solve(*voxels, bg, options.grid, left);
       if (!sol) return sol.error();
       stats.stages.push_back({"bounce " + std::to_string(b + 1), watch.ms()});
@@ -786,13 +806,14 @@ Expected<ImageRgb> render(const Scene& scene, const RayScene& rays, const GBuffe
   }
   stats.cascades = int(sol->cascades().size());
   stats.t0 = sol->cascades()[0].t_end;
-  stats.memory_bytes = voxel_memory + cascades_bytes(sol->cascades(), options.grid);
+  stats.memory_bytes = voxel_memory + cascades_bytes(sol->cascades(), options.grid, voxels->size);
   watch.restart();
 
   const Media media(scene);
   const Vec3 sun_dir = bg.sun_direction();
-  ImageRgb img = shade_pixels(
-      g, bg, stats.rays, [&](int, int, std::size_t, const Hit& h, std::uint64_t& local) {
+  std::uint64_t shaded = 0;
+  ImageRgb img =
+      shade_pixels(g, bg, shaded, [&](int, int, std::size_t, const Hit& h, std::uint64_t& local) {
         const Rgb albedo = albedo_at(scene, h);
         Rgb l = emission_at(scene, h), mean;
         if (sol->mean_radiance(h.position, h.geometric_normal, mean, &rays)) l += albedo * mean;
@@ -804,6 +825,7 @@ Expected<ImageRgb> render(const Scene& scene, const RayScene& rays, const GBuffe
         }
         return l;
       });
+  stats.rays += shaded;
   if (!media.empty()) {
     // The fog between the camera and what each pixel shows, a probe spacing a step (the
     // in-scattered light's own resolution).

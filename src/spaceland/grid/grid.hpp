@@ -101,8 +101,9 @@ class SunLight {
 // irradiance over 4 pi included).
 // `normals`, when given, receives each surface voxel's normal (a thin wall's + side's; zero
 // where it has none).
-void add_bounce(Voxels& v, const Solution& sol, const std::vector<Rgb>& base,
-                const SunLight* sun = nullptr, std::vector<Vec3>* normals = nullptr);
+// Returns the shadow rays it traced towards the sun.
+std::uint64_t add_bounce(Voxels& v, const Solution& sol, const std::vector<Rgb>& base,
+                         const SunLight* sun = nullptr, std::vector<Vec3>* normals = nullptr);
 
 // The world-space radiance cache other methods take their later bounces from: per surface voxel,
 // the light its surfaces reflect after `bounces` bounces (albedo times the mean radiance the
@@ -136,12 +137,15 @@ Expected<RadianceCache> radiance_cache(const Scene& scene, const RayScene& rays,
 
 // Working bytes of two cascades' radiance at once, the largest pair (with extension, the lower
 // one's intervals twice over besides).
-std::uint64_t cascades_bytes(const std::vector<CascadePlan>& plan, const GridOptions& o);
+std::uint64_t cascades_bytes(const std::vector<CascadePlan>& plan, const GridOptions& o,
+                             float voxel);
 
 // How many times cascade c's traced intervals are doubled (0: traced whole).
 int extension_doublings(const CascadePlan& c, const GridOptions& o, float voxel, bool top);
 
-// The grid's options out of range.
+// The grid's options out of range or that do not go together (the method table's check; any
+// scene will do).
+Status check_options(const GridOptions& o);
 Status check(const Scene& scene, const RenderOptions& options);
 
 // The voxel size the render uses: options.grid.voxel, or the default for a quarter of

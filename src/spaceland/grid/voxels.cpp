@@ -115,8 +115,10 @@ Bounds box_bounds(const Medium& m) {
 }  // namespace
 
 std::uint64_t voxel_bytes(std::uint64_t n, bool sides) {
-  return n * (3 * sizeof(Rgb) + sizeof(std::uint8_t) +
-              (sides ? sizeof(Rgb) + sizeof(std::uint8_t) : 0));
+  // With bounces: each thin wall's second value and mark, the surfaces' own emission kept aside,
+  // and add_bounce's new emission, second values and marks while the old ones live.
+  const std::uint64_t bounce = 4 * sizeof(Rgb) + 2 * sizeof(std::uint8_t);
+  return n * (3 * sizeof(Rgb) + sizeof(std::uint8_t) + (sides ? bounce : 0));
 }
 
 Bounds grid_bounds(const Scene& scene) {

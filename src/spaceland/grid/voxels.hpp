@@ -56,8 +56,9 @@ struct Voxels {
   }
 };
 
-// Bytes a grid of n voxels holds (the distance field included); `sides`: with the thin walls'
-// second values (bounces).
+// Bytes a grid of n voxels holds (the distance field included); `sides`: at its peak through
+// bounces (the thin walls' second values, the surfaces' own emission kept aside, add_bounce's
+// new arrays beside the old).
 std::uint64_t voxel_bytes(std::uint64_t n, bool sides = false);
 
 // What voxelise covers: the surfaces' and the fog boxes' bounds.

@@ -1,6 +1,8 @@
 // libFuzzer target: the 3D scene loader (parse_scene) on arbitrary text; a scene it accepts must
 // pass check_scene, and small ones are rendered (Embree's BVH, the G-buffer and one path-traced
-// sample of two bounces), which must succeed with a finite image. docs/RELIABILITY.md.
+// sample of two bounces), which must succeed, and by the probe grid on coarse voxels, which
+// may refuse but must give a finite image. docs/RELIABILITY.md.
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
@@ -41,5 +43,15 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   options.max_memory = std::uint64_t(512) << 20;
   Expected<RenderResult> r = render(*scene, options);
   if (!r) std::abort();  // a valid small scene must render
+  // The probe grid on the same scene, coarse (the voxel derived from a small memory limit, a
+  // few thousand voxels): voxelising arbitrary geometry, fog and the sun through two bounces. It
+  // may refuse (memory); what it renders must be finite.
+  options.method = Method::grid;
+  options.grid.directions = 4;
+  options.max_memory = std::uint64_t(8) << 20;
+  Expected<RenderResult> g = render(*scene, options);
+  if (g)
+    for (std::size_t k = 0; k < g->radiance.size(); ++k)
+      if (!std::isfinite(g->radiance.data()[k])) std::abort();
   return 0;
 }

@@ -8,7 +8,9 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <iostream>
+#include <map>
 
 #include "io/image_io.hpp"
 #include "io/json_reader.hpp"
@@ -58,40 +60,59 @@ std::uint64_t scene_hash(const sl::Scene& scene) {
   return h;
 }
 
-// One configuration. `t0_scale` > 0: the method's interval is that multiple of the one its
-// defaults derived; `cascades_delta`: that many cascades more than the defaults derived;
-// `voxel_scale` > 0: the grid's voxel that multiple of its default (all known once the method's
-// defaults have run, which come first).
+// One configuration. `derive`, when set, changes the options from what the method's defaults
+// used (derived lengths are known once they have run, which come first) and returns what to add
+// to the label.
+using Derive = std::function<std::string(sl::RenderOptions&, const sl::RenderOptions& defaults)>;
 struct Run {
   std::string label, curve;
   sl::RenderOptions options;
-  double t0_scale = 0;
-  int cascades_delta = 0;
-  double voxel_scale = 0;
+  Derive derive;
 };
+
+// A derived length (t0, the voxel; `field` picks it) at `k` times the defaults', shown as `flag`.
+template <class Field>
+Derive scaled(double k, Field field, const char* flag) {
+  return [k, field, flag](sl::RenderOptions& o, const sl::RenderOptions& d) {
+    float& v = field(o);
+    v = float(k * field(d));
+    // Appended piece by piece: GCC 12 warns falsely (-Wrestrict) on a chain of +.
+    std::string label = " ";
+    label += io::format_rounded(k);
+    label += "x (";
+    label += flag;
+    label += " ";
+    label += io::format_rounded(v);
+    label += ")";
+    return label;
+  };
+}
 
 // The probe grid at its defaults, then (unless quick) the voxel at half and twice its size, s0
 // and Q0 each way, t0 at half and twice, the bilinear fix and interval extension.
 void add_grid_runs(std::vector<Run>& runs, bool quick) {
-  auto grid = [&](const std::string& label, auto&& set, double t0_scale = 0,
-                  double voxel_scale = 0) {
+  auto grid = [&](const std::string& label, auto&& set, Derive derive = {}) {
     sl::RenderOptions o;
     o.method = sl::Method::grid;
     set(o.grid);
-    runs.push_back({label, "", o, t0_scale, 0, voxel_scale});
+    runs.push_back({label, "", o, std::move(derive)});
   };
   using G = sl::GridOptions;
   grid("grid (defaults)", [](G&) {});
   if (quick) return;
   for (double k : {0.5, 2.0})
     grid(
-        "grid voxel", [](G&) {}, 0, k);
+        "grid voxel", [](G&) {},
+        scaled(
+            k, [](auto& o) -> auto& { return o.grid.voxel; }, "--voxel"));
   grid("grid --probe-spacing 1", [](G& g) { g.probe_spacing = 1; });
   grid("grid --probe-spacing 4", [](G& g) { g.probe_spacing = 4; });
   grid("grid --directions 64", [](G& g) { g.directions = 64; });
   for (double k : {0.5, 2.0})
     grid(
-        "grid t0", [](G&) {}, k);
+        "grid t0", [](G&) {},
+        scaled(
+            k, [](auto& o) -> auto& { return o.grid.interval; }, "--interval"));
   grid("grid --fix bilinear", [](G& g) { g.fix = true; });
   grid("grid --extend", [](G& g) { g.extend_length = 8; });
 }
@@ -107,14 +128,13 @@ std::vector<Run> default_runs(int max_spp, bool quick) {
     if (quick && spp > 16) break;
     sl::RenderOptions o;
     o.pt.spp = spp;
-    runs.push_back({"pt " + std::to_string(spp) + " spp", "pt nee", o});
+    runs.push_back({"pt " + std::to_string(spp) + " spp", "pt nee", o, {}});
   }
-  auto spwi = [&](const std::string& label, auto&& set, double t0_scale = 0,
-                  int cascades_delta = 0) {
+  auto spwi = [&](const std::string& label, auto&& set, Derive derive = {}) {
     sl::RenderOptions o;
     o.method = sl::Method::spwi;
     set(o.spwi);
-    runs.push_back({label, "", o, t0_scale, cascades_delta});
+    runs.push_back({label, "", o, std::move(derive)});
   };
   using S = sl::SpwiOptions;
   spwi("spwi (defaults)", [](S&) {});
@@ -127,7 +147,9 @@ std::vector<Run> default_runs(int max_spp, bool quick) {
     spwi(std::string("spwi --merge ") + sl::to_string(m), [m](S& s) { s.merge = m; });
   for (double k : {0.25, 0.5, 2.0})
     spwi(
-        "spwi t0", [](S&) {}, k);
+        "spwi t0", [](S&) {},
+        scaled(
+            k, [](auto& o) -> auto& { return o.spwi.interval; }, "--interval"));
   spwi("spwi --probe-spacing 2", [](S& s) { s.probe_spacing = 2; });
   spwi("spwi --probe-spacing 8", [](S& s) { s.probe_spacing = 8; });
   spwi("spwi --directions 16", [](S& s) { s.directions = 16; });
@@ -149,10 +171,18 @@ std::vector<Run> default_runs(int max_spp, bool quick) {
     s.merge = sl::SpwiMerge::bilateral;
     s.merge_edge = 0.2f;
   });
-  spwi(
-      "spwi cascades", [](S&) {}, 0, -1);
-  spwi(
-      "spwi cascades", [](S&) {}, 0, 1);
+  for (int delta : {-1, 1})
+    spwi(
+        "spwi cascades", [](S&) {},
+        [delta](sl::RenderOptions& o, const sl::RenderOptions& d) {
+          o.spwi.cascades = std::max(1, d.spwi.cascades + delta);
+          std::string label = delta > 0 ? " +" : " ";
+          label += std::to_string(delta);
+          label += " (--cascades ";
+          label += std::to_string(o.spwi.cascades);
+          label += ")";
+          return label;
+        });
   spwi("spwi --probe-spacing 2 --directions 256", [](S& s) {
     s.probe_spacing = 2;
     s.directions = 256;
@@ -208,31 +238,14 @@ int run_quality3d(const QualityArgs& a) {
 
   std::vector<study::Row> rows;
   std::vector<quality_detail::Montage> montages;
-  float default_t0 = 0, grid_t0 = 0, grid_voxel = 0;
-  int default_cascades = 0;
+  std::map<sl::Method, sl::RenderOptions> defaults;  // what each method's defaults used
   std::vector<sl::Method> refused;  // methods whose defaults refused the scene (spwi: fog)
   for (Run& run : default_runs(a.max_spp, a.quick)) {
     sl::RenderOptions o = run.options;
     o.threads = a.threads;
     o.bounces = a.bounces;
     if (std::find(refused.begin(), refused.end(), o.method) != refused.end()) continue;
-    const bool grid = o.method == sl::Method::grid;
-    if (run.cascades_delta != 0) {
-      o.spwi.cascades = std::max(1, default_cascades + run.cascades_delta);
-      run.label += (run.cascades_delta > 0 ? " +" : " ") + std::to_string(run.cascades_delta) +
-                   " (--cascades " + std::to_string(o.spwi.cascades) + ")";
-    }
-    if (run.t0_scale > 0) {
-      float& t0 = grid ? o.grid.interval : o.spwi.interval;
-      t0 = float(run.t0_scale * (grid ? grid_t0 : default_t0));
-      run.label +=
-          " " + io::format_rounded(run.t0_scale) + "x (--interval " + io::format_rounded(t0) + ")";
-    }
-    if (run.voxel_scale > 0) {
-      o.grid.voxel = float(run.voxel_scale * grid_voxel);
-      run.label += " " + io::format_rounded(run.voxel_scale) + "x (--voxel " +
-                   io::format_rounded(o.grid.voxel) + ")";
-    }
+    if (run.derive) run.label += run.derive(o, defaults.at(o.method));
     Expected<sl::RenderResult> r = sl::render(*scene, o);
     if (!r && run.label.find("(defaults)") != std::string::npos) {
       // A method that cannot carry the scene (SPWI and fog): its runs are left out, said here.
@@ -249,15 +262,8 @@ int run_quality3d(const QualityArgs& a) {
                 row.time_ms, 100 * m->relative_rmse, m->psnr);
     std::fflush(stdout);
     rows.push_back(row);
-    if (run.label == "spwi (defaults)") {
-      default_t0 = r->options.spwi.interval;
-      default_cascades = r->options.spwi.cascades;
-    }
-    if (run.label == "grid (defaults)") {
-      grid_t0 = r->options.grid.interval;
-      grid_voxel = r->options.grid.voxel;
-    }
     if (run.label == "spwi (defaults)" || run.label == "grid (defaults)") {
+      defaults[o.method] = r->options;
       flatland::MontageOptions mo;
       mo.test_label = run.label;
       mo.reference_label = "path tracer, " + std::to_string(a.reference_spp) + " spp";
@@ -266,10 +272,10 @@ int run_quality3d(const QualityArgs& a) {
           flatland::comparison_montage(r->radiance, reference, nullptr, mo);
       if (!montage) return fail(montage.error().message);
       const std::string method = sl::to_string(o.method);
-      montages.push_back(
-          {method + "_vs_reference.png",
-           std::string(grid ? "the probe grid" : "SPWI") + " at its defaults against the reference",
-           *montage});
+      montages.push_back({method + "_vs_reference.png",
+                          std::string(o.method == sl::Method::grid ? "the probe grid" : "SPWI") +
+                              " at its defaults against the reference",
+                          *montage});
     }
   }
   return output.finish(rows, ref, montages);

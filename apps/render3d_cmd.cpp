@@ -89,22 +89,21 @@ int render_scene_3d(const RenderArgs& a) {
         return kUsage;
       }
     }
-  // spwi: its defaults, and the options shared with 2D's cascades where they were given.
+  // spwi and grid: their defaults, and the options they share with 2D's cascades where given.
+  auto given = [&](const char* name) { return a.app && a.app->get_option(name)->count() > 0; };
+  auto cascade_options = [&](auto& m) {
+    if (given("--probe-spacing")) m.probe_spacing = a.options.rc.probe_spacing;
+    if (given("--directions")) m.directions = a.options.rc.directions;
+    if (given("--interval")) m.interval = a.options.rc.interval;
+    if (given("--cascades")) m.cascades = a.options.rc.cascades;
+  };
   options.spwi = a.spwi;
   if (a.disjoint) options.spwi.overlap = false;
-  auto given = [&](const char* name) { return a.app && a.app->get_option(name)->count() > 0; };
-  if (given("--probe-spacing")) options.spwi.probe_spacing = a.options.rc.probe_spacing;
-  if (given("--directions")) options.spwi.directions = a.options.rc.directions;
-  if (given("--interval")) options.spwi.interval = a.options.rc.interval;
-  if (given("--cascades")) options.spwi.cascades = a.options.rc.cascades;
+  cascade_options(options.spwi);
   if (given("--branching")) options.spwi.branching = a.options.rc.branching;
   if (given("--preaverage")) options.spwi.preaverage = a.options.rc.preaverage;
-  // grid: the same for its own.
   options.grid = a.grid;
-  if (given("--probe-spacing")) options.grid.probe_spacing = a.options.rc.probe_spacing;
-  if (given("--directions")) options.grid.directions = a.options.rc.directions;
-  if (given("--interval")) options.grid.interval = a.options.rc.interval;
-  if (given("--cascades")) options.grid.cascades = a.options.rc.cascades;
+  cascade_options(options.grid);
   // Extension on with --extend, tracing --extend-length voxels (cells in 2D); the fix off unless
   // --fix bilinear (2D's default is on: there every merge takes it).
   if (given("--extend") || given("--extend-length"))
@@ -178,12 +177,16 @@ int render_scene_3d(const RenderArgs& a) {
     if (options.method == sl::Method::pt)
       parameters.update(
           {{"spp", options.pt.spp}, {"time", options.pt.seconds}, {"seed", options.pt.seed}});
+    auto cascade_parameters = [&](const auto& m) {
+      parameters.update({{"probe_spacing", m.probe_spacing},
+                         {"directions", m.directions},
+                         {"interval", m.interval},
+                         {"cascades", m.cascades}});
+    };
+    if (options.method == sl::Method::spwi) cascade_parameters(used.spwi);
+    if (options.method == sl::Method::grid) cascade_parameters(used.grid);
     if (options.method == sl::Method::spwi)
-      parameters.update({{"probe_spacing", used.spwi.probe_spacing},
-                         {"directions", used.spwi.directions},
-                         {"interval", used.spwi.interval},
-                         {"cascades", used.spwi.cascades},
-                         {"branching", used.spwi.branching},
+      parameters.update({{"branching", used.spwi.branching},
                          {"merge", sl::to_string(used.spwi.merge)},
                          {"sun", sl::to_string(used.spwi.sun)},
                          {"gather", sl::to_string(used.spwi.gather)},
@@ -195,10 +198,7 @@ int render_scene_3d(const RenderArgs& a) {
                          {"gather_normal", used.spwi.gather_normal}});
     if (options.method == sl::Method::grid)
       parameters.update({{"voxel", used.grid.voxel},
-                         {"probe_spacing", used.grid.probe_spacing},
-                         {"directions", used.grid.directions},
-                         {"interval", used.grid.interval},
-                         {"cascades", used.grid.cascades},
+                         {"voxel_memory_bytes", result->voxel_bytes},
                          {"extend_length", used.grid.extend_length},
                          {"fix", used.grid.fix ? "bilinear" : "none"}});
     nlohmann::json j = {{"method", sl::to_string(options.method)},
@@ -234,9 +234,9 @@ int render_scene_3d(const RenderArgs& a) {
                   penumbra::io::format_rounded(result->options.spwi.interval).c_str(),
                   sl::to_string(options.spwi.merge), sl::to_string(options.spwi.sun));
     else if (options.method == sl::Method::grid)
-      std::printf(", voxel %s, %d cascades, t0 %s\n",
+      std::printf(", voxel %s (%.1f MiB of voxels), %d cascades, t0 %s\n",
                   penumbra::io::format_rounded(result->options.grid.voxel).c_str(),
-                  result->options.grid.cascades,
+                  double(result->voxel_bytes) / (1 << 20), result->options.grid.cascades,
                   penumbra::io::format_rounded(result->options.grid.interval).c_str());
     else
       std::printf(", %llu samples per pixel, %d bounce%s\n", (unsigned long long)result->samples,

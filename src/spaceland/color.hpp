@@ -8,6 +8,9 @@ namespace penumbra::spaceland {
 constexpr Rgb operator+(Rgb a, Rgb b) {
   return {a.r + b.r, a.g + b.g, a.b + b.b};
 }
+constexpr Rgb operator-(Rgb a, Rgb b) {
+  return {a.r - b.r, a.g - b.g, a.b - b.b};
+}
 constexpr Rgb operator*(Rgb a, Rgb b) {
   return {a.r * b.r, a.g * b.g, a.b * b.b};
 }

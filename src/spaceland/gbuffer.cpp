@@ -21,17 +21,26 @@ Rgb emission_at(const Scene& scene, const Hit& hit) {
   return scene.materials[hit.material].emission;
 }
 
-Rgb direct_sun(const Scene& scene, const RayScene& tracer, Vec3 sun_direction, const Hit& hit,
-               Rgb albedo, std::uint64_t& rays) {
-  const float cos_s = dot(hit.shading_normal, sun_direction);
-  if (!(cos_s > 0) || !(dot(hit.geometric_normal, sun_direction) > 0)) return {};
+SunLight::SunLight(const Scene& scene, const RayScene& rays) : rays_(&rays), media_(scene) {
+  const Background bg(scene);
+  on_ = bg.has_sun();
+  if (!on_) return;
+  dir_ = bg.sun_direction();
+  irradiance_ = scene.sun.irradiance;
+}
+
+Rgb SunLight::at(Vec3 p, std::uint64_t& rays) const {
   ++rays;
-  const Ray r{tracer.spawn(hit.position, hit.geometric_normal, sun_direction), sun_direction, 0,
-              std::numeric_limits<float>::infinity()};
-  if (tracer.occluded(r)) return {};
-  const float k = float(cos_s / kPi);
-  return {albedo.r * scene.sun.irradiance.r * k, albedo.g * scene.sun.irradiance.g * k,
-          albedo.b * scene.sun.irradiance.b * k};
+  const Ray r{p, dir_, 0, std::numeric_limits<float>::infinity()};
+  if (rays_->occluded(r)) return {};
+  return media_.empty() ? irradiance_ : irradiance_ * media_.transmittance(r, r.tmax);
+}
+
+Rgb SunLight::reflected(const Hit& hit, Rgb albedo, std::uint64_t& rays) const {
+  const float cos_s = dot(hit.shading_normal, dir_);
+  if (!on_ || !(cos_s > 0) || !(dot(hit.geometric_normal, dir_) > 0)) return {};
+  return albedo * at(rays_->spawn(hit.position, hit.geometric_normal, dir_), rays) *
+         float(cos_s / kPi);
 }
 
 void face_towards(Hit& hit, Vec3 d) {

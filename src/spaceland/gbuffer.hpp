@@ -12,6 +12,7 @@
 #include "penumbra/spaceland/scene.hpp"
 #include "spaceland/camera.hpp"
 #include "spaceland/embree/ray_scene.hpp"
+#include "spaceland/media.hpp"
 
 namespace penumbra::spaceland {
 
@@ -19,11 +20,27 @@ namespace penumbra::spaceland {
 Rgb albedo_at(const Scene& scene, const Hit& hit);
 Rgb emission_at(const Scene& scene, const Hit& hit);
 
-// The sun's direct light reflected at a visible hit (normals faced to the camera): albedo E cos /
-// pi where one shadow ray towards the sun's centre reaches it (hard shadows), else 0. Counts the
-// shadow ray in `rays` when it traces one.
-Rgb direct_sun(const Scene& scene, const RayScene& tracer, Vec3 sun_direction, const Hit& hit,
-               Rgb albedo, std::uint64_t& rays);
+// The sun's light reaching a point: its irradiance (normal to it) where one exact shadow ray
+// towards its centre passes (hard shadows), times the fog's transmittance on the way. Each
+// shadow ray traced is counted in `rays`.
+class SunLight {
+ public:
+  SunLight(const Scene& scene, const RayScene& rays);
+  bool on() const { return on_; }
+  Vec3 direction() const { return dir_; }
+  // The irradiance normal to the sun reaching free point p.
+  Rgb at(Vec3 p, std::uint64_t& rays) const;
+  // Reflected at a visible hit (normals faced to the camera): albedo E cos / pi, 0 where the
+  // surface faces away or the shadow ray is blocked.
+  Rgb reflected(const Hit& hit, Rgb albedo, std::uint64_t& rays) const;
+
+ private:
+  const RayScene* rays_;
+  Media media_;
+  bool on_ = false;
+  Vec3 dir_{};
+  Rgb irradiance_{};
+};
 
 // Turns a hit's normals to the side the ray arrives from (surfaces are two-sided).
 void face_towards(Hit& hit, Vec3 ray_direction);
@@ -50,7 +67,7 @@ ImageRgb aov_image(const Scene& scene, const GBuffer& g, Aov aov);
 
 // The camera's image shaded in parallel rows: a pixel that sees the sky shows `bg`, one that
 // hits a surface shade(x, y, k, hit, rays) (k = y * width + x; `rays` counts the rays the
-// shading traces, summed into `traced`).
+// shading traces, added to `traced`).
 template <class Shade>
 ImageRgb shade_pixels(const GBuffer& g, const Background& bg, std::uint64_t& traced,
                       Shade&& shade) {
@@ -64,7 +81,7 @@ ImageRgb shade_pixels(const GBuffer& g, const Background& bg, std::uint64_t& tra
     }
     count.fetch_add(local, std::memory_order_relaxed);
   });
-  traced = count.load();
+  traced += count.load();
   return img;
 }
 

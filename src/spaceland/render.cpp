@@ -30,7 +30,7 @@ std::uint64_t pt_bytes(const Scene& scene, const RenderOptions&) {
 // What a method's solver is handed, and what it gives back besides the image.
 struct Solved {
   std::vector<StageTime> stages;
-  std::uint64_t rays = 0, samples = 0, memory_bytes = 0;
+  std::uint64_t rays = 0, samples = 0, memory_bytes = 0, voxel_bytes = 0;
   bool cancelled = false;
   RenderOptions derived;  // the options with the values the method derived filled in
 };
@@ -76,6 +76,7 @@ Expected<ImageRgb> grid_solve(const Scene& scene, const RayScene& rays, const GB
   out.derived.grid.voxel = stats.voxel;
   out.derived.grid.interval = stats.t0;
   out.derived.grid.cascades = stats.cascades;
+  out.voxel_bytes = stats.voxel_bytes;
   return img;
 }
 
@@ -272,6 +273,7 @@ Expected<RenderResult> render(const Scene& scene, const RenderOptions& options) 
       result.samples = solved.samples;
       result.cancelled = solved.cancelled;
       result.memory_bytes += solved.memory_bytes;
+      result.voxel_bytes = solved.voxel_bytes;
       result.options = solved.derived;
     }
     result.time_ms = total.ms();

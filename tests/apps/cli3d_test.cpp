@@ -110,6 +110,8 @@ TEST_F(Cli3d, GridReportsItsVoxelsAndIsRefusedItsOthersOptions) {
   EXPECT_TRUE(j["stages"].contains("voxelise"));
   EXPECT_EQ(p["extend_length"], 0);
   EXPECT_EQ(p["fix"], "none");
+  EXPECT_GT(p["voxel_memory_bytes"].get<double>(), 0.0);
+  EXPECT_LT(p["voxel_memory_bytes"].get<double>(), j["memory_bytes"].get<double>());
   // Extension and the fix, shared with 2D's cascades; 2D's nearest merge is not the grid's.
   const auto e = run({"render", scene_, "--method", "grid", "--voxel", "0.25", "--extend",
                       "--extend-length", "4", "--json", "-o", out("e.pfm")});

@@ -193,6 +193,9 @@ TEST(Grid, RenderGivesTheEnclosureAndRefusesBadOptions) {
     EXPECT_FLOAT_EQ(r.options.grid.voxel, 0.05f);
     EXPECT_GE(r.options.grid.cascades, 2);
     EXPECT_GT(r.memory_bytes, voxel_bytes(1000));
+    // The voxels' share, reported: 2 x 2.5 x 3 over voxels of 0.05 and the padding each side.
+    EXPECT_EQ(r.voxel_bytes, voxel_bytes(48 * 58 * 68, bounces > 1));
+    EXPECT_LT(r.voxel_bytes, r.memory_bytes);
   }
   o.grid.directions = 12;
   EXPECT_FALSE(render(s, o).ok());

@@ -141,6 +141,7 @@ struct RenderResult {
   std::vector<StageTime> stages;   // in the order they ran
   double time_ms = 0;              // computation only (BVH build included), no file I/O
   std::uint64_t memory_bytes = 0;  // peak working memory (BVH, buffers; not the scene)
+  std::uint64_t voxel_bytes = 0;   // the probe grid's voxels, part of memory_bytes (else 0)
   std::uint64_t rays = 0;          // rays traced (closest-hit and shadow)
   std::uint64_t samples = 0;       // samples per pixel in the result
   bool cancelled = false;          // stopped early through RenderOptions::cancel

@@ -12,6 +12,7 @@
 #include "core/timer.hpp"
 #include "io/json_reader.hpp"
 #include "spaceland/color.hpp"
+#include "spaceland/probe_light.hpp"
 
 namespace penumbra::spaceland::grid {
 
@@ -19,13 +20,6 @@ namespace {
 
 constexpr int kMaxCascades = 12;
 constexpr float kInfinity = std::numeric_limits<float>::infinity();
-
-// A ray of an upper cascade that met a surface before its interval: what lies beyond is not on
-// the lower probe's ray, so no lower ray takes it.
-constexpr Rgb kNoLight{-1, 0, 0};
-bool holds_light(const Rgb& c) {
-  return c.r >= 0;
-}
 
 // The voxel a probe of spacing s sits in, along one axis: the middle of its block.
 int probe_voxel(int a, int s) {
@@ -186,6 +180,12 @@ struct Extended {
   std::vector<std::uint8_t> before;
 };
 
+// What a ray sees along a segment and, where the segment does not end on a surface, `beyond` it
+// through the segment's transmittance.
+Rgb then(const Segment& s, Rgb beyond) {
+  return s.blocked ? s.radiance : s.radiance + s.transmittance * beyond;
+}
+
 // Calls ray(q, p, d, k) for every probe q of cascade c (at world position p) and direction d
 // (k = q * nd + d), rows of probes in parallel.
 template <class Ray>
@@ -200,7 +200,7 @@ void for_each_ray(const Voxels& v, const CascadePlan& c, std::size_t nd, Ray&& r
 }
 
 Extended extend_cascade(const Voxels& v, const CascadePlan& c, const std::vector<Vec3>& dirs,
-                        int doublings, bool check_before) {
+                        int doublings) {
   const std::size_t nd = dirs.size(), count = std::size_t(c.probes());
   Extended e;
   e.radiance.resize(count * nd);
@@ -208,7 +208,7 @@ Extended extend_cascade(const Voxels& v, const CascadePlan& c, const std::vector
   e.before.assign(count * nd, 0);
   const float piece = (c.t_end - c.t_start) / float(1 << doublings);
   for_each_ray(v, c, nd, [&](std::uint64_t, Vec3 p, std::size_t d, std::size_t k) {
-    if (check_before && c.t_start > 0) e.before[k] = march(v, p, dirs[d], 0, c.t_start).blocked;
+    if (c.t_start > 0) e.before[k] = march(v, p, dirs[d], 0, c.t_start).blocked;
     const Segment s = march(v, p, dirs[d], c.t_start, c.t_start + piece);
     e.radiance[k] = s.radiance;
     e.transmittance[k] = s.blocked ? Rgb{} : s.transmittance;
@@ -260,24 +260,23 @@ Expected<Solution> solve(const Voxels& v, const Background& bg, const GridOption
                  " MiB; use a larger --voxel or fewer --directions"};
 
   std::vector<Rgb> upper, lower;
+  std::vector<Vec3> dirs, up_dirs;  // this cascade's directions and the one above's
   std::vector<double> ms(plan.size());
   for (int i = int(plan.size()) - 1; i >= 0; --i) {
     Stopwatch watch;
     const CascadePlan& c = plan[std::size_t(i)];
     const bool top = i == int(plan.size()) - 1;
-    const std::vector<Vec3> dirs = octahedral::map_directions(c.side);
+    dirs = octahedral::map_directions(c.side);
     const std::size_t nd = dirs.size();
     const std::uint64_t count = c.probes();
     lower.assign(std::size_t(count) * nd, Rgb{});
     const CascadePlan* up = top ? nullptr : &plan[std::size_t(i) + 1];
     const int up_side = top ? 0 : up->side;
-    const std::vector<Vec3> up_dirs =
-        top ? std::vector<Vec3>{} : octahedral::map_directions(up_side);
     // The fix traces from each interval's start to the upper probes': no ray needs to know
     // whether a surface lies before its interval.
     const bool fix = o.fix && !top;
     const int doublings = extension_doublings(c, o, v.size, top);
-    const Extended ext = doublings > 0 ? extend_cascade(v, c, dirs, doublings, true) : Extended{};
+    const Extended ext = doublings > 0 ? extend_cascade(v, c, dirs, doublings) : Extended{};
     // What an upper probe sends along its child direction ud (for the fix: all of them).
     auto upper_at = [&](std::uint64_t q, std::size_t ud) -> const Rgb& {
       return upper[std::size_t(q) * (std::size_t(up_side) * up_side) + ud];
@@ -328,10 +327,8 @@ Expected<Solution> solve(const Voxels& v, const Background& bg, const GridOption
                       const Vec3 from = p + up_dirs[ud] * c.t_start;
                       const Vec3 to = upper_probe + up_dirs[ud] * up->t_start - from;
                       const float dist = length(to);
-                      const Segment s =
-                          dist > 0 ? march(v, from, to * (1 / dist), 0, dist) : Segment{};
-                      mean +=
-                          s.blocked ? s.radiance : s.radiance + s.transmittance * upper_at(uq, ud);
+                      mean += then(dist > 0 ? march(v, from, to * (1 / dist), 0, dist) : Segment{},
+                                   upper_at(uq, ud));
                     }
                   sum += mean * (w / 4);
                   weight += w;
@@ -341,8 +338,7 @@ Expected<Solution> solve(const Voxels& v, const Background& bg, const GridOption
                   continue;
                 }
                 // No upper probe seen: the ray traces its interval and on to the sky.
-                const Segment rest = march(v, p, dir, c.t_start, kInfinity);
-                out[d] = rest.radiance + (rest.blocked ? Rgb{} : rest.transmittance * bg.sky(dir));
+                out[d] = then(march(v, p, dir, c.t_start, kInfinity), bg.sky(dir));
                 continue;
               }
               // From the probe to the interval's start: a surface there leaves this ray
@@ -364,12 +360,8 @@ Expected<Solution> solve(const Voxels& v, const Background& bg, const GridOption
                 }
                 s = march(v, p, dir, c.t_start, c.t_end);
               }
-              if (s.blocked) {
-                out[d] = s.radiance;
-                continue;
-              }
-              if (top) {
-                out[d] = s.radiance + s.transmittance * bg.sky(dir);
+              if (s.blocked || top) {
+                out[d] = then(s, bg.sky(dir));
                 continue;
               }
               // The upper probes around this one, each through the mean of its 2x2 children of
@@ -399,14 +391,12 @@ Expected<Solution> solve(const Voxels& v, const Background& bg, const GridOption
                 continue;
               }
               // No upper probe has light this way: the ray continues itself to the sky.
-              const Segment rest = march(v, p, dir, c.t_end, kInfinity);
-              out[d] = s.radiance + s.transmittance *
-                                        (rest.radiance +
-                                         (rest.blocked ? Rgb{} : rest.transmittance * bg.sky(dir)));
+              out[d] = then(s, then(march(v, p, dir, c.t_end, kInfinity), bg.sky(dir)));
             }
         }
     });
     std::swap(upper, lower);
+    std::swap(up_dirs, dirs);
     ms[std::size_t(i)] = watch.ms();
   }
 
@@ -414,7 +404,7 @@ Expected<Solution> solve(const Voxels& v, const Background& bg, const GridOption
   sol.cascade_ms_ = std::move(ms);
   sol.voxels_ = &v;
   sol.plan_ = plan;
-  sol.dirs_ = octahedral::map_directions(plan[0].side);
+  sol.dirs_ = std::move(up_dirs);  // cascade 0's, swapped up last
   sol.radiance_ = std::move(upper);
   const std::size_t nd = sol.dirs_.size();
   sol.valid_.resize(std::size_t(plan[0].probes()));
@@ -539,37 +529,13 @@ bool Solution::mean_radiance(Vec3 p, Vec3 n, Rgb& out, const RayScene* rays) con
       const float dist = length(to);
       if (dist > 0 && march(v, free_point, to * (1 / dist), 0, dist).blocked) return false;
     }
-    Rgb mean{};
-    float cos_sum = 0;
-    for (std::size_t d = 0; d < nd; ++d) {
-      const float cos_t = dot(n, dirs_[d]);
-      const Rgb& r = radiance_[std::size_t(q) * nd + d];
-      if (cos_t <= 0 || !holds_light(r)) continue;
-      mean += r * cos_t;
-      cos_sum += cos_t;
-    }
-    if (!(cos_sum > 0)) return false;
-    value = mean * (1 / cos_sum);
-    return true;
+    return cosine_mean(
+        dirs_, n, [&](std::size_t d) -> const Rgb& { return radiance_[std::size_t(q) * nd + d]; },
+        value);
   };
   // Where none of the 8 probes around p serves (they sit in the surface's own voxels, or behind
   // it), up to 4 probe spacings out.
   return tent(v, plan_[0], valid_, p, 4, serve, out);
-}
-
-SunLight::SunLight(const Scene& scene, const RayScene& rays) : rays_(&rays), media_(scene) {
-  const Background bg(scene);
-  on_ = bg.has_sun();
-  if (!on_) return;
-  dir_ = bg.sun_direction();
-  irradiance_ = scene.sun.irradiance;
-}
-
-Rgb SunLight::at(Vec3 p, std::uint64_t& rays) const {
-  ++rays;
-  const Ray r{p, dir_, 0, kInfinity};
-  if (rays_->occluded(r)) return {};
-  return media_.empty() ? irradiance_ : irradiance_ * media_.transmittance(r, kInfinity);
 }
 
 std::uint64_t add_bounce(Voxels& v, const Solution& sol, const std::vector<Rgb>& base,
@@ -590,8 +556,8 @@ std::uint64_t add_bounce(Voxels& v, const Solution& sol, const std::vector<Rgb>&
         if (!v.opaque(k)) {
           // Fog re-emits what it scatters: sigma_s times the sphere's mean radiance.
           if (is_black(v.extinction[k]) || is_black(v.albedo[k])) continue;
-          Rgb in{};
-          if (!sol.sphere_radiance(centre, in)) in = {};
+          Rgb in{};  // none where no probe is seen
+          sol.sphere_radiance(centre, in);
           if (sunlit) in += sun->at(centre, rays) * float(1 / (4 * kPi));
           next[k] += v.extinction[k] * v.albedo[k] * in;
           continue;
@@ -704,11 +670,8 @@ Expected<RadianceCache> radiance_cache(const Scene& scene, const RayScene& rays,
   cache.reflected_.resize(base.size());
   cache.reflected_minus_.resize(base.size());
   for (std::size_t k = 0; k < base.size(); ++k) {
-    cache.reflected_[k] = {v.emission[k].r - base[k].r, v.emission[k].g - base[k].g,
-                           v.emission[k].b - base[k].b};
-    cache.reflected_minus_[k] = {v.emission_minus[k].r - base[k].r,
-                                 v.emission_minus[k].g - base[k].g,
-                                 v.emission_minus[k].b - base[k].b};
+    cache.reflected_[k] = v.emission[k] - base[k];
+    cache.reflected_minus_[k] = v.emission_minus[k] - base[k];
   }
   // Lookups need only where the surfaces are (the extinction's opaque mark) and the thin walls.
   std::vector<Rgb>().swap(v.emission);
@@ -750,23 +713,16 @@ Rgb through_fog(const Media& media, const Solution& sol, const SunLight& sun, fl
     if (!(len > 0)) continue;
     const int steps = int(std::clamp(std::ceil(double(len) / step), 1.0, 4096.0));
     const float dt = len / float(steps);
-    const float sigma[3] = {piece.sigma_t.r, piece.sigma_t.g, piece.sigma_t.b};
-    float pass[3];
-    for (int c = 0; c < 3; ++c) pass[c] = std::exp(-sigma[c] * dt);
-    const Rgb through{pass[0], pass[1], pass[2]};
+    const Rgb& sigma = piece.sigma_t;
+    const Rgb through{std::exp(-sigma.r * dt), std::exp(-sigma.g * dt), std::exp(-sigma.b * dt)};
     for (int i = 0; i < steps; ++i) {
       const Vec3 x = origin + dir * (piece.t0 + (float(i) + 0.5f) * dt);
-      Rgb in{};
+      Rgb in{};  // none where no probe is seen
       if (!is_black(piece.sigma_s)) {
-        if (!sol.sphere_radiance(x, in)) in = {};
+        sol.sphere_radiance(x, in);
         if (sun.on()) in += sun.at(x, rays) * sun_share;
       }
-      const Rgb source = piece.emission + piece.sigma_s * in;
-      const float src[3] = {source.r, source.g, source.b};
-      float gain[3];
-      for (int c = 0; c < 3; ++c)
-        gain[c] = sigma[c] * dt > 1e-4f ? src[c] * (1 - pass[c]) / sigma[c] : src[c] * dt;
-      l += tr * Rgb{gain[0], gain[1], gain[2]};
+      l += tr * stretch_light(sigma, piece.emission + piece.sigma_s * in, dt, through);
       tr *= through;
     }
   }
@@ -806,26 +762,19 @@ Expected<ImageRgb> render(const Scene& scene, const RayScene& rays, const GBuffe
   }
   stats.cascades = int(sol->cascades().size());
   stats.t0 = sol->cascades()[0].t_end;
+  stats.voxel_bytes = voxel_memory;
   stats.memory_bytes = voxel_memory + cascades_bytes(sol->cascades(), options.grid, voxels->size);
   watch.restart();
 
+  ImageRgb img = shade_pixels(g, bg, stats.rays,
+                              [&](int, int, std::size_t, const Hit& h, std::uint64_t& local) {
+                                const Rgb albedo = albedo_at(scene, h);
+                                Rgb l = emission_at(scene, h), mean;
+                                if (sol->mean_radiance(h.position, h.geometric_normal, mean, &rays))
+                                  l += albedo * mean;
+                                return l + sun.reflected(h, albedo, local);
+                              });
   const Media media(scene);
-  const Vec3 sun_dir = bg.sun_direction();
-  std::uint64_t shaded = 0;
-  ImageRgb img =
-      shade_pixels(g, bg, shaded, [&](int, int, std::size_t, const Hit& h, std::uint64_t& local) {
-        const Rgb albedo = albedo_at(scene, h);
-        Rgb l = emission_at(scene, h), mean;
-        if (sol->mean_radiance(h.position, h.geometric_normal, mean, &rays)) l += albedo * mean;
-        if (bg.has_sun()) {
-          Rgb direct = direct_sun(scene, rays, sun_dir, h, albedo, local);
-          if (!media.empty() && !is_black(direct))
-            direct *= media.transmittance(Ray{h.position, sun_dir, 0, kInfinity}, kInfinity);
-          l += direct;
-        }
-        return l;
-      });
-  stats.rays += shaded;
   if (!media.empty()) {
     // The fog between the camera and what each pixel shows, a probe spacing a step (the
     // in-scattered light's own resolution).

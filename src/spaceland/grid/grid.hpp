@@ -21,7 +21,6 @@
 #include "spaceland/embree/ray_scene.hpp"
 #include "spaceland/gbuffer.hpp"
 #include "spaceland/grid/voxels.hpp"
-#include "spaceland/media.hpp"
 
 namespace penumbra::spaceland::grid {
 
@@ -72,25 +71,6 @@ class Solution {
 // `max_bytes` (two cascades' radiance at once: the largest and the one above it).
 Expected<Solution> solve(const Voxels& v, const Background& bg, const GridOptions& o,
                          std::uint64_t max_bytes);
-
-// The sun's light reaching a point: its irradiance (normal to it) where an exact shadow ray
-// passes, times the fog's transmittance on the way.
-class SunLight {
- public:
-  SunLight(const Scene& scene, const RayScene& rays);
-  bool on() const { return on_; }
-  Vec3 direction() const { return dir_; }
-  Rgb irradiance() const { return irradiance_; }
-  // The irradiance normal to the sun reaching p, leaving from p (a free point; `rays` counts).
-  Rgb at(Vec3 p, std::uint64_t& rays) const;
-
- private:
-  const RayScene* rays_;
-  Media media_;
-  bool on_ = false;
-  Vec3 dir_{};
-  Rgb irradiance_{};
-};
 
 // One more bounce: every surface voxel's emission becomes `base` (its own) plus its albedo times
 // the mean radiance the solution brings to it, about the normal its free 6-neighbours give, plus
@@ -156,6 +136,7 @@ struct Stats {
   std::vector<StageTime> stages;  // voxelise, cascades, gather
   std::uint64_t rays = 0;         // shadow rays towards the sun (the cascades march voxels)
   std::uint64_t memory_bytes = 0;
+  std::uint64_t voxel_bytes = 0;  // the voxels' share of memory_bytes
   float voxel = 0, t0 = 0;
   int cascades = 0;
 };

@@ -405,24 +405,20 @@ Segment march(const Voxels& v, Vec3 origin, Vec3 dir, float tmin, float tmax) {
       }
       if (leave >= t1) break;
       // A point an eighth of a voxel (along every axis at most) before the exit: in one of the
-      // cube's voxels the ray crosses last.
+      // cube's voxels the ray crosses last, at least r - 1/8 voxels past this one along the
+      // exit's axis (so the leap always moves on).
       const double at = leave - 0.125 * double(v.size) /
                                     std::max({std::abs(double(dir[0])), std::abs(double(dir[1])),
                                               std::abs(double(dir[2]))});
       const int from[3] = {cell[0], cell[1], cell[2]};
-      bool moved = false;
       for (int a = 0; a < 3; ++a) {
         if (step[a] == 0) continue;
         const double p = double(origin[a]) + at * dir[a] - v.origin[a];
         cell[a] = std::clamp(int(std::floor(p / v.size)), from[a] - r, from[a] + r);
-        moved = moved || cell[a] != from[a];
         next[a] = boundary(a, cell[a]);
       }
-      if (moved) {
-        t = std::max(t, at);
-        continue;
-      }
-      // Still in the first voxel (a ray leaving through a cube's corner region): step as usual.
+      t = std::max(t, at);
+      continue;
     }
     const int axis = next[0] < next[1] ? (next[0] < next[2] ? 0 : 2) : (next[1] < next[2] ? 1 : 2);
     const double leave = std::min(next[axis], t1);
@@ -439,17 +435,9 @@ Segment march(const Voxels& v, Vec3 origin, Vec3 dir, float tmin, float tmax) {
     // An empty voxel leaves the segment as it is (transmittance 1, no light): skip the arithmetic.
     const bool empty = is_black(s) && is_black(e);
     if (len > 0 && !empty) {
-      // Per channel: emission e per unit length seen through the voxel's own extinction.
-      const float sigma[3] = {s.r, s.g, s.b}, emit[3] = {e.r, e.g, e.b};
-      float gain[3], pass[3];
-      for (int c = 0; c < 3; ++c) {
-        const float tau = sigma[c] * len;
-        pass[c] = std::exp(-tau);
-        gain[c] = tau > 1e-4f ? emit[c] * (1 - pass[c]) / sigma[c]
-                              : emit[c] * len * (1 - 0.5f * tau);  // the same, without 0/0
-      }
-      out.radiance += out.transmittance * Rgb{gain[0], gain[1], gain[2]};
-      out.transmittance *= Rgb{pass[0], pass[1], pass[2]};
+      const Rgb pass{std::exp(-s.r * len), std::exp(-s.g * len), std::exp(-s.b * len)};
+      out.radiance += out.transmittance * stretch_light(s, e, len, pass);
+      out.transmittance *= pass;
     }
     t = leave;
     if (leave >= t1) break;

@@ -12,6 +12,7 @@
 
 #include "penumbra/error.hpp"
 #include "penumbra/spaceland/scene.hpp"
+#include "spaceland/color.hpp"
 
 namespace penumbra::spaceland::grid {
 
@@ -78,6 +79,20 @@ float default_voxel_size(const Scene& scene, std::uint64_t max_bytes);
 // they cover (4^3 points a voxel; overlapping boxes add). Refuses (Error, nothing allocated) a
 // size that is not a positive number or a grid over `max_bytes`.
 Expected<Voxels> voxelise(const Scene& scene, float size, std::uint64_t max_bytes);
+
+// The light a homogeneous stretch (extinction `sigma`, a source of `source` radiance per unit
+// length) of length `len` sends to its start, seen through its own extinction; `pass` is its
+// transmittance exp(-sigma len), which the caller has (the fog on a camera ray reuses it).
+inline Rgb stretch_light(Rgb sigma, Rgb source, float len, Rgb pass) {
+  Rgb out;
+  for (int c = 0; c < 3; ++c) {
+    const float s = channel(sigma, c), e = channel(source, c), tau = s * len;
+    const float v = tau > 1e-4f ? e * (1 - channel(pass, c)) / s
+                                : e * len * (1 - 0.5f * tau);  // the same, without 0/0
+    (c == 0 ? out.r : c == 1 ? out.g : out.b) = v;
+  }
+  return out;
+}
 
 // What a ray segment picks up crossing the grid.
 struct Segment {

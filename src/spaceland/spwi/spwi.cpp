@@ -17,6 +17,7 @@
 #include "spaceland/camera.hpp"
 #include "spaceland/color.hpp"
 #include "spaceland/grid/grid.hpp"
+#include "spaceland/probe_light.hpp"
 
 namespace penumbra::spaceland::spwi {
 
@@ -32,16 +33,6 @@ int screen_cascades(int w, int h, int s0, int step) {
   int n = 1;
   while (n < kMaxCascades / step && double(s0) * double(1 << (step * (n - 1))) < diagonal) ++n;
   return n;
-}
-
-// A direction into a probe's own surface brings it no light and holds no radiance: marked by a
-// negative red (radiance is never negative), and left out wherever directions are averaged, so
-// that the weights that remain sum to one (a uniform sky gives a L exactly at any map seam).
-// So is a ray of an upper cascade that met a surface before its interval (overlap): what lies
-// between its probe and its interval is not on the lower probes' rays, so it tells them nothing.
-constexpr Rgb kNoLight{-1, 0, 0};
-bool holds_light(const Rgb& c) {
-  return c.r >= 0;
 }
 
 // A probe: a visible surface point under the pixel at the centre of its tile.
@@ -646,8 +637,9 @@ Expected<ImageRgb> render(const Scene& scene, const RayScene& rays, const GBuffe
   const int side = plan.map_side(0);
   const std::vector<Vec3> dirs = octahedral::map_directions(side);
   const std::uint64_t count = plan.probes(0);
-  const bool sun_direct = o.sun == SpwiSun::direct && bg.has_sun();
-  const Vec3 sun_dir = bg.sun_direction();
+  // The sun by one shadow ray per pixel, unless the top cascade carries it.
+  const SunLight sun(scene, rays);
+  const bool sun_direct = o.sun == SpwiSun::direct;
   // --gather probe: each probe's cosine-weighted mean radiance about its own normal, once, so
   // that a pixel reads 4 values instead of 4 x Q0 (exact where the pixel's normal is its
   // probes', as on flat surfaces). kNoLight where the probe has none towards its hemisphere.
@@ -657,16 +649,10 @@ Expected<ImageRgb> render(const Scene& scene, const RayScene& rays, const GBuffe
     parallel_for(int(count), [&](int k) {
       const Probe& pr = upper_probes[std::size_t(k)];
       if (!pr.valid) return;
-      Rgb sum{};
-      float weight = 0;
-      for (std::size_t d = 0; d < dirs.size(); ++d) {
-        const float cos_t = dot(pr.n, dirs[d]);
-        const Rgb& r = upper[d * count + std::size_t(k)];
-        if (cos_t <= 0 || !holds_light(r)) continue;
-        sum += r * cos_t;
-        weight += cos_t;
-      }
-      if (weight > 0) probe_mean[std::size_t(k)] = sum * (1 / weight);
+      cosine_mean(
+          dirs, pr.n,
+          [&](std::size_t d) -> const Rgb& { return upper[d * count + std::size_t(k)]; },
+          probe_mean[std::size_t(k)]);
     });
   }
   // A probe's cosine-weighted mean radiance over the hemisphere of normal n (--gather pixel) or
@@ -676,22 +662,13 @@ Expected<ImageRgb> render(const Scene& scene, const RayScene& rays, const GBuffe
       mean = probe_mean[std::size_t(index)];
       return holds_light(mean);
     }
-    Rgb sum{};
-    float weight = 0;
-    for (std::size_t d = 0; d < dirs.size(); ++d) {
-      const float cos_t = dot(n, dirs[d]);
-      const Rgb& r = upper[d * count + std::size_t(index)];
-      if (cos_t <= 0 || !holds_light(r)) continue;
-      sum += r * cos_t;
-      weight += cos_t;
-    }
-    if (!(weight > 0)) return false;
-    mean = sum * (1 / weight);
-    return true;
+    return cosine_mean(
+        dirs, n, [&](std::size_t d) -> const Rgb& { return upper[d * count + std::size_t(index)]; },
+        mean);
   };
-  std::uint64_t sun_rays = 0;
+  stats.rays = ray_count.load();
   ImageRgb img = shade_pixels(
-      g, bg, sun_rays, [&](int x, int y, std::size_t k, const Hit& h, std::uint64_t& local) {
+      g, bg, stats.rays, [&](int x, int y, std::size_t k, const Hit& h, std::uint64_t& local) {
         const Vec3 n = h.shading_normal;
         Rgb l = emission_at(scene, h);
         const Rgb albedo = albedo_at(scene, h);
@@ -731,11 +708,10 @@ Expected<ImageRgb> render(const Scene& scene, const RayScene& rays, const GBuffe
           }
           if (used > 0) l += albedo * e * (1 / used);
         }
-        if (sun_direct) l += direct_sun(scene, rays, sun_dir, h, albedo, local);
+        if (sun_direct) l += sun.reflected(h, albedo, local);
         return l;
       });
   stats.stages.push_back({"gather", watch.ms()});
-  stats.rays = ray_count.load() + sun_rays;
   return img;
 }
 

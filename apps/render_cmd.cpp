@@ -49,6 +49,7 @@ nlohmann::json parameters_json(const penumbra::flatland::RenderOptions& o) {
     p.erase("blocks");
     p.update({{"storage", penumbra::flatland::to_string(o.hrc.storage)},
               {"cross_blur", o.hrc.cross_blur},
+              {"blur_near_segment", o.hrc.blur_near},
               {"near_segment", o.hrc.near_segment}});
     return p;
   }
@@ -240,7 +241,9 @@ int render_scene(const RenderArgs& a) {
                   penumbra::flatland::to_string(options.pt.sampler), options.pt.nee ? ", nee" : "");
     else if (options.method == penumbra::flatland::Method::hrc)
       std::printf("storage %s, cross blur %s\n", penumbra::flatland::to_string(options.hrc.storage),
-                  options.hrc.cross_blur ? "on" : "off");
+                  !options.hrc.cross_blur ? "off"
+                  : options.hrc.blur_near ? "on the whole fluence"
+                                          : "on the light from beyond the near segment");
     else
       std::printf("%d cascades, fix %s\n", result->options.rc.cascades,
                   penumbra::flatland::to_string(options.rc.fix));

@@ -82,7 +82,10 @@ void add_render_options(CLI::App* app, RenderOptions& options, RenderOptionFlags
     add_enum_option(app, "--storage", options.hrc.storage, {Storage::f32, Storage::f16},
                     "hrc: precision of T and R: f32, f16");
   if (which.hrc) {
-    app->add_flag("--no-cross-blur", flags.no_cross_blur, "hrc: skip the final 1-cell cross blur");
+    app->add_flag("--no-cross-blur", flags.no_cross_blur, "hrc: skip the 1-cell cross blur");
+    app->add_flag("--blur-near-segment", options.hrc.blur_near,
+                  "hrc: blur the whole fluence as eq. 21 is written (default: only the light from "
+                  "beyond the near segment, so the rims of lights stay sharp)");
     app->add_flag("--no-near-segment", flags.no_near_segment,
                   "hrc: read R_0([x+1, y]) alone, as the paper (a cell's own medium left out)");
   }
@@ -133,6 +136,7 @@ std::string with_flags(std::string message) {
       {"`rc.extend`", "--extend"},
       {"`hrc.storage`", "--storage"},
       {"`hrc.cross_blur`", "--no-cross-blur"},
+      {"`hrc.blur_near`", "--blur-near-segment"},
       {"`hrc.near_segment`", "--no-near-segment"},
       {"`pt.spp`", "--spp"},
       {"`pt.seconds`", "--time"},

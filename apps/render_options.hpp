@@ -22,7 +22,7 @@ struct RenderOptionSet {
   bool rc = false;         // --probe-spacing ... --extend-length
   bool device = false;     // --device
   bool storage = false;    // --storage
-  bool hrc = false;        // --no-cross-blur --no-near-segment
+  bool hrc = false;        // --no-cross-blur --blur-near-segment --no-near-segment
   bool bounces = false;    // --bounces
   bool threads = false;    // --threads
   bool traversal = false;  // --no-distance-field --no-blocks

@@ -99,6 +99,7 @@ void Painter::draw_panel() {
       if (ImGui::Checkbox("f16 storage", &f16))
         options_.hrc.storage = f16 ? Storage::f16 : Storage::f32, changed = true;
       changed |= ImGui::Checkbox("cross blur", &options_.hrc.cross_blur);
+      changed |= ImGui::Checkbox("blur near segment", &options_.hrc.blur_near);
       changed |= ImGui::Checkbox("near segment", &options_.hrc.near_segment);
     } else if (options_.method == Method::rc) {
       RcOptions& rc = options_.rc;

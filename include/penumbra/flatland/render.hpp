@@ -50,7 +50,11 @@ enum class Storage {
 // Holographic radiance cascades (seed 004 section 4). See docs/METHODS.md.
 struct HrcOptions {
   Storage storage = Storage::f32;  // of the acceleration structure T and the cascades R
-  bool cross_blur = true;          // the final 1-cell cross blur (eq. 21)
+  bool cross_blur = true;          // the 1-cell cross blur (eq. 21)
+  // Blur the whole fluence, the near segment included, as eq. 21 is written (off: blur only the
+  // light arriving from beyond the near segment, so that a cell's own medium and the cell beside
+  // it stay sharp: the rims of lights, docs/QUALITY.md).
+  bool blur_near = false;
   // Merge the transport from a cell's centre to the probe the paper reads, R_0([x+1, y]), in
   // front of it (off: the paper's formula, which leaves a cell's own medium out of its fluence).
   bool near_segment = true;

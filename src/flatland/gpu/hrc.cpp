@@ -63,7 +63,8 @@ std::uint64_t hrc_device_bytes(int W, int H, const HrcOptions& o) {
   const int levels = int(sz.t.size()) - 1;
   const std::uint64_t value = o.storage == Storage::f16 ? 2 : 4;  // a stored T or R value
   // The world planes, and the gather's own fluence when the blur writes the result.
-  std::uint64_t bytes = std::uint64_t(W) * H * (6 + (o.cross_blur ? 3 : 0)) * sizeof(float);
+  std::uint64_t bytes =
+      std::uint64_t(W) * H * (6 + (o.cross_blur && o.blur_near ? 3 : 0)) * sizeof(float);
   bytes += 6 * std::uint64_t(sz.pad) * sizeof(float);  // view
   bytes += 2 * 3 * std::uint64_t(std::max<std::size_t>(sz.r, 1)) * value;
   bytes += ((std::uint64_t(2) << levels) - 1) * sizeof(float);  // cone angles
@@ -112,7 +113,7 @@ Status record_hrc(Cache& cache, Batch& batch, int W, int H, Buffer& step, Buffer
       {f16 ? "hrc_trace f16" : "hrc_trace", shaders::hrc_trace(f16), 4, 28},
       {f16 ? "hrc_merge_up f16" : "hrc_merge_up", shaders::hrc_merge_up(f16), 2, 20},
       {f16 ? "hrc_merge_down f16" : "hrc_merge_down", shaders::hrc_merge_down(f16), 5, 36},
-      {f16 ? "hrc_gather f16" : "hrc_gather", shaders::hrc_gather(f16), 3, 52}};
+      {f16 ? "hrc_gather f16" : "hrc_gather", shaders::hrc_gather(f16), 3, 64}};
   const Kernel* k[std::size(specs)];
   for (std::size_t i = 0; i < std::size(specs); ++i) {
     Expected<const Kernel*> kernel =
@@ -129,7 +130,8 @@ Status record_hrc(Cache& cache, Batch& batch, int W, int H, Buffer& step, Buffer
   for (const Expected<Buffer*>* b : {&world, &view, &r0, &r1})
     if (!*b) return b->error();
   Buffer* fluence = &fluence_out;
-  if (o.cross_blur) {  // the gather writes a buffer of its own, the blur writes fluence_out
+  if (o.cross_blur &&
+      o.blur_near) {  // the gather writes a buffer of its own, the blur writes fluence_out
     Expected<Buffer*> f = cache.buffer(kHrcBlur, "hrc fluence", 3 * std::size_t(cells) * 4);
     if (!f) return f.error();
     fluence = *f;
@@ -242,6 +244,8 @@ Status record_hrc(Cache& cache, Batch& batch, int W, int H, Buffer& step, Buffer
         std::uint32_t view_cells;
         std::int32_t base, su, sv, first, near;
         float er, eg, eb;
+        std::int32_t blur, last;
+        float step;
       } push{v.w,
              v.h,
              hp,
@@ -254,12 +258,15 @@ Status record_hrc(Cache& cache, Batch& batch, int W, int H, Buffer& step, Buffer
              o.near_segment ? 1 : 0,
              env.r,
              env.g,
-             env.b};
+             env.b,
+             o.cross_blur && !o.blur_near ? 1 : 0,
+             d == 3 ? 1 : 0,
+             hrc::kBlurOpacityStep};
       Buffer* b[] = {upper, *view, fluence};
       batch.dispatch(*k[5], b, &push, groups(std::size_t(v.h), 64), groups(std::size_t(v.w), 4));
     }
   }
-  if (o.cross_blur)  // the transmittance over half a cell: the world's plane 3
+  if (o.cross_blur && o.blur_near)  // the transmittance over half a cell: the world's plane 3
     return record_cross_blur(cache, batch, W, H, **world, 3 * cells, *fluence, fluence_out);
   return {};
 }

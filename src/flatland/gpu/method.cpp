@@ -60,7 +60,7 @@ bool no_jumps(const RenderOptions&) {
 
 void hrc_owners(const RenderOptions& o, std::vector<Owner>& keep) {
   keep.push_back(kHrc);
-  if (o.hrc.cross_blur) keep.push_back(kHrcBlur);
+  if (o.hrc.cross_blur && o.hrc.blur_near) keep.push_back(kHrcBlur);
 }
 
 Status hrc_record(GpuSolve& s, Batch& batch, Buffer& emission) {

@@ -82,25 +82,9 @@ struct Buffers {
   }
 };
 
-// Calls f(u, v) for every cell of a w x h view in an order that reads and writes memory in
-// runs: along v when the world neighbour of a v step is adjacent (|sv| = 1), otherwise in
-// tiles of kTile columns, row by row, so both sides of the transpose stay in cache.
+// The gather writes a quadrant's fluence into the world grid in tiles of kTile view columns,
+// row by row, where a view column is a world column (both sides of the transpose in cache).
 constexpr int kTile = 16;
-
-template <class F>
-void for_view_cells(const Rotation& rot, int w, int h, F&& f) {
-  if (rot.sv == 1 || rot.sv == -1) {
-    parallel_for(w, [&](int u) {
-      for (int v = 0; v < h; ++v) f(u, v);
-    });
-    return;
-  }
-  parallel_for((w + kTile - 1) / kTile, [&](int tile) {
-    const int u0 = tile * kTile, u1 = std::min(w, u0 + kTile);
-    for (int v = 0; v < h; ++v)
-      for (int u = u0; u < u1; ++u) f(u, v);
-  });
-}
 
 // The medium as planes in world layout (row by row), computed once per solve: the rotated
 // views are then permutations of it.
@@ -568,18 +552,79 @@ void merge_down(const View& view, int n, const S* tn, const S* tn1, const S* rn1
   });
 }
 
-// Trace([u, v], [u + 1, v]) from the centre of cell `own` into the centre of `next`, leaving an
-// opaque own cell without interacting (as every method treats a wall cell's fluence: the light
-// arriving at it).
-inline Interval near_segment(const ViewPlanes& vp, std::size_t own) {
-  const std::size_t next = own + vp.hp;
-  const float* tau = vp.plane(kTau0);
-  // An opaque own cell (e^-inf = 0) is left as if empty.
-  const float t_own = tau[own] == 0.0f ? 1.0f : tau[own], t_next = tau[next];
-  const float w_own = 1.0f - t_own, w_next = t_own * (1.0f - t_next);
-  const float *r = vp.plane(kR), *g = vp.plane(kG), *b = vp.plane(kB);
-  return {w_own * r[own] + w_next * r[next], w_own * g[own] + w_next * g[next],
-          w_own * b[own] + w_next * b[next], t_own * t_next};
+// Rows [0, h) of the R_0 read of view column u (R_0 at column u + 1, `edge` beyond the view),
+// channel by channel into c[0..2].
+template <class S>
+void r0_column(const S* r0, const View& view, int u, const Rad& edge, float* const c[3]) {
+  const int h = view.h;
+  if (u < 0 || u + 1 >= view.w) {
+    std::fill(c[0], c[0] + h, edge.r), std::fill(c[1], c[1] + h, edge.g);
+    std::fill(c[2], c[2] + h, edge.b);
+    return;
+  }
+  const S* col = r0 + std::size_t(u + 1) * kRChannels * h;
+  for (int ch = 0; ch < 3; ++ch)
+    for (int v = 0; v < h; ++v) c[ch][v] = load(col[std::size_t(ch) * h + v]);
+}
+
+// A quadrant's fluence over view column u into q[0..2] (rows [0, h)): the R_0 read, blurred by
+// eq. 21 over the cell's neighbours when `blur` (4 at the centre, 1 for each neighbour
+// blur_together() admits, beyond the grid none), then the near segment past the cell's own
+// edge when `near`. Column by column so the loops vectorise; `scratch` holds 14 columns.
+template <class S>
+void quadrant_column(const S* r0, const View& view, const ViewPlanes& vp, int u, const Rad& edge,
+                     bool blur, bool near, float* scratch, float* const q[3]) {
+  const int h = view.h;
+  r0_column(r0, view, u, edge, q);
+  if (blur) {
+    float* left[3] = {scratch, scratch + h, scratch + 2 * h};
+    float* right[3] = {scratch + 3 * h, scratch + 4 * h, scratch + 5 * h};
+    float* own[3] = {scratch + 6 * h, scratch + 7 * h, scratch + 8 * h};
+    r0_column(r0, view, u - 1, edge, left);  // what the cell at u - 1 reads
+    r0_column(r0, view, u + 1, edge, right);
+    for (int ch = 0; ch < 3; ++ch) std::copy(q[ch], q[ch] + h, own[ch]);
+    const float* tc = vp.plane(kTau0) + vp.at(u, 0);
+    const float* tl = u > 0 ? vp.plane(kTau0) + vp.at(u - 1, 0) : nullptr;
+    const float* tr = u + 1 < view.w ? vp.plane(kTau0) + vp.at(u + 1, 0) : nullptr;
+    // Without a neighbour column, the cell's own (weight 0); an opaque cell keeps its value.
+    if (!tl) tl = tc;
+    if (!tr) tr = tc;
+    float* w = scratch + 9 * std::size_t(h);  // the four weights, then 1 / their sum with 4
+    for (int v = 0; v < h; ++v) {
+      const float c = tc[v], opaque = c == 0.0f ? 1.0f : 0.0f;
+      const float wl = u > 0 && blur_together(c, tl[v]) ? 1.0f - opaque : 0.0f;
+      const float wr = u + 1 < view.w && blur_together(c, tr[v]) ? 1.0f - opaque : 0.0f;
+      const float wu = v > 0 && blur_together(c, tc[v - 1]) ? 1.0f - opaque : 0.0f;
+      const float wd = v + 1 < h && blur_together(c, tc[v + 1]) ? 1.0f - opaque : 0.0f;
+      w[v] = wl, w[h + v] = wr, w[2 * h + v] = wu, w[3 * h + v] = wd;
+      w[4 * h + v] = 1.0f / (4.0f + wl + wr + wu + wd);
+    }
+    for (int ch = 0; ch < 3; ++ch) {
+      const float *a = own[ch], *l = left[ch], *r = right[ch];
+      float* o = q[ch];
+      o[0] = (4.0f * a[0] + w[0] * l[0] + w[h] * r[0] + w[3 * h] * a[h > 1 ? 1 : 0]) * w[4 * h];
+      for (int v = 1; v + 1 < h; ++v)
+        o[v] = (4.0f * a[v] + w[v] * l[v] + w[h + v] * r[v] + w[2 * h + v] * a[v - 1] +
+                w[3 * h + v] * a[v + 1]) *
+               w[4 * h + v];
+      if (h > 1) {
+        const int v = h - 1;
+        o[v] =
+            (4.0f * a[v] + w[v] * l[v] + w[h + v] * r[v] + w[2 * h + v] * a[v - 1]) * w[4 * h + v];
+      }
+    }
+  }
+  if (near) {
+    // From the cell's edge across the next cell to its centre, where R_0 is read.
+    const std::size_t next = vp.at(u + 1, 0);
+    const float* t = vp.plane(kTau0) + next;
+    const float quarter = float(kPi / 2);
+    for (int ch = 0; ch < 3; ++ch) {
+      const float* e = vp.plane(kR + ch) + next;
+      float* c = q[ch];
+      for (int v = 0; v < h; ++v) c[v] = quarter * (1.0f - t[v]) * e[v] + t[v] * c[v];
+    }
+  }
 }
 
 template <class S>
@@ -632,23 +677,51 @@ void solve_with(const Medium& m, const Rgb& env, const HrcOptions& o, Buffers<S>
 
     // The quadrant's fluence at [u, v] is R_0([u + 1, v]): the offset keeps the diagonal rays
     // of neighbouring quadrants apart (seed 004, Fig. 12). With the near segment, the transport
-    // from the cell's centre to that probe comes first, so a cell's own medium counts.
+    // from the cell's edge to that probe comes first; the cell's own part, the same for every
+    // quadrant, is added with the last one. Eq. 21 blurs R_0 here unless it is to blur the whole
+    // fluence (blur_near, after the loop).
     watch.restart();
     const S* r0 = upper;
     const Rad edge{env.r * quarter, env.g * quarter, env.b * quarter};
     const Rotation rot = rotation(d, W, H);
-    for_view_cells(rot, view.w, view.h, [&](int u, int v) {
-      Rad q =
-          u + 1 < view.w ? get_r(r0 + std::size_t(u + 1) * kRChannels * view.h, v, view.h) : edge;
-      if (o.near_segment) {
-        const Interval n = near_segment(vp, vp.at(u, v));
-        q = {quarter * n.r + n.t * q.r, quarter * n.g + n.t * q.g, quarter * n.b + n.t * q.b};
+    const bool blur_far = o.cross_blur && !o.blur_near, own = o.near_segment && d == 3;
+    const int h = view.h;
+    const bool rows = rot.sv == 1 || rot.sv == -1;  // a view column is a world row
+    const int tile = rows ? 1 : kTile;
+    parallel_for((view.w + tile - 1) / tile, [&](int t) {
+      const int u0 = t * tile, u1 = std::min(view.w, u0 + tile);
+      thread_local std::vector<float> buf;
+      buf.resize(std::size_t(14 + 3 * tile) * h);
+      float* cols = buf.data() + 14 * std::size_t(h);
+      for (int u = u0; u < u1; ++u) {
+        float* qc = cols + std::size_t(u - u0) * 3 * h;
+        float* q[3] = {qc, qc + h, qc + 2 * h};
+        quadrant_column(r0, view, vp, u, edge, blur_far, o.near_segment, buf.data(), q);
       }
-      float* out = &f[std::size_t(rot.at(u, v)) * 3];
-      if (d == 0)
-        out[0] = q.r, out[1] = q.g, out[2] = q.b;
+      // The cell's own part, once the four quadrants are summed: an opaque own cell is left as if
+      // empty (its fluence is the light arriving at it).
+      auto put = [&](int u, int v) {
+        const float* qc = cols + std::size_t(u - u0) * 3 * h;
+        float* out = &f[std::size_t(rot.at(u, v)) * 3];
+        if (d == 0) {
+          out[0] = qc[v], out[1] = qc[h + v], out[2] = qc[2 * h + v];
+          return;
+        }
+        out[0] += qc[v], out[1] += qc[h + v], out[2] += qc[2 * h + v];
+        if (!own) return;
+        const std::size_t at = vp.at(u, v);
+        const float tau = vp.plane(kTau0)[at], m = tau == 0.0f ? 1.0f : own_transmittance(tau);
+        if (m == 1.0f) return;
+        const float e = float(2 * kPi) * (1.0f - m);
+        out[0] = e * vp.plane(kR)[at] + m * out[0];
+        out[1] = e * vp.plane(kG)[at] + m * out[1];
+        out[2] = e * vp.plane(kB)[at] + m * out[2];
+      };
+      if (rows)
+        for (int v = 0; v < h; ++v) put(u0, v);
       else
-        out[0] += q.r, out[1] += q.g, out[2] += q.b;
+        for (int v = 0; v < h; ++v)
+          for (int u = u0; u < u1; ++u) put(u, v);
     });
     ms_view += watch.ms();
   }
@@ -656,7 +729,7 @@ void solve_with(const Medium& m, const Rgb& env, const HrcOptions& o, Buffers<S>
   stages.push_back({"trace T0-T2", ms_trace});
   stages.push_back({"merge up T3-TN", ms_up});
   stages.push_back({"merge down R", ms_down});
-  if (o.cross_blur) {
+  if (o.cross_blur && o.blur_near) {
     watch.restart();
     reserve_huge(blurred, cells * 3);
     blurred.resize(cells * 3);
@@ -669,6 +742,17 @@ void solve_with(const Medium& m, const Rgb& env, const HrcOptions& o, Buffers<S>
 }  // namespace
 
 // ---- the geometry shared with the GPU backend (hrc.hpp) ---------------------------------------
+
+float own_transmittance(float t) {
+  // Nodes a_i = pi/8 (1 + x_i) as 1 / cos a_i, and weights w_i / 2 (the mean over pi/4).
+  constexpr float kSec[4] = {1.001488695f, 1.034556040f, 1.156447476f, 1.343009689f};
+  constexpr float kWeight[4] = {0.17392742255f, 0.32607257745f, 0.32607257745f, 0.17392742255f};
+  if (t == 1.0f) return 1.0f;  // empty: most cells
+  const float l = std::log(t);
+  float m = 0;
+  for (int i = 0; i < 4; ++i) m += kWeight[i] * std::exp(l * kSec[i]);
+  return m;
+}
 
 float cone_angle(int n, int a) {
   const double s = double(1 << n);
@@ -722,8 +806,9 @@ int level_count(int w) {
 
 std::uint64_t working_bytes(int width, int height, const HrcOptions& o) {
   const Sizes s = plan(width, height);
-  return o.storage == Storage::f16 ? bytes_of<Half>(s, width, height, o.cross_blur)
-                                   : bytes_of<float>(s, width, height, o.cross_blur);
+  const bool copy = o.cross_blur && o.blur_near;  // the blur of the whole fluence writes a copy
+  return o.storage == Storage::f16 ? bytes_of<Half>(s, width, height, copy)
+                                   : bytes_of<float>(s, width, height, copy);
 }
 
 std::uint64_t structure_bytes(int width, int height, Storage storage) {
@@ -790,13 +875,11 @@ void cross_blur(int W, int H, const float* tau_half, const float* f, float* out)
         std::copy(f + 3 * i, f + 3 * i + 3, out + 3 * i);
         continue;
       }
-      const float op = 1.0f - tau_half[i] * tau_half[i];
       float r = 4 * f[3 * i], g = 4 * f[3 * i + 1], b = 4 * f[3 * i + 2], w = 4;
       auto add = [&](int nx, int ny) {
         if (nx < 0 || ny < 0 || nx >= W || ny >= H) return;
         const std::size_t j = std::size_t(ny) * W + nx;
-        if (tau_half[j] == 0.0f) return;  // opaque
-        if (std::abs(1.0f - tau_half[j] * tau_half[j] - op) > kBlurOpacityStep) return;
+        if (!blur_together(tau_half[i], tau_half[j])) return;
         r += f[3 * j], g += f[3 * j + 1], b += f[3 * j + 2], w += 1;
       };
       add(x - 1, y);

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -66,6 +67,21 @@ void solve(const Medium& medium, const Rgb& environment, const HrcOptions& optio
 // than kBlurOpacityStep are left out; opaque cells neither blur nor are blurred into others.
 inline constexpr float kBlurOpacityStep = 0.5f;
 void cross_blur(int W, int H, const float* tau_half, const float* f, float* out);
+
+// Whether eq. 21 mixes a non-opaque cell with a neighbour, given each one's transmittance over
+// half a cell: not an opaque neighbour, nor one whose opacity differs by more than the step.
+inline bool blur_together(float tau_cell, float tau_neighbour) {
+  if (tau_neighbour == 0.0f) return false;
+  const float a = 1.0f - tau_cell * tau_cell, b = 1.0f - tau_neighbour * tau_neighbour;
+  return std::abs(a - b) <= kBlurOpacityStep;
+}
+
+// The near segment's part in a cell's own medium: the mean over a quadrant's directions of the
+// transmittance from the cell's centre to its edge, (4 / pi) int_0^{pi/4} t^{1 / cos a} da,
+// given the transmittance t over half a cell along an axis (4-point Gauss-Legendre, within 1e-6
+// of the integral; the GPU's gather computes the same). A cell of fog or the anti-aliased rim of
+// a light then gives its own light as every direction sees it, not only the axes.
+float own_transmittance(float t);
 
 // ---- The geometry of the solve, shared with the GPU backend (src/gpu/hrc.cpp) ----
 

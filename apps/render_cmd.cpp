@@ -50,7 +50,8 @@ nlohmann::json parameters_json(const penumbra::flatland::RenderOptions& o) {
     p.update({{"storage", penumbra::flatland::to_string(o.hrc.storage)},
               {"cross_blur", o.hrc.cross_blur},
               {"blur_near_segment", o.hrc.blur_near},
-              {"near_segment", o.hrc.near_segment}});
+              {"near_segment", o.hrc.near_segment},
+              {"corners", penumbra::flatland::to_string(o.hrc.corners)}});
     return p;
   }
   const penumbra::flatland::RcOptions& rc = o.rc;

@@ -86,6 +86,9 @@ void add_render_options(CLI::App* app, RenderOptions& options, RenderOptionFlags
     app->add_flag("--blur-near-segment", options.hrc.blur_near,
                   "hrc: blur the whole fluence as eq. 21 is written (default: only the light from "
                   "beyond the near segment, so the rims of lights stay sharp)");
+    add_enum_option(app, "--corners", options.hrc.corners, {Corners::half, Corners::walls},
+                    "hrc: a 45-degree traced ray through a cell corner: half (each opaque cell "
+                    "touching it stops half of the ray), walls (only two opaque cells stop it)");
     app->add_flag("--no-near-segment", flags.no_near_segment,
                   "hrc: read R_0([x+1, y]) alone, as the paper (a cell's own medium left out)");
   }
@@ -138,6 +141,7 @@ std::string with_flags(std::string message) {
       {"`hrc.cross_blur`", "--no-cross-blur"},
       {"`hrc.blur_near`", "--blur-near-segment"},
       {"`hrc.near_segment`", "--no-near-segment"},
+      {"`hrc.corners`", "--corners"},
       {"`pt.spp`", "--spp"},
       {"`pt.seconds`", "--time"},
       {"`pt.nee`", "--nee"},

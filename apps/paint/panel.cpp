@@ -101,6 +101,9 @@ void Painter::draw_panel() {
       changed |= ImGui::Checkbox("cross blur", &options_.hrc.cross_blur);
       changed |= ImGui::Checkbox("blur near segment", &options_.hrc.blur_near);
       changed |= ImGui::Checkbox("near segment", &options_.hrc.near_segment);
+      bool walls = options_.hrc.corners == Corners::walls;
+      if (ImGui::Checkbox("corners: walls only", &walls))
+        options_.hrc.corners = walls ? Corners::walls : Corners::half, changed = true;
     } else if (options_.method == Method::rc) {
       RcOptions& rc = options_.rc;
       changed |= ImGui::SliderInt("probe spacing", &rc.probe_spacing, 1, 16);

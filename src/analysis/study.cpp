@@ -70,6 +70,7 @@ std::vector<Run> default_runs(int bounces, int max_spp, bool quick) {
   if (quick) return runs;
   hrc("hrc --no-cross-blur", [](HrcOptions& h) { h.cross_blur = false; });
   hrc("hrc --blur-near-segment", [](HrcOptions& h) { h.blur_near = true; });
+  hrc("hrc --corners walls", [](HrcOptions& h) { h.corners = Corners::walls; });
   hrc("hrc --no-near-segment", [](HrcOptions& h) { h.near_segment = false; });
   hrc("hrc --storage f16", [](HrcOptions& h) { h.storage = Storage::f16; });
   rc("rc --fix nearest", [](RcOptions& r) { r.fix = MergeFix::nearest; });

@@ -41,6 +41,16 @@ const char* to_string(Storage s) {
   return "?";
 }
 
+const char* to_string(Corners c) {
+  switch (c) {
+    case Corners::half:
+      return "half";
+    case Corners::walls:
+      return "walls";
+  }
+  return "?";
+}
+
 const char* to_string(Device d) {
   switch (d) {
     case Device::cpu:

@@ -85,9 +85,10 @@ DiskError against(const ImageRgb& f, const ImageRgb& ref, float cx, float cy, fl
 }
 
 // The rasterised disk is not the analytic one: the converged path tracer itself is 0.9% off the
-// closed form on average (up to 4% on rim-aligned cells). HRC lands within 1% of the path
-// tracer on the same grid, and within half a percent of the tracer's own distance to the
-// closed form. Measured: closed form mean |e| 1.15% (pt 0.90%), against pt 0.93%, bias +0.35%.
+// closed form on average (up to 4% on rim-aligned cells). HRC lands within about 1% of the path
+// tracer on the same grid, and within 0.6 points of the tracer's own distance to the closed
+// form. Measured (128^2 / 150x97): closed form mean |e| 1.33% / 1.40% (pt 0.90% / 0.91%),
+// against pt 0.98% / 1.02%, bias +0.56% / +0.63%; before Corners::half 1.15%, 0.93%, +0.35%.
 TEST(FlatlandHrc, DiskLightMatchesClosedForm) {
   // Square and power of two; then neither (padded inside, the output has the scene's size).
   struct Case {
@@ -107,9 +108,9 @@ TEST(FlatlandHrc, DiskLightMatchesClosedForm) {
       const DiskError e = disk_error(c.w, c.h, c.cx, c.cy, 12, 2.5f, f);
       const DiskError e_vs = against(f, ref, c.cx, c.cy, 12);
       EXPECT_GT(e.cells, 5000);
-      EXPECT_LT(e.mean_abs, e_pt.mean_abs + 0.005) << c.w << "x" << c.h << " " << to_string(device);
+      EXPECT_LT(e.mean_abs, e_pt.mean_abs + 0.006) << c.w << "x" << c.h << " " << to_string(device);
       EXPECT_LT(e.max_abs, 0.05);
-      EXPECT_LT(e_vs.mean_abs, 0.01);
+      EXPECT_LT(e_vs.mean_abs, 0.011);
       EXPECT_LT(std::abs(e_vs.mean), 0.01);
     }
   }
@@ -406,6 +407,63 @@ TEST(FlatlandHrc, RimOfALightStaysSharp) {
   const double e_whole = rim_error(fluence_of(s, whole)), e = rim_error(fluence_of(s, hrc()));
   EXPECT_GT(e_whole, 0.019);
   EXPECT_LT(e, 0.016);
+}
+
+// A wall one cell thick along a diagonal (cells touching only at their corners) between a light
+// and the rest of the grid. The traced 45-degree rays of T_0..T_2 pass exactly through cell
+// corners; they went between the wall's cells and 4% of the lit side's mean fluence (up to 20%
+// in places) leaked behind it, where the path tracer and RC give 0. Both corner rules stop them.
+TEST(FlatlandHrc, NoLeakThroughADiagonalWall) {
+  SceneDesc d;
+  d.width = d.height = 64;
+  for (int k = 0; k < 64; ++k)
+    d.shapes.push_back({Box{{k + 0.5f, 63 - k + 0.5f}, {1, 1}, 0}, Material{}});
+  d.shapes.push_back({Circle{{14, 14}, 4}, Material{{10, 10, 10}, 1, {}}});
+  const Scene s = build(d);
+  for (Corners corners : {Corners::half, Corners::walls})
+    for (Device device : {Device::cpu, Device::gpu}) {  // the GPU through lavapipe in CI
+      RenderOptions o = hrc();
+      o.hrc.corners = corners;
+      o.device = device;
+      const ImageRgb f = fluence_of(s, o);
+      double lit = 0, behind = 0;
+      for (int y = 0; y < 64; ++y)
+        for (int x = 0; x < 64; ++x) {
+          if (x + y < 61) lit = std::max<double>(lit, f.at(x, y).g);
+          if (x + y > 64) behind = std::max<double>(behind, f.at(x, y).g);
+        }
+      EXPECT_GT(lit, 1.0);
+      EXPECT_EQ(behind, 0.0) << to_string(corners) << " " << to_string(device);
+    }
+}
+
+// A 6x6 light: a traced 45-degree ray grazing one of its corners, between a light cell and an
+// open one, lies on the light's edge, where half of the rays around it hit the light. Stopping
+// half of it (Corners::half, the default) gives the cells diagonal to the light's corners the
+// light the quadrants' gap along the diagonals leaves out (docs/METHODS.md). RMSE over the RMS
+// of the open cells against the converged path tracer, measured: 3.1% half, 5.1% walls
+// (`penumbra compare`'s relative RMSE, over the mean: 4.4%, 7.0%, RC 4.1%).
+TEST(FlatlandHrc, HalfCornersSeeTheCornersOfALight) {
+  SceneDesc d;
+  d.width = d.height = 128;
+  d.shapes.push_back({Box{{40, 64}, {6, 6}, 0}, Material{{30, 30, 30}, 1, {}}});
+  const Scene s = build(d);
+  const ImageRgb ref = fluence_of(s, pt(512));
+  auto error = [&](Corners corners) {
+    RenderOptions o = hrc();
+    o.hrc.corners = corners;
+    const ImageRgb f = fluence_of(s, o);
+    double e = 0, n = 0;
+    for (int y = 0; y < 128; ++y)
+      for (int x = 0; x < 128; ++x) {
+        if (s.opacity[s.index(x, y)] == 1.0f) continue;
+        e += std::pow(f.at(x, y).g - ref.at(x, y).g, 2), n += std::pow(ref.at(x, y).g, 2);
+      }
+    return std::sqrt(e / n);
+  };
+  const double half = error(Corners::half), walls = error(Corners::walls);
+  EXPECT_LT(half, 0.037);
+  EXPECT_GT(walls, 0.045);
 }
 
 }  // namespace

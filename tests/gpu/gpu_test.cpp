@@ -228,11 +228,13 @@ TEST(Gpu, HrcSolveMatchesTheCpu) {
     bool near, blur;
     Storage storage = Storage::f32;
     bool blur_near = false;  // eq. 21 on the whole fluence (its own pass) instead of in the gather
+    Corners corners = Corners::half;
   };
   for (const Case& k :
        {Case{64, 64, true, true}, Case{100, 37, true, true}, Case{45, 80, false, false},
         Case{128, 96, true, false}, Case{100, 37, true, true, Storage::f16},
-        Case{96, 64, true, true, Storage::f32, true}}) {
+        Case{96, 64, true, true, Storage::f32, true},
+        Case{64, 64, true, true, Storage::f32, false, Corners::walls}}) {
     SceneDesc d;
     d.width = k.w;
     d.height = k.h;
@@ -248,6 +250,7 @@ TEST(Gpu, HrcSolveMatchesTheCpu) {
     o.cross_blur = k.blur;
     o.storage = k.storage;
     o.blur_near = k.blur_near;
+    o.corners = k.corners;
     hrc::Workspace workspace;
     std::vector<float> cpu;
     std::vector<StageTime> stages;

@@ -47,6 +47,14 @@ enum class Storage {
   f16,  // 16-bit floats (half the memory; brighter scenes are rendered at a scaled light)
 };
 
+// What a 45-degree ray of HRC's traced levels does at a cell corner it passes through, between
+// two cells it does not enter (docs/METHODS.md).
+enum class Corners {
+  half,   // each of the two cells that is opaque stops half of the ray (the mean of the ray
+          // nudged off the corner to either side)
+  walls,  // only two opaque cells stop it (a wall meeting at corners), one opaque cell none
+};
+
 // Holographic radiance cascades (seed 004 section 4). See docs/METHODS.md.
 struct HrcOptions {
   Storage storage = Storage::f32;  // of the acceleration structure T and the cascades R
@@ -58,6 +66,7 @@ struct HrcOptions {
   // Merge the transport from a cell's centre to the probe the paper reads, R_0([x+1, y]), in
   // front of it (off: the paper's formula, which leaves a cell's own medium out of its fluence).
   bool near_segment = true;
+  Corners corners = Corners::half;
 };
 
 // Where the path tracer's directions come from.
@@ -180,6 +189,7 @@ const char* to_string(Method m);
 const char* to_string(MergeFix f);
 const char* to_string(Sampler s);
 const char* to_string(Storage s);
+const char* to_string(Corners c);
 const char* to_string(Device d);
 
 }  // namespace penumbra::flatland

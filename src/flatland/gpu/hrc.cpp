@@ -152,15 +152,17 @@ Status record_hrc(Cache& cache, Batch& batch, int W, int H, Buffer& step, Buffer
       const std::vector<hrc::TracedCell> pc = hrc::traced_cells(n, kk);
       ranges_of.push_back(std::int32_t(cells_of.size() / 4));
       ranges_of.push_back(std::int32_t(pc.size()));
+      // A corner: length -1 (Corners::half) or -2 (Corners::walls), then its side.
       for (const hrc::TracedCell& tc : pc) {
         cells_of.push_back(tc.du);
         cells_of.push_back(tc.dv);
-        cells_of.push_back(tc.length);
-        cells_of.push_back(tc.squared ? 1 : 0);
+        cells_of.push_back(tc.corner == 0 ? tc.length : o.corners == Corners::walls ? -2 : -1);
+        cells_of.push_back(tc.corner != 0 ? tc.corner : tc.squared ? 1 : 0);
       }
     }
-    Expected<Buffer*> pb = cache.table(batch, kHrc, "hrc pattern " + std::to_string(n),
-                                       cells_of.data(), cells_of.size() * 4);
+    Expected<Buffer*> pb =
+        cache.table(batch, kHrc, "hrc pattern " + std::to_string(n) + " " + to_string(o.corners),
+                    cells_of.data(), cells_of.size() * 4);
     if (!pb) return pb.error();
     Expected<Buffer*> rb = cache.table(batch, kHrc, "hrc range " + std::to_string(n),
                                        ranges_of.data(), ranges_of.size() * 4);

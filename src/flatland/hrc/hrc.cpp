@@ -161,6 +161,7 @@ struct Segment {
   float len;
   int plane = kTau0;     // the transmittance plane of its length
   bool squared = false;  // twice that length
+  int corner = 0;        // +-1: the corner of (du, dv) towards (du + 1, dv) and (du, dv + corner)
 };
 
 std::vector<Segment> ray_pattern(int n, int k);
@@ -202,7 +203,16 @@ std::vector<Segment> ray_pattern(int n, int k) {
     // Rays between cell centres with these offsets cross cells only along the six lengths.
     if (best > 1e-4f) throw std::logic_error("hrc: a traced segment of unexpected length");
   }
-  return segs;
+  // A 45-degree ray passes from cell to cell through their shared corner: between the two cells
+  // that touch it, which a wall of cells meeting only at corners (a diagonal line) must not let
+  // through. The corner goes between the two cells, for trace_level to apply HrcOptions::corners.
+  std::vector<Segment> out;
+  for (std::size_t i = 0; i < segs.size(); ++i) {
+    if (i > 0 && segs[i].du != segs[i - 1].du && segs[i].dv != segs[i - 1].dv)
+      out.push_back({segs[i - 1].du, segs[i - 1].dv, 0, kTau0, false, segs[i].dv - segs[i - 1].dv});
+    out.push_back(segs[i]);
+  }
+  return out;
 }
 
 // T and R as columns: column c of a level (one direction and probe x) holds the h rows of its
@@ -289,10 +299,31 @@ void cross_cells(int h, const float* __restrict tau, const float* __restrict er,
   }
 }
 
+// A ray through a corner it shares with two cells (Segment::corner), for a column of h probes:
+// each opaque one stops half of it, with its emission, the mean over the ray nudged off the
+// corner to either side (Corners::half); with Corners::walls only two opaque cells (a diagonal
+// wall) stop it. Two opaque cells stop all of it either way.
+void cross_corner(int h, Corners rule, const float* __restrict ta, const float* __restrict tb,
+                  const float* const ea[3], const float* const eb[3], float* const acc[4]) {
+  float* __restrict ar = acc[0], * __restrict ag = acc[1], * __restrict ab = acc[2], * __restrict at = acc[3];
+  const bool walls = rule == Corners::walls;
+  for (int v = 0; v < h; ++v) {
+    // Corners::walls: half for each only when both are opaque.
+    const float both = ta[v] == 0.0f && tb[v] == 0.0f ? 0.5f : 0.0f;
+    const float oa = walls ? both : ta[v] == 0.0f ? 0.5f : 0.0f;
+    const float ob = walls ? both : tb[v] == 0.0f ? 0.5f : 0.0f;
+    const float w = at[v];
+    ar[v] += w * (oa * ea[0][v] + ob * eb[0][v]);
+    ag[v] += w * (oa * ea[1][v] + ob * eb[1][v]);
+    ab[v] += w * (oa * ea[2][v] + ob * eb[2][v]);
+    at[v] = w * (1.0f - oa - ob);
+  }
+}
+
 // T_n(p, k) = Trace(p, p + v_n(k)) for n <= 2, by the rays' cell patterns: one pass over a
 // column of probes per crossed cell, accumulating front to back in single precision.
 template <class S>
-void trace_level(const View& view, int n, const ViewPlanes& vp,
+void trace_level(const View& view, int n, const ViewPlanes& vp, Corners corners,
                  const std::array<std::vector<Segment>, 5>& patterns, S* out) {
   const int P = view.probes(n), h = view.h;
   parallel_for(((1 << n) + 1) * P, [&](int row) {
@@ -303,6 +334,14 @@ void trace_level(const View& view, int n, const ViewPlanes& vp,
     std::fill(ar, ar + 3 * std::size_t(h), 0.0f);
     std::fill(at, at + h, 1.0f);
     for (const Segment& g : patterns[k]) {
+      if (g.corner != 0) {
+        const std::size_t a = vp.at(u + g.du + 1, g.dv), b = vp.at(u + g.du, g.dv + g.corner);
+        const float* ea[3] = {vp.plane(kR) + a, vp.plane(kG) + a, vp.plane(kB) + a};
+        const float* eb[3] = {vp.plane(kR) + b, vp.plane(kG) + b, vp.plane(kB) + b};
+        float* acc4[4] = {ar, ag, ab, at};
+        cross_corner(h, corners, vp.plane(kTau0) + a, vp.plane(kTau0) + b, ea, eb, acc4);
+        continue;
+      }
       const std::size_t off = vp.at(u + g.du, g.dv);
       const float *er = vp.plane(kR) + off, *eg = vp.plane(kG) + off, *eb = vp.plane(kB) + off;
       const float* tau = vp.plane(g.plane) + off;
@@ -660,7 +699,8 @@ void solve_with(const Medium& m, const Rgb& env, const HrcOptions& o, Buffers<S>
     ms_view += watch.ms();
 
     watch.restart();
-    for (int n = 0; n <= std::min(2, view.levels); ++n) trace_level(view, n, vp, patterns[n], t[n]);
+    for (int n = 0; n <= std::min(2, view.levels); ++n)
+      trace_level(view, n, vp, o.corners, patterns[n], t[n]);
     ms_trace += watch.ms();
     watch.restart();
     for (int n = 3; n <= view.levels; ++n) merge_up(view, n - 1, t[n - 1], t[n], empty.data());
@@ -794,7 +834,7 @@ Rotation rotation(int d, int width, int height) {
 std::vector<TracedCell> traced_cells(int n, int k) {
   std::vector<TracedCell> out;
   for (const Segment& g : ray_patterns()[std::size_t(n)][std::size_t(k)])
-    out.push_back({g.du, g.dv, g.plane - kTau0, g.squared});
+    out.push_back({g.du, g.dv, g.plane - kTau0, g.squared, g.corner});
   return out;
 }
 

@@ -127,11 +127,15 @@ struct Rotation {
 };
 Rotation rotation(int d, int width, int height);
 
-// The cells ray k of T_n crosses, in order, each with its length.
+// The cells ray k of T_n crosses, in order, each with its length, and the corners a 45-degree
+// ray passes through between two cells it does not enter: each of those cells that is opaque
+// stops half of the ray (so walls meeting only at corners do not leak).
 struct TracedCell {
   int du, dv;
-  int length;    // index into kLengths
-  bool squared;  // twice that length
+  int length;      // index into kLengths
+  bool squared;    // twice that length
+  int corner = 0;  // +-1: not a cell but the corner of (du, dv) towards (du + 1, dv) and
+                   // (du, dv + corner)
 };
 std::vector<TracedCell> traced_cells(int n, int k);
 

@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
 # The artifacts of holographic radiance cascades (seed 004, section 5.0.3), measured: the
 # checkerboard with and without the cross blur, and the error against light size (moire of
-# small lights). Writes the pictures next to this script and prints the tables of
-# docs/QUALITY.md. Run from the repository root after `make build` (a few minutes: the
-# path-traced references are rendered here, not cached).
+# small lights), and issue 20's disk and two-light scenes. Writes the pictures next to this
+# script and prints the tables of docs/QUALITY.md. Run from the repository root after
+# `make build` (a few minutes: the path-traced references are rendered here, not cached).
 set -euo pipefail
 cd "$(dirname "$0")/../../.."
 P=build/bin/penumbra
@@ -64,6 +64,31 @@ JSON
 done
 "$P" compare "$T/hrc2.pfm" "$T/ref2.pfm" --scene "$T/light2.json" --exposure 2 -q \
   --montage "$D/small_light.png"
+"$P" compare "$T/hrc2.pfm" "$T/ref2.pfm" --crop 8 96 64 64 -q --heatmap "$D/small_light_heat.png"
+
+# Issue 20's scenes: the disk light of the tests (128^2, radius 12) and two disk lights with a
+# slanted occluder (512^2), relative RMSE over the open cells against 4096-sample references,
+# for HRC's defaults, each of its options and RC.
+echo
+echo "| scene | HRC | --corners walls | --blur-near-segment | --no-cross-blur | RC (defaults) |"
+echo "| --- | ---: | ---: | ---: | ---: | ---: |"
+cat > "$T/disk.json" <<JSON
+{ "penumbra": 1, "width": 128, "height": 128,
+  "shapes": [ { "type": "circle", "center": [64.3, 63.8], "radius": 12, "emission": [2.5, 2.5, 2.5] } ] }
+JSON
+cp scenes/two_lights.json "$T/two_lights.json"
+for name in disk two_lights; do
+  S="$T/$name.json"
+  "$P" render "$S" --method pt --nee --spp 4096 -q -o "$T/${name}_ref.pfm"
+  row="| $name"
+  for opts in "" "--corners walls" "--blur-near-segment" "--no-cross-blur"; do
+    # shellcheck disable=SC2086 # the options are words
+    "$P" render "$S" --method hrc $opts -q -o "$T/${name}_hrc.pfm"
+    row="$row | $(rmse "$T/${name}_hrc.pfm" "$T/${name}_ref.pfm" --scene "$S")"
+  done
+  "$P" render "$S" -q -o "$T/${name}_rc.pfm"
+  echo "$row | $(rmse "$T/${name}_rc.pfm" "$T/${name}_ref.pfm" --scene "$S") |"
+done
 
 # A diagonal wall edge of the built-in scene, lit from above: HRC against the path tracer.
 "$P" render --method pt --nee --spp 256 -q -o "$T/default_ref.pfm"

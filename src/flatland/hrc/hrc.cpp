@@ -323,36 +323,33 @@ void cross_corner(int h, Corners rule, const float* __restrict ta, const float* 
 // T_n(p, k) = Trace(p, p + v_n(k)) for n <= 2, by the rays' cell patterns: one pass over a
 // column of probes per crossed cell, accumulating front to back in single precision.
 template <class S>
-void trace_level(const View& view, int n, const ViewPlanes& vp, Corners corners,
-                 const std::array<std::vector<Segment>, 5>& patterns, S* out) {
-  const int P = view.probes(n), h = view.h;
-  parallel_for(((1 << n) + 1) * P, [&](int row) {
-    const int k = row / P, u = (row % P) << n;
-    thread_local std::vector<float> acc;
-    acc.resize(kTChannels * std::size_t(h));
-    float *ar = acc.data(), *ag = ar + h, *ab = ag + h, *at = ab + h;
-    std::fill(ar, ar + 3 * std::size_t(h), 0.0f);
-    std::fill(at, at + h, 1.0f);
-    for (const Segment& g : patterns[k]) {
-      if (g.corner != 0) {
-        const std::size_t a = vp.at(u + g.du + 1, g.dv), b = vp.at(u + g.du, g.dv + g.corner);
-        const float* ea[3] = {vp.plane(kR) + a, vp.plane(kG) + a, vp.plane(kB) + a};
-        const float* eb[3] = {vp.plane(kR) + b, vp.plane(kG) + b, vp.plane(kB) + b};
-        float* acc4[4] = {ar, ag, ab, at};
-        cross_corner(h, corners, vp.plane(kTau0) + a, vp.plane(kTau0) + b, ea, eb, acc4);
-        continue;
-      }
-      const std::size_t off = vp.at(u + g.du, g.dv);
-      const float *er = vp.plane(kR) + off, *eg = vp.plane(kG) + off, *eb = vp.plane(kB) + off;
-      const float* tau = vp.plane(g.plane) + off;
-      (g.squared ? cross_cells<true> : cross_cells<false>)(h, tau, er, eg, eb, ar, ag, ab, at);
+void trace_column(const View& view, int n, const ViewPlanes& vp, Corners corners,
+                  const std::array<std::vector<Segment>, 5>& patterns, S* out, int k, int x) {
+  const int P = view.probes(n), h = view.h, u = x << n;
+  thread_local std::vector<float> acc;
+  acc.resize(kTChannels * std::size_t(h));
+  float *ar = acc.data(), *ag = ar + h, *ab = ag + h, *at = ab + h;
+  std::fill(ar, ar + 3 * std::size_t(h), 0.0f);
+  std::fill(at, at + h, 1.0f);
+  for (const Segment& g : patterns[k]) {
+    if (g.corner != 0) {
+      const std::size_t a = vp.at(u + g.du + 1, g.dv), b = vp.at(u + g.du, g.dv + g.corner);
+      const float* ea[3] = {vp.plane(kR) + a, vp.plane(kG) + a, vp.plane(kB) + a};
+      const float* eb[3] = {vp.plane(kR) + b, vp.plane(kG) + b, vp.plane(kB) + b};
+      float* acc4[4] = {ar, ag, ab, at};
+      cross_corner(h, corners, vp.plane(kTau0) + a, vp.plane(kTau0) + b, ea, eb, acc4);
+      continue;
     }
-    S* o = out + std::size_t(row) * kTChannels * h;
-    if constexpr (std::is_same_v<S, Half>)
-      to_half(acc.data(), o, kTChannels * h);
-    else
-      std::copy(acc.begin(), acc.end(), o);
-  });
+    const std::size_t off = vp.at(u + g.du, g.dv);
+    const float *er = vp.plane(kR) + off, *eg = vp.plane(kG) + off, *eb = vp.plane(kB) + off;
+    const float* tau = vp.plane(g.plane) + off;
+    (g.squared ? cross_cells<true> : cross_cells<false>)(h, tau, er, eg, eb, ar, ag, ab, at);
+  }
+  S* o = out + (std::size_t(k) * P + x) * kTChannels * h;
+  if constexpr (std::is_same_v<S, Half>)
+    to_half(acc.data(), o, kTChannels * h);
+  else
+    std::copy(acc.begin(), acc.end(), o);
 }
 
 // The merges over rows [lo, hi) whose reads all lie inside their columns: plain loops over
@@ -498,33 +495,72 @@ void down_even_rows<Half>(int lo, int hi, int h, float ap, float am, const Half*
 // T_{n+1} from T_n: eq. 18 for even directions 2k, eqs. 19-20 for odd ones. `empty` is a column
 // of empty intervals (what lies beyond the grid).
 template <class S>
-void merge_up(const View& view, int n, const S* tn, S* tn1, const S* empty) {
+void merge_up_column(const View& view, int n, const S* tn, S* tn1, const S* empty, int k2, int x) {
   const int P = view.probes(n), P1 = view.probes(n + 1), h = view.h;
-  auto col = [&](int k, int x) -> const S* {
-    return x < P ? tn + (std::size_t(k) * P + x) * kTChannels * h : nullptr;
+  auto col = [&](int k, int c) -> const S* {
+    return c < P ? tn + (std::size_t(k) * P + c) * kTChannels * h : nullptr;
   };
-  parallel_for(((1 << (n + 1)) + 1) * P1, [&](int row) {
-    const int k2 = row / P1, x = row % P1;
-    S* o = tn1 + std::size_t(row) * kTChannels * h;
-    if (k2 % 2 == 0) {
-      const int k = k2 / 2;
-      const S* near = col(k, 2 * x);
-      for_segments<S, 1>(
-          h, {{{col(k, 2 * x + 1), vy(n, k), empty}}},
-          [&](int lo, int hi, const auto& c, const auto& d) {
-            up_even_rows(lo, hi, h, near, c[0], d[0], o);
-          },
-          [](std::size_t, int, int) {});
-    } else {
-      // Direction k + 1/2 is between two integer ones: average the two bent paths.
-      const int k = k2 / 2;
-      const S *a1 = col(k + 1, 2 * x), *a0 = col(k, 2 * x);
-      for_segments<S, 2>(
-          h, {{{col(k, 2 * x + 1), vy(n, k + 1), empty}, {col(k + 1, 2 * x + 1), vy(n, k), empty}}},
-          [&](int lo, int hi, const auto& c, const auto& d) {
-            up_odd_rows(lo, hi, h, a1, c[0], d[0], a0, c[1], d[1], o);
-          },
-          [](std::size_t, int, int) {});
+  S* o = tn1 + (std::size_t(k2) * P1 + x) * kTChannels * h;
+  if (k2 % 2 == 0) {
+    const int k = k2 / 2;
+    const S* near = col(k, 2 * x);
+    for_segments<S, 1>(
+        h, {{{col(k, 2 * x + 1), vy(n, k), empty}}},
+        [&](int lo, int hi, const auto& c, const auto& d) {
+          up_even_rows(lo, hi, h, near, c[0], d[0], o);
+        },
+        [](std::size_t, int, int) {});
+  } else {
+    // Direction k + 1/2 is between two integer ones: average the two bent paths.
+    const int k = k2 / 2;
+    const S *a1 = col(k + 1, 2 * x), *a0 = col(k, 2 * x);
+    for_segments<S, 2>(
+        h, {{{col(k, 2 * x + 1), vy(n, k + 1), empty}, {col(k + 1, 2 * x + 1), vy(n, k), empty}}},
+        [&](int lo, int hi, const auto& c, const auto& d) {
+          up_odd_rows(lo, hi, h, a1, c[0], d[0], a0, c[1], d[1], o);
+        },
+        [](std::size_t, int, int) {});
+  }
+}
+
+// T_{n+1} from T_n, every column: eq. 18 for even directions 2k, eqs. 19-20 for odd ones.
+// `empty` is a column of empty intervals (what lies beyond the grid).
+template <class S>
+void merge_up(const View& view, int n, const S* tn, S* tn1, const S* empty) {
+  const int P1 = view.probes(n + 1);
+  parallel_for(((1 << (n + 1)) + 1) * P1,
+               [&](int row) { merge_up_column(view, n, tn, tn1, empty, row / P1, row % P1); });
+}
+
+// lower_levels() builds T_0..T_m tile by tile: m as large as keeps a tile's share of a level
+// (2^m cells along u by h rows, 16 bytes each in single precision) within kTileBytes, so that
+// the level a merge reads and the one it writes stay in each core's cache; at least the traced
+// T_0..T_2, at most N.
+constexpr std::int64_t kTileBytes = std::int64_t(1) << 18;
+
+int fused_levels(const View& v) {
+  int m = 2;
+  while (m < v.levels && (std::int64_t(2) << m) * v.h * 16 <= kTileBytes) ++m;
+  return std::min(m, v.levels);
+}
+
+// T_0..T_m in tiles of 2^m cells along u, each tile traced and merged up to level m before the
+// next (T_{n+1} of a tile reads only T_n of the same tile), so the levels a merge reads are
+// still in cache from the merge that wrote them: the merges of the lower levels read memory once.
+template <class S>
+void lower_levels(const View& view, int m, const ViewPlanes& vp, Corners corners,
+                  const Patterns& patterns, const std::vector<S*>& t, const S* empty) {
+  const int tiles = int((std::int64_t(view.w) + (1 << m) - 1) >> m);
+  parallel_for(tiles, [&](int tile) {
+    for (int n = 0; n <= m; ++n) {
+      const int P = view.probes(n), x0 = tile << (m - n), x1 = std::min(P, (tile + 1) << (m - n));
+      for (int k = 0; k <= (1 << n); ++k)
+        for (int x = x0; x < x1; ++x) {
+          if (n <= 2)
+            trace_column(view, n, vp, corners, patterns[std::size_t(n)], t[std::size_t(n)], k, x);
+          else
+            merge_up_column(view, n - 1, t[std::size_t(n - 1)], t[std::size_t(n)], empty, k, x);
+        }
     }
   });
 }
@@ -535,73 +571,93 @@ void fill_column(S* col, int h, int lo, int hi, const std::array<float, C>& v) {
   for (std::size_t c = 0; c < C; ++c) std::fill(col + c * h + lo, col + c * h + hi, S(v[c]));
 }
 
-// R_n from R_{n+1} (null at n + 1 = N: the environment), T_n and T_{n+1}.
+// A layer of R: `columns` probe columns per cone, cone after cone; null data: the environment
+// (R_N).
+template <class S>
+struct RLayer {
+  S* data = nullptr;
+  int columns = 0;
+  S* col(int j, int x, int h) const {
+    return data + (std::size_t(j) * columns + x) * kRChannels * h;
+  }
+};
+
+// Column (a, x) of R_n from R_{n+1} (`up`; beyond its columns lies what is beyond the grid,
+// where the environment fills the cone), T_n and T_{n+1}, into `out`.
+template <class S>
+void merge_down_column(const View& view, int n, const S* tn, const S* tn1, const RLayer<S>& up,
+                       const RLayer<S>& out, int a, int x, const Rgb& env) {
+  const int P = view.probes(n), P1 = view.probes(n + 1), h = view.h;
+  auto rcol = [&](int j, int c) -> const S* {
+    return up.data && c < P1 ? up.col(j, c, h) : nullptr;
+  };
+  // The upper and lower halves of cone a are cones 2a + 1 and 2a of cascade n + 1; beyond
+  // the grid they hold the environment over their angle.
+  const float ap = cone_angle(n + 1, 2 * a + 1), am = cone_angle(n + 1, 2 * a);
+  thread_local std::vector<S> outside;
+  outside.resize(2 * kRChannels * std::size_t(h));
+  S *outp = outside.data(), *outm = outp + kRChannels * h;
+  // Reads 0 and 2 use the upper half's outside column, 1 and 3 the lower half's (filled only
+  // over the rows that read them).
+  auto prepare = [&](std::size_t i, int lo, int hi) {
+    if (i % 2 == 0)
+      fill_column<S, 3>(outp, h, lo, hi, {env.r * ap, env.g * ap, env.b * ap});
+    else
+      fill_column<S, 3>(outm, h, lo, hi, {env.r * am, env.g * am, env.b * am});
+  };
+  S* o = out.col(a, x, h);
+  if (x % 2 == 1) {
+    // Eq. 14: trace each edge to the cascade-(n+1) probe it ends on, merge with its cone.
+    const S* tp = tn + (std::size_t(a + 1) * P + x) * kTChannels * h;
+    const S* tm = tn + (std::size_t(a) * P + x) * kTChannels * h;
+    const int xq = (x + 1) / 2;
+    for_segments<S, 2>(
+        h, {{{rcol(2 * a + 1, xq), vy(n, a + 1), outp}, {rcol(2 * a, xq), vy(n, a), outm}}},
+        [&](int lo, int hi, const auto& c, const auto& d) {
+          down_odd_rows(lo, hi, h, ap, am, tp, tm, c[0], d[0], c[1], d[1], o);
+        },
+        prepare);
+  } else {
+    // Eqs. 15-17: T_{n+1} has the same probe columns as R_{n+1}.
+    const int xp = x / 2, xq = xp + 1;
+    const S* upp = tn1 + (std::size_t(2 * a + 2) * P1 + xp) * kTChannels * h;
+    const S* ump = tn1 + (std::size_t(2 * a) * P1 + xp) * kTChannels * h;
+    for_segments<S, 4>(
+        h,
+        {{{rcol(2 * a + 1, xp), 0, outp},
+          {rcol(2 * a, xp), 0, outm},
+          {rcol(2 * a + 1, xq), vy(n + 1, 2 * a + 2), outp},
+          {rcol(2 * a, xq), vy(n + 1, 2 * a), outm}}},
+        [&](int lo, int hi, const auto& c, const auto& d) {
+          down_even_rows(lo, hi, h, ap, am, upp, ump, c[0], d[0], c[1], d[1], c[2], d[2], c[3],
+                         d[3], o);
+        },
+        prepare);
+  }
+}
+
+// R_n from R_{n+1} (null at n + 1 = N: the environment), T_n and T_{n+1}, every column.
 template <class S>
 void merge_down(const View& view, int n, const S* tn, const S* tn1, const S* rn1, S* rn,
                 const Rgb& env) {
-  const int P = view.probes(n), P1 = view.probes(n + 1), h = view.h;
-  auto rcol = [&](int j, int x) -> const S* {
-    return rn1 && x < P1 ? rn1 + (std::size_t(j) * P1 + x) * kRChannels * h : nullptr;
-  };
+  const int P = view.probes(n);
+  const RLayer<S> up{const_cast<S*>(rn1), view.probes(n + 1)}, out{rn, P};
   parallel_for((1 << n) * P, [&](int row) {
-    const int a = row / P, x = row % P;
-    // The upper and lower halves of cone a are cones 2a + 1 and 2a of cascade n + 1; beyond
-    // the grid they hold the environment over their angle.
-    const float ap = cone_angle(n + 1, 2 * a + 1), am = cone_angle(n + 1, 2 * a);
-    thread_local std::vector<S> outside;
-    outside.resize(2 * kRChannels * std::size_t(h));
-    S *outp = outside.data(), *outm = outp + kRChannels * h;
-    // Reads 0 and 2 use the upper half's outside column, 1 and 3 the lower half's (filled only
-    // over the rows that read them).
-    auto prepare = [&](std::size_t i, int lo, int hi) {
-      if (i % 2 == 0)
-        fill_column<S, 3>(outp, h, lo, hi, {env.r * ap, env.g * ap, env.b * ap});
-      else
-        fill_column<S, 3>(outm, h, lo, hi, {env.r * am, env.g * am, env.b * am});
-    };
-    S* o = rn + std::size_t(row) * kRChannels * h;
-    if (x % 2 == 1) {
-      // Eq. 14: trace each edge to the cascade-(n+1) probe it ends on, merge with its cone.
-      const S* tp = tn + (std::size_t(a + 1) * P + x) * kTChannels * h;
-      const S* tm = tn + (std::size_t(a) * P + x) * kTChannels * h;
-      const int xq = (x + 1) / 2;
-      for_segments<S, 2>(
-          h, {{{rcol(2 * a + 1, xq), vy(n, a + 1), outp}, {rcol(2 * a, xq), vy(n, a), outm}}},
-          [&](int lo, int hi, const auto& c, const auto& d) {
-            down_odd_rows(lo, hi, h, ap, am, tp, tm, c[0], d[0], c[1], d[1], o);
-          },
-          prepare);
-    } else {
-      // Eqs. 15-17: T_{n+1} has the same probe columns as R_{n+1}.
-      const int xp = x / 2, xq = xp + 1;
-      const S* up = tn1 + (std::size_t(2 * a + 2) * P1 + xp) * kTChannels * h;
-      const S* um = tn1 + (std::size_t(2 * a) * P1 + xp) * kTChannels * h;
-      for_segments<S, 4>(
-          h,
-          {{{rcol(2 * a + 1, xp), 0, outp},
-            {rcol(2 * a, xp), 0, outm},
-            {rcol(2 * a + 1, xq), vy(n + 1, 2 * a + 2), outp},
-            {rcol(2 * a, xq), vy(n + 1, 2 * a), outm}}},
-          [&](int lo, int hi, const auto& c, const auto& d) {
-            down_even_rows(lo, hi, h, ap, am, up, um, c[0], d[0], c[1], d[1], c[2], d[2], c[3],
-                           d[3], o);
-          },
-          prepare);
-    }
+    merge_down_column(view, n, tn, tn1, up, out, row / P, row % P, env);
   });
 }
 
 // Rows [0, h) of the R_0 read of view column u (R_0 at column u + 1, `edge` beyond the view),
 // channel by channel into c[0..2].
 template <class S>
-void r0_column(const S* r0, const View& view, int u, const Rad& edge, float* const c[3]) {
+void r0_column(const RLayer<S>& r0, const View& view, int u, const Rad& edge, float* const c[3]) {
   const int h = view.h;
   if (u < 0 || u + 1 >= view.w) {
     std::fill(c[0], c[0] + h, edge.r), std::fill(c[1], c[1] + h, edge.g);
     std::fill(c[2], c[2] + h, edge.b);
     return;
   }
-  const S* col = r0 + std::size_t(u + 1) * kRChannels * h;
+  const S* col = r0.col(0, u + 1, h);
   for (int ch = 0; ch < 3; ++ch)
     for (int v = 0; v < h; ++v) c[ch][v] = load(col[std::size_t(ch) * h + v]);
 }
@@ -611,8 +667,8 @@ void r0_column(const S* r0, const View& view, int u, const Rad& edge, float* con
 // blur_together() admits, beyond the grid none), then the near segment past the cell's own
 // edge when `near`. Column by column so the loops vectorise; `scratch` holds 14 columns.
 template <class S>
-void quadrant_column(const S* r0, const View& view, const ViewPlanes& vp, int u, const Rad& edge,
-                     bool blur, bool near, float* scratch, float* const q[3]) {
+void quadrant_column(const RLayer<S>& r0, const View& view, const ViewPlanes& vp, int u,
+                     const Rad& edge, bool blur, bool near, float* scratch, float* const q[3]) {
   const int h = view.h;
   r0_column(r0, view, u, edge, q);
   if (blur) {
@@ -699,11 +755,11 @@ void solve_with(const Medium& m, const Rgb& env, const HrcOptions& o, Buffers<S>
     ms_view += watch.ms();
 
     watch.restart();
-    for (int n = 0; n <= std::min(2, view.levels); ++n)
-      trace_level(view, n, vp, o.corners, patterns[n], t[n]);
+    const int m = fused_levels(view);
+    lower_levels(view, m, vp, o.corners, patterns, t, empty.data());
     ms_trace += watch.ms();
     watch.restart();
-    for (int n = 3; n <= view.levels; ++n) merge_up(view, n - 1, t[n - 1], t[n], empty.data());
+    for (int n = m + 1; n <= view.levels; ++n) merge_up(view, n - 1, t[n - 1], t[n], empty.data());
     ms_up += watch.ms();
 
     watch.restart();
@@ -721,17 +777,17 @@ void solve_with(const Medium& m, const Rgb& env, const HrcOptions& o, Buffers<S>
     // quadrant, is added with the last one. Eq. 21 blurs R_0 here unless it is to blur the whole
     // fluence (blur_near, after the loop).
     watch.restart();
-    const S* r0 = upper;
+    const RLayer<S> r0{const_cast<S*>(upper), view.probes(0)};
     const Rad edge{env.r * quarter, env.g * quarter, env.b * quarter};
     const Rotation rot = rotation(d, W, H);
     const bool blur_far = o.cross_blur && !o.blur_near, own = o.near_segment && d == 3;
     const int h = view.h;
     const bool rows = rot.sv == 1 || rot.sv == -1;  // a view column is a world row
-    const int tile = rows ? 1 : kTile;
-    parallel_for((view.w + tile - 1) / tile, [&](int t) {
-      const int u0 = t * tile, u1 = std::min(view.w, u0 + tile);
+    const int strip = rows ? 1 : kTile;             // columns gathered before writing the world
+    parallel_for((view.w + strip - 1) / strip, [&](int t) {
+      const int u0 = t * strip, u1 = std::min(view.w, u0 + strip);
       thread_local std::vector<float> buf;
-      buf.resize(std::size_t(14 + 3 * tile) * h);
+      buf.resize(std::size_t(14 + 3 * strip) * h);
       float* cols = buf.data() + 14 * std::size_t(h);
       for (int u = u0; u < u1; ++u) {
         float* qc = cols + std::size_t(u - u0) * 3 * h;
@@ -750,12 +806,12 @@ void solve_with(const Medium& m, const Rgb& env, const HrcOptions& o, Buffers<S>
         out[0] += qc[v], out[1] += qc[h + v], out[2] += qc[2 * h + v];
         if (!own) return;
         const std::size_t at = vp.at(u, v);
-        const float tau = vp.plane(kTau0)[at], m = tau == 0.0f ? 1.0f : own_transmittance(tau);
-        if (m == 1.0f) return;
-        const float e = float(2 * kPi) * (1.0f - m);
-        out[0] = e * vp.plane(kR)[at] + m * out[0];
-        out[1] = e * vp.plane(kG)[at] + m * out[1];
-        out[2] = e * vp.plane(kB)[at] + m * out[2];
+        const float tau = vp.plane(kTau0)[at], mo = tau == 0.0f ? 1.0f : own_transmittance(tau);
+        if (mo == 1.0f) return;
+        const float e = float(2 * kPi) * (1.0f - mo);
+        out[0] = e * vp.plane(kR)[at] + mo * out[0];
+        out[1] = e * vp.plane(kG)[at] + mo * out[1];
+        out[2] = e * vp.plane(kB)[at] + mo * out[2];
       };
       if (rows)
         for (int v = 0; v < h; ++v) put(u0, v);

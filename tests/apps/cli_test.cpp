@@ -179,6 +179,24 @@ TEST_F(Cli, HolographicCascadesReportStagesAndParameters) {
   fs::remove(out("h.pfm"));
   expect_failure(run({"render", scene_, "--method", "hrc", "--storage", "f8", "-o", out("x.pfm")}),
                  2);
+  // Issue 20's options: the defaults, then each spelled out, in the report; the whole-fluence
+  // blur is a stage of its own; a corner rule that does not exist is a usage error.
+  const Result d = render_ok({"--json", "--method", "hrc", "-o", out("d.pfm")});
+  const nlohmann::json jd = nlohmann::json::parse(d.out);
+  EXPECT_EQ(jd.at("parameters").at("corners"), "half");
+  EXPECT_EQ(jd.at("parameters").at("blur_near_segment"), false);
+  EXPECT_FALSE(jd.at("stages").contains("cross blur"));
+  const Result w = render_ok({"--json", "--method", "hrc", "--corners", "walls",
+                              "--blur-near-segment", "-o", out("w.pfm")});
+  const nlohmann::json jw = nlohmann::json::parse(w.out);
+  EXPECT_EQ(jw.at("parameters").at("corners"), "walls");
+  EXPECT_EQ(jw.at("parameters").at("blur_near_segment"), true);
+  EXPECT_TRUE(jw.at("stages").contains("cross blur"));
+  fs::remove(out("d.pfm"));
+  fs::remove(out("w.pfm"));
+  expect_failure(
+      run({"render", scene_, "--method", "hrc", "--corners", "both", "-o", out("x.pfm")}), 2);
+  EXPECT_FALSE(fs::exists(out("x.pfm")));
 }
 
 // Half precision converts with F16C where the CPU has it and through tables otherwise
@@ -262,9 +280,9 @@ TEST_F(Cli, HelpMentionsTheOptions) {
 
   const Result r = run({"render", "--help"});
   EXPECT_EQ(r.status, 0) << r.err;
-  for (const char* opt :
-       {"--output", "--probe-spacing", "--branching", "--fix", "--threads", "--max-memory",
-        "--json", "--extend", "--storage", "--no-cross-blur", "--no-near-segment"})
+  for (const char* opt : {"--output", "--probe-spacing", "--branching", "--fix", "--threads",
+                          "--max-memory", "--json", "--extend", "--storage", "--no-cross-blur",
+                          "--no-near-segment", "--corners", "--blur-near-segment"})
     EXPECT_NE(r.out.find(opt), std::string::npos) << opt << " missing from:\n" << r.out;
 }
 

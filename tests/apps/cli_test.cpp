@@ -196,7 +196,6 @@ TEST_F(Cli, HolographicCascadesReportStagesAndParameters) {
   fs::remove(out("w.pfm"));
   expect_failure(
       run({"render", scene_, "--method", "hrc", "--corners", "both", "-o", out("x.pfm")}), 2);
-  EXPECT_FALSE(fs::exists(out("x.pfm")));
 }
 
 // Half precision converts with F16C where the CPU has it and through tables otherwise

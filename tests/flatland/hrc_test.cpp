@@ -384,6 +384,17 @@ TEST(FlatlandHrc, CrossBlurSmoothsButKeepsWallsApart) {
     }
 }
 
+// sqrt(sum (f - ref)^2 / sum ref^2) over the cells `counted(x, y)` admits (green channel).
+template <class Counted>
+double relative_rms(const ImageRgb& f, const ImageRgb& ref, Counted&& counted) {
+  double e = 0, n = 0;
+  for (int y = 0; y < f.height(); ++y)
+    for (int x = 0; x < f.width(); ++x)
+      if (counted(x, y))
+        e += std::pow(f.at(x, y).g - ref.at(x, y).g, 2), n += std::pow(ref.at(x, y).g, 2);
+  return std::sqrt(e / n);
+}
+
 // The rim of an anti-aliased disk light: its edge cells are partly covered, a glowing medium
 // with sharp differences from cell to cell. Blurring the whole fluence (eq. 21 as written)
 // mixed them; the default blurs only the light from beyond the near segment. Relative RMSE over
@@ -396,13 +407,8 @@ TEST(FlatlandHrc, RimOfALightStaysSharp) {
   RenderOptions whole = hrc();
   whole.hrc.blur_near = true;
   auto rim_error = [&](const ImageRgb& f) {
-    double e = 0, n = 0;
-    for (int y = 0; y < 128; ++y)
-      for (int x = 0; x < 128; ++x) {
-        if (std::hypot(x + 0.5 - cx, y + 0.5 - cy) >= r + 3) continue;
-        e += std::pow(f.at(x, y).g - ref.at(x, y).g, 2), n += std::pow(ref.at(x, y).g, 2);
-      }
-    return std::sqrt(e / n);
+    return relative_rms(
+        f, ref, [&](int x, int y) { return std::hypot(x + 0.5 - cx, y + 0.5 - cy) < r + 3; });
   };
   const double e_whole = rim_error(fluence_of(s, whole)), e = rim_error(fluence_of(s, hrc()));
   EXPECT_GT(e_whole, 0.019);
@@ -452,14 +458,8 @@ TEST(FlatlandHrc, HalfCornersSeeTheCornersOfALight) {
   auto error = [&](Corners corners) {
     RenderOptions o = hrc();
     o.hrc.corners = corners;
-    const ImageRgb f = fluence_of(s, o);
-    double e = 0, n = 0;
-    for (int y = 0; y < 128; ++y)
-      for (int x = 0; x < 128; ++x) {
-        if (s.opacity[s.index(x, y)] == 1.0f) continue;
-        e += std::pow(f.at(x, y).g - ref.at(x, y).g, 2), n += std::pow(ref.at(x, y).g, 2);
-      }
-    return std::sqrt(e / n);
+    return relative_rms(fluence_of(s, o), ref,
+                        [&](int x, int y) { return s.opacity[s.index(x, y)] != 1.0f; });
   };
   const double half = error(Corners::half), walls = error(Corners::walls);
   EXPECT_LT(half, 0.037);

@@ -64,7 +64,7 @@ std::uint64_t hrc_device_bytes(int W, int H, const HrcOptions& o) {
   const std::uint64_t value = o.storage == Storage::f16 ? 2 : 4;  // a stored T or R value
   // The world planes, and the gather's own fluence when the blur writes the result.
   std::uint64_t bytes =
-      std::uint64_t(W) * H * (6 + (o.cross_blur && o.blur_near ? 3 : 0)) * sizeof(float);
+      std::uint64_t(W) * H * (6 + (hrc::blurs_whole_fluence(o) ? 3 : 0)) * sizeof(float);
   bytes += 6 * std::uint64_t(sz.pad) * sizeof(float);  // view
   bytes += 2 * 3 * std::uint64_t(std::max<std::size_t>(sz.r, 1)) * value;
   bytes += ((std::uint64_t(2) << levels) - 1) * sizeof(float);  // cone angles
@@ -130,8 +130,7 @@ Status record_hrc(Cache& cache, Batch& batch, int W, int H, Buffer& step, Buffer
   for (const Expected<Buffer*>* b : {&world, &view, &r0, &r1})
     if (!*b) return b->error();
   Buffer* fluence = &fluence_out;
-  if (o.cross_blur &&
-      o.blur_near) {  // the gather writes a buffer of its own, the blur writes fluence_out
+  if (hrc::blurs_whole_fluence(o)) {  // the gather writes a buffer of its own, the blur the output
     Expected<Buffer*> f = cache.buffer(kHrcBlur, "hrc fluence", 3 * std::size_t(cells) * 4);
     if (!f) return f.error();
     fluence = *f;
@@ -261,14 +260,14 @@ Status record_hrc(Cache& cache, Batch& batch, int W, int H, Buffer& step, Buffer
              env.r,
              env.g,
              env.b,
-             o.cross_blur && !o.blur_near ? 1 : 0,
+             o.cross_blur && !hrc::blurs_whole_fluence(o) ? 1 : 0,
              d == 3 ? 1 : 0,
              hrc::kBlurOpacityStep};
       Buffer* b[] = {upper, *view, fluence};
       batch.dispatch(*k[5], b, &push, groups(std::size_t(v.h), 64), groups(std::size_t(v.w), 4));
     }
   }
-  if (o.cross_blur && o.blur_near)  // the transmittance over half a cell: the world's plane 3
+  if (hrc::blurs_whole_fluence(o))  // the transmittance over half a cell: the world's plane 3
     return record_cross_blur(cache, batch, W, H, **world, 3 * cells, *fluence, fluence_out);
   return {};
 }

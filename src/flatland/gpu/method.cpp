@@ -5,6 +5,7 @@
 #include "flatland/gpu/hrc.hpp"
 #include "flatland/gpu/owners.hpp"
 #include "flatland/gpu/rc.hpp"
+#include "flatland/hrc/hrc.hpp"
 
 namespace penumbra::flatland::gpu {
 namespace {
@@ -60,7 +61,7 @@ bool no_jumps(const RenderOptions&) {
 
 void hrc_owners(const RenderOptions& o, std::vector<Owner>& keep) {
   keep.push_back(kHrc);
-  if (o.hrc.cross_blur && o.hrc.blur_near) keep.push_back(kHrcBlur);
+  if (hrc::blurs_whole_fluence(o.hrc)) keep.push_back(kHrcBlur);
 }
 
 Status hrc_record(GpuSolve& s, Batch& batch, Buffer& emission) {

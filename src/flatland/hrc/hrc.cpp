@@ -571,93 +571,73 @@ void fill_column(S* col, int h, int lo, int hi, const std::array<float, C>& v) {
   for (std::size_t c = 0; c < C; ++c) std::fill(col + c * h + lo, col + c * h + hi, S(v[c]));
 }
 
-// A layer of R: `columns` probe columns per cone, cone after cone; null data: the environment
-// (R_N).
-template <class S>
-struct RLayer {
-  S* data = nullptr;
-  int columns = 0;
-  S* col(int j, int x, int h) const {
-    return data + (std::size_t(j) * columns + x) * kRChannels * h;
-  }
-};
-
-// Column (a, x) of R_n from R_{n+1} (`up`; beyond its columns lies what is beyond the grid,
-// where the environment fills the cone), T_n and T_{n+1}, into `out`.
-template <class S>
-void merge_down_column(const View& view, int n, const S* tn, const S* tn1, const RLayer<S>& up,
-                       const RLayer<S>& out, int a, int x, const Rgb& env) {
-  const int P = view.probes(n), P1 = view.probes(n + 1), h = view.h;
-  auto rcol = [&](int j, int c) -> const S* {
-    return up.data && c < P1 ? up.col(j, c, h) : nullptr;
-  };
-  // The upper and lower halves of cone a are cones 2a + 1 and 2a of cascade n + 1; beyond
-  // the grid they hold the environment over their angle.
-  const float ap = cone_angle(n + 1, 2 * a + 1), am = cone_angle(n + 1, 2 * a);
-  thread_local std::vector<S> outside;
-  outside.resize(2 * kRChannels * std::size_t(h));
-  S *outp = outside.data(), *outm = outp + kRChannels * h;
-  // Reads 0 and 2 use the upper half's outside column, 1 and 3 the lower half's (filled only
-  // over the rows that read them).
-  auto prepare = [&](std::size_t i, int lo, int hi) {
-    if (i % 2 == 0)
-      fill_column<S, 3>(outp, h, lo, hi, {env.r * ap, env.g * ap, env.b * ap});
-    else
-      fill_column<S, 3>(outm, h, lo, hi, {env.r * am, env.g * am, env.b * am});
-  };
-  S* o = out.col(a, x, h);
-  if (x % 2 == 1) {
-    // Eq. 14: trace each edge to the cascade-(n+1) probe it ends on, merge with its cone.
-    const S* tp = tn + (std::size_t(a + 1) * P + x) * kTChannels * h;
-    const S* tm = tn + (std::size_t(a) * P + x) * kTChannels * h;
-    const int xq = (x + 1) / 2;
-    for_segments<S, 2>(
-        h, {{{rcol(2 * a + 1, xq), vy(n, a + 1), outp}, {rcol(2 * a, xq), vy(n, a), outm}}},
-        [&](int lo, int hi, const auto& c, const auto& d) {
-          down_odd_rows(lo, hi, h, ap, am, tp, tm, c[0], d[0], c[1], d[1], o);
-        },
-        prepare);
-  } else {
-    // Eqs. 15-17: T_{n+1} has the same probe columns as R_{n+1}.
-    const int xp = x / 2, xq = xp + 1;
-    const S* upp = tn1 + (std::size_t(2 * a + 2) * P1 + xp) * kTChannels * h;
-    const S* ump = tn1 + (std::size_t(2 * a) * P1 + xp) * kTChannels * h;
-    for_segments<S, 4>(
-        h,
-        {{{rcol(2 * a + 1, xp), 0, outp},
-          {rcol(2 * a, xp), 0, outm},
-          {rcol(2 * a + 1, xq), vy(n + 1, 2 * a + 2), outp},
-          {rcol(2 * a, xq), vy(n + 1, 2 * a), outm}}},
-        [&](int lo, int hi, const auto& c, const auto& d) {
-          down_even_rows(lo, hi, h, ap, am, upp, ump, c[0], d[0], c[1], d[1], c[2], d[2], c[3],
-                         d[3], o);
-        },
-        prepare);
-  }
-}
-
-// R_n from R_{n+1} (null at n + 1 = N: the environment), T_n and T_{n+1}, every column.
+// R_n from R_{n+1} (null at n + 1 = N: the environment), T_n and T_{n+1}.
 template <class S>
 void merge_down(const View& view, int n, const S* tn, const S* tn1, const S* rn1, S* rn,
                 const Rgb& env) {
-  const int P = view.probes(n);
-  const RLayer<S> up{const_cast<S*>(rn1), view.probes(n + 1)}, out{rn, P};
+  const int P = view.probes(n), P1 = view.probes(n + 1), h = view.h;
+  auto rcol = [&](int j, int x) -> const S* {
+    return rn1 && x < P1 ? rn1 + (std::size_t(j) * P1 + x) * kRChannels * h : nullptr;
+  };
   parallel_for((1 << n) * P, [&](int row) {
-    merge_down_column(view, n, tn, tn1, up, out, row / P, row % P, env);
+    const int a = row / P, x = row % P;
+    // The upper and lower halves of cone a are cones 2a + 1 and 2a of cascade n + 1; beyond
+    // the grid they hold the environment over their angle.
+    const float ap = cone_angle(n + 1, 2 * a + 1), am = cone_angle(n + 1, 2 * a);
+    thread_local std::vector<S> outside;
+    outside.resize(2 * kRChannels * std::size_t(h));
+    S *outp = outside.data(), *outm = outp + kRChannels * h;
+    // Reads 0 and 2 use the upper half's outside column, 1 and 3 the lower half's (filled only
+    // over the rows that read them).
+    auto prepare = [&](std::size_t i, int lo, int hi) {
+      if (i % 2 == 0)
+        fill_column<S, 3>(outp, h, lo, hi, {env.r * ap, env.g * ap, env.b * ap});
+      else
+        fill_column<S, 3>(outm, h, lo, hi, {env.r * am, env.g * am, env.b * am});
+    };
+    S* o = rn + std::size_t(row) * kRChannels * h;
+    if (x % 2 == 1) {
+      // Eq. 14: trace each edge to the cascade-(n+1) probe it ends on, merge with its cone.
+      const S* tp = tn + (std::size_t(a + 1) * P + x) * kTChannels * h;
+      const S* tm = tn + (std::size_t(a) * P + x) * kTChannels * h;
+      const int xq = (x + 1) / 2;
+      for_segments<S, 2>(
+          h, {{{rcol(2 * a + 1, xq), vy(n, a + 1), outp}, {rcol(2 * a, xq), vy(n, a), outm}}},
+          [&](int lo, int hi, const auto& c, const auto& d) {
+            down_odd_rows(lo, hi, h, ap, am, tp, tm, c[0], d[0], c[1], d[1], o);
+          },
+          prepare);
+    } else {
+      // Eqs. 15-17: T_{n+1} has the same probe columns as R_{n+1}.
+      const int xp = x / 2, xq = xp + 1;
+      const S* up = tn1 + (std::size_t(2 * a + 2) * P1 + xp) * kTChannels * h;
+      const S* um = tn1 + (std::size_t(2 * a) * P1 + xp) * kTChannels * h;
+      for_segments<S, 4>(
+          h,
+          {{{rcol(2 * a + 1, xp), 0, outp},
+            {rcol(2 * a, xp), 0, outm},
+            {rcol(2 * a + 1, xq), vy(n + 1, 2 * a + 2), outp},
+            {rcol(2 * a, xq), vy(n + 1, 2 * a), outm}}},
+          [&](int lo, int hi, const auto& c, const auto& d) {
+            down_even_rows(lo, hi, h, ap, am, up, um, c[0], d[0], c[1], d[1], c[2], d[2], c[3],
+                           d[3], o);
+          },
+          prepare);
+    }
   });
 }
 
 // Rows [0, h) of the R_0 read of view column u (R_0 at column u + 1, `edge` beyond the view),
 // channel by channel into c[0..2].
 template <class S>
-void r0_column(const RLayer<S>& r0, const View& view, int u, const Rad& edge, float* const c[3]) {
+void r0_column(const S* r0, const View& view, int u, const Rad& edge, float* const c[3]) {
   const int h = view.h;
   if (u < 0 || u + 1 >= view.w) {
     std::fill(c[0], c[0] + h, edge.r), std::fill(c[1], c[1] + h, edge.g);
     std::fill(c[2], c[2] + h, edge.b);
     return;
   }
-  const S* col = r0.col(0, u + 1, h);
+  const S* col = r0 + std::size_t(u + 1) * kRChannels * h;
   for (int ch = 0; ch < 3; ++ch)
     for (int v = 0; v < h; ++v) c[ch][v] = load(col[std::size_t(ch) * h + v]);
 }
@@ -667,8 +647,8 @@ void r0_column(const RLayer<S>& r0, const View& view, int u, const Rad& edge, fl
 // blur_together() admits, beyond the grid none), then the near segment past the cell's own
 // edge when `near`. Column by column so the loops vectorise; `scratch` holds 14 columns.
 template <class S>
-void quadrant_column(const RLayer<S>& r0, const View& view, const ViewPlanes& vp, int u,
-                     const Rad& edge, bool blur, bool near, float* scratch, float* const q[3]) {
+void quadrant_column(const S* r0, const View& view, const ViewPlanes& vp, int u, const Rad& edge,
+                     bool blur, bool near, float* scratch, float* const q[3]) {
   const int h = view.h;
   r0_column(r0, view, u, edge, q);
   if (blur) {
@@ -678,12 +658,11 @@ void quadrant_column(const RLayer<S>& r0, const View& view, const ViewPlanes& vp
     r0_column(r0, view, u - 1, edge, left);  // what the cell at u - 1 reads
     r0_column(r0, view, u + 1, edge, right);
     for (int ch = 0; ch < 3; ++ch) std::copy(q[ch], q[ch] + h, own[ch]);
+    // The neighbours' columns (read only where they lie in the view); an opaque cell keeps its
+    // value.
     const float* tc = vp.plane(kTau0) + vp.at(u, 0);
-    const float* tl = u > 0 ? vp.plane(kTau0) + vp.at(u - 1, 0) : nullptr;
-    const float* tr = u + 1 < view.w ? vp.plane(kTau0) + vp.at(u + 1, 0) : nullptr;
-    // Without a neighbour column, the cell's own (weight 0); an opaque cell keeps its value.
-    if (!tl) tl = tc;
-    if (!tr) tr = tc;
+    const float* tl = vp.plane(kTau0) + vp.at(std::max(u - 1, 0), 0);
+    const float* tr = vp.plane(kTau0) + vp.at(u + 1, 0);
     float* w = scratch + 9 * std::size_t(h);  // the four weights, then 1 / their sum with 4
     for (int v = 0; v < h; ++v) {
       const float c = tc[v], opaque = c == 0.0f ? 1.0f : 0.0f;
@@ -777,10 +756,10 @@ void solve_with(const Medium& m, const Rgb& env, const HrcOptions& o, Buffers<S>
     // quadrant, is added with the last one. Eq. 21 blurs R_0 here unless it is to blur the whole
     // fluence (blur_near, after the loop).
     watch.restart();
-    const RLayer<S> r0{const_cast<S*>(upper), view.probes(0)};
+    const S* r0 = upper;
     const Rad edge{env.r * quarter, env.g * quarter, env.b * quarter};
     const Rotation rot = rotation(d, W, H);
-    const bool blur_far = o.cross_blur && !o.blur_near, own = o.near_segment && d == 3;
+    const bool blur_far = o.cross_blur && !blurs_whole_fluence(o), own = o.near_segment && d == 3;
     const int h = view.h;
     const bool rows = rot.sv == 1 || rot.sv == -1;  // a view column is a world row
     const int strip = rows ? 1 : kTile;             // columns gathered before writing the world
@@ -825,7 +804,7 @@ void solve_with(const Medium& m, const Rgb& env, const HrcOptions& o, Buffers<S>
   stages.push_back({"trace T0-T2", ms_trace});
   stages.push_back({"merge up T3-TN", ms_up});
   stages.push_back({"merge down R", ms_down});
-  if (o.cross_blur && o.blur_near) {
+  if (blurs_whole_fluence(o)) {
     watch.restart();
     reserve_huge(blurred, cells * 3);
     blurred.resize(cells * 3);
@@ -902,9 +881,9 @@ int level_count(int w) {
 
 std::uint64_t working_bytes(int width, int height, const HrcOptions& o) {
   const Sizes s = plan(width, height);
-  const bool copy = o.cross_blur && o.blur_near;  // the blur of the whole fluence writes a copy
-  return o.storage == Storage::f16 ? bytes_of<Half>(s, width, height, copy)
-                                   : bytes_of<float>(s, width, height, copy);
+  // The blur of the whole fluence writes a copy.
+  return o.storage == Storage::f16 ? bytes_of<Half>(s, width, height, blurs_whole_fluence(o))
+                                   : bytes_of<float>(s, width, height, blurs_whole_fluence(o));
 }
 
 std::uint64_t structure_bytes(int width, int height, Storage storage) {

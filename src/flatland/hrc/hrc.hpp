@@ -68,6 +68,12 @@ void solve(const Medium& medium, const Rgb& environment, const HrcOptions& optio
 inline constexpr float kBlurOpacityStep = 0.5f;
 void cross_blur(int W, int H, const float* tau_half, const float* f, float* out);
 
+// Whether eq. 21 runs on the whole fluence, as a pass of its own after the quadrants (otherwise,
+// when on, each quadrant's gather blurs the light from beyond the near segment).
+inline bool blurs_whole_fluence(const HrcOptions& o) {
+  return o.cross_blur && o.blur_near;
+}
+
 // Whether eq. 21 mixes a non-opaque cell with a neighbour, given each one's transmittance over
 // half a cell: not an opaque neighbour, nor one whose opacity differs by more than the step.
 inline bool blur_together(float tau_cell, float tau_neighbour) {

@@ -68,7 +68,18 @@ struct Run {
   std::string label, curve;
   sl::RenderOptions options;
   Derive derive;
+  bool defaults = false;  // the method at its defaults: what the others derive from
 };
+
+// A run of `method` with `set` applied to its options (`member` of the render options).
+template <class Options, class Set>
+void add_run(std::vector<Run>& runs, sl::Method method, Options sl::RenderOptions::*member,
+             const std::string& label, Set&& set, Derive derive = {}) {
+  sl::RenderOptions o;
+  o.method = method;
+  set(o.*member);
+  runs.push_back({label, "", o, std::move(derive)});
+}
 
 // A derived length (t0, the voxel; `field` picks it) at `k` times the defaults', shown as `flag`.
 template <class Field>
@@ -92,13 +103,11 @@ Derive scaled(double k, Field field, const char* flag) {
 // and Q0 each way, t0 at half and twice, the bilinear fix and interval extension.
 void add_grid_runs(std::vector<Run>& runs, bool quick) {
   auto grid = [&](const std::string& label, auto&& set, Derive derive = {}) {
-    sl::RenderOptions o;
-    o.method = sl::Method::grid;
-    set(o.grid);
-    runs.push_back({label, "", o, std::move(derive)});
+    add_run(runs, sl::Method::grid, &sl::RenderOptions::grid, label, set, std::move(derive));
   };
   using G = sl::GridOptions;
   grid("grid (defaults)", [](G&) {});
+  runs.back().defaults = true;
   if (quick) return;
   for (double k : {0.5, 2.0})
     grid(
@@ -131,13 +140,11 @@ std::vector<Run> default_runs(int max_spp, bool quick) {
     runs.push_back({"pt " + std::to_string(spp) + " spp", "pt nee", o, {}});
   }
   auto spwi = [&](const std::string& label, auto&& set, Derive derive = {}) {
-    sl::RenderOptions o;
-    o.method = sl::Method::spwi;
-    set(o.spwi);
-    runs.push_back({label, "", o, std::move(derive)});
+    add_run(runs, sl::Method::spwi, &sl::RenderOptions::spwi, label, set, std::move(derive));
   };
   using S = sl::SpwiOptions;
   spwi("spwi (defaults)", [](S&) {});
+  runs.back().defaults = true;
   if (quick) {
     add_grid_runs(runs, true);
     return runs;
@@ -247,7 +254,7 @@ int run_quality3d(const QualityArgs& a) {
     if (std::find(refused.begin(), refused.end(), o.method) != refused.end()) continue;
     if (run.derive) run.label += run.derive(o, defaults.at(o.method));
     Expected<sl::RenderResult> r = sl::render(*scene, o);
-    if (!r && run.label.find("(defaults)") != std::string::npos) {
+    if (!r && run.defaults) {
       // A method that cannot carry the scene (SPWI and fog): its runs are left out, said here.
       std::printf("  %-44s refused: %s\n", run.label.c_str(), r.error().message.c_str());
       refused.push_back(o.method);
@@ -262,7 +269,7 @@ int run_quality3d(const QualityArgs& a) {
                 row.time_ms, 100 * m->relative_rmse, m->psnr);
     std::fflush(stdout);
     rows.push_back(row);
-    if (run.label == "spwi (defaults)" || run.label == "grid (defaults)") {
+    if (run.defaults) {
       defaults[o.method] = r->options;
       flatland::MontageOptions mo;
       mo.test_label = run.label;

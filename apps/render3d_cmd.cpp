@@ -183,9 +183,8 @@ int render_scene_3d(const RenderArgs& a) {
                          {"interval", m.interval},
                          {"cascades", m.cascades}});
     };
-    if (options.method == sl::Method::spwi) cascade_parameters(used.spwi);
-    if (options.method == sl::Method::grid) cascade_parameters(used.grid);
-    if (options.method == sl::Method::spwi)
+    if (options.method == sl::Method::spwi) {
+      cascade_parameters(used.spwi);
       parameters.update({{"branching", used.spwi.branching},
                          {"merge", sl::to_string(used.spwi.merge)},
                          {"sun", sl::to_string(used.spwi.sun)},
@@ -196,11 +195,14 @@ int render_scene_3d(const RenderArgs& a) {
                          {"merge_edge", used.spwi.merge_edge},
                          {"gather_edge", used.spwi.gather_edge},
                          {"gather_normal", used.spwi.gather_normal}});
-    if (options.method == sl::Method::grid)
+    }
+    if (options.method == sl::Method::grid) {
+      cascade_parameters(used.grid);
       parameters.update({{"voxel", used.grid.voxel},
                          {"voxel_memory_bytes", result->voxel_bytes},
                          {"extend_length", used.grid.extend_length},
                          {"fix", used.grid.fix ? "bilinear" : "none"}});
+    }
     nlohmann::json j = {{"method", sl::to_string(options.method)},
                         {"dimensions", 3},
                         {"device", result->device},

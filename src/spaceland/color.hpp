@@ -1,6 +1,8 @@
 // Arithmetic on linear RGB values (penumbra::Rgb) for the 3D transport.
 #pragma once
 
+#include <cmath>
+
 #include "penumbra/image.hpp"
 
 namespace penumbra::spaceland {
@@ -37,6 +39,11 @@ constexpr bool is_black(Rgb a) {
 }
 constexpr float channel(Rgb a, int c) {
   return c == 0 ? a.r : c == 1 ? a.g : a.b;
+}
+
+// Per channel exp(-tau): the transmittance of an optical depth.
+inline Rgb exp_neg(Rgb tau) {
+  return {std::exp(-tau.r), std::exp(-tau.g), std::exp(-tau.b)};
 }
 
 }  // namespace penumbra::spaceland

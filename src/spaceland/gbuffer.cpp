@@ -37,10 +37,15 @@ Rgb SunLight::at(Vec3 p, std::uint64_t& rays) const {
 }
 
 Rgb SunLight::reflected(const Hit& hit, Rgb albedo, std::uint64_t& rays) const {
-  const float cos_s = dot(hit.shading_normal, dir_);
-  if (!on_ || !(cos_s > 0) || !(dot(hit.geometric_normal, dir_) > 0)) return {};
-  return albedo * at(rays_->spawn(hit.position, hit.geometric_normal, dir_), rays) *
-         float(cos_s / kPi);
+  if (!on_ || !(dot(hit.geometric_normal, dir_) > 0)) return {};
+  return reflected(rays_->spawn(hit.position, hit.geometric_normal, dir_), hit.shading_normal,
+                   albedo, rays);
+}
+
+Rgb SunLight::reflected(Vec3 from, Vec3 n, Rgb albedo, std::uint64_t& rays) const {
+  const float cos_s = dot(n, dir_);
+  if (!on_ || !(cos_s > 0)) return {};
+  return albedo * at(from, rays) * float(cos_s / kPi);
 }
 
 void face_towards(Hit& hit, Vec3 d) {

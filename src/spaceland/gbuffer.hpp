@@ -33,6 +33,9 @@ class SunLight {
   // Reflected at a visible hit (normals faced to the camera): albedo E cos / pi, 0 where the
   // surface faces away or the shadow ray is blocked.
   Rgb reflected(const Hit& hit, Rgb albedo, std::uint64_t& rays) const;
+  // The same at a point with normal n, the shadow ray starting from `from` (already clear of
+  // the surface).
+  Rgb reflected(Vec3 from, Vec3 n, Rgb albedo, std::uint64_t& rays) const;
 
  private:
   const RayScene* rays_;

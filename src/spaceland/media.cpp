@@ -31,10 +31,6 @@ bool box_span(const Medium& m, const Ray& ray, float tmax, float& t0, float& t1)
   return t1 > t0;
 }
 
-Rgb exp_neg(Rgb tau) {
-  return {std::exp(-tau.r), std::exp(-tau.g), std::exp(-tau.b)};
-}
-
 }  // namespace
 
 void Media::pieces(const Ray& ray, float tmax, std::vector<MediumPiece>& out) const {

@@ -123,7 +123,7 @@ const MethodEntry kMethods[] = {
     {{Method::grid, "grid",
       "the world-space probe grid (seed 001 4.3): radiance cascades over the scene's voxels, "
       "fog and light shafts, later bounces, the radiance cache spwi's come from"},
-     grid::check,
+     no_check,  // check_options checks the grid's options; any scene will do
      grid_bytes,
      grid_solve},
 };
@@ -210,8 +210,10 @@ Status check_options(const RenderOptions& o) {
           "`pt.spp` is 0 (no limit) and no `pt.seconds` is given: the render would "
           "never end"};
   }
-  // The grid's options (ranges and combinations) before any scene is read.
-  if (o.method == Method::grid) return grid::check_options(o.grid);
+  // The grid's options (ranges and combinations) before any scene is read: the grid's own, and
+  // SPWI's later bounces, which come from the grid's radiance cache.
+  if (o.method == Method::grid || (o.method == Method::spwi && o.bounces > 1))
+    return grid::check_options(o.grid);
   return {};
 }
 

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <string>
 
+#include "core/math.hpp"
 #include "penumbra/spaceland/render.hpp"
 #include "penumbra/spaceland/scene.hpp"
 
@@ -162,7 +163,7 @@ inline FogSphere absorbing_fog_sphere() {
   const Vec3 o{2.1f, 1.7f, -0.9f};
   const float r = 1.3f;
   s.camera = camera(o, o + Vec3{0.3f, 0.2f, -1}, 16, 12, 60);
-  const double le = 1, a = 0.8, sigma = 0.5, pi = 3.14159265358979323846;
+  const double le = 1, a = 0.8, sigma = 0.5, pi = kPi;
   add_sphere(s, o, r, add_material(s, {float(a), float(a), float(a)}, {float(le), 1, 1}));
   Medium m;
   m.center = o;

@@ -227,12 +227,8 @@ TEST(Spwi, SameBitsOnOneAndTwoThreads) {
   Scene s = sky_plane();
   add_sphere(s, {0, 0.5f, -1}, 0.5f, add_material(s, {0.3f, 0.8f, 0.3f}, {1, 0, 0}));
   for (SpwiMerge m : kMerges) {
-    RenderOptions o = spwi(m);
-    o.threads = 1;
-    const ImageRgb one = render_ok(s, o).radiance;
-    o.threads = 2;
-    const ImageRgb two = render_ok(s, o).radiance;
-    EXPECT_TRUE(std::equal(one.data(), one.data() + one.size(), two.data())) << to_string(m);
+    SCOPED_TRACE(to_string(m));
+    same_bits_on_one_and_two_threads(s, spwi(m));
   }
 }
 

@@ -293,16 +293,21 @@ Expected<Solution> solve(const Voxels& v, const Background& bg, const GridOption
           }
           const Vec3 p = position_of(v, c, q);
           Corners around;
+          Vec3 upper_probe[8];
           if (!top) {
             around = corners(v, *up, p);
             // An upper probe this one cannot see (across a wall or a floor) would bring light
             // from the other side: it takes no part (the 2D cascades weigh by visibility too).
+            // With the fix, neither does one inside a surface (it holds no light).
             for (int j = 0; j < 8; ++j) {
-              if (around.w[std::size_t(j)] <= 0) continue;
-              const Vec3 to = position_of(v, *up, around.index[std::size_t(j)]) - p;
+              float& w = around.w[std::size_t(j)];
+              if (w <= 0) continue;
+              const std::uint64_t uq = around.index[std::size_t(j)];
+              upper_probe[j] = position_of(v, *up, uq);
+              const Vec3 to = upper_probe[j] - p;
               const float dist = length(to);
-              if (dist > 0 && march(v, p, to * (1 / dist), 0, dist).blocked)
-                around.w[std::size_t(j)] = 0;
+              if (dist > 0 && march(v, p, to * (1 / dist), 0, dist).blocked) w = 0;
+              if (fix && !holds_light(upper_at(uq, 0))) w = 0;
             }
           }
           for (int dv = 0; dv < c.side; ++dv)
@@ -317,15 +322,14 @@ Expected<Solution> solve(const Voxels& v, const Background& bg, const GridOption
                 for (int j = 0; j < 8; ++j) {
                   const float w = around.w[std::size_t(j)];
                   const std::uint64_t uq = around.index[std::size_t(j)];
-                  if (w <= 0 || !holds_light(upper_at(uq, 0))) continue;
-                  const Vec3 upper_probe = position_of(v, *up, uq);
+                  if (w <= 0) continue;
                   Rgb mean{};
                   for (int cv = 0; cv < 2; ++cv)
                     for (int cu = 0; cu < 2; ++cu) {
                       const std::size_t ud = std::size_t(2 * dv + cv) * std::size_t(up_side) +
                                              std::size_t(2 * du + cu);
                       const Vec3 from = p + up_dirs[ud] * c.t_start;
-                      const Vec3 to = upper_probe + up_dirs[ud] * up->t_start - from;
+                      const Vec3 to = upper_probe[j] + up_dirs[ud] * up->t_start - from;
                       const float dist = length(to);
                       mean += then(dist > 0 ? march(v, from, to * (1 / dist), 0, dist) : Segment{},
                                    upper_at(uq, ud));
@@ -409,14 +413,17 @@ Expected<Solution> solve(const Voxels& v, const Background& bg, const GridOption
   const std::size_t nd = sol.dirs_.size();
   sol.valid_.resize(std::size_t(plan[0].probes()));
   sol.sphere_.resize(std::size_t(plan[0].probes()));
-  for (std::uint64_t q = 0; q < plan[0].probes(); ++q) {
-    sol.valid_[std::size_t(q)] = probe_free(v, plan[0], q);
-    if (!sol.valid_[std::size_t(q)]) continue;
-    // Equal-area cells: the plain mean is the mean over the sphere.
-    Rgb sum{};
-    for (std::size_t d = 0; d < nd; ++d) sum += sol.radiance_[std::size_t(q) * nd + d];
-    sol.sphere_[std::size_t(q)] = sum * (1 / float(nd));
-  }
+  const std::uint64_t row = std::uint64_t(plan[0].nx);
+  parallel_for(int(plan[0].probes() / row), [&](int r) {
+    for (std::uint64_t q = std::uint64_t(r) * row; q < std::uint64_t(r + 1) * row; ++q) {
+      sol.valid_[std::size_t(q)] = probe_free(v, plan[0], q);
+      if (!sol.valid_[std::size_t(q)]) continue;
+      // Equal-area cells: the plain mean is the mean over the sphere.
+      Rgb sum{};
+      for (std::size_t d = 0; d < nd; ++d) sum += sol.radiance_[std::size_t(q) * nd + d];
+      sol.sphere_[std::size_t(q)] = sum * (1 / float(nd));
+    }
+  });
   return sol;
 }
 
@@ -470,8 +477,7 @@ bool Solution::sphere_radiance(Vec3 p, Rgb& out) const {
   const Voxels& v = *voxels_;
   const int vdims[3] = {v.nx, v.ny, v.nz};
   int own[3];
-  for (int k = 0; k < 3; ++k)
-    own[k] = std::clamp(int(std::floor((p[k] - v.origin[k]) / v.size)), 0, vdims[k] - 1);
+  for (int k = 0; k < 3; ++k) own[k] = std::clamp(v.cell(p, k), 0, vdims[k] - 1);
   auto serve = [&](std::uint64_t q, Vec3 probe, Rgb& value) {
     // Marched from the probe: the only opaque voxel it may meet is p's own (p close to a surface
     // lies in the surface's voxels).
@@ -483,7 +489,7 @@ bool Solution::sphere_radiance(Vec3 p, Rgb& out) const {
       if (s.blocked) {
         const Vec3 in = probe + dir * (s.t_end + 1e-3f * v.size);
         for (int k = 0; k < 3; ++k)
-          if (int(std::floor((in[k] - v.origin[k]) / v.size)) != own[k]) return false;
+          if (v.cell(in, k) != own[k]) return false;
       }
     }
     value = sphere_[std::size_t(q)];
@@ -502,7 +508,7 @@ bool Solution::mean_radiance(Vec3 p, Vec3 n, Rgb& out, const RayScene* rays) con
   if (!rays) {
     int at[3];
     const int vdims[3] = {v.nx, v.ny, v.nz};
-    for (int k = 0; k < 3; ++k) at[k] = int(std::floor((p[k] - v.origin[k]) / v.size));
+    for (int k = 0; k < 3; ++k) at[k] = v.cell(p, k);
     float best = kInfinity;
     for (int dz = -2; dz <= 2; ++dz)
       for (int dy = -2; dy <= 2; ++dy)
@@ -538,13 +544,25 @@ bool Solution::mean_radiance(Vec3 p, Vec3 n, Rgb& out, const RayScene* rays) con
   return tent(v, plan_[0], valid_, p, 4, serve, out);
 }
 
+namespace {
+
+// The radiance fog at x scatters, per unit sigma_s: the mean over the sphere (none where no
+// probe is seen) and the sun's irradiance spread over 4 pi.
+Rgb in_scattered(const Solution& sol, const SunLight* sun, Vec3 x, std::uint64_t& rays) {
+  Rgb in{};
+  sol.sphere_radiance(x, in);
+  if (sun && sun->on()) in += sun->at(x, rays) * float(1 / (4 * kPi));
+  return in;
+}
+
+}  // namespace
+
 std::uint64_t add_bounce(Voxels& v, const Solution& sol, const std::vector<Rgb>& base,
                          const SunLight* sun, std::vector<Vec3>* normals) {
   // Written aside: the solution marches these voxels meanwhile.
   std::vector<Rgb> next(v.emission.size()), minus(v.emission.size());
   std::vector<std::uint8_t> thin(v.emission.size(), 0);
   if (normals) normals->assign(v.emission.size(), Vec3{});
-  const bool sunlit = sun && sun->on();
   std::atomic<std::uint64_t> traced{0};
   parallel_for(v.nz, [&](int z) {
     std::uint64_t rays = 0;
@@ -556,10 +574,7 @@ std::uint64_t add_bounce(Voxels& v, const Solution& sol, const std::vector<Rgb>&
         if (!v.opaque(k)) {
           // Fog re-emits what it scatters: sigma_s times the sphere's mean radiance.
           if (is_black(v.extinction[k]) || is_black(v.albedo[k])) continue;
-          Rgb in{};  // none where no probe is seen
-          sol.sphere_radiance(centre, in);
-          if (sunlit) in += sun->at(centre, rays) * float(1 / (4 * kPi));
-          next[k] += v.extinction[k] * v.albedo[k] * in;
+          next[k] += v.extinction[k] * v.albedo[k] * in_scattered(sol, sun, centre, rays);
           continue;
         }
         // The free 6-neighbours: the outward normal points towards them.
@@ -592,9 +607,7 @@ std::uint64_t add_bounce(Voxels& v, const Solution& sol, const std::vector<Rgb>&
           normal = n * (1 / len);
           Rgb out{}, mean;
           if (sol.mean_radiance(centre, normal, mean)) out += v.albedo[k] * mean;
-          const float cos_s = sunlit ? dot(normal, sun->direction()) : 0.0f;
-          if (cos_s > 0)
-            out += v.albedo[k] * sun->at(centre + n * v.size, rays) * float(cos_s / kPi);
+          if (sun) out += sun->reflected(centre + n * v.size, normal, v.albedo[k], rays);
           return out;
         };
         Vec3 normal;
@@ -622,7 +635,7 @@ Rgb RadianceCache::reflected(Vec3 p, Vec3 n) const {
   const Voxels& v = voxels_;
   int at[3];
   const int dims[3] = {v.nx, v.ny, v.nz};
-  for (int k = 0; k < 3; ++k) at[k] = int(std::floor((p[k] - v.origin[k]) / v.size));
+  for (int k = 0; k < 3; ++k) at[k] = v.cell(p, k);
   float best = kInfinity;
   Rgb out{};
   for (int dz = -1; dz <= 1; ++dz)
@@ -688,10 +701,6 @@ Status check_options(const GridOptions& o) {
   return check_cascade_options(o);
 }
 
-Status check(const Scene&, const RenderOptions& options) {
-  return check_options(options.grid);
-}
-
 float voxel_size(const Scene& scene, const RenderOptions& options) {
   return options.grid.voxel > 0 ? options.grid.voxel
                                 : default_voxel_size(scene, options.max_memory / 4);
@@ -707,21 +716,16 @@ Rgb through_fog(const Media& media, const Solution& sol, const SunLight& sun, fl
                 std::uint64_t& rays) {
   media.pieces(Ray{origin, dir, 0, t_end}, t_end, pieces);
   Rgb l{}, tr{1, 1, 1};
-  const float sun_share = float(1 / (4 * kPi));
   for (const MediumPiece& piece : pieces) {
     const float len = piece.t1 - piece.t0;
     if (!(len > 0)) continue;
     const int steps = int(std::clamp(std::ceil(double(len) / step), 1.0, 4096.0));
     const float dt = len / float(steps);
     const Rgb& sigma = piece.sigma_t;
-    const Rgb through{std::exp(-sigma.r * dt), std::exp(-sigma.g * dt), std::exp(-sigma.b * dt)};
+    const Rgb through = exp_neg(sigma * dt);
     for (int i = 0; i < steps; ++i) {
       const Vec3 x = origin + dir * (piece.t0 + (float(i) + 0.5f) * dt);
-      Rgb in{};  // none where no probe is seen
-      if (!is_black(piece.sigma_s)) {
-        sol.sphere_radiance(x, in);
-        if (sun.on()) in += sun.at(x, rays) * sun_share;
-      }
+      const Rgb in = is_black(piece.sigma_s) ? Rgb{} : in_scattered(sol, &sun, x, rays);
       l += tr * stretch_light(sigma, piece.emission + piece.sigma_s * in, dt, through);
       tr *= through;
     }

@@ -123,10 +123,9 @@ std::uint64_t cascades_bytes(const std::vector<CascadePlan>& plan, const GridOpt
 // How many times cascade c's traced intervals are doubled (0: traced whole).
 int extension_doublings(const CascadePlan& c, const GridOptions& o, float voxel, bool top);
 
-// The grid's options out of range or that do not go together (the method table's check; any
-// scene will do).
+// The grid's options out of range or that do not go together (spaceland::check_options calls it
+// for the grid and for SPWI's later bounces; any scene will do).
 Status check_options(const GridOptions& o);
-Status check(const Scene& scene, const RenderOptions& options);
 
 // The voxel size the render uses: options.grid.voxel, or the default for a quarter of
 // options.max_memory.

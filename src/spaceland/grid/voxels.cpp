@@ -189,10 +189,8 @@ Expected<Voxels> voxelise(const Scene& scene, float size, std::uint64_t max_byte
   auto range = [&](Vec3 a, Vec3 c, std::array<int, 3>& lo, std::array<int, 3>& hi) {
     const int dim[3] = {v.nx, v.ny, v.nz};
     for (int k = 0; k < 3; ++k) {
-      lo[std::size_t(k)] =
-          std::clamp(int(std::floor((a[k] - v.origin[k]) / size)) - 1, 0, dim[k] - 1);
-      hi[std::size_t(k)] =
-          std::clamp(int(std::floor((c[k] - v.origin[k]) / size)) + 1, 0, dim[k] - 1);
+      lo[std::size_t(k)] = std::clamp(v.cell(a, k) - 1, 0, dim[k] - 1);
+      hi[std::size_t(k)] = std::clamp(v.cell(c, k) + 1, 0, dim[k] - 1);
     }
   };
   auto voxel_lo = [&](int x, int y, int z) {
@@ -390,6 +388,10 @@ Segment march(const Voxels& v, Vec3 origin, Vec3 dir, float tmin, float tmax) {
   }
   double t = t0;
   const bool skipping = !v.skip.empty();
+  // A leap stops an eighth of a voxel (along every axis at most) before the empty cube's exit.
+  const double short_of_exit =
+      0.125 * double(v.size) /
+      std::max({std::abs(double(dir[0])), std::abs(double(dir[1])), std::abs(double(dir[2]))});
   while (t < t1) {
     const std::size_t k = v.index(cell[0], cell[1], cell[2]);
     if (skipping && v.skip[k] >= 2) {
@@ -407,9 +409,7 @@ Segment march(const Voxels& v, Vec3 origin, Vec3 dir, float tmin, float tmax) {
       // A point an eighth of a voxel (along every axis at most) before the exit: in one of the
       // cube's voxels the ray crosses last, at least r - 1/8 voxels past this one along the
       // exit's axis (so the leap always moves on).
-      const double at = leave - 0.125 * double(v.size) /
-                                    std::max({std::abs(double(dir[0])), std::abs(double(dir[1])),
-                                              std::abs(double(dir[2]))});
+      const double at = leave - short_of_exit;
       const int from[3] = {cell[0], cell[1], cell[2]};
       for (int a = 0; a < 3; ++a) {
         if (step[a] == 0) continue;
@@ -435,7 +435,7 @@ Segment march(const Voxels& v, Vec3 origin, Vec3 dir, float tmin, float tmax) {
     // An empty voxel leaves the segment as it is (transmittance 1, no light): skip the arithmetic.
     const bool empty = is_black(s) && is_black(e);
     if (len > 0 && !empty) {
-      const Rgb pass{std::exp(-s.r * len), std::exp(-s.g * len), std::exp(-s.b * len)};
+      const Rgb pass = exp_neg(s * len);
       out.radiance += out.transmittance * stretch_light(s, e, len, pass);
       out.transmittance *= pass;
     }

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <vector>
@@ -51,6 +52,8 @@ struct Voxels {
     if (thin.empty() || thin[k] == 0) return emission[k];
     return dir[thin[k] - 1] > 0 ? emission_minus[k] : emission[k];
   }
+  // The voxel index along `axis` of point p (outside [0, n) beyond the grid).
+  int cell(Vec3 p, int axis) const { return int(std::floor((p[axis] - origin[axis]) / size)); }
   Vec3 centre(int x, int y, int z) const {
     return origin +
            Vec3{(float(x) + 0.5f) * size, (float(y) + 0.5f) * size, (float(z) + 0.5f) * size};

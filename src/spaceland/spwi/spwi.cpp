@@ -317,8 +317,6 @@ std::uint64_t bytes_upper_bound(int width, int height, const SpwiOptions& o) {
 
 Status check(const Scene& scene, const RenderOptions& options) {
   const SpwiOptions& o = options.spwi;
-  if (options.bounces > 1)
-    if (Status s = grid::check(scene, options); !s) return s;
   if (!scene.media.empty())
     return Error{"spwi cannot carry fog: the scene has " + std::to_string(scene.media.size()) +
                  " medium box(es); use --method pt"};

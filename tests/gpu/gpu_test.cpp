@@ -203,7 +203,7 @@ TEST(Gpu, CrossBlurMatchesTheCpu) {
   }
   for (float& v : f) v = 10 * u(rng);
   std::vector<float> cpu(3 * n);
-  hrc::cross_blur(w, h, tau.data(), f.data(), cpu.data());
+  hrc::cross_blur(w, h, tau.data(), w, f.data(), cpu.data());
   Expected<std::vector<float>> gpu = flatland::gpu::cross_blur(*c, w, h, tau, f);
   ASSERT_TRUE(gpu.ok()) << gpu.error().message;
   for (std::size_t i = 0; i < 3 * n; ++i) {

@@ -66,7 +66,8 @@ std::uint64_t bytes_of(const Sizes& s, int width, int height, bool blur) {
   for (std::size_t t : s.t) b += t * 4 * sizeof(S);  // radiance and transmittance
   b += 2 * s.r * 3 * sizeof(S);                      // angular fluence
   const std::uint64_t cells = std::uint64_t(width) * height;
-  b += (s.pad + cells) * kPlanes * sizeof(float);  // a rotated view and the world planes
+  const std::uint64_t world = std::uint64_t(unaliased_stride(width)) * height;
+  b += (s.pad + world) * kPlanes * sizeof(float);  // a rotated view and the world planes
   b += cells * 3 * sizeof(float);                  // the summed fluence
   if (blur) b += cells * 3 * sizeof(float);        // its blurred copy
   return b;
@@ -84,17 +85,18 @@ struct Buffers {
 
 // The gather writes a quadrant's fluence into the world grid in tiles of kTile view columns,
 // row by row, where a view column is a world column (both sides of the transpose in cache).
-constexpr int kTile = 16;
+constexpr int kTile = 32;
 
-// The medium as planes in world layout (row by row), computed once per solve: the rotated
-// views are then permutations of it.
+// The medium as planes in world layout (row by row, unaliased_stride() apart), computed once per
+// solve: the rotated views are then permutations of it.
 void build_world(const Medium& m, float* planes) {
-  const std::size_t cells = std::size_t(m.width) * m.height;
+  const int stride = unaliased_stride(m.width);
+  const std::size_t cells = std::size_t(stride) * m.height;
   parallel_for(m.height, [&](int y) {
     for (int x = 0; x < m.width; ++x) {
-      const std::size_t i = std::size_t(y) * m.width + x;
-      const Cell& c = m.cells[i];
-      const float sigma = m.step[i] > 0 ? m.step[i] : 0.0f;
+      const std::size_t c_at = std::size_t(y) * m.width + x, i = std::size_t(y) * stride + x;
+      const Cell& c = m.cells[c_at];
+      const float sigma = m.step[c_at] > 0 ? m.step[c_at] : 0.0f;
       planes[kR * cells + i] = c.r, planes[kG * cells + i] = c.g, planes[kB * cells + i] = c.b;
       // Empty and opaque cells, most of a painted scene, need no exp.
       for (int l = 0; l < 3; ++l)
@@ -108,12 +110,13 @@ void build_world(const Medium& m, float* planes) {
 void build_view(const float* world, int width, int height, int d, const View& view,
                 ViewPlanes& out) {
   out.hp = view.h + 2 * kPad;
-  const std::size_t cells = std::size_t(width) * height;
-  const Rotation rot = rotation(d, width, height);
+  const std::size_t cells = std::size_t(unaliased_stride(width)) * height;
+  const Rotation rot = rotation(d, width, height, unaliased_stride(width));
   const int columns = view.w + kPad;  // kPad empty columns after the view
   // Tiles of kBlock columns, all planes: a view column is a world row read forwards or backwards
-  // (|sv| = 1), or a world column, transposed in kBlock x kBlock blocks held in L1.
-  constexpr int kBlock = 8;
+  // (|sv| = 1), or a world column, gathered kBlock rows at a time from a kBlock x kBlock block
+  // that stays in L1 (its rows unaliased_stride() apart).
+  constexpr int kBlock = 64;
   parallel_for((columns + kBlock - 1) / kBlock, [&](int tile) {
     const int u0 = tile * kBlock, u1 = std::min(columns, u0 + kBlock);
     const int ue = std::min(u1, view.w);
@@ -144,9 +147,10 @@ void build_view(const float* world, int width, int height, int d, const View& vi
       }
       for (int v0 = 0; v0 < view.h; v0 += kBlock) {
         const int ve = std::min(view.h, v0 + kBlock);
-        for (int v = v0; v < ve; ++v) {
-          const float* row = src + rot.at(0, v);
-          for (int u = u0; u < ue; ++u) dst[out.at(u, v)] = row[u * rot.su];
+        for (int u = u0; u < ue; ++u) {
+          const float* from = src + rot.at(u, 0);
+          float* to = dst + out.at(u, 0);
+          for (int v = v0; v < ve; ++v) to[v] = from[v * rot.sv];
         }
       }
     }
@@ -421,7 +425,7 @@ template <class S>
 // count and row shift) are converted to single precision, run through the single-precision loop
 // (`rows(n, inputs, out)`, each input then a block with channel stride kBlock), and the result is
 // converted back, so the merges still vectorise and memory carries half the bytes.
-constexpr int kBlock = 256;
+constexpr int kBlock = 32;
 
 struct HalfInput {
   const Half* col;
@@ -712,9 +716,10 @@ void solve_with(const Medium& m, const Rgb& env, const HrcOptions& o, Buffers<S>
   std::vector<S*> t(sz.t.size());
   for (std::size_t n = 0; n < t.size(); ++n) t[n] = buf.t[n].ensure(sz.t[n] * kTChannels);
   S* r[2] = {buf.r[0].ensure(sz.r * kRChannels), buf.r[1].ensure(sz.r * kRChannels)};
-  float* world = planes.ensure((cells + sz.pad) * kPlanes);
+  const std::size_t world_cells = std::size_t(unaliased_stride(W)) * H;
+  float* world = planes.ensure((world_cells + sz.pad) * kPlanes);
   ViewPlanes vp;
-  vp.data = world + cells * kPlanes;
+  vp.data = world + world_cells * kPlanes;
   vp.cells = sz.pad;
   const Patterns& patterns = ray_patterns();
   reserve_huge(f, cells * 3);
@@ -723,7 +728,7 @@ void solve_with(const Medium& m, const Rgb& env, const HrcOptions& o, Buffers<S>
 
   Stopwatch watch;
   build_world(m, world);
-  double ms_view = watch.ms(), ms_trace = 0, ms_up = 0, ms_down = 0;
+  double ms_view = watch.ms(), ms_trace = 0, ms_up = 0, ms_down = 0, ms_gather = 0;
   const float quarter = float(kPi / 2);  // A_0: a quadrant
   for (int d = 0; d < 4; ++d) {
     const View& view = sz.views[d & 1];
@@ -765,24 +770,27 @@ void solve_with(const Medium& m, const Rgb& env, const HrcOptions& o, Buffers<S>
     const int strip = rows ? 1 : kTile;             // columns gathered before writing the world
     parallel_for((view.w + strip - 1) / strip, [&](int t) {
       const int u0 = t * strip, u1 = std::min(view.w, u0 + strip);
+      // Channels kept `hs` apart, not h: a multiple of 4 KiB would put the same row of every
+      // column in one L1 set.
+      const std::size_t hs = std::size_t(unaliased_stride(h));
       thread_local std::vector<float> buf;
-      buf.resize(std::size_t(14 + 3 * strip) * h);
+      buf.resize(14 * std::size_t(h) + 3 * strip * hs);
       float* cols = buf.data() + 14 * std::size_t(h);
       for (int u = u0; u < u1; ++u) {
-        float* qc = cols + std::size_t(u - u0) * 3 * h;
-        float* q[3] = {qc, qc + h, qc + 2 * h};
+        float* qc = cols + std::size_t(u - u0) * 3 * hs;
+        float* q[3] = {qc, qc + hs, qc + 2 * hs};
         quadrant_column(r0, view, vp, u, edge, blur_far, o.near_segment, buf.data(), q);
       }
       // The cell's own part, once the four quadrants are summed: an opaque own cell is left as if
       // empty (its fluence is the light arriving at it).
       auto put = [&](int u, int v) {
-        const float* qc = cols + std::size_t(u - u0) * 3 * h;
+        const float* qc = cols + std::size_t(u - u0) * 3 * hs;
         float* out = &f[std::size_t(rot.at(u, v)) * 3];
         if (d == 0) {
-          out[0] = qc[v], out[1] = qc[h + v], out[2] = qc[2 * h + v];
+          out[0] = qc[v], out[1] = qc[hs + v], out[2] = qc[2 * hs + v];
           return;
         }
-        out[0] += qc[v], out[1] += qc[h + v], out[2] += qc[2 * h + v];
+        out[0] += qc[v], out[1] += qc[hs + v], out[2] += qc[2 * hs + v];
         if (!own) return;
         const std::size_t at = vp.at(u, v);
         const float tau = vp.plane(kTau0)[at], mo = tau == 0.0f ? 1.0f : own_transmittance(tau);
@@ -798,9 +806,10 @@ void solve_with(const Medium& m, const Rgb& env, const HrcOptions& o, Buffers<S>
         for (int v = 0; v < h; ++v)
           for (int u = u0; u < u1; ++u) put(u, v);
     });
-    ms_view += watch.ms();
+    ms_gather += watch.ms();
   }
   stages.push_back({"views", ms_view});
+  stages.push_back({"gather", ms_gather});
   stages.push_back({"trace T0-T2", ms_trace});
   stages.push_back({"merge up T3-TN", ms_up});
   stages.push_back({"merge down R", ms_down});
@@ -808,7 +817,7 @@ void solve_with(const Medium& m, const Rgb& env, const HrcOptions& o, Buffers<S>
     watch.restart();
     reserve_huge(blurred, cells * 3);
     blurred.resize(cells * 3);
-    cross_blur(W, H, world + kTau0 * cells, f.data(), blurred.data());
+    cross_blur(W, H, world + kTau0 * world_cells, unaliased_stride(W), f.data(), blurred.data());
     std::swap(f, blurred);
     stages.push_back({"cross blur", watch.ms()});
   }
@@ -852,18 +861,27 @@ Sizes plan(int width, int height) {
   return s;
 }
 
-Rotation rotation(int d, int width, int height) {
-  const std::ptrdiff_t W = width, last_row = std::ptrdiff_t(height - 1) * W;
+Rotation rotation(int d, int width, int height, std::ptrdiff_t stride) {
+  const std::ptrdiff_t W = width, S = stride ? stride : W,
+                       last_row = std::ptrdiff_t(height - 1) * S;
   switch (d) {
     case 0:
-      return {0, 1, W};  // (x, y) = (u, v)
+      return {0, 1, S};  // (x, y) = (u, v)
     case 1:
-      return {W - 1, W, -1};  // (x, y) = (W - 1 - v, u)
+      return {W - 1, S, -1};  // (x, y) = (W - 1 - v, u)
     case 2:
-      return {last_row + W - 1, -1, -W};  // (x, y) = (W - 1 - u, H - 1 - v)
+      return {last_row + W - 1, -1, -S};  // (x, y) = (W - 1 - u, H - 1 - v)
     default:
-      return {last_row, -W, 1};  // (x, y) = (v, H - 1 - u)
+      return {last_row, -S, 1};  // (x, y) = (v, H - 1 - u)
   }
+}
+
+int unaliased_stride(int n) {
+  // A multiple of 16 floats (whole cache lines) that is not a multiple of 256: rows 1 KiB or
+  // 4 KiB apart fall into the same L1 set, and a transposing read of 16 rows missed L1 every
+  // time (views at 1024^2 took 8x those at 512^2).
+  const int s = (n + 15) / 16 * 16;
+  return s % 256 == 0 ? s + 16 : s;
 }
 
 std::vector<TracedCell> traced_cells(int n, int k) {
@@ -942,11 +960,12 @@ void solve(const Medium& medium, const Rgb& environment, const HrcOptions& optio
 // and inside a wall it is zero, so averaging a wall's surface with its inside would darken the
 // light it re-emits.
 
-void cross_blur(int W, int H, const float* tau_half, const float* f, float* out) {
+void cross_blur(int W, int H, const float* tau_half, int tau_stride, const float* f, float* out) {
   parallel_for(H, [&](int y) {
     for (int x = 0; x < W; ++x) {
       const std::size_t i = std::size_t(y) * W + x;
-      if (tau_half[i] == 0.0f) {  // opaque: kept as it is
+      const float tau = tau_half[std::size_t(y) * tau_stride + x];
+      if (tau == 0.0f) {  // opaque: kept as it is
         std::copy(f + 3 * i, f + 3 * i + 3, out + 3 * i);
         continue;
       }
@@ -954,7 +973,7 @@ void cross_blur(int W, int H, const float* tau_half, const float* f, float* out)
       auto add = [&](int nx, int ny) {
         if (nx < 0 || ny < 0 || nx >= W || ny >= H) return;
         const std::size_t j = std::size_t(ny) * W + nx;
-        if (!blur_together(tau_half[i], tau_half[j])) return;
+        if (!blur_together(tau, tau_half[std::size_t(ny) * tau_stride + nx])) return;
         r += f[3 * j], g += f[3 * j + 1], b += f[3 * j + 2], w += 1;
       };
       add(x - 1, y);

@@ -63,10 +63,11 @@ void solve(const Medium& medium, const Rgb& environment, const HrcOptions& optio
            Workspace& workspace, std::vector<float>& fluence, std::vector<StageTime>& stages);
 
 // Eq. 21, the final 1-cell cross blur of the fluence f (3 floats per cell) into out, given the
-// transmittance over half a cell per cell (0: opaque). Neighbours whose opacity differs by more
-// than kBlurOpacityStep are left out; opaque cells neither blur nor are blurred into others.
+// transmittance over half a cell per cell (0: opaque), rows tau_stride apart. Neighbours whose
+// opacity differs by more than kBlurOpacityStep are left out; opaque cells neither blur nor are
+// blurred into others.
 inline constexpr float kBlurOpacityStep = 0.5f;
-void cross_blur(int W, int H, const float* tau_half, const float* f, float* out);
+void cross_blur(int W, int H, const float* tau_half, int tau_stride, const float* f, float* out);
 
 // Whether eq. 21 runs on the whole fluence, as a pass of its own after the quadrants (otherwise,
 // when on, each quadrant's gather blurs the light from beyond the near segment).
@@ -131,7 +132,11 @@ struct Rotation {
   std::ptrdiff_t base, su, sv;
   std::ptrdiff_t at(int u, int v) const { return base + u * su + v * sv; }
 };
-Rotation rotation(int d, int width, int height);
+// Rows of the world `stride` cells apart (0: `width`).
+Rotation rotation(int d, int width, int height, std::ptrdiff_t stride = 0);
+// The row stride for n floats that keeps rows out of each other's L1 sets (the CPU solver's
+// world planes and gathered columns).
+int unaliased_stride(int n);
 
 // The cells ray k of T_n crosses, in order, each with its length, and the corners a 45-degree
 // ray passes through between two cells it does not enter: each of those cells that is opaque

@@ -166,7 +166,7 @@ TEST_F(Cli, HolographicCascadesReportStagesAndParameters) {
   nlohmann::json j;
   ASSERT_NO_THROW(j = nlohmann::json::parse(r.out)) << r.out;
   EXPECT_EQ(j.at("method"), "hrc");
-  for (const char* stage : {"trace T0-T2", "merge up T3-TN", "merge down R", "views"})
+  for (const char* stage : {"trace T0-T2", "merge up T3-TN", "merge down R", "views", "gather"})
     EXPECT_TRUE(j.at("stages").contains(stage)) << stage;
   EXPECT_FALSE(j.at("stages").contains("cross blur"));
   EXPECT_GT(j.at("intervals").get<std::uint64_t>(), 4u * 48 * 32);  // T_0 alone: 2 per cell

@@ -646,28 +646,24 @@ void r0_column(const S* r0, const View& view, int u, const Rad& edge, float* con
     for (int v = 0; v < h; ++v) c[ch][v] = load(col[std::size_t(ch) * h + v]);
 }
 
-// A quadrant's fluence over view column u into q[0..2] (rows [0, h)): the R_0 read, blurred by
-// eq. 21 over the cell's neighbours when `blur` (4 at the centre, 1 for each neighbour
-// blur_together() admits, beyond the grid none), then the near segment past the cell's own
-// edge when `near`. Column by column so the loops vectorise; `scratch` holds 14 columns.
-template <class S>
-void quadrant_column(const S* r0, const View& view, const ViewPlanes& vp, int u, const Rad& edge,
-                     bool blur, bool near, float* scratch, float* const q[3]) {
+// A quadrant's fluence over view column u into q[0..2] (rows [0, h)), given the R_0 reads of
+// view columns u - 1, u and u + 1 (rd[0..2], channel by channel; only rd[1] without the blur):
+// the R_0 read, blurred by eq. 21 over the cell's neighbours when `blur` (4 at the centre, 1 for
+// each neighbour blur_together() admits, beyond the grid none), then the near segment past the
+// cell's own edge when `near`. Column by column so the loops vectorise; `w` holds 5 columns.
+inline void quadrant_column(const View& view, const ViewPlanes& vp, int u,
+                            const float* const (&rd)[3][3], bool blur, bool near, float* w,
+                            float* const q[3]) {
   const int h = view.h;
-  r0_column(r0, view, u, edge, q);
+  if (!blur)
+    for (int ch = 0; ch < 3; ++ch) std::copy(rd[1][ch], rd[1][ch] + h, q[ch]);
   if (blur) {
-    float* left[3] = {scratch, scratch + h, scratch + 2 * h};
-    float* right[3] = {scratch + 3 * h, scratch + 4 * h, scratch + 5 * h};
-    float* own[3] = {scratch + 6 * h, scratch + 7 * h, scratch + 8 * h};
-    r0_column(r0, view, u - 1, edge, left);  // what the cell at u - 1 reads
-    r0_column(r0, view, u + 1, edge, right);
-    for (int ch = 0; ch < 3; ++ch) std::copy(q[ch], q[ch] + h, own[ch]);
     // The neighbours' columns (read only where they lie in the view); an opaque cell keeps its
     // value.
     const float* tc = vp.plane(kTau0) + vp.at(u, 0);
     const float* tl = vp.plane(kTau0) + vp.at(std::max(u - 1, 0), 0);
     const float* tr = vp.plane(kTau0) + vp.at(u + 1, 0);
-    float* w = scratch + 9 * std::size_t(h);  // the four weights, then 1 / their sum with 4
+    // w: the four weights, then 1 / their sum with 4
     for (int v = 0; v < h; ++v) {
       const float c = tc[v], opaque = c == 0.0f ? 1.0f : 0.0f;
       const float wl = u > 0 && blur_together(c, tl[v]) ? 1.0f - opaque : 0.0f;
@@ -678,7 +674,7 @@ void quadrant_column(const S* r0, const View& view, const ViewPlanes& vp, int u,
       w[4 * h + v] = 1.0f / (4.0f + wl + wr + wu + wd);
     }
     for (int ch = 0; ch < 3; ++ch) {
-      const float *a = own[ch], *l = left[ch], *r = right[ch];
+      const float *a = rd[1][ch], *l = rd[0][ch], *r = rd[2][ch];
       float* o = q[ch];
       o[0] = (4.0f * a[0] + w[0] * l[0] + w[h] * r[0] + w[3 * h] * a[h > 1 ? 1 : 0]) * w[4 * h];
       for (int v = 1; v + 1 < h; ++v)
@@ -775,11 +771,26 @@ void solve_with(const Medium& m, const Rgb& env, const HrcOptions& o, Buffers<S>
       const std::size_t hs = std::size_t(unaliased_stride(h));
       thread_local std::vector<float> buf;
       buf.resize(14 * std::size_t(h) + 3 * strip * hs);
+      // The R_0 reads of three consecutive view columns, in a ring (each column read once),
+      // then the blur's weights.
+      auto read = [&](int c) {
+        float* slot = buf.data() + std::size_t((c % 3 + 3) % 3) * 3 * h;
+        return std::array<float*, 3>{slot, slot + h, slot + 2 * std::size_t(h)};
+      };
+      auto load = [&](int c) {
+        const std::array<float*, 3> at = read(c);
+        r0_column(r0, view, c, edge, at.data());
+      };
+      float* weights = buf.data() + 9 * std::size_t(h);
       float* cols = buf.data() + 14 * std::size_t(h);
+      if (blur_far) load(u0 - 1), load(u0);
       for (int u = u0; u < u1; ++u) {
         float* qc = cols + std::size_t(u - u0) * 3 * hs;
         float* q[3] = {qc, qc + hs, qc + 2 * hs};
-        quadrant_column(r0, view, vp, u, edge, blur_far, o.near_segment, buf.data(), q);
+        load(blur_far ? u + 1 : u);
+        const std::array<float*, 3> l = read(u - 1), c = read(u), r = read(u + 1);
+        const float* const rd[3][3] = {{l[0], l[1], l[2]}, {c[0], c[1], c[2]}, {r[0], r[1], r[2]}};
+        quadrant_column(view, vp, u, rd, blur_far, o.near_segment, weights, q);
       }
       // The cell's own part, once the four quadrants are summed: an opaque own cell is left as if
       // empty (its fluence is the light arriving at it).

@@ -260,7 +260,7 @@ Status record_hrc(Cache& cache, Batch& batch, int W, int H, Buffer& step, Buffer
              env.r,
              env.g,
              env.b,
-             o.cross_blur && !hrc::blurs_whole_fluence(o) ? 1 : 0,
+             hrc::blurs_far_light(o) ? 1 : 0,
              d == 3 ? 1 : 0,
              hrc::kBlurOpacityStep};
       Buffer* b[] = {upper, *view, fluence};

@@ -89,8 +89,7 @@ constexpr int kTile = 32;
 
 // The medium as planes in world layout (row by row, unaliased_stride() apart), computed once per
 // solve: the rotated views are then permutations of it.
-void build_world(const Medium& m, float* planes) {
-  const int stride = unaliased_stride(m.width);
+void build_world(const Medium& m, int stride, float* planes) {
   const std::size_t cells = std::size_t(stride) * m.height;
   parallel_for(m.height, [&](int y) {
     for (int x = 0; x < m.width; ++x) {
@@ -107,11 +106,11 @@ void build_world(const Medium& m, float* planes) {
   });
 }
 
-void build_view(const float* world, int width, int height, int d, const View& view,
+void build_view(const float* world, int width, int height, int stride, int d, const View& view,
                 ViewPlanes& out) {
   out.hp = view.h + 2 * kPad;
-  const std::size_t cells = std::size_t(unaliased_stride(width)) * height;
-  const Rotation rot = rotation(d, width, height, unaliased_stride(width));
+  const std::size_t cells = std::size_t(stride) * height;
+  const Rotation rot = rotation(d, width, height, stride);
   const int columns = view.w + kPad;  // kPad empty columns after the view
   // Tiles of kBlock columns, all planes: a view column is a world row read forwards or backwards
   // (|sv| = 1), or a world column, gathered kBlock rows at a time from a kBlock x kBlock block
@@ -646,58 +645,54 @@ void r0_column(const S* r0, const View& view, int u, const Rad& edge, float* con
     for (int v = 0; v < h; ++v) c[ch][v] = load(col[std::size_t(ch) * h + v]);
 }
 
-// A quadrant's fluence over view column u into q[0..2] (rows [0, h)), given the R_0 reads of
-// view columns u - 1, u and u + 1 (rd[0..2], channel by channel; only rd[1] without the blur):
-// the R_0 read, blurred by eq. 21 over the cell's neighbours when `blur` (4 at the centre, 1 for
-// each neighbour blur_together() admits, beyond the grid none), then the near segment past the
-// cell's own edge when `near`. Column by column so the loops vectorise; `w` holds 5 columns.
-inline void quadrant_column(const View& view, const ViewPlanes& vp, int u,
-                            const float* const (&rd)[3][3], bool blur, bool near, float* w,
-                            float* const q[3]) {
+// Eq. 21 over view column u into q[0..2] (rows [0, h)), given the R_0 reads of view columns
+// u - 1, u and u + 1 (rd[0..2], channel by channel): 4 at the centre, 1 for each neighbour
+// blur_together() admits, beyond the grid none. Column by column so the loops vectorise; `w`
+// holds 5 columns.
+inline void blur_column(const View& view, const ViewPlanes& vp, int u,
+                        const float* const (&rd)[3][3], float* w, float* const q[3]) {
   const int h = view.h;
-  if (!blur)
-    for (int ch = 0; ch < 3; ++ch) std::copy(rd[1][ch], rd[1][ch] + h, q[ch]);
-  if (blur) {
-    // The neighbours' columns (read only where they lie in the view); an opaque cell keeps its
-    // value.
-    const float* tc = vp.plane(kTau0) + vp.at(u, 0);
-    const float* tl = vp.plane(kTau0) + vp.at(std::max(u - 1, 0), 0);
-    const float* tr = vp.plane(kTau0) + vp.at(u + 1, 0);
-    // w: the four weights, then 1 / their sum with 4
-    for (int v = 0; v < h; ++v) {
-      const float c = tc[v], opaque = c == 0.0f ? 1.0f : 0.0f;
-      const float wl = u > 0 && blur_together(c, tl[v]) ? 1.0f - opaque : 0.0f;
-      const float wr = u + 1 < view.w && blur_together(c, tr[v]) ? 1.0f - opaque : 0.0f;
-      const float wu = v > 0 && blur_together(c, tc[v - 1]) ? 1.0f - opaque : 0.0f;
-      const float wd = v + 1 < h && blur_together(c, tc[v + 1]) ? 1.0f - opaque : 0.0f;
-      w[v] = wl, w[h + v] = wr, w[2 * h + v] = wu, w[3 * h + v] = wd;
-      w[4 * h + v] = 1.0f / (4.0f + wl + wr + wu + wd);
-    }
-    for (int ch = 0; ch < 3; ++ch) {
-      const float *a = rd[1][ch], *l = rd[0][ch], *r = rd[2][ch];
-      float* o = q[ch];
-      o[0] = (4.0f * a[0] + w[0] * l[0] + w[h] * r[0] + w[3 * h] * a[h > 1 ? 1 : 0]) * w[4 * h];
-      for (int v = 1; v + 1 < h; ++v)
-        o[v] = (4.0f * a[v] + w[v] * l[v] + w[h + v] * r[v] + w[2 * h + v] * a[v - 1] +
-                w[3 * h + v] * a[v + 1]) *
-               w[4 * h + v];
-      if (h > 1) {
-        const int v = h - 1;
-        o[v] =
-            (4.0f * a[v] + w[v] * l[v] + w[h + v] * r[v] + w[2 * h + v] * a[v - 1]) * w[4 * h + v];
-      }
+  // The neighbours' columns (read only where they lie in the view); an opaque cell keeps its
+  // value.
+  const float* tc = vp.plane(kTau0) + vp.at(u, 0);
+  const float* tl = vp.plane(kTau0) + vp.at(std::max(u - 1, 0), 0);
+  const float* tr = vp.plane(kTau0) + vp.at(u + 1, 0);
+  // w: the four weights, then 1 / their sum with 4
+  for (int v = 0; v < h; ++v) {
+    const float c = tc[v], opaque = c == 0.0f ? 1.0f : 0.0f;
+    const float wl = u > 0 && blur_together(c, tl[v]) ? 1.0f - opaque : 0.0f;
+    const float wr = u + 1 < view.w && blur_together(c, tr[v]) ? 1.0f - opaque : 0.0f;
+    const float wu = v > 0 && blur_together(c, tc[v - 1]) ? 1.0f - opaque : 0.0f;
+    const float wd = v + 1 < h && blur_together(c, tc[v + 1]) ? 1.0f - opaque : 0.0f;
+    w[v] = wl, w[h + v] = wr, w[2 * h + v] = wu, w[3 * h + v] = wd;
+    w[4 * h + v] = 1.0f / (4.0f + wl + wr + wu + wd);
+  }
+  for (int ch = 0; ch < 3; ++ch) {
+    const float *a = rd[1][ch], *l = rd[0][ch], *r = rd[2][ch];
+    float* o = q[ch];
+    o[0] = (4.0f * a[0] + w[0] * l[0] + w[h] * r[0] + w[3 * h] * a[h > 1 ? 1 : 0]) * w[4 * h];
+    for (int v = 1; v + 1 < h; ++v)
+      o[v] = (4.0f * a[v] + w[v] * l[v] + w[h + v] * r[v] + w[2 * h + v] * a[v - 1] +
+              w[3 * h + v] * a[v + 1]) *
+             w[4 * h + v];
+    if (h > 1) {
+      const int v = h - 1;
+      o[v] = (4.0f * a[v] + w[v] * l[v] + w[h + v] * r[v] + w[2 * h + v] * a[v - 1]) * w[4 * h + v];
     }
   }
-  if (near) {
-    // From the cell's edge across the next cell to its centre, where R_0 is read.
-    const std::size_t next = vp.at(u + 1, 0);
-    const float* t = vp.plane(kTau0) + next;
-    const float quarter = float(kPi / 2);
-    for (int ch = 0; ch < 3; ++ch) {
-      const float* e = vp.plane(kR + ch) + next;
-      float* c = q[ch];
-      for (int v = 0; v < h; ++v) c[v] = quarter * (1.0f - t[v]) * e[v] + t[v] * c[v];
-    }
+}
+
+// The near segment in front of view column u's R_0 read, in place in q[0..2]: from the cell's
+// edge across the next cell to its centre, where R_0 is read.
+inline void near_column(const View& view, const ViewPlanes& vp, int u, float* const q[3]) {
+  const int h = view.h;
+  const std::size_t next = vp.at(u + 1, 0);
+  const float* t = vp.plane(kTau0) + next;
+  const float quarter = float(kPi / 2);
+  for (int ch = 0; ch < 3; ++ch) {
+    const float* e = vp.plane(kR + ch) + next;
+    float* c = q[ch];
+    for (int v = 0; v < h; ++v) c[v] = quarter * (1.0f - t[v]) * e[v] + t[v] * c[v];
   }
 }
 
@@ -712,7 +707,8 @@ void solve_with(const Medium& m, const Rgb& env, const HrcOptions& o, Buffers<S>
   std::vector<S*> t(sz.t.size());
   for (std::size_t n = 0; n < t.size(); ++n) t[n] = buf.t[n].ensure(sz.t[n] * kTChannels);
   S* r[2] = {buf.r[0].ensure(sz.r * kRChannels), buf.r[1].ensure(sz.r * kRChannels)};
-  const std::size_t world_cells = std::size_t(unaliased_stride(W)) * H;
+  const int stride = unaliased_stride(W);  // of the world planes
+  const std::size_t world_cells = std::size_t(stride) * H;
   float* world = planes.ensure((world_cells + sz.pad) * kPlanes);
   ViewPlanes vp;
   vp.data = world + world_cells * kPlanes;
@@ -723,13 +719,13 @@ void solve_with(const Medium& m, const Rgb& env, const HrcOptions& o, Buffers<S>
   std::vector<S> empty;  // a column of empty intervals: what T reads beyond the grid
 
   Stopwatch watch;
-  build_world(m, world);
+  build_world(m, stride, world);
   double ms_view = watch.ms(), ms_trace = 0, ms_up = 0, ms_down = 0, ms_gather = 0;
   const float quarter = float(kPi / 2);  // A_0: a quadrant
   for (int d = 0; d < 4; ++d) {
     const View& view = sz.views[d & 1];
     watch.restart();
-    build_view(world, W, H, d, view, vp);
+    build_view(world, W, H, stride, d, view, vp);
     empty.resize(std::size_t(kTChannels) * view.h);
     fill_column<S, 4>(empty.data(), view.h, 0, view.h, {0.0f, 0.0f, 0.0f, 1.0f});
     ms_view += watch.ms();
@@ -760,17 +756,14 @@ void solve_with(const Medium& m, const Rgb& env, const HrcOptions& o, Buffers<S>
     const S* r0 = upper;
     const Rad edge{env.r * quarter, env.g * quarter, env.b * quarter};
     const Rotation rot = rotation(d, W, H);
-    const bool blur_far = o.cross_blur && !blurs_whole_fluence(o), own = o.near_segment && d == 3;
+    const bool blur_far = blurs_far_light(o), own = o.near_segment && d == 3;
     const int h = view.h;
     const bool rows = rot.sv == 1 || rot.sv == -1;  // a view column is a world row
     const int strip = rows ? 1 : kTile;             // columns gathered before writing the world
     parallel_for((view.w + strip - 1) / strip, [&](int t) {
       const int u0 = t * strip, u1 = std::min(view.w, u0 + strip);
-      // Channels kept `hs` apart, not h: a multiple of 4 KiB would put the same row of every
-      // column in one L1 set.
-      const std::size_t hs = std::size_t(unaliased_stride(h));
       thread_local std::vector<float> buf;
-      buf.resize(14 * std::size_t(h) + 3 * strip * hs);
+      buf.resize(14 * std::size_t(h) + 3 * std::size_t(strip) * h);
       // The R_0 reads of three consecutive view columns, in a ring (each column read once),
       // then the blur's weights.
       auto read = [&](int c) {
@@ -785,23 +778,29 @@ void solve_with(const Medium& m, const Rgb& env, const HrcOptions& o, Buffers<S>
       float* cols = buf.data() + 14 * std::size_t(h);
       if (blur_far) load(u0 - 1), load(u0);
       for (int u = u0; u < u1; ++u) {
-        float* qc = cols + std::size_t(u - u0) * 3 * hs;
-        float* q[3] = {qc, qc + hs, qc + 2 * hs};
-        load(blur_far ? u + 1 : u);
-        const std::array<float*, 3> l = read(u - 1), c = read(u), r = read(u + 1);
-        const float* const rd[3][3] = {{l[0], l[1], l[2]}, {c[0], c[1], c[2]}, {r[0], r[1], r[2]}};
-        quadrant_column(view, vp, u, rd, blur_far, o.near_segment, weights, q);
+        float* qc = cols + std::size_t(u - u0) * 3 * h;
+        float* q[3] = {qc, qc + h, qc + 2 * h};
+        if (blur_far) {
+          load(u + 1);
+          const std::array<float*, 3> l = read(u - 1), c = read(u), r = read(u + 1);
+          const float* const rd[3][3] = {
+              {l[0], l[1], l[2]}, {c[0], c[1], c[2]}, {r[0], r[1], r[2]}};
+          blur_column(view, vp, u, rd, weights, q);
+        } else {
+          r0_column(r0, view, u, edge, q);
+        }
+        if (o.near_segment) near_column(view, vp, u, q);
       }
       // The cell's own part, once the four quadrants are summed: an opaque own cell is left as if
       // empty (its fluence is the light arriving at it).
       auto put = [&](int u, int v) {
-        const float* qc = cols + std::size_t(u - u0) * 3 * hs;
+        const float* qc = cols + std::size_t(u - u0) * 3 * h;
         float* out = &f[std::size_t(rot.at(u, v)) * 3];
         if (d == 0) {
-          out[0] = qc[v], out[1] = qc[hs + v], out[2] = qc[2 * hs + v];
+          out[0] = qc[v], out[1] = qc[h + v], out[2] = qc[2 * h + v];
           return;
         }
-        out[0] += qc[v], out[1] += qc[hs + v], out[2] += qc[2 * hs + v];
+        out[0] += qc[v], out[1] += qc[h + v], out[2] += qc[2 * h + v];
         if (!own) return;
         const std::size_t at = vp.at(u, v);
         const float tau = vp.plane(kTau0)[at], mo = tau == 0.0f ? 1.0f : own_transmittance(tau);
@@ -828,7 +827,7 @@ void solve_with(const Medium& m, const Rgb& env, const HrcOptions& o, Buffers<S>
     watch.restart();
     reserve_huge(blurred, cells * 3);
     blurred.resize(cells * 3);
-    cross_blur(W, H, world + kTau0 * world_cells, unaliased_stride(W), f.data(), blurred.data());
+    cross_blur(W, H, world + kTau0 * world_cells, stride, f.data(), blurred.data());
     std::swap(f, blurred);
     stages.push_back({"cross blur", watch.ms()});
   }

@@ -74,6 +74,10 @@ void cross_blur(int W, int H, const float* tau_half, int tau_stride, const float
 inline bool blurs_whole_fluence(const HrcOptions& o) {
   return o.cross_blur && o.blur_near;
 }
+// Whether each quadrant's gather blurs its R_0 read (the light from beyond the near segment).
+inline bool blurs_far_light(const HrcOptions& o) {
+  return o.cross_blur && !o.blur_near;
+}
 
 // Whether eq. 21 mixes a non-opaque cell with a neighbour, given each one's transmittance over
 // half a cell: not an opaque neighbour, nor one whose opacity differs by more than the step.
@@ -135,7 +139,7 @@ struct Rotation {
 // Rows of the world `stride` cells apart (0: `width`).
 Rotation rotation(int d, int width, int height, std::ptrdiff_t stride = 0);
 // The row stride for n floats that keeps rows out of each other's L1 sets (the CPU solver's
-// world planes and gathered columns).
+// world planes).
 int unaliased_stride(int n);
 
 // The cells ray k of T_n crosses, in order, each with its length, and the corners a 45-degree

@@ -44,7 +44,7 @@ void main() {
   uint own = at(u, v);
   float t_own = tau(own);
   if (p.blur != 0 && t_own != 0.0) {
-    // hrc.cpp quadrant_column, in its order: left, right, up, down.
+    // hrc.cpp blur_column, in its order: left, right, up, down.
     precise vec3 sum = 4.0 * q;
     precise float weight = 4.0;
     precise float opacity = 1.0 - t_own * t_own;

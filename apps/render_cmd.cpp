@@ -51,7 +51,8 @@ nlohmann::json parameters_json(const penumbra::flatland::RenderOptions& o) {
               {"cross_blur", o.hrc.cross_blur},
               {"blur_near_segment", o.hrc.blur_near},
               {"near_segment", o.hrc.near_segment},
-              {"corners", penumbra::flatland::to_string(o.hrc.corners)}});
+              {"corners", penumbra::flatland::to_string(o.hrc.corners)},
+              {"wall_fan", o.hrc.wall_fan}});
     return p;
   }
   const penumbra::flatland::RcOptions& rc = o.rc;

@@ -91,6 +91,11 @@ void add_render_options(CLI::App* app, RenderOptions& options, RenderOptionFlags
                     "touching it stops half of the ray), walls (only two opaque cells stop it)");
     app->add_flag("--no-near-segment", flags.no_near_segment,
                   "hrc: read R_0([x+1, y]) alone, as the paper (a cell's own medium left out)");
+    app->add_option("--wall-fan", options.hrc.wall_fan,
+                    "hrc: lit wall cells gather through 2 rays per cone of this cascade (0: "
+                    "through the cell beside them, as any cell)")
+        ->check(CLI::Range(0, penumbra::flatland::kMaxWallFan))
+        ->capture_default_str();
   }
   if (which.bounces)
     app->add_option("--bounces", options.bounces, which.bounces_help)
@@ -142,6 +147,7 @@ std::string with_flags(std::string message) {
       {"`hrc.blur_near`", "--blur-near-segment"},
       {"`hrc.near_segment`", "--no-near-segment"},
       {"`hrc.corners`", "--corners"},
+      {"`hrc.wall_fan`", "--wall-fan"},
       {"`pt.spp`", "--spp"},
       {"`pt.seconds`", "--time"},
       {"`pt.nee`", "--nee"},

@@ -23,7 +23,7 @@ void run_warm(benchmark::State& state, const Scene& scene, const HrcOptions& o) 
   std::vector<float> fluence;
   std::vector<StageTime> stages;
   hrc::solve(medium, scene.environment, o, workspace, fluence, stages);
-  double up = 0, down = 0, other = 0, gather = 0;
+  double up = 0, down = 0, other = 0, gather = 0, walls = 0;
   for (auto _ : state) {
     stages.clear();
     hrc::solve(medium, scene.environment, o, workspace, fluence, stages);
@@ -34,6 +34,8 @@ void run_warm(benchmark::State& state, const Scene& scene, const HrcOptions& o) 
         gather += s.ms;
       else if (s.name == "merge down R")
         down += s.ms;
+      else if (s.name == "wall fan")
+        walls += s.ms;
       else
         other += s.ms;
     }
@@ -44,6 +46,7 @@ void run_warm(benchmark::State& state, const Scene& scene, const HrcOptions& o) 
   state.counters["merge_down_ms"] = down / n;
   state.counters["views_ms"] = other / n;  // the world, the views, a whole-fluence blur
   state.counters["gather_ms"] = gather / n;
+  state.counters["walls_ms"] = walls / n;  // HrcOptions::wall_fan
   state.counters["memory_MiB"] =
       double(hrc::working_bytes(scene.width, scene.height, o)) / (1 << 20);
   // T and two layers of R alone, and the seed's formula for them at the next power of two.
@@ -79,15 +82,18 @@ BENCHMARK(BM_HrcLights512)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
-// Half-precision storage of T and R against single precision.
-void BM_HrcStorage1024(benchmark::State& state) {
-  const Scene scene = *build_scene(bench::lights_scene(1024, 102));
+// Half-precision storage of T and R against single precision, at two sizes (how each scales).
+void BM_HrcStorage(benchmark::State& state) {
+  const Scene scene = *build_scene(bench::lights_scene(int(state.range(0)), 102));
   HrcOptions o;
-  o.storage = Storage(state.range(0));
+  o.storage = Storage(state.range(1));
   state.SetLabel(to_string(o.storage));
   run_warm(state, scene, o);
 }
-BENCHMARK(BM_HrcStorage1024)->DenseRange(0, 1)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_HrcStorage)
+    ->ArgsProduct({{512, 1024}, {0, 1}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 // One render() from nothing, as the command line runs it: allocation and first touch of every
 // buffer included.

@@ -85,6 +85,14 @@ std::uint64_t rc_intervals(const Plan& p) {
 
 // ---- hrc: holographic radiance cascades (seed 004) ----
 
+Status hrc_check(Plan& p) {
+  const int fan = p.options.hrc.wall_fan;
+  if (fan < 0 || fan > kMaxWallFan)
+    return bad("`hrc.wall_fan`: expected 0 (off) or 1.." + std::to_string(kMaxWallFan) +
+               ", found " + std::to_string(fan));
+  return {};
+}
+
 std::uint64_t hrc_bytes(const Plan& p) {
   return hrc::working_bytes(p.width, p.height, p.options.hrc);
 }
@@ -140,7 +148,7 @@ const MethodEntry kMethods[] = {
      "the reference path tracer (converges to the exact fluence)", true, true, pt_check, pt_bytes,
      no_advice, nullptr, pt_solve, nullptr, nullptr},
     {Method::hrc, "hrc", "holographic radiance cascades",
-     "holographic radiance cascades (seed 004)", false, false, nullptr, hrc_bytes, hrc_advice,
+     "holographic radiance cascades (seed 004)", false, false, hrc_check, hrc_bytes, hrc_advice,
      hrc_largest_radiance, hrc_solve, hrc_intervals, &gpu::kHrcPasses},
 };
 

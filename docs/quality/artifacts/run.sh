@@ -95,3 +95,7 @@ done
 "$P" render --method hrc -q -o "$T/default_hrc.pfm"
 "$P" compare "$T/default_hrc.pfm" "$T/default_ref.pfm" --crop 280 120 80 80 --exposure 1 -q \
   --montage "$D/diagonal_edge.png"
+# The same without the wall fan: wall cells read through the cell beside them (the staircase).
+"$P" render --method hrc --wall-fan 0 -q -o "$T/default_hrc_no_fan.pfm"
+"$P" compare "$T/default_hrc_no_fan.pfm" "$T/default_ref.pfm" --crop 280 120 80 80 --exposure 1 \
+  -q --montage "$D/diagonal_edge_no_fan.png"

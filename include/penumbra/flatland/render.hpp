@@ -67,7 +67,15 @@ struct HrcOptions {
   // front of it (off: the paper's formula, which leaves a cell's own medium out of its fluence).
   bool near_segment = true;
   Corners corners = Corners::half;
+  // Lit wall cells gather through a fan of rays: from the cell's centre, 2 rays per cone of
+  // cascade `wall_fan` (2^wall_fan cones per quadrant) to that cascade's next probe column,
+  // each merged with its cone of R there. 0: a wall cell reads its quadrants like any cell,
+  // through the cell beside it (the paper's formula), which leaves edges lit at a grazing angle
+  // through anti-aliased cells dark (docs/QUALITY.md). 1..8; a grid with fewer cascades uses
+  // its highest below the environment.
+  int wall_fan = 3;
 };
+inline constexpr int kMaxWallFan = 8;  // HrcOptions::wall_fan
 
 // Where the path tracer's directions come from.
 enum class Sampler {

@@ -62,9 +62,11 @@ std::uint64_t hrc_device_bytes(int W, int H, const HrcOptions& o) {
   const hrc::Sizes sz = hrc::plan(W, H);
   const int levels = int(sz.t.size()) - 1;
   const std::uint64_t value = o.storage == Storage::f16 ? 2 : 4;  // a stored T or R value
-  // The world planes, and the gather's own fluence when the blur writes the result.
-  std::uint64_t bytes =
-      std::uint64_t(W) * H * (6 + (hrc::blurs_whole_fluence(o) ? 3 : 0)) * sizeof(float);
+  // The world planes, the gather's own fluence when the blur writes the result, the wall fan's
+  // light.
+  std::uint64_t bytes = std::uint64_t(W) * H *
+                        (6 + (hrc::blurs_whole_fluence(o) ? 3 : 0) + (o.wall_fan > 0 ? 3 : 0)) *
+                        sizeof(float);
   bytes += 6 * std::uint64_t(sz.pad) * sizeof(float);  // view
   bytes += 2 * 3 * std::uint64_t(std::max<std::size_t>(sz.r, 1)) * value;
   bytes += ((std::uint64_t(2) << levels) - 1) * sizeof(float);  // cone angles
@@ -113,7 +115,8 @@ Status record_hrc(Cache& cache, Batch& batch, int W, int H, Buffer& step, Buffer
       {f16 ? "hrc_trace f16" : "hrc_trace", shaders::hrc_trace(f16), 4, 28},
       {f16 ? "hrc_merge_up f16" : "hrc_merge_up", shaders::hrc_merge_up(f16), 2, 20},
       {f16 ? "hrc_merge_down f16" : "hrc_merge_down", shaders::hrc_merge_down(f16), 5, 36},
-      {f16 ? "hrc_gather f16" : "hrc_gather", shaders::hrc_gather(f16), 3, 64}};
+      {f16 ? "hrc_gather f16" : "hrc_gather", shaders::hrc_gather(f16), 4, 68},
+      {f16 ? "hrc_walls f16" : "hrc_walls", shaders::hrc_walls(f16), 5, 36}};
   const Kernel* k[std::size(specs)];
   for (std::size_t i = 0; i < std::size(specs); ++i) {
     Expected<const Kernel*> kernel =
@@ -129,6 +132,12 @@ Status record_hrc(Cache& cache, Batch& batch, int W, int H, Buffer& step, Buffer
                     r1 = make("r1", 3 * r_size, value);
   for (const Expected<Buffer*>* b : {&world, &view, &r0, &r1})
     if (!*b) return b->error();
+  Buffer* walls = nullptr;  // HrcOptions::wall_fan: the light at lit wall cells
+  if (o.wall_fan > 0) {
+    Expected<Buffer*> b = make("walls", 3 * std::size_t(cells));
+    if (!b) return b.error();
+    walls = *b;
+  }
   Buffer* fluence = &fluence_out;
   if (hrc::blurs_whole_fluence(o)) {  // the gather writes a buffer of its own, the blur the output
     Expected<Buffer*> f = cache.buffer(kHrcBlur, "hrc fluence", 3 * std::size_t(cells) * 4);
@@ -226,6 +235,7 @@ Status record_hrc(Cache& cache, Batch& batch, int W, int H, Buffer& step, Buffer
     batch.mark("merge down R");
     Buffer* upper = *r1;  // unread at the top level
     bool top = true;
+    const int fan = walls ? hrc::wall_fan_level(v, o.wall_fan) : -1;
     for (int n = v.levels - 1; n >= 0; --n) {
       Buffer* out = upper == *r0 ? *r1 : *r0;
       const int P = v.probes(n), P1 = v.probes(n + 1), rows = (1 << n) * P;
@@ -237,6 +247,15 @@ Status record_hrc(Cache& cache, Batch& batch, int W, int H, Buffer& step, Buffer
       batch.dispatch(*k[4], b, &push, groups(std::size_t(v.h), 64), groups(std::size_t(rows), 4));
       upper = out;
       top = false;
+      if (n != fan) continue;
+      batch.mark("wall fan");
+      struct {
+        std::int32_t W, H, d, n, P, h;
+        float er, eg, eb;
+      } wp{W, H, d, n, v.probes(n), v.h, env.r, env.g, env.b};
+      Buffer* wb[] = {&step, &emission, out, *angles, walls};
+      batch.dispatch(*k[6], wb, &wp, groups(std::size_t(W), 64), groups(std::size_t(H), 4));
+      batch.mark("merge down R");
     }
     batch.mark("views");
     {
@@ -247,6 +266,7 @@ Status record_hrc(Cache& cache, Batch& batch, int W, int H, Buffer& step, Buffer
         float er, eg, eb;
         std::int32_t blur, last;
         float step;
+        std::int32_t walls;
       } push{v.w,
              v.h,
              hp,
@@ -262,8 +282,9 @@ Status record_hrc(Cache& cache, Batch& batch, int W, int H, Buffer& step, Buffer
              env.b,
              hrc::blurs_far_light(o) ? 1 : 0,
              d == 3 ? 1 : 0,
-             hrc::kBlurOpacityStep};
-      Buffer* b[] = {upper, *view, fluence};
+             hrc::kBlurOpacityStep,
+             walls ? 1 : 0};
+      Buffer* b[] = {upper, *view, fluence, walls ? walls : fluence};
       batch.dispatch(*k[5], b, &push, groups(std::size_t(v.h), 64), groups(std::size_t(v.w), 4));
     }
   }

@@ -55,6 +55,12 @@ const std::uint32_t k_hrc_merge_down[] = {
 const std::uint32_t k_hrc_merge_down_f16[] = {
 #include "hrc_merge_down_f16.comp.inc"
 };
+const std::uint32_t k_hrc_walls[] = {
+#include "hrc_walls.comp.inc"
+};
+const std::uint32_t k_hrc_walls_f16[] = {
+#include "hrc_walls_f16.comp.inc"
+};
 const std::uint32_t k_hrc_gather[] = {
 #include "hrc_gather.comp.inc"
 };
@@ -89,6 +95,7 @@ PENUMBRA_SHADER_F16(hrc_trace)
 PENUMBRA_SHADER_F16(hrc_merge_up)
 PENUMBRA_SHADER_F16(hrc_merge_down)
 PENUMBRA_SHADER_F16(hrc_gather)
+PENUMBRA_SHADER_F16(hrc_walls)
 #undef PENUMBRA_SHADER
 #undef PENUMBRA_SHADER_F16
 

@@ -696,10 +696,82 @@ inline void near_column(const View& view, const ViewPlanes& vp, int u, float* co
   }
 }
 
+// World point (cell units, row 0 at the top) of view point (u, v) of quadrant d, cell centres
+// at integers: rotation() extended to points.
+inline void world_point(int d, int W, int H, float u, float v, float& x, float& y) {
+  switch (d) {
+    case 0:
+      x = u, y = v;
+      break;
+    case 1:
+      x = float(W - 1) - v, y = u;
+      break;
+    case 2:
+      x = float(W - 1) - u, y = float(H - 1) - v;
+      break;
+    default:
+      x = v, y = float(H - 1) - u;
+  }
+  x += 0.5f, y += 0.5f;
+}
+
+// HrcOptions::wall_fan: quadrant d's light at wall cell (x, y), through 2 rays per cone of
+// cascade n, each traced from the cell's centre (leaving the opaque cell) to the cascade's next
+// probe column and merged with its cone of R_n there, read between the two rows the ray lands
+// between (beyond the grid: the environment over the cone). A quadrant's R_0 is one value for
+// 90 degrees read through the cell beside the wall cell; light grazing an edge through the
+// corner of two anti-aliased cells needs the finer cones of R_n to reach the wall cell.
+template <class S>
+Rad wall_fan_light(const Medium& m, const View& view, int d, int n, const S* rn,
+                   const float* angles, const Rgb& env, int x, int y) {
+  const int W = m.width, H = m.height;
+  const int u = d == 0 ? x : d == 1 ? y : d == 2 ? W - 1 - x : H - 1 - y;
+  const int v = d == 0 ? y : d == 1 ? W - 1 - x : d == 2 ? H - 1 - y : x;
+  const int M = 1 << n, P = view.probes(n), h = view.h;
+  const int xq = u / M + 1;  // the next probe column, xq * M
+  const float delta = float(xq * M - u);
+  float ax, ay;
+  world_point(d, W, H, float(u), float(v), ax, ay);
+  Rad sum{0.0f, 0.0f, 0.0f};
+  for (int a = 0; a < M; ++a) {
+    const float A = angles[a];
+    const S* col = xq < P ? rn + (std::size_t(a) * P + xq) * kRChannels * h : nullptr;
+    for (int j = 0; j < kWallFanRays; ++j) {
+      // Cone a spans the slopes (2a - M) / M .. (2a + 2 - M) / M; ray j the middle of its share.
+      const float slope =
+          (2.0f * float(a - (M >> 1)) + (2.0f * float(j) + 1.0f) / kWallFanRays) / float(M);
+      const float ve = float(v) + slope * delta;
+      float bx, by;
+      world_point(d, W, H, float(xq * M), ve, bx, by);
+      const Interval seg = trace_segment(m, ax, ay, bx, by, true);
+      const int v0 = int(std::floor(ve));
+      const float f1 = ve - float(v0), f0 = 1.0f - f1;
+      auto far = [&](int row, int ch) {
+        const float e = ch == 0 ? env.r : ch == 1 ? env.g : env.b;
+        return !col || row < 0 || row >= h ? e * A : load(col[std::size_t(ch) * h + row]);
+      };
+      float c[3];
+      for (int ch = 0; ch < 3; ++ch)
+        c[ch] = f0 * far(v0, ch) + (f1 > 0.0f ? f1 * far(v0 + 1, ch) : 0.0f);
+      constexpr float share = 1.0f / kWallFanRays;
+      sum.r += share * (A * seg.r + seg.t * c[0]);
+      sum.g += share * (A * seg.g + seg.t * c[1]);
+      sum.b += share * (A * seg.b + seg.t * c[2]);
+    }
+  }
+  return sum;
+}
+
+// What HrcOptions::wall_fan keeps between solves: the wall cells and their light.
+struct Walls {
+  std::vector<std::uint32_t> cells;
+  std::vector<float> light;  // 3 per cell, summed over the quadrants
+};
+
 template <class S>
 void solve_with(const Medium& m, const Rgb& env, const HrcOptions& o, Buffers<S>& buf,
-                HugeArray<float>& planes, std::vector<float>& blurred, std::vector<float>& f,
-                std::vector<StageTime>& stages) {
+                HugeArray<float>& planes, std::vector<float>& blurred, Walls& walls,
+                std::vector<float>& f, std::vector<StageTime>& stages) {
   const int W = m.width, H = m.height;
   const std::size_t cells = std::size_t(W) * H;
   const Sizes sz = plan(W, H);
@@ -720,7 +792,13 @@ void solve_with(const Medium& m, const Rgb& env, const HrcOptions& o, Buffers<S>
 
   Stopwatch watch;
   build_world(m, stride, world);
-  double ms_view = watch.ms(), ms_trace = 0, ms_up = 0, ms_down = 0, ms_gather = 0;
+  double ms_view = watch.ms(), ms_trace = 0, ms_up = 0, ms_down = 0, ms_gather = 0, ms_walls = 0;
+  if (o.wall_fan > 0) {
+    watch.restart();
+    lit_wall_cells(m, walls.cells);
+    walls.light.assign(walls.cells.size() * 3, 0.0f);
+    ms_walls += watch.ms();
+  }
   const float quarter = float(kPi / 2);  // A_0: a quadrant
   for (int d = 0; d < 4; ++d) {
     const View& view = sz.views[d & 1];
@@ -731,19 +809,38 @@ void solve_with(const Medium& m, const Rgb& env, const HrcOptions& o, Buffers<S>
     ms_view += watch.ms();
 
     watch.restart();
-    const int m = fused_levels(view);
-    lower_levels(view, m, vp, o.corners, patterns, t, empty.data());
+    const int fused = fused_levels(view);
+    lower_levels(view, fused, vp, o.corners, patterns, t, empty.data());
     ms_trace += watch.ms();
     watch.restart();
-    for (int n = m + 1; n <= view.levels; ++n) merge_up(view, n - 1, t[n - 1], t[n], empty.data());
+    for (int n = fused + 1; n <= view.levels; ++n)
+      merge_up(view, n - 1, t[n - 1], t[n], empty.data());
     ms_up += watch.ms();
 
     watch.restart();
     const S* upper = nullptr;  // R_N: the environment
+    const int fan = o.wall_fan > 0 ? wall_fan_level(view, o.wall_fan) : -1;
     for (int n = view.levels - 1; n >= 0; --n) {
       S* out = upper == r[0] ? r[1] : r[0];
       merge_down(view, n, t[n], t[n + 1], upper, out, env);
       upper = out;
+      if (n != fan || walls.cells.empty()) continue;
+      ms_down += watch.ms();
+      watch.restart();
+      float angles[1 << kMaxWallFan];
+      for (int a = 0; a < 1 << n; ++a) angles[a] = cone_angle(n, a);
+      parallel_for(
+          int(walls.cells.size()),
+          [&](int i) {
+            const std::uint32_t c = walls.cells[std::size_t(i)];
+            const Rad q = wall_fan_light(m, view, d, n, out, angles, env, int(c % unsigned(W)),
+                                         int(c / unsigned(W)));
+            float* l = &walls.light[3 * std::size_t(i)];
+            l[0] += q.r, l[1] += q.g, l[2] += q.b;
+          },
+          16);
+      ms_walls += watch.ms();
+      watch.restart();
     }
     ms_down += watch.ms();
 
@@ -818,8 +915,13 @@ void solve_with(const Medium& m, const Rgb& env, const HrcOptions& o, Buffers<S>
     });
     ms_gather += watch.ms();
   }
+  // Wall cells take the fan's light in place of what their quadrants read through the cell
+  // beside them.
+  for (std::size_t i = 0; i < walls.cells.size(); ++i)
+    std::copy_n(&walls.light[3 * i], 3, &f[3 * std::size_t(walls.cells[i])]);
   stages.push_back({"views", ms_view});
   stages.push_back({"gather", ms_gather});
+  if (o.wall_fan > 0) stages.push_back({"wall fan", ms_walls});
   stages.push_back({"trace T0-T2", ms_trace});
   stages.push_back({"merge up T3-TN", ms_up});
   stages.push_back({"merge down R", ms_down});
@@ -846,6 +948,31 @@ float own_transmittance(float t) {
   float m = 0;
   for (int i = 0; i < 4; ++i) m += kWeight[i] * std::exp(l * kSec[i]);
   return m;
+}
+
+void lit_wall_cells(const Medium& m, std::vector<std::uint32_t>& cells) {
+  const int W = m.width, H = m.height;
+  auto lit = [&](int x, int y) {
+    if (m.step[std::size_t(y) * W + x] != kOpaque) return false;
+    for (int b = std::max(y - 1, 0); b <= std::min(y + 1, H - 1); ++b)
+      for (int a = std::max(x - 1, 0); a <= std::min(x + 1, W - 1); ++a)
+        if (m.step[std::size_t(b) * W + a] != kOpaque) return true;
+    return false;
+  };
+  // Counted row by row, then written at each row's offset: the same order on any thread count.
+  std::vector<std::uint32_t> first(std::size_t(H) + 1, 0);
+  parallel_for(H, [&](int y) {
+    std::uint32_t n = 0;
+    for (int x = 0; x < W; ++x) n += lit(x, y) ? 1 : 0;
+    first[std::size_t(y) + 1] = n;
+  });
+  for (int y = 0; y < H; ++y) first[std::size_t(y) + 1] += first[std::size_t(y)];
+  cells.resize(first[std::size_t(H)]);
+  parallel_for(H, [&](int y) {
+    std::uint32_t at = first[std::size_t(y)];
+    for (int x = 0; x < W; ++x)
+      if (lit(x, y)) cells[at++] = std::uint32_t(y) * std::uint32_t(W) + std::uint32_t(x);
+  });
 }
 
 float cone_angle(int n, int a) {
@@ -944,6 +1071,7 @@ struct Workspace::Impl {
   Buffers<Half> f16;
   HugeArray<float> planes;
   std::vector<float> blurred;
+  Walls walls;
 };
 
 Workspace::Workspace() : impl_(std::make_unique<Impl>()) {}
@@ -956,10 +1084,10 @@ void solve(const Medium& medium, const Rgb& environment, const HrcOptions& optio
   Workspace::Impl& w = *workspace.impl_;
   if (options.storage == Storage::f16) {
     w.f32.release();
-    solve_with(medium, environment, options, w.f16, w.planes, w.blurred, fluence, stages);
+    solve_with(medium, environment, options, w.f16, w.planes, w.blurred, w.walls, fluence, stages);
   } else {
     w.f16.release();
-    solve_with(medium, environment, options, w.f32, w.planes, w.blurred, fluence, stages);
+    solve_with(medium, environment, options, w.f32, w.planes, w.blurred, w.walls, fluence, stages);
   }
 }
 

@@ -96,6 +96,12 @@ float own_transmittance(float t);
 
 // ---- The geometry of the solve, shared with the GPU backend (src/gpu/hrc.cpp) ----
 
+// HrcOptions::wall_fan: the cells it gathers (opaque cells with a cell that is not opaque among
+// their 8 neighbours, as row-major world indices, in order) and the cascade it reads on a view
+// (the option, or the highest below the environment; -1: none).
+void lit_wall_cells(const Medium& medium, std::vector<std::uint32_t>& cells);
+inline constexpr int kWallFanRays = 2;  // per cone
+
 // Eq. 13: the angle of cone a (the paper's i = a + 1/2) of cascade n.
 float cone_angle(int n, int a);
 
@@ -108,6 +114,11 @@ struct View {
   std::size_t r_size(int n) const { return std::size_t(probes(n)) * (1 << n) * h; }
 };
 View make_view(int w, int h);
+// The cascade HrcOptions::wall_fan reads on a view: the option, or the highest below the
+// environment; -1: none.
+inline int wall_fan_level(const View& v, int wall_fan) {
+  return wall_fan > 0 ? (wall_fan < v.levels ? wall_fan : v.levels - 1) : -1;
+}
 
 // Rotated views carry this many empty cells beyond the grid (the longest traced ray, T_2's
 // (4, +-4), ends 4 cells out), so the traced levels read them without bounds checks.

@@ -1,0 +1,78 @@
+#version 450
+#extension GL_GOOGLE_include_directive : require
+#include "storage.glsl"
+// HrcOptions::wall_fan, quadrant d (hrc.cpp wall_fan_light): the light at each lit wall cell (an
+// opaque cell with a cell that is not opaque among its 8 neighbours) through 2 rays per cone of
+// cascade n, each traced from the cell's centre to the cascade's next probe column and merged
+// with its cone of R_n there, between the two rows it lands between. One invocation per world
+// cell; a cell that is not a lit wall gets -1 (the gather then reads its quadrant as usual).
+layout(local_size_x = 64, local_size_y = 4) in;
+layout(std430, binding = 0) readonly buffer Step { float step_[]; };
+layout(std430, binding = 1) readonly buffer Emission { float emission[]; };
+layout(std430, binding = 2) readonly buffer Rn { stored_t rn[]; };
+layout(std430, binding = 3) readonly buffer Angles { float angles[]; };
+layout(std430, binding = 4) writeonly buffer Walls { float walls[]; };
+layout(push_constant) uniform Push {
+  int W; int H; int d; int n; int P; int h; float er; float eg; float eb;
+} p;
+
+#include "trace.glsl"
+
+bool opaque(int x, int y) { return isinf(step_[uint(y) * uint(p.W) + uint(x)]); }
+
+vec2 world_point(float u, float v) {
+  vec2 q;
+  if (p.d == 0) q = vec2(u, v);
+  else if (p.d == 1) q = vec2(float(p.W - 1) - v, u);
+  else if (p.d == 2) q = vec2(float(p.W - 1) - u, float(p.H - 1) - v);
+  else q = vec2(v, float(p.H - 1) - u);
+  return q + 0.5;
+}
+
+void main() {
+  int x = int(gl_GlobalInvocationID.x), y = int(gl_GlobalInvocationID.y);
+  if (x >= p.W || y >= p.H) return;
+  uint c = (uint(y) * uint(p.W) + uint(x)) * 3u;
+  bool lit = false;
+  if (opaque(x, y))
+    for (int b = max(y - 1, 0); b <= min(y + 1, p.H - 1); ++b)
+      for (int a = max(x - 1, 0); a <= min(x + 1, p.W - 1); ++a)
+        if (!opaque(a, b)) lit = true;
+  if (!lit) {
+    walls[c] = -1.0;
+    return;
+  }
+  int u = p.d == 0 ? x : p.d == 1 ? y : p.d == 2 ? p.W - 1 - x : p.H - 1 - y;
+  int v = p.d == 0 ? y : p.d == 1 ? p.W - 1 - x : p.d == 2 ? p.H - 1 - y : x;
+  int M = 1 << p.n;
+  int xq = u / M + 1;
+  float delta = float(xq * M - u);
+  vec2 a0 = world_point(float(u), float(v));
+  vec3 env = vec3(p.er, p.eg, p.eb);
+  precise vec3 sum = vec3(0.0);
+  for (int a = 0; a < M; ++a) {
+    float A = angles[uint(M - 1 + a)];
+    uint col = (uint(a) * uint(p.P) + uint(xq)) * 3u * uint(p.h);
+    for (int j = 0; j < 2; ++j) {
+      precise float slope = (2.0 * float(a - (M >> 1)) + (2.0 * float(j) + 1.0) / 2.0) / float(M);
+      precise float ve = float(v) + slope * delta;
+      vec4 seg = trace_segment(p.W, p.H, a0, world_point(float(xq * M), ve), true);
+      int v0 = int(floor(ve));
+      precise float f1 = ve - float(v0), f0 = 1.0 - f1;
+      vec3 far[2];
+      for (int i = 0; i < 2; ++i) {
+        int row = v0 + i;
+        if (xq >= p.P || row < 0 || row >= p.h)
+          far[i] = env * A;
+        else
+          far[i] = vec3(float(rn[col + uint(row)]), float(rn[col + uint(p.h) + uint(row)]),
+                        float(rn[col + 2u * uint(p.h) + uint(row)]));
+      }
+      precise vec3 cf = f0 * far[0] + (f1 > 0.0 ? f1 * far[1] : vec3(0.0));
+      sum += 0.5 * (A * seg.rgb + seg.a * cf);
+    }
+  }
+  walls[c] = sum.r;
+  walls[c + 1u] = sum.g;
+  walls[c + 2u] = sum.b;
+}

@@ -104,6 +104,7 @@ void Painter::draw_panel() {
       bool walls = options_.hrc.corners == Corners::walls;
       if (ImGui::Checkbox("corners: walls only", &walls))
         options_.hrc.corners = walls ? Corners::walls : Corners::half, changed = true;
+      changed |= ImGui::SliderInt("wall fan", &options_.hrc.wall_fan, 0, kMaxWallFan);
     } else if (options_.method == Method::rc) {
       RcOptions& rc = options_.rc;
       changed |= ImGui::SliderInt("probe spacing", &rc.probe_spacing, 1, 16);

@@ -417,17 +417,23 @@ TEST(FlatlandHrc, RimOfALightStaysSharp) {
   EXPECT_LT(e, 0.013);
 }
 
+// A wall at 45 degrees and a light beyond its end, just off its upper surface (96 x 96 cells at
+// k = 1).
+Scene grazed_diagonal_wall(float k) {
+  SceneDesc d;
+  d.width = d.height = int(96 * k);
+  d.shapes.push_back({Box{{52 * k, 52 * k}, {90 * k, 16 * k}, 45}, Material{}});
+  d.shapes.push_back({Circle{{32.2f * k, 15.2f * k}, 3 * k}, Material{{20, 20, 20}, 1, {}}});
+  return build(d);
+}
+
 // Wall cells along an anti-aliased diagonal edge lit at a grazing angle (the staircase of the
 // built-in scene's picture): the light reaches them through the corner between two partly
 // covered cells. Read through the cell beside them, one value per quadrant, many came out
 // nearly black; the wall fan reaches them through cascade 3's cones. Wall cells with an open
 // side, against the path tracer; the GPU (lavapipe in CI) runs the same fan.
 TEST(FlatlandHrc, WallFanLightsADiagonalEdge) {
-  SceneDesc d;
-  d.width = d.height = 96;
-  d.shapes.push_back({Box{{52, 52}, {90, 16}, 45}, Material{}});
-  d.shapes.push_back({Circle{{32.2f, 15.2f}, 3}, Material{{20, 20, 20}, 1, {}}});
-  const Scene s = build(d);
+  const Scene s = grazed_diagonal_wall(1);
   const ImageRgb ref = fluence_of(s, pt(1024));
   auto wall = [&](int x, int y) {
     if (s.opacity[s.index(x, y)] != 1.0f) return false;
@@ -469,6 +475,39 @@ TEST(FlatlandHrc, WallFanLightsADiagonalEdge) {
   const ImageRgb f_gpu = fluence_of(s, gpu);
   EXPECT_LT(relative_rms(f_gpu, f_fan, [](int, int) { return true; }), 1e-5);
   EXPECT_LT(relative_rms(f_gpu, f_fan, wall), 1e-5);
+}
+
+// The wall fan's geometry: world_point() and view_cell() are rotation() for points and its
+// inverse, on a grid that is neither square nor a power of two.
+TEST(FlatlandHrc, WorldPointsFollowTheRotation) {
+  const int W = 7, H = 5;
+  for (int d = 0; d < 4; ++d)
+    for (int y = 0; y < H; ++y)
+      for (int x = 0; x < W; ++x) {
+        int u = -1, v = -1;
+        hrc::view_cell(d, W, H, x, y, u, v);
+        EXPECT_EQ(hrc::rotation(d, W, H).at(u, v), std::ptrdiff_t(y) * W + x) << d;
+        const hrc::Point p = hrc::world_point(d, W, H, float(u), float(v));
+        EXPECT_EQ(p.x, x + 0.5f) << d;
+        EXPECT_EQ(p.y, y + 0.5f) << d;
+      }
+}
+
+// A workspace that solved with the wall fan and then without it keeps none of the fan's light:
+// the same bits as a fresh workspace.
+TEST(FlatlandHrc, WallFanOffOnAReusedWorkspace) {
+  const Scene s = grazed_diagonal_wall(0.5f);
+  const Medium m = make_medium(s);
+  HrcOptions on, off;
+  off.wall_fan = 0;
+  std::vector<float> fresh, reused;
+  std::vector<StageTime> stages;
+  hrc::Workspace a, b;
+  hrc::solve(m, s.environment, off, a, fresh, stages);
+  hrc::solve(m, s.environment, on, b, reused, stages);
+  ASSERT_NE(fresh, reused);  // the fan changes the wall cells
+  hrc::solve(m, s.environment, off, b, reused, stages);
+  EXPECT_EQ(fresh, reused);
 }
 
 // A wall one cell thick along a diagonal (cells touching only at their corners) between a light

@@ -235,7 +235,7 @@ Status record_hrc(Cache& cache, Batch& batch, int W, int H, Buffer& step, Buffer
     batch.mark("merge down R");
     Buffer* upper = *r1;  // unread at the top level
     bool top = true;
-    const int fan = walls ? hrc::wall_fan_level(v, o.wall_fan) : -1;
+    const int fan = hrc::wall_fan_level(v, o.wall_fan);
     for (int n = v.levels - 1; n >= 0; --n) {
       Buffer* out = upper == *r0 ? *r1 : *r0;
       const int P = v.probes(n), P1 = v.probes(n + 1), rows = (1 << n) * P;

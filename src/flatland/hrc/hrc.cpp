@@ -696,25 +696,6 @@ inline void near_column(const View& view, const ViewPlanes& vp, int u, float* co
   }
 }
 
-// World point (cell units, row 0 at the top) of view point (u, v) of quadrant d, cell centres
-// at integers: rotation() extended to points.
-inline void world_point(int d, int W, int H, float u, float v, float& x, float& y) {
-  switch (d) {
-    case 0:
-      x = u, y = v;
-      break;
-    case 1:
-      x = float(W - 1) - v, y = u;
-      break;
-    case 2:
-      x = float(W - 1) - u, y = float(H - 1) - v;
-      break;
-    default:
-      x = v, y = float(H - 1) - u;
-  }
-  x += 0.5f, y += 0.5f;
-}
-
 // HrcOptions::wall_fan: quadrant d's light at wall cell (x, y), through 2 rays per cone of
 // cascade n, each traced from the cell's centre (leaving the opaque cell) to the cascade's next
 // probe column and merged with its cone of R_n there, read between the two rows the ray lands
@@ -725,31 +706,28 @@ template <class S>
 Rad wall_fan_light(const Medium& m, const View& view, int d, int n, const S* rn,
                    const float* angles, const Rgb& env, int x, int y) {
   const int W = m.width, H = m.height;
-  const int u = d == 0 ? x : d == 1 ? y : d == 2 ? W - 1 - x : H - 1 - y;
-  const int v = d == 0 ? y : d == 1 ? W - 1 - x : d == 2 ? H - 1 - y : x;
+  int u, v;
+  view_cell(d, W, H, x, y, u, v);
   const int M = 1 << n, P = view.probes(n), h = view.h;
   const int xq = u / M + 1;  // the next probe column, xq * M
   const float delta = float(xq * M - u);
-  float ax, ay;
-  world_point(d, W, H, float(u), float(v), ax, ay);
+  const Point a0 = world_point(d, W, H, float(u), float(v));
   Rad sum{0.0f, 0.0f, 0.0f};
   for (int a = 0; a < M; ++a) {
-    const float A = angles[a];
+    const float A = angles[a], outside[3] = {env.r * A, env.g * A, env.b * A};
     const S* col = xq < P ? rn + (std::size_t(a) * P + xq) * kRChannels * h : nullptr;
+    auto far = [&](int row, int ch) {
+      return !col || row < 0 || row >= h ? outside[ch] : load(col[std::size_t(ch) * h + row]);
+    };
     for (int j = 0; j < kWallFanRays; ++j) {
       // Cone a spans the slopes (2a - M) / M .. (2a + 2 - M) / M; ray j the middle of its share.
       const float slope =
           (2.0f * float(a - (M >> 1)) + (2.0f * float(j) + 1.0f) / kWallFanRays) / float(M);
       const float ve = float(v) + slope * delta;
-      float bx, by;
-      world_point(d, W, H, float(xq * M), ve, bx, by);
-      const Interval seg = trace_segment(m, ax, ay, bx, by, true);
+      const Point b = world_point(d, W, H, float(xq * M), ve);
+      const Interval seg = trace_segment(m, a0.x, a0.y, b.x, b.y, true);
       const int v0 = int(std::floor(ve));
       const float f1 = ve - float(v0), f0 = 1.0f - f1;
-      auto far = [&](int row, int ch) {
-        const float e = ch == 0 ? env.r : ch == 1 ? env.g : env.b;
-        return !col || row < 0 || row >= h ? e * A : load(col[std::size_t(ch) * h + row]);
-      };
       float c[3];
       for (int ch = 0; ch < 3; ++ch)
         c[ch] = f0 * far(v0, ch) + (f1 > 0.0f ? f1 * far(v0 + 1, ch) : 0.0f);
@@ -796,9 +774,11 @@ void solve_with(const Medium& m, const Rgb& env, const HrcOptions& o, Buffers<S>
   if (o.wall_fan > 0) {
     watch.restart();
     lit_wall_cells(m, walls.cells);
-    walls.light.assign(walls.cells.size() * 3, 0.0f);
     ms_walls += watch.ms();
+  } else {
+    walls.cells.clear();  // none from an earlier solve on this workspace
   }
+  walls.light.assign(walls.cells.size() * 3, 0.0f);
   const float quarter = float(kPi / 2);  // A_0: a quadrant
   for (int d = 0; d < 4; ++d) {
     const View& view = sz.views[d & 1];
@@ -819,7 +799,7 @@ void solve_with(const Medium& m, const Rgb& env, const HrcOptions& o, Buffers<S>
 
     watch.restart();
     const S* upper = nullptr;  // R_N: the environment
-    const int fan = o.wall_fan > 0 ? wall_fan_level(view, o.wall_fan) : -1;
+    const int fan = wall_fan_level(view, o.wall_fan);
     for (int n = view.levels - 1; n >= 0; --n) {
       S* out = upper == r[0] ? r[1] : r[0];
       merge_down(view, n, t[n], t[n + 1], upper, out, env);
@@ -1011,6 +991,20 @@ Rotation rotation(int d, int width, int height, std::ptrdiff_t stride) {
     default:
       return {last_row, -S, 1};  // (x, y) = (v, H - 1 - u)
   }
+}
+
+Point world_point(int d, int width, int height, float u, float v) {
+  const float W = float(width - 1), H = float(height - 1);
+  const Point p = d == 0   ? Point{u, v}
+                  : d == 1 ? Point{W - v, u}
+                  : d == 2 ? Point{W - u, H - v}
+                           : Point{v, H - u};
+  return {p.x + 0.5f, p.y + 0.5f};
+}
+
+void view_cell(int d, int width, int height, int x, int y, int& u, int& v) {
+  u = d == 0 ? x : d == 1 ? y : d == 2 ? width - 1 - x : height - 1 - y;
+  v = d == 0 ? y : d == 1 ? width - 1 - x : d == 2 ? height - 1 - y : x;
 }
 
 int unaliased_stride(int n) {

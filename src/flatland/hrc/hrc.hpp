@@ -97,8 +97,7 @@ float own_transmittance(float t);
 // ---- The geometry of the solve, shared with the GPU backend (src/gpu/hrc.cpp) ----
 
 // HrcOptions::wall_fan: the cells it gathers (opaque cells with a cell that is not opaque among
-// their 8 neighbours, as row-major world indices, in order) and the cascade it reads on a view
-// (the option, or the highest below the environment; -1: none).
+// their 8 neighbours, as row-major world indices, in order).
 void lit_wall_cells(const Medium& medium, std::vector<std::uint32_t>& cells);
 inline constexpr int kWallFanRays = 2;  // per cone
 
@@ -149,6 +148,13 @@ struct Rotation {
 };
 // Rows of the world `stride` cells apart (0: `width`).
 Rotation rotation(int d, int width, int height, std::ptrdiff_t stride = 0);
+// rotation() for points, and its inverse: the world point (cell units, row 0 at the top) of
+// view point (u, v), cell centres at integers; the view cell of world cell (x, y).
+struct Point {
+  float x, y;
+};
+Point world_point(int d, int width, int height, float u, float v);
+void view_cell(int d, int width, int height, int x, int y, int& u, int& v);
 // The row stride for n floats that keeps rows out of each other's L1 sets (the CPU solver's
 // world planes).
 int unaliased_stride(int n);

@@ -52,7 +52,8 @@ nlohmann::json parameters_json(const penumbra::flatland::RenderOptions& o) {
               {"blur_near_segment", o.hrc.blur_near},
               {"near_segment", o.hrc.near_segment},
               {"corners", penumbra::flatland::to_string(o.hrc.corners)},
-              {"wall_fan", o.hrc.wall_fan}});
+              {"wall_fan", o.hrc.wall_fan},
+              {"near_fan", o.hrc.near_fan}});
     return p;
   }
   const penumbra::flatland::RcOptions& rc = o.rc;

@@ -96,6 +96,11 @@ void add_render_options(CLI::App* app, RenderOptions& options, RenderOptionFlags
                     "through the cell beside them, as any cell)")
         ->check(CLI::Range(0, penumbra::flatland::kMaxWallFan))
         ->capture_default_str();
+    app->add_option("--near-fan", options.hrc.near_fan,
+                    "hrc: cells within this many cells of a light's rim gather through the wall "
+                    "fan too (0: wall cells only; no effect with --wall-fan 0)")
+        ->check(CLI::Range(0, penumbra::flatland::kMaxNearFan))
+        ->capture_default_str();
   }
   if (which.bounces)
     app->add_option("--bounces", options.bounces, which.bounces_help)
@@ -148,6 +153,7 @@ std::string with_flags(std::string message) {
       {"`hrc.near_segment`", "--no-near-segment"},
       {"`hrc.corners`", "--corners"},
       {"`hrc.wall_fan`", "--wall-fan"},
+      {"`hrc.near_fan`", "--near-fan"},
       {"`pt.spp`", "--spp"},
       {"`pt.seconds`", "--time"},
       {"`pt.nee`", "--nee"},

@@ -23,7 +23,7 @@ void run_warm(benchmark::State& state, const Scene& scene, const HrcOptions& o) 
   std::vector<float> fluence;
   std::vector<StageTime> stages;
   hrc::solve(medium, scene.environment, o, workspace, fluence, stages);
-  double up = 0, down = 0, other = 0, gather = 0, walls = 0;
+  double up = 0, down = 0, other = 0, gather = 0, fan = 0;
   for (auto _ : state) {
     stages.clear();
     hrc::solve(medium, scene.environment, o, workspace, fluence, stages);
@@ -34,8 +34,8 @@ void run_warm(benchmark::State& state, const Scene& scene, const HrcOptions& o) 
         gather += s.ms;
       else if (s.name == "merge down R")
         down += s.ms;
-      else if (s.name == "wall fan")
-        walls += s.ms;
+      else if (s.name == "fan")
+        fan += s.ms;
       else
         other += s.ms;
     }
@@ -46,7 +46,7 @@ void run_warm(benchmark::State& state, const Scene& scene, const HrcOptions& o) 
   state.counters["merge_down_ms"] = down / n;
   state.counters["views_ms"] = other / n;  // the world, the views, a whole-fluence blur
   state.counters["gather_ms"] = gather / n;
-  state.counters["walls_ms"] = walls / n;  // HrcOptions::wall_fan
+  state.counters["fan_ms"] = fan / n;  // HrcOptions::wall_fan and near_fan
   state.counters["memory_MiB"] =
       double(hrc::working_bytes(scene.width, scene.height, o)) / (1 << 20);
   // T and two layers of R alone, and the seed's formula for them at the next power of two.

@@ -105,6 +105,7 @@ void Painter::draw_panel() {
       if (ImGui::Checkbox("corners: walls only", &walls))
         options_.hrc.corners = walls ? Corners::walls : Corners::half, changed = true;
       changed |= ImGui::SliderInt("wall fan", &options_.hrc.wall_fan, 0, kMaxWallFan);
+      changed |= ImGui::SliderInt("near fan", &options_.hrc.near_fan, 0, kMaxNearFan);
     } else if (options_.method == Method::rc) {
       RcOptions& rc = options_.rc;
       changed |= ImGui::SliderInt("probe spacing", &rc.probe_spacing, 1, 16);

@@ -90,6 +90,10 @@ Status hrc_check(Plan& p) {
   if (fan < 0 || fan > kMaxWallFan)
     return bad("`hrc.wall_fan`: expected 0 (off) or 1.." + std::to_string(kMaxWallFan) +
                ", found " + std::to_string(fan));
+  const int near = p.options.hrc.near_fan;
+  if (near < 0 || near > kMaxNearFan)
+    return bad("`hrc.near_fan`: expected 0 (off) to " + std::to_string(kMaxNearFan) +
+               " cells, found " + std::to_string(near));
   return {};
 }
 
@@ -107,7 +111,9 @@ double hrc_largest_radiance(const RenderOptions& o) {
 
 std::vector<float> hrc_solve(CpuSolve& s, std::vector<StageTime>& stages) {
   std::vector<float> f;
-  hrc::solve(s.medium, s.scene.environment, s.plan.options.hrc, s.hrc, f, stages);
+  // The near fan follows the rims of the scene's own lights, whatever a bounce adds.
+  hrc::solve(s.medium, s.scene.environment, s.plan.options.hrc, s.hrc, f, stages,
+             s.scene.emission.data());
   return f;
 }
 

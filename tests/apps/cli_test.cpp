@@ -187,13 +187,16 @@ TEST_F(Cli, HolographicCascadesReportStagesAndParameters) {
   EXPECT_EQ(jd.at("parameters").at("blur_near_segment"), false);
   EXPECT_FALSE(jd.at("stages").contains("cross blur"));
   EXPECT_EQ(jd.at("parameters").at("wall_fan"), 3);
-  EXPECT_TRUE(jd.at("stages").contains("wall fan"));
-  const Result w = render_ok({"--json", "--method", "hrc", "--corners", "walls",
-                              "--blur-near-segment", "--wall-fan", "0", "-o", out("w.pfm")});
+  EXPECT_EQ(jd.at("parameters").at("near_fan"), 2);
+  EXPECT_TRUE(jd.at("stages").contains("fan"));
+  const Result w =
+      render_ok({"--json", "--method", "hrc", "--corners", "walls", "--blur-near-segment",
+                 "--wall-fan", "0", "--near-fan", "5", "-o", out("w.pfm")});
   const nlohmann::json jw = nlohmann::json::parse(w.out);
   EXPECT_EQ(jw.at("parameters").at("corners"), "walls");
   EXPECT_EQ(jw.at("parameters").at("wall_fan"), 0);
-  EXPECT_FALSE(jw.at("stages").contains("wall fan"));
+  EXPECT_EQ(jw.at("parameters").at("near_fan"), 5);
+  EXPECT_FALSE(jw.at("stages").contains("fan"));
   EXPECT_EQ(jw.at("parameters").at("blur_near_segment"), true);
   EXPECT_TRUE(jw.at("stages").contains("cross blur"));
   fs::remove(out("d.pfm"));
@@ -201,6 +204,8 @@ TEST_F(Cli, HolographicCascadesReportStagesAndParameters) {
   expect_failure(
       run({"render", scene_, "--method", "hrc", "--corners", "both", "-o", out("x.pfm")}), 2);
   expect_failure(run({"render", scene_, "--method", "hrc", "--wall-fan", "9", "-o", out("x.pfm")}),
+                 2);
+  expect_failure(run({"render", scene_, "--method", "hrc", "--near-fan", "17", "-o", out("x.pfm")}),
                  2);
 }
 

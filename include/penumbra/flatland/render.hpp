@@ -68,14 +68,21 @@ struct HrcOptions {
   bool near_segment = true;
   Corners corners = Corners::half;
   // Lit wall cells gather through a fan of rays: from the cell's centre, 2 rays per cone of
-  // cascade `wall_fan` (2^wall_fan cones per quadrant) to that cascade's next probe column,
-  // each merged with its cone of R there. 0: a wall cell reads its quadrants like any cell,
-  // through the cell beside it (the paper's formula), which leaves edges lit at a grazing angle
-  // through anti-aliased cells dark (docs/QUALITY.md). 1..8; a grid with fewer cascades uses
-  // its highest below the environment.
+  // cascade `wall_fan` (2^wall_fan cones per quadrant) to the first of that cascade's probe
+  // columns more than half its spacing ahead, each merged with its cone of R there. 0: a wall cell
+  // reads its quadrants like any cell, through the cell beside it (the paper's formula), which
+  // leaves edges lit at a grazing angle through anti-aliased cells dark (docs/QUALITY.md). 1..8; a
+  // grid with fewer cascades uses its highest below the environment.
   int wall_fan = 3;
+  // Cells that are not opaque within `near_fan` cells (along x and y) of a light's rim gather
+  // through the same fan: there a quadrant's cones of cascades 0..2 are too coarse for the
+  // light's edge (docs/QUALITY.md). A rim is a cell of the scene's own emission with a cell
+  // that emits nothing among its 8 neighbours. 0: only wall cells; 0..16; no effect without
+  // the wall fan.
+  int near_fan = 2;
 };
-inline constexpr int kMaxWallFan = 8;  // HrcOptions::wall_fan
+inline constexpr int kMaxWallFan = 8;   // HrcOptions::wall_fan
+inline constexpr int kMaxNearFan = 16;  // HrcOptions::near_fan
 
 // Where the path tracer's directions come from.
 enum class Sampler {

@@ -62,11 +62,12 @@ std::uint64_t hrc_device_bytes(int W, int H, const HrcOptions& o) {
   const hrc::Sizes sz = hrc::plan(W, H);
   const int levels = int(sz.t.size()) - 1;
   const std::uint64_t value = o.storage == Storage::f16 ? 2 : 4;  // a stored T or R value
-  // The world planes, the gather's own fluence when the blur writes the result, the wall fan's
-  // light.
-  std::uint64_t bytes = std::uint64_t(W) * H *
-                        (6 + (hrc::blurs_whole_fluence(o) ? 3 : 0) + (o.wall_fan > 0 ? 3 : 0)) *
-                        sizeof(float);
+  // The world planes, the gather's own fluence when the blur writes the result, the fan's cells
+  // and light.
+  std::uint64_t bytes =
+      std::uint64_t(W) * H *
+      (6 + (hrc::blurs_whole_fluence(o) ? 3 : 0) + (hrc::runs_fan(W, H, o) ? 4 : 0)) *
+      sizeof(float);
   bytes += 6 * std::uint64_t(sz.pad) * sizeof(float);  // view
   bytes += 2 * 3 * std::uint64_t(std::max<std::size_t>(sz.r, 1)) * value;
   bytes += ((std::uint64_t(2) << levels) - 1) * sizeof(float);  // cone angles
@@ -88,7 +89,7 @@ std::uint64_t hrc_largest_buffer(int W, int H, Storage storage) {
 }
 
 Status record_hrc(Cache& cache, Batch& batch, int W, int H, Buffer& step, Buffer& emission,
-                  const Rgb& env, const HrcOptions& o, Buffer& fluence_out) {
+                  Buffer& lights, const Rgb& env, const HrcOptions& o, Buffer& fluence_out) {
   const bool f16 = o.storage == Storage::f16;
   if (f16 && !cache.context().info().storage_f16)
     return Error{"`device` gpu: " + cache.context().info().name +
@@ -116,7 +117,8 @@ Status record_hrc(Cache& cache, Batch& batch, int W, int H, Buffer& step, Buffer
       {f16 ? "hrc_merge_up f16" : "hrc_merge_up", shaders::hrc_merge_up(f16), 2, 20},
       {f16 ? "hrc_merge_down f16" : "hrc_merge_down", shaders::hrc_merge_down(f16), 5, 36},
       {f16 ? "hrc_gather f16" : "hrc_gather", shaders::hrc_gather(f16), 4, 68},
-      {f16 ? "hrc_walls f16" : "hrc_walls", shaders::hrc_walls(f16), 5, 36}};
+      {f16 ? "hrc_fan f16" : "hrc_fan", shaders::hrc_fan(f16), 6, 36},
+      {"hrc_fan_cells", shaders::hrc_fan_cells(), 3, 12}};
   const Kernel* k[std::size(specs)];
   for (std::size_t i = 0; i < std::size(specs); ++i) {
     Expected<const Kernel*> kernel =
@@ -132,11 +134,13 @@ Status record_hrc(Cache& cache, Batch& batch, int W, int H, Buffer& step, Buffer
                     r1 = make("r1", 3 * r_size, value);
   for (const Expected<Buffer*>* b : {&world, &view, &r0, &r1})
     if (!*b) return b->error();
-  Buffer* walls = nullptr;  // HrcOptions::wall_fan: the light at lit wall cells
-  if (o.wall_fan > 0) {
-    Expected<Buffer*> b = make("walls", 3 * std::size_t(cells));
-    if (!b) return b.error();
-    walls = *b;
+  // HrcOptions::wall_fan: which cells the fan gathers, and their light.
+  Buffer *fan_cells = nullptr, *fan_light = nullptr;
+  if (hrc::runs_fan(W, H, o)) {
+    Expected<Buffer*> c = make("fan cells", cells), l = make("fan light", 3 * std::size_t(cells));
+    if (!c) return c.error();
+    if (!l) return l.error();
+    fan_cells = *c, fan_light = *l;
   }
   Buffer* fluence = &fluence_out;
   if (hrc::blurs_whole_fluence(o)) {  // the gather writes a buffer of its own, the blur the output
@@ -199,6 +203,12 @@ Status record_hrc(Cache& cache, Batch& batch, int W, int H, Buffer& step, Buffer
     const Groups g = groups_1d(cells, 256, cache.context().info());
     batch.dispatch(*k[0], b, &push, g.x, g.y);
   }
+  if (fan_cells) {
+    batch.mark("fan");
+    const std::int32_t push[3] = {W, H, o.near_fan};
+    Buffer* b[] = {&step, &lights, fan_cells};
+    batch.dispatch(*k[7], b, push, groups(std::size_t(W), 64), groups(std::size_t(H), 4));
+  }
   for (int d = 0; d < 4; ++d) {
     const hrc::View& v = views[d & 1];
     const hrc::Rotation rot = hrc::rotation(d, W, H);
@@ -235,7 +245,7 @@ Status record_hrc(Cache& cache, Batch& batch, int W, int H, Buffer& step, Buffer
     batch.mark("merge down R");
     Buffer* upper = *r1;  // unread at the top level
     bool top = true;
-    const int fan = hrc::wall_fan_level(v, o.wall_fan);
+    const int fan_level = hrc::wall_fan_level(v, o.wall_fan);
     for (int n = v.levels - 1; n >= 0; --n) {
       Buffer* out = upper == *r0 ? *r1 : *r0;
       const int P = v.probes(n), P1 = v.probes(n + 1), rows = (1 << n) * P;
@@ -247,13 +257,13 @@ Status record_hrc(Cache& cache, Batch& batch, int W, int H, Buffer& step, Buffer
       batch.dispatch(*k[4], b, &push, groups(std::size_t(v.h), 64), groups(std::size_t(rows), 4));
       upper = out;
       top = false;
-      if (n != fan) continue;
-      batch.mark("wall fan");
+      if (n != fan_level || !fan_cells) continue;
+      batch.mark("fan");
       struct {
         std::int32_t W, H, d, n, P, h;
         float er, eg, eb;
       } wp{W, H, d, n, v.probes(n), v.h, env.r, env.g, env.b};
-      Buffer* wb[] = {&step, &emission, out, *angles, walls};
+      Buffer* wb[] = {&step, &emission, out, *angles, fan_light, fan_cells};
       batch.dispatch(*k[6], wb, &wp, groups(std::size_t(W), 64), groups(std::size_t(H), 4));
       batch.mark("merge down R");
     }
@@ -266,7 +276,7 @@ Status record_hrc(Cache& cache, Batch& batch, int W, int H, Buffer& step, Buffer
         float er, eg, eb;
         std::int32_t blur, last;
         float step;
-        std::int32_t walls;
+        std::int32_t fan;
       } push{v.w,
              v.h,
              hp,
@@ -283,8 +293,8 @@ Status record_hrc(Cache& cache, Batch& batch, int W, int H, Buffer& step, Buffer
              hrc::blurs_far_light(o) ? 1 : 0,
              d == 3 ? 1 : 0,
              hrc::kBlurOpacityStep,
-             walls ? 1 : 0};
-      Buffer* b[] = {upper, *view, fluence, walls ? walls : fluence};
+             fan_light ? 1 : 0};
+      Buffer* b[] = {upper, *view, fluence, fan_light ? fan_light : fluence};
       batch.dispatch(*k[5], b, &push, groups(std::size_t(v.h), 64), groups(std::size_t(v.w), 4));
     }
   }

@@ -65,8 +65,8 @@ void hrc_owners(const RenderOptions& o, std::vector<Owner>& keep) {
 }
 
 Status hrc_record(GpuSolve& s, Batch& batch, Buffer& emission) {
-  return record_hrc(s.cache, batch, s.plan.width, s.plan.height, s.step, emission, s.environment,
-                    s.plan.options.hrc, s.fluence);
+  return record_hrc(s.cache, batch, s.plan.width, s.plan.height, s.step, emission, s.lights,
+                    s.environment, s.plan.options.hrc, s.fluence);
 }
 
 }  // namespace

@@ -27,6 +27,7 @@ struct GpuSolve {
   Cache& cache;
   const Plan& plan;
   Buffer& step;
+  Buffer& lights;  // the scene's own emission (a bounce's solve reads another)
   const Rgb& environment;
   Buffer& fluence;
   std::uint64_t binding_limit;  // bytes bound at once at most

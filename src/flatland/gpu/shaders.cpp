@@ -28,6 +28,9 @@ const std::uint32_t k_hrc_world[] = {
 const std::uint32_t k_hrc_view[] = {
 #include "hrc_view.comp.inc"
 };
+const std::uint32_t k_hrc_fan_cells[] = {
+#include "hrc_fan_cells.comp.inc"
+};
 const std::uint32_t k_rc_merge[] = {
 #include "rc_merge.comp.inc"
 };
@@ -55,11 +58,11 @@ const std::uint32_t k_hrc_merge_down[] = {
 const std::uint32_t k_hrc_merge_down_f16[] = {
 #include "hrc_merge_down_f16.comp.inc"
 };
-const std::uint32_t k_hrc_walls[] = {
-#include "hrc_walls.comp.inc"
+const std::uint32_t k_hrc_fan[] = {
+#include "hrc_fan.comp.inc"
 };
-const std::uint32_t k_hrc_walls_f16[] = {
-#include "hrc_walls_f16.comp.inc"
+const std::uint32_t k_hrc_fan_f16[] = {
+#include "hrc_fan_f16.comp.inc"
 };
 const std::uint32_t k_hrc_gather[] = {
 #include "hrc_gather.comp.inc"
@@ -88,6 +91,7 @@ PENUMBRA_SHADER(jfa_jump)
 PENUMBRA_SHADER(cross_blur)
 PENUMBRA_SHADER(hrc_world)
 PENUMBRA_SHADER(hrc_view)
+PENUMBRA_SHADER(hrc_fan_cells)
 PENUMBRA_SHADER(rc_merge)
 PENUMBRA_SHADER(rc_fluence)
 PENUMBRA_SHADER(bounce)
@@ -95,7 +99,7 @@ PENUMBRA_SHADER_F16(hrc_trace)
 PENUMBRA_SHADER_F16(hrc_merge_up)
 PENUMBRA_SHADER_F16(hrc_merge_down)
 PENUMBRA_SHADER_F16(hrc_gather)
-PENUMBRA_SHADER_F16(hrc_walls)
+PENUMBRA_SHADER_F16(hrc_fan)
 #undef PENUMBRA_SHADER
 #undef PENUMBRA_SHADER_F16
 

@@ -224,9 +224,13 @@ Expected<std::vector<float>> Solver::render(const Scene& scene, const Plan& plan
     s.medium_jumps = jumps;
   }
 
-  GpuSolve solve{cache,      plan,
-                 **step,     scene.environment,
-                 **fluence,  s.binding_limit ? s.binding_limit : info.max_buffer_bytes,
+  GpuSolve solve{cache,
+                 plan,
+                 **step,
+                 *device[1],
+                 scene.environment,
+                 **fluence,
+                 s.binding_limit ? s.binding_limit : info.max_buffer_bytes,
                  s.alignment};
   if (Status st = method->record(solve, *batch, *device[1]); !st) return st.error();
   std::string prefix;  // of the batch being recorded

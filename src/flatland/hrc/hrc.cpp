@@ -696,22 +696,27 @@ inline void near_column(const View& view, const ViewPlanes& vp, int u, float* co
   }
 }
 
-// HrcOptions::wall_fan: quadrant d's light at wall cell (x, y), through 2 rays per cone of
-// cascade n, each traced from the cell's centre (leaving the opaque cell) to the cascade's next
-// probe column and merged with its cone of R_n there, read between the two rows the ray lands
-// between (beyond the grid: the environment over the cone). A quadrant's R_0 is one value for
-// 90 degrees read through the cell beside the wall cell; light grazing an edge through the
-// corner of two anti-aliased cells needs the finer cones of R_n to reach the wall cell.
+// HrcOptions::wall_fan and near_fan: quadrant d's light at cell (x, y), through 2 rays per cone
+// of cascade n, each traced from the cell's centre (leaving an opaque cell) to the first probe
+// column of the cascade more than M / 2 cells ahead and merged with its cone of R_n there, read
+// between the two rows the ray lands between (beyond the grid: the environment over the cone).
+// A quadrant's R_0 is one value for 90 degrees read through the cell beside the wall cell;
+// light grazing an edge through the corner of two anti-aliased cells needs the finer cones of
+// R_n to reach the wall cell. Near a light's rim, the cones of cascades 0..2 are as coarse for
+// its edge. The rays run M / 2 + 1 .. 3M / 2 cells, so that R_n is never read right beside the
+// cell, where its own cones are coarse for the same light (the next column, 1..M cells ahead,
+// gave 3.94% against 3.77% on the 8-cell light of docs/QUALITY.md).
 template <class S>
-Rad wall_fan_light(const Medium& m, const View& view, int d, int n, const S* rn,
-                   const float* angles, const Rgb& env, int x, int y) {
+Rad fan_light(const Medium& m, const View& view, int d, int n, const S* rn, const float* angles,
+              const Rgb& env, int x, int y) {
   const int W = m.width, H = m.height;
   int u, v;
   view_cell(d, W, H, x, y, u, v);
   const int M = 1 << n, P = view.probes(n), h = view.h;
-  const int xq = u / M + 1;  // the next probe column, xq * M
+  const int xq = (u + M / 2) / M + 1;  // the probe column xq * M
   const float delta = float(xq * M - u);
   const Point a0 = world_point(d, W, H, float(u), float(v));
+  const bool open = m.step[std::size_t(y) * W + x] != kOpaque;
   Rad sum{0.0f, 0.0f, 0.0f};
   for (int a = 0; a < M; ++a) {
     const float A = angles[a], outside[3] = {env.r * A, env.g * A, env.b * A};
@@ -725,7 +730,15 @@ Rad wall_fan_light(const Medium& m, const View& view, int d, int n, const S* rn,
           (2.0f * float(a - (M >> 1)) + (2.0f * float(j) + 1.0f) / kWallFanRays) / float(M);
       const float ve = float(v) + slope * delta;
       const Point b = world_point(d, W, H, float(xq * M), ve);
-      const Interval seg = trace_segment(m, a0.x, a0.y, b.x, b.y, true);
+      // From where the ray leaves an open cell: its own medium is added once the quadrants are
+      // summed, as for any cell (an opaque one is left by trace_segment).
+      float sx = a0.x, sy = a0.y;
+      if (open) {
+        const float dx = b.x - a0.x, dy = b.y - a0.y;
+        const float e = 0.5f / std::max(std::abs(dx), std::abs(dy));
+        sx += e * dx, sy += e * dy;
+      }
+      const Interval seg = trace_segment(m, sx, sy, b.x, b.y, true);
       const int v0 = int(std::floor(ve));
       const float f1 = ve - float(v0), f0 = 1.0f - f1;
       float c[3];
@@ -740,16 +753,16 @@ Rad wall_fan_light(const Medium& m, const View& view, int d, int n, const S* rn,
   return sum;
 }
 
-// What HrcOptions::wall_fan keeps between solves: the wall cells and their light.
-struct Walls {
+// What HrcOptions::wall_fan keeps between solves: the fan's cells and their light.
+struct Fan {
   std::vector<std::uint32_t> cells;
   std::vector<float> light;  // 3 per cell, summed over the quadrants
 };
 
 template <class S>
 void solve_with(const Medium& m, const Rgb& env, const HrcOptions& o, Buffers<S>& buf,
-                HugeArray<float>& planes, std::vector<float>& blurred, Walls& walls,
-                std::vector<float>& f, std::vector<StageTime>& stages) {
+                HugeArray<float>& planes, std::vector<float>& blurred, Fan& fan,
+                std::vector<float>& f, std::vector<StageTime>& stages, const float* lights) {
   const int W = m.width, H = m.height;
   const std::size_t cells = std::size_t(W) * H;
   const Sizes sz = plan(W, H);
@@ -770,15 +783,16 @@ void solve_with(const Medium& m, const Rgb& env, const HrcOptions& o, Buffers<S>
 
   Stopwatch watch;
   build_world(m, stride, world);
-  double ms_view = watch.ms(), ms_trace = 0, ms_up = 0, ms_down = 0, ms_gather = 0, ms_walls = 0;
-  if (o.wall_fan > 0) {
+  double ms_view = watch.ms(), ms_trace = 0, ms_up = 0, ms_down = 0, ms_gather = 0, ms_fan = 0;
+  const bool runs = runs_fan(W, H, o);
+  if (runs) {
     watch.restart();
-    lit_wall_cells(m, walls.cells);
-    ms_walls += watch.ms();
+    fan_cells(m, lights, o.near_fan, fan.cells);
+    ms_fan += watch.ms();
   } else {
-    walls.cells.clear();  // none from an earlier solve on this workspace
+    fan.cells.clear();  // none from an earlier solve on this workspace
   }
-  walls.light.assign(walls.cells.size() * 3, 0.0f);
+  fan.light.assign(fan.cells.size() * 3, 0.0f);
   const float quarter = float(kPi / 2);  // A_0: a quadrant
   for (int d = 0; d < 4; ++d) {
     const View& view = sz.views[d & 1];
@@ -799,27 +813,27 @@ void solve_with(const Medium& m, const Rgb& env, const HrcOptions& o, Buffers<S>
 
     watch.restart();
     const S* upper = nullptr;  // R_N: the environment
-    const int fan = wall_fan_level(view, o.wall_fan);
+    const int fan_level = wall_fan_level(view, o.wall_fan);
     for (int n = view.levels - 1; n >= 0; --n) {
       S* out = upper == r[0] ? r[1] : r[0];
       merge_down(view, n, t[n], t[n + 1], upper, out, env);
       upper = out;
-      if (n != fan || walls.cells.empty()) continue;
+      if (n != fan_level || fan.cells.empty()) continue;
       ms_down += watch.ms();
       watch.restart();
       float angles[1 << kMaxWallFan];
       for (int a = 0; a < 1 << n; ++a) angles[a] = cone_angle(n, a);
       parallel_for(
-          int(walls.cells.size()),
+          int(fan.cells.size()),
           [&](int i) {
-            const std::uint32_t c = walls.cells[std::size_t(i)];
-            const Rad q = wall_fan_light(m, view, d, n, out, angles, env, int(c % unsigned(W)),
-                                         int(c / unsigned(W)));
-            float* l = &walls.light[3 * std::size_t(i)];
+            const std::uint32_t c = fan.cells[std::size_t(i)];
+            const Rad q = fan_light(m, view, d, n, out, angles, env, int(c % unsigned(W)),
+                                    int(c / unsigned(W)));
+            float* l = &fan.light[3 * std::size_t(i)];
             l[0] += q.r, l[1] += q.g, l[2] += q.b;
           },
           16);
-      ms_walls += watch.ms();
+      ms_fan += watch.ms();
       watch.restart();
     }
     ms_down += watch.ms();
@@ -895,13 +909,22 @@ void solve_with(const Medium& m, const Rgb& env, const HrcOptions& o, Buffers<S>
     });
     ms_gather += watch.ms();
   }
-  // Wall cells take the fan's light in place of what their quadrants read through the cell
-  // beside them.
-  for (std::size_t i = 0; i < walls.cells.size(); ++i)
-    std::copy_n(&walls.light[3 * i], 3, &f[3 * std::size_t(walls.cells[i])]);
+  // The fan's cells take its light in place of what their quadrants read, then an open cell's
+  // own medium as the gather adds it (with the near segment, the mean over a quadrant's
+  // directions: exact for a lone glowing cell).
+  for (std::size_t i = 0; i < fan.cells.size(); ++i) {
+    const std::uint32_t c = fan.cells[i];
+    float* out = &f[3 * std::size_t(c)];
+    std::copy_n(&fan.light[3 * i], 3, out);
+    const std::size_t at = std::size_t(c / unsigned(W)) * stride + c % unsigned(W);
+    const float tau = world[kTau0 * world_cells + at];
+    if (!o.near_segment || tau == 0.0f || tau == 1.0f) continue;
+    const float mo = own_transmittance(tau), e = float(2 * kPi) * (1.0f - mo);
+    for (int ch = 0; ch < 3; ++ch) out[ch] = e * world[(kR + ch) * world_cells + at] + mo * out[ch];
+  }
   stages.push_back({"views", ms_view});
   stages.push_back({"gather", ms_gather});
-  if (o.wall_fan > 0) stages.push_back({"wall fan", ms_walls});
+  if (runs) stages.push_back({"fan", ms_fan});
   stages.push_back({"trace T0-T2", ms_trace});
   stages.push_back({"merge up T3-TN", ms_up});
   stages.push_back({"merge down R", ms_down});
@@ -930,28 +953,67 @@ float own_transmittance(float t) {
   return m;
 }
 
-void lit_wall_cells(const Medium& m, std::vector<std::uint32_t>& cells) {
-  const int W = m.width, H = m.height;
-  auto lit = [&](int x, int y) {
-    if (m.step[std::size_t(y) * W + x] != kOpaque) return false;
+void fan_cells(const Medium& m, const float* lights, int near_fan,
+               std::vector<std::uint32_t>& cells) {
+  const int W = m.width, H = m.height, K = near_fan;
+  auto at = [W](int x, int y) { return std::size_t(y) * W + x; };
+  auto opaque = [&](int x, int y) { return m.step[at(x, y)] == kOpaque; };
+  auto emits = [&](int x, int y) {
+    const std::size_t i = at(x, y);
+    if (lights) return lights[3 * i] + lights[3 * i + 1] + lights[3 * i + 2] > 0.0f;
+    const Cell& c = m.cells[i];
+    return c.r + c.g + c.b > 0.0f;
+  };
+  // Whether any of the 3x3 (lit walls) cells around (x, y) in the grid passes `test`.
+  auto around = [&](int x, int y, auto test) {
     for (int b = std::max(y - 1, 0); b <= std::min(y + 1, H - 1); ++b)
       for (int a = std::max(x - 1, 0); a <= std::min(x + 1, W - 1); ++a)
-        if (m.step[std::size_t(b) * W + a] != kOpaque) return true;
+        if (test(a, b)) return true;
+    return false;
+  };
+  // Near a rim: a rim within K columns (near_row, per row), then within K rows of that.
+  std::vector<std::uint8_t> rim, near_row;
+  if (K > 0) {
+    rim.resize(std::size_t(W) * H);
+    near_row.resize(rim.size());
+    parallel_for(H, [&](int y) {
+      for (int x = 0; x < W; ++x)
+        rim[at(x, y)] = emits(x, y) && around(x, y, [&](int a, int b) { return !emits(a, b); });
+    });
+    parallel_for(H, [&](int y) {
+      int last = -K - 1;  // the last rim at or left of x, then the next right of it
+      for (int x = 0; x < W; ++x)
+        if (rim[at(x, y)])
+          last = x;
+        else
+          near_row[at(x, y)] = x - last <= K;
+      for (int x = W - 1, next = W + K + 1; x >= 0; --x)
+        if (rim[at(x, y)])
+          next = x, near_row[at(x, y)] = 1;
+        else
+          near_row[at(x, y)] |= next - x <= K;
+    });
+  }
+  auto in_fan = [&](int x, int y) {
+    if (opaque(x, y)) return around(x, y, [&](int a, int b) { return !opaque(a, b); });
+    if (K == 0) return false;
+    for (int b = std::max(y - K, 0); b <= std::min(y + K, H - 1); ++b)
+      if (near_row[at(x, b)]) return true;
     return false;
   };
   // Counted row by row, then written at each row's offset: the same order on any thread count.
   std::vector<std::uint32_t> first(std::size_t(H) + 1, 0);
   parallel_for(H, [&](int y) {
     std::uint32_t n = 0;
-    for (int x = 0; x < W; ++x) n += lit(x, y) ? 1 : 0;
+    for (int x = 0; x < W; ++x) n += in_fan(x, y) ? 1 : 0;
     first[std::size_t(y) + 1] = n;
   });
   for (int y = 0; y < H; ++y) first[std::size_t(y) + 1] += first[std::size_t(y)];
   cells.resize(first[std::size_t(H)]);
   parallel_for(H, [&](int y) {
-    std::uint32_t at = first[std::size_t(y)];
+    std::uint32_t i = first[std::size_t(y)];
     for (int x = 0; x < W; ++x)
-      if (lit(x, y)) cells[at++] = std::uint32_t(y) * std::uint32_t(W) + std::uint32_t(x);
+      if (in_fan(x, y)) cells[i++] = std::uint32_t(at(x, y));
   });
 }
 
@@ -1031,8 +1093,14 @@ int level_count(int w) {
 std::uint64_t working_bytes(int width, int height, const HrcOptions& o) {
   const Sizes s = plan(width, height);
   // The blur of the whole fluence writes a copy.
-  return o.storage == Storage::f16 ? bytes_of<Half>(s, width, height, blurs_whole_fluence(o))
-                                   : bytes_of<float>(s, width, height, blurs_whole_fluence(o));
+  std::uint64_t b = o.storage == Storage::f16
+                        ? bytes_of<Half>(s, width, height, blurs_whole_fluence(o))
+                        : bytes_of<float>(s, width, height, blurs_whole_fluence(o));
+  // The fan: an index and a light per cell it gathers, as if every cell were one (the count
+  // depends on the scene), and the rim flags it finds them with.
+  if (runs_fan(width, height, o))
+    b += std::uint64_t(width) * height * (4 + 3 * sizeof(float) + (o.near_fan > 0 ? 2 : 0));
+  return b;
 }
 
 std::uint64_t structure_bytes(int width, int height, Storage storage) {
@@ -1065,7 +1133,7 @@ struct Workspace::Impl {
   Buffers<Half> f16;
   HugeArray<float> planes;
   std::vector<float> blurred;
-  Walls walls;
+  Fan fan;
 };
 
 Workspace::Workspace() : impl_(std::make_unique<Impl>()) {}
@@ -1074,14 +1142,17 @@ Workspace::Workspace(Workspace&&) noexcept = default;
 Workspace& Workspace::operator=(Workspace&&) noexcept = default;
 
 void solve(const Medium& medium, const Rgb& environment, const HrcOptions& options,
-           Workspace& workspace, std::vector<float>& fluence, std::vector<StageTime>& stages) {
+           Workspace& workspace, std::vector<float>& fluence, std::vector<StageTime>& stages,
+           const float* lights) {
   Workspace::Impl& w = *workspace.impl_;
   if (options.storage == Storage::f16) {
     w.f32.release();
-    solve_with(medium, environment, options, w.f16, w.planes, w.blurred, w.walls, fluence, stages);
+    solve_with(medium, environment, options, w.f16, w.planes, w.blurred, w.fan, fluence, stages,
+               lights);
   } else {
     w.f16.release();
-    solve_with(medium, environment, options, w.f32, w.planes, w.blurred, w.walls, fluence, stages);
+    solve_with(medium, environment, options, w.f32, w.planes, w.blurred, w.fan, fluence, stages,
+               lights);
   }
 }
 

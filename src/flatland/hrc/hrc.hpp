@@ -19,7 +19,7 @@ int level_count(int w);
 
 // Bytes HRC keeps alive: the acceleration structure T_0..T_N, two layers of R, the medium as
 // planes (world layout and one rotated view) and the summed fluence, with the blur's copy (the
-// largest of the two view orientations when the grid is not square).
+// largest of the two view orientations when the grid is not square), and a bound on the fan's.
 std::uint64_t working_bytes(int width, int height, const HrcOptions& options);
 
 // Bytes of the acceleration structure T_0..T_N and the two layers of R alone. For a 2^N x 2^N
@@ -52,15 +52,17 @@ class Workspace {
 
  private:
   friend void solve(const Medium&, const Rgb&, const HrcOptions&, Workspace&, std::vector<float>&,
-                    std::vector<StageTime>&);
+                    std::vector<StageTime>&, const float*);
   std::unique_ptr<Impl> impl_;
 };
 
 // Fluence at every cell centre into `fluence` (3 floats per cell, resized): the four quadrants
 // on rotated views, summed, then the cross blur when enabled. Stage times are appended to
-// `stages`.
+// `stages`. `lights` (3 per cell) is the scene's own emission, whose rims the near fan follows
+// (a later bounce's medium also emits the light its walls reflect); null: the medium's.
 void solve(const Medium& medium, const Rgb& environment, const HrcOptions& options,
-           Workspace& workspace, std::vector<float>& fluence, std::vector<StageTime>& stages);
+           Workspace& workspace, std::vector<float>& fluence, std::vector<StageTime>& stages,
+           const float* lights = nullptr);
 
 // Eq. 21, the final 1-cell cross blur of the fluence f (3 floats per cell) into out, given the
 // transmittance over half a cell per cell (0: opaque), rows tau_stride apart. Neighbours whose
@@ -96,9 +98,13 @@ float own_transmittance(float t);
 
 // ---- The geometry of the solve, shared with the GPU backend (src/gpu/hrc.cpp) ----
 
-// HrcOptions::wall_fan: the cells it gathers (opaque cells with a cell that is not opaque among
-// their 8 neighbours, as row-major world indices, in order).
-void lit_wall_cells(const Medium& medium, std::vector<std::uint32_t>& cells);
+// HrcOptions::wall_fan and near_fan: the cells the fan gathers, as row-major world indices in
+// order. Lit wall cells: opaque, with a cell that is not opaque among their 8 neighbours. With
+// near_fan K > 0, also the cells that are not opaque within K cells along x and y of a light's
+// rim: a cell whose `lights` (3 per cell; null: the medium's emission) are not all 0, with one
+// among its 8 neighbours whose are.
+void fan_cells(const Medium& medium, const float* lights, int near_fan,
+               std::vector<std::uint32_t>& cells);
 inline constexpr int kWallFanRays = 2;  // per cone
 
 // Eq. 13: the angle of cone a (the paper's i = a + 1/2) of cascade n.
@@ -117,6 +123,11 @@ View make_view(int w, int h);
 // environment; -1: none.
 inline int wall_fan_level(const View& v, int wall_fan) {
   return wall_fan > 0 ? (wall_fan < v.levels ? wall_fan : v.levels - 1) : -1;
+}
+// Whether a solve runs the fan: on, and every quadrant has a cascade for it (a grid one cell
+// wide has none across).
+inline bool runs_fan(int width, int height, const HrcOptions& o) {
+  return o.wall_fan > 0 && width > 1 && height > 1;
 }
 
 // Rotated views carry this many empty cells beyond the grid (the longest traced ray, T_2's

@@ -9,11 +9,11 @@ layout(local_size_x = 64, local_size_y = 4) in;
 layout(std430, binding = 0) readonly buffer R0 { stored_t r0[]; };
 layout(std430, binding = 1) readonly buffer View { float view[]; };
 layout(std430, binding = 2) buffer Fluence { float f[]; };
-// hrc_walls' light at lit wall cells (-1 elsewhere), read when `walls` is set.
-layout(std430, binding = 3) readonly buffer Walls { float walls[]; };
+// hrc_fan's light at the fan's cells (-1 elsewhere), read when `fan` is set.
+layout(std430, binding = 3) readonly buffer Fan { float fan_light[]; };
 layout(push_constant) uniform Push {
   int w; int h; int hp; int pad; uint view_cells; int base; int su; int sv; int first; int near;
-  float er; float eg; float eb; int blur; int last; float step; int walls;
+  float er; float eg; float eb; int blur; int last; float step; int fan;
 } p;
 
 const float quarter = 1.57079633;
@@ -71,9 +71,9 @@ void main() {
     q = quarter * e + t_next * q;
   }
   uint i = uint(p.base + u * p.su + v * p.sv) * 3u;
-  // A lit wall cell takes the wall fan's light in place of its quadrant's read (hrc.cpp).
-  if (p.walls != 0 && t_own == 0.0 && walls[i] >= 0.0)
-    q = vec3(walls[i], walls[i + 1u], walls[i + 2u]);
+  // A cell of the fan takes its light in place of its quadrant's read (hrc.cpp).
+  if (p.fan != 0 && fan_light[i] >= 0.0)
+    q = vec3(fan_light[i], fan_light[i + 1u], fan_light[i + 2u]);
   if (p.first != 0) {
     f[i] = q.r; f[i + 1u] = q.g; f[i + 2u] = q.b;
     return;

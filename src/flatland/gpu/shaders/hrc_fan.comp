@@ -1,24 +1,24 @@
 #version 450
 #extension GL_GOOGLE_include_directive : require
 #include "storage.glsl"
-// HrcOptions::wall_fan, quadrant d (hrc.cpp wall_fan_light): the light at each lit wall cell (an
-// opaque cell with a cell that is not opaque among its 8 neighbours) through 2 rays per cone of
-// cascade n, each traced from the cell's centre to the cascade's next probe column and merged
-// with its cone of R_n there, between the two rows it lands between. One invocation per world
-// cell; a cell that is not a lit wall gets -1 (the gather then reads its quadrant as usual).
+// HrcOptions::wall_fan and near_fan, quadrant d (hrc.cpp fan_light): the light at each cell
+// hrc_fan_cells marked, through 2 rays per cone of cascade n, each traced from the cell's centre
+// (from where it leaves an open cell) to the first probe column of the cascade more than M / 2
+// cells ahead and merged with its cone of R_n there, between the two rows it lands between. One
+// invocation per world cell; a cell outside the fan gets -1 (the gather then reads its
+// quadrant as usual).
 layout(local_size_x = 64, local_size_y = 4) in;
 layout(std430, binding = 0) readonly buffer Step { float step_[]; };
 layout(std430, binding = 1) readonly buffer Emission { float emission[]; };
 layout(std430, binding = 2) readonly buffer Rn { stored_t rn[]; };
 layout(std430, binding = 3) readonly buffer Angles { float angles[]; };
-layout(std430, binding = 4) writeonly buffer Walls { float walls[]; };
+layout(std430, binding = 4) writeonly buffer Light { float light[]; };
+layout(std430, binding = 5) readonly buffer Cells { uint fan[]; };
 layout(push_constant) uniform Push {
   int W; int H; int d; int n; int P; int h; float er; float eg; float eb;
 } p;
 
 #include "trace.glsl"
-
-bool opaque(int x, int y) { return isinf(step_[uint(y) * uint(p.W) + uint(x)]); }
 
 vec2 world_point(float u, float v) {
   vec2 q;
@@ -33,21 +33,17 @@ void main() {
   int x = int(gl_GlobalInvocationID.x), y = int(gl_GlobalInvocationID.y);
   if (x >= p.W || y >= p.H) return;
   uint c = (uint(y) * uint(p.W) + uint(x)) * 3u;
-  bool lit = false;
-  if (opaque(x, y))
-    for (int b = max(y - 1, 0); b <= min(y + 1, p.H - 1); ++b)
-      for (int a = max(x - 1, 0); a <= min(x + 1, p.W - 1); ++a)
-        if (!opaque(a, b)) lit = true;
-  if (!lit) {
-    walls[c] = -1.0;
+  if (fan[uint(y) * uint(p.W) + uint(x)] == 0u) {
+    light[c] = -1.0;
     return;
   }
   int u = p.d == 0 ? x : p.d == 1 ? y : p.d == 2 ? p.W - 1 - x : p.H - 1 - y;
   int v = p.d == 0 ? y : p.d == 1 ? p.W - 1 - x : p.d == 2 ? p.H - 1 - y : x;
   int M = 1 << p.n;
-  int xq = u / M + 1;
+  int xq = (u + M / 2) / M + 1;
   float delta = float(xq * M - u);
   vec2 a0 = world_point(float(u), float(v));
+  bool open = !isinf(step_[uint(y) * uint(p.W) + uint(x)]);
   vec3 env = vec3(p.er, p.eg, p.eb);
   precise vec3 sum = vec3(0.0);
   for (int a = 0; a < M; ++a) {
@@ -56,7 +52,13 @@ void main() {
     for (int j = 0; j < 2; ++j) {
       precise float slope = (2.0 * float(a - (M >> 1)) + (2.0 * float(j) + 1.0) / 2.0) / float(M);
       precise float ve = float(v) + slope * delta;
-      vec4 seg = trace_segment(p.W, p.H, a0, world_point(float(xq * M), ve), true);
+      vec2 b = world_point(float(xq * M), ve), start = a0;
+      if (open) {  // from where the ray leaves an open cell, as on the CPU
+        precise vec2 dir = b - a0;
+        precise float e = 0.5 / max(abs(dir.x), abs(dir.y));
+        start = a0 + e * dir;
+      }
+      vec4 seg = trace_segment(p.W, p.H, start, b, true);
       int v0 = int(floor(ve));
       precise float f1 = ve - float(v0), f0 = 1.0 - f1;
       vec3 far[2];
@@ -72,7 +74,7 @@ void main() {
       sum += 0.5 * (A * seg.rgb + seg.a * cf);
     }
   }
-  walls[c] = sum.r;
-  walls[c + 1u] = sum.g;
-  walls[c + 2u] = sum.b;
+  light[c] = sum.r;
+  light[c + 1u] = sum.g;
+  light[c + 2u] = sum.b;
 }

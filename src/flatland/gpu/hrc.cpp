@@ -118,7 +118,7 @@ Status record_hrc(Cache& cache, Batch& batch, int W, int H, Buffer& step, Buffer
       {f16 ? "hrc_merge_down f16" : "hrc_merge_down", shaders::hrc_merge_down(f16), 5, 36},
       {f16 ? "hrc_gather f16" : "hrc_gather", shaders::hrc_gather(f16), 4, 68},
       {f16 ? "hrc_fan f16" : "hrc_fan", shaders::hrc_fan(f16), 6, 36},
-      {"hrc_fan_cells", shaders::hrc_fan_cells(), 3, 12}};
+      {"hrc_fan_cells", shaders::hrc_fan_cells(), 4, 16}};
   const Kernel* k[std::size(specs)];
   for (std::size_t i = 0; i < std::size(specs); ++i) {
     Expected<const Kernel*> kernel =
@@ -205,9 +205,11 @@ Status record_hrc(Cache& cache, Batch& batch, int W, int H, Buffer& step, Buffer
   }
   if (fan_cells) {
     batch.mark("fan");
-    const std::int32_t push[3] = {W, H, o.near_fan};
-    Buffer* b[] = {&step, &lights, fan_cells};
-    batch.dispatch(*k[7], b, push, groups(std::size_t(W), 64), groups(std::size_t(H), 4));
+    Buffer* b[] = {&step, &lights, fan_light, fan_cells};
+    for (std::int32_t pass : {0, 1}) {  // the rims (in the light buffer), then the cells
+      const std::int32_t push[4] = {W, H, o.near_fan, pass};
+      batch.dispatch(*k[7], b, push, groups(std::size_t(W), 64), groups(std::size_t(H), 4));
+    }
   }
   for (int d = 0; d < 4; ++d) {
     const hrc::View& v = views[d & 1];

@@ -73,6 +73,9 @@ std::vector<Run> default_runs(int bounces, int max_spp, bool quick) {
   hrc("hrc --corners walls", [](HrcOptions& h) { h.corners = Corners::walls; });
   hrc("hrc --no-near-segment", [](HrcOptions& h) { h.near_segment = false; });
   hrc("hrc --storage f16", [](HrcOptions& h) { h.storage = Storage::f16; });
+  hrc("hrc --near-fan 0", [](HrcOptions& h) { h.near_fan = 0; });
+  hrc("hrc --wall-fan 0", [](HrcOptions& h) { h.wall_fan = 0; });
+  hrc("hrc --wall-fan 4 --near-fan 8", [](HrcOptions& h) { h.wall_fan = 4, h.near_fan = 8; });
   rc("rc --fix nearest", [](RcOptions& r) { r.fix = MergeFix::nearest; });
   rc("rc --interval 2", [](RcOptions& r) { r.interval = 2; });
   rc("rc --directions 8", [](RcOptions& r) { r.directions = 8; });

@@ -92,8 +92,8 @@ void add_render_options(CLI::App* app, RenderOptions& options, RenderOptionFlags
     app->add_flag("--no-near-segment", flags.no_near_segment,
                   "hrc: read R_0([x+1, y]) alone, as the paper (a cell's own medium left out)");
     app->add_option("--wall-fan", options.hrc.wall_fan,
-                    "hrc: lit wall cells gather through 2 rays per cone of this cascade (0: "
-                    "through the cell beside them, as any cell)")
+                    "hrc: lit wall cells, and the cells --near-fan names, gather through 2 rays "
+                    "per cone of this cascade (0: no fan, every cell reads its quadrants)")
         ->check(CLI::Range(0, penumbra::flatland::kMaxWallFan))
         ->capture_default_str();
     app->add_option("--near-fan", options.hrc.near_fan,

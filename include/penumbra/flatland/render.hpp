@@ -69,10 +69,11 @@ struct HrcOptions {
   Corners corners = Corners::half;
   // Lit wall cells gather through a fan of rays: from the cell's centre, 2 rays per cone of
   // cascade `wall_fan` (2^wall_fan cones per quadrant) to the first of that cascade's probe
-  // columns more than half its spacing ahead, each merged with its cone of R there. 0: a wall cell
-  // reads its quadrants like any cell, through the cell beside it (the paper's formula), which
-  // leaves edges lit at a grazing angle through anti-aliased cells dark (docs/QUALITY.md). 1..8; a
-  // grid with fewer cascades uses its highest below the environment.
+  // columns more than half its spacing ahead, each merged with its cone of R there (and so do
+  // the cells `near_fan` names). 0: no fan; a wall cell reads its quadrants like any cell,
+  // through the cell beside it (the paper's formula), which leaves edges lit at a grazing angle
+  // through anti-aliased cells dark (docs/QUALITY.md). 1..8; a grid with fewer cascades uses its
+  // highest below the environment.
   int wall_fan = 3;
   // Cells that are not opaque within `near_fan` cells (along x and y) of a light's rim gather
   // through the same fan: there a quadrant's cones of cascades 0..2 are too coarse for the

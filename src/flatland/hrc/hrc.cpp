@@ -776,6 +776,18 @@ Rad fan_light(const Medium& m, const View& view, int d, int n, const S* rn, cons
   return sum;
 }
 
+// With the near segment, a cell's own medium over the light its quadrants gathered (`out`, 3
+// floats): the mean over a quadrant's directions of the transmittance from its centre to its
+// edge, given `tau` over half a cell. An opaque cell is left as if empty (its fluence is the
+// light arriving at it), and an empty one has nothing to add.
+inline void add_own_medium(float tau, float r, float g, float b, float* out) {
+  if (tau == 0.0f || tau == 1.0f) return;
+  const float mo = own_transmittance(tau), e = float(2 * kPi) * (1.0f - mo);
+  out[0] = e * r + mo * out[0];
+  out[1] = e * g + mo * out[1];
+  out[2] = e * b + mo * out[2];
+}
+
 // What HrcOptions::wall_fan keeps between solves: the fan's cells and their light.
 struct Fan {
   std::vector<std::uint32_t> cells;
@@ -917,12 +929,8 @@ void solve_with(const Medium& m, const Rgb& env, const HrcOptions& o, Buffers<S>
         out[0] += qc[v], out[1] += qc[h + v], out[2] += qc[2 * h + v];
         if (!own) return;
         const std::size_t at = vp.at(u, v);
-        const float tau = vp.plane(kTau0)[at], mo = tau == 0.0f ? 1.0f : own_transmittance(tau);
-        if (mo == 1.0f) return;
-        const float e = float(2 * kPi) * (1.0f - mo);
-        out[0] = e * vp.plane(kR)[at] + mo * out[0];
-        out[1] = e * vp.plane(kG)[at] + mo * out[1];
-        out[2] = e * vp.plane(kB)[at] + mo * out[2];
+        add_own_medium(vp.plane(kTau0)[at], vp.plane(kR)[at], vp.plane(kG)[at], vp.plane(kB)[at],
+                       out);
       };
       if (rows)
         for (int v = 0; v < h; ++v) put(u0, v);
@@ -939,11 +947,10 @@ void solve_with(const Medium& m, const Rgb& env, const HrcOptions& o, Buffers<S>
     const std::uint32_t c = fan.cells[i];
     float* out = &f[3 * std::size_t(c)];
     std::copy_n(&fan.light[3 * i], 3, out);
-    const std::size_t at = std::size_t(c / unsigned(W)) * stride + c % unsigned(W);
-    const float tau = world[kTau0 * world_cells + at];
-    if (!o.near_segment || tau == 0.0f || tau == 1.0f) continue;
-    const float mo = own_transmittance(tau), e = float(2 * kPi) * (1.0f - mo);
-    for (int ch = 0; ch < 3; ++ch) out[ch] = e * world[(kR + ch) * world_cells + at] + mo * out[ch];
+    if (!o.near_segment) continue;
+    const float* w = world + std::size_t(c / unsigned(W)) * stride + c % unsigned(W);
+    add_own_medium(w[kTau0 * world_cells], w[kR * world_cells], w[kG * world_cells],
+                   w[kB * world_cells], out);
   }
   stages.push_back({"views", ms_view});
   stages.push_back({"gather", ms_gather});
@@ -987,7 +994,7 @@ void fan_cells(const Medium& m, const float* lights, int near_fan,
     const Cell& c = m.cells[i];
     return c.r + c.g + c.b > 0.0f;
   };
-  // Whether any of the 3x3 (lit walls) cells around (x, y) in the grid passes `test`.
+  // Whether any cell of the 3x3 around (x, y), within the grid, passes `test`.
   auto around = [&](int x, int y, auto test) {
     for (int b = std::max(y - 1, 0); b <= std::min(y + 1, H - 1); ++b)
       for (int a = std::max(x - 1, 0); a <= std::min(x + 1, W - 1); ++a)
@@ -995,9 +1002,8 @@ void fan_cells(const Medium& m, const float* lights, int near_fan,
     return false;
   };
   // Near a rim: a rim within K columns (near_row, per row), then within K rows of that.
-  std::vector<std::uint8_t> rim, near_row;
+  std::vector<std::uint8_t> rim(std::size_t(W) * H), near_row;
   if (K > 0) {
-    rim.resize(std::size_t(W) * H);
     near_row.resize(rim.size());
     parallel_for(H, [&](int y) {
       for (int x = 0; x < W; ++x)
@@ -1024,11 +1030,13 @@ void fan_cells(const Medium& m, const float* lights, int near_fan,
       if (near_row[at(x, b)]) return true;
     return false;
   };
-  // Counted row by row, then written at each row's offset: the same order on any thread count.
+  // Found once (into the rim flags, no longer needed) and counted row by row, then written at
+  // each row's offset: the same order on any thread count.
+  std::vector<std::uint8_t>& in = rim;
   std::vector<std::uint32_t> first(std::size_t(H) + 1, 0);
   parallel_for(H, [&](int y) {
     std::uint32_t n = 0;
-    for (int x = 0; x < W; ++x) n += in_fan(x, y) ? 1 : 0;
+    for (int x = 0; x < W; ++x) n += in[at(x, y)] = in_fan(x, y);
     first[std::size_t(y) + 1] = n;
   });
   for (int y = 0; y < H; ++y) first[std::size_t(y) + 1] += first[std::size_t(y)];
@@ -1036,7 +1044,7 @@ void fan_cells(const Medium& m, const float* lights, int near_fan,
   parallel_for(H, [&](int y) {
     std::uint32_t i = first[std::size_t(y)];
     for (int x = 0; x < W; ++x)
-      if (in_fan(x, y)) cells[i++] = std::uint32_t(at(x, y));
+      if (in[at(x, y)]) cells[i++] = std::uint32_t(at(x, y));
   });
 }
 
@@ -1120,9 +1128,8 @@ std::uint64_t working_bytes(int width, int height, const HrcOptions& o) {
                         ? bytes_of<Half>(s, width, height, blurs_whole_fluence(o))
                         : bytes_of<float>(s, width, height, blurs_whole_fluence(o));
   // The fan: an index and a light per cell it gathers, as if every cell were one (the count
-  // depends on the scene), and the rim flags it finds them with.
-  if (runs_fan(width, height, o))
-    b += std::uint64_t(width) * height * (4 + 3 * sizeof(float) + (o.near_fan > 0 ? 2 : 0));
+  // depends on the scene), and the two bytes of flags per cell it finds them with.
+  if (runs_fan(width, height, o)) b += std::uint64_t(width) * height * (4 + 3 * sizeof(float) + 2);
   return b;
 }
 

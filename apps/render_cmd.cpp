@@ -53,7 +53,8 @@ nlohmann::json parameters_json(const penumbra::flatland::RenderOptions& o) {
               {"near_segment", o.hrc.near_segment},
               {"corners", penumbra::flatland::to_string(o.hrc.corners)},
               {"wall_fan", o.hrc.wall_fan},
-              {"near_fan", o.hrc.near_fan}});
+              {"near_fan", o.hrc.near_fan},
+              {"even_weight", o.hrc.even_weight}});
     return p;
   }
   const penumbra::flatland::RcOptions& rc = o.rc;

@@ -101,6 +101,11 @@ void add_render_options(CLI::App* app, RenderOptions& options, RenderOptionFlags
                     "fan too (0: wall cells only; no effect with --wall-fan 0)")
         ->check(CLI::Range(0, penumbra::flatland::kMaxNearFan))
         ->capture_default_str();
+    app->add_option("--even-weight", options.hrc.even_weight,
+                    "hrc: eqs. 15-17 at an even probe column, the weight of the cones at its own "
+                    "probe against the merges along the edges (the paper: 0.5); in [0, 1]")
+        ->check(CLI::Range(0.0f, 1.0f))
+        ->capture_default_str();
   }
   if (which.bounces)
     app->add_option("--bounces", options.bounces, which.bounces_help)
@@ -154,6 +159,7 @@ std::string with_flags(std::string message) {
       {"`hrc.corners`", "--corners"},
       {"`hrc.wall_fan`", "--wall-fan"},
       {"`hrc.near_fan`", "--near-fan"},
+      {"`hrc.even_weight`", "--even-weight"},
       {"`pt.spp`", "--spp"},
       {"`pt.seconds`", "--time"},
       {"`pt.nee`", "--nee"},

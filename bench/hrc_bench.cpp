@@ -82,6 +82,20 @@ BENCHMARK(BM_HrcLights512)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
+// The fan's cost against its reach: 102 and 1002 lights at 512^2, wall_fan M and near_fan K
+// (docs/PERFORMANCE.md: why `--wall-fan 4 --near-fan 8` is not the default).
+void BM_HrcFan512(benchmark::State& state) {
+  const Scene scene = *build_scene(bench::lights_scene(512, int(state.range(0))));
+  HrcOptions o;
+  o.wall_fan = int(state.range(1));
+  o.near_fan = int(state.range(2));
+  run_warm(state, scene, o);
+}
+BENCHMARK(BM_HrcFan512)
+    ->ArgsProduct({{102, 1002}, {3, 4}, {2, 8}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
 // Half-precision storage of T and R against single precision, at two sizes (how each scales).
 void BM_HrcStorage(benchmark::State& state) {
   const Scene scene = *build_scene(bench::lights_scene(int(state.range(0)), 102));

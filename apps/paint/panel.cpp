@@ -106,6 +106,7 @@ void Painter::draw_panel() {
         options_.hrc.corners = walls ? Corners::walls : Corners::half, changed = true;
       changed |= ImGui::SliderInt("wall fan", &options_.hrc.wall_fan, 0, kMaxWallFan);
       changed |= ImGui::SliderInt("near fan", &options_.hrc.near_fan, 0, kMaxNearFan);
+      changed |= ImGui::SliderFloat("even weight", &options_.hrc.even_weight, 0.0f, 1.0f, "%.3f");
     } else if (options_.method == Method::rc) {
       RcOptions& rc = options_.rc;
       changed |= ImGui::SliderInt("probe spacing", &rc.probe_spacing, 1, 16);

@@ -76,6 +76,7 @@ std::vector<Run> default_runs(int bounces, int max_spp, bool quick) {
   hrc("hrc --near-fan 0", [](HrcOptions& h) { h.near_fan = 0; });
   hrc("hrc --wall-fan 0", [](HrcOptions& h) { h.wall_fan = 0; });
   hrc("hrc --wall-fan 4 --near-fan 8", [](HrcOptions& h) { h.wall_fan = 4, h.near_fan = 8; });
+  hrc("hrc --even-weight 0.5", [](HrcOptions& h) { h.even_weight = 0.5f; });
   rc("rc --fix nearest", [](RcOptions& r) { r.fix = MergeFix::nearest; });
   rc("rc --interval 2", [](RcOptions& r) { r.interval = 2; });
   rc("rc --directions 8", [](RcOptions& r) { r.directions = 8; });

@@ -231,6 +231,7 @@ TEST(Gpu, HrcSolveMatchesTheCpu) {
     bool blur_near = false;  // eq. 21 on the whole fluence (its own pass) instead of in the gather
     Corners corners = Corners::half;
     int near_fan = 2;
+    float even_weight = HrcOptions{}.even_weight;
   };
   for (const Case& k :
        {Case{64, 64, true, true}, Case{100, 37, true, true}, Case{45, 80, false, false},
@@ -238,7 +239,9 @@ TEST(Gpu, HrcSolveMatchesTheCpu) {
         Case{96, 64, true, true, Storage::f32, true},
         Case{64, 64, true, true, Storage::f32, false, Corners::walls},
         Case{100, 37, true, true, Storage::f32, false, Corners::half, 0},
-        Case{45, 80, true, true, Storage::f32, false, Corners::half, 5}}) {
+        Case{45, 80, true, true, Storage::f32, false, Corners::half, 5},
+        Case{64, 64, true, true, Storage::f32, false, Corners::half, 2, 0.9f},
+        Case{100, 37, true, true, Storage::f16, false, Corners::half, 2, 0.5f}}) {
     SceneDesc d;
     d.width = k.w;
     d.height = k.h;
@@ -256,6 +259,7 @@ TEST(Gpu, HrcSolveMatchesTheCpu) {
     o.blur_near = k.blur_near;
     o.corners = k.corners;
     o.near_fan = k.near_fan;
+    o.even_weight = k.even_weight;
     hrc::Workspace workspace;
     std::vector<float> cpu;
     std::vector<StageTime> stages;

@@ -81,6 +81,12 @@ struct HrcOptions {
   // that emits nothing among its 8 neighbours. 0: only wall cells; 0..16; no effect without
   // the wall fan.
   int near_fan = 2;
+  // Eqs. 15-17 at an even probe column: the weight of the cones of R_{n+1} at the column's own
+  // probe, the rest going to the merges along the doubled edges; in [0, 1]. The seed's mean is
+  // 1/2. Merges along edges represent a cone by its edges, so each parity of column sees light
+  // pushed towards its cones' edges: quadrant axes too dark and diagonals too bright around
+  // lights; a larger weight shifts even columns less (docs/METHODS.md, "The edge bias").
+  float even_weight = 0.575f;
 };
 inline constexpr int kMaxWallFan = 8;   // HrcOptions::wall_fan
 inline constexpr int kMaxNearFan = 16;  // HrcOptions::near_fan

@@ -115,7 +115,7 @@ Status record_hrc(Cache& cache, Batch& batch, int W, int H, Buffer& step, Buffer
       {"hrc_view", shaders::hrc_view(), 2, 36},
       {f16 ? "hrc_trace f16" : "hrc_trace", shaders::hrc_trace(f16), 4, 28},
       {f16 ? "hrc_merge_up f16" : "hrc_merge_up", shaders::hrc_merge_up(f16), 2, 20},
-      {f16 ? "hrc_merge_down f16" : "hrc_merge_down", shaders::hrc_merge_down(f16), 5, 36},
+      {f16 ? "hrc_merge_down f16" : "hrc_merge_down", shaders::hrc_merge_down(f16), 5, 40},
       {f16 ? "hrc_gather f16" : "hrc_gather", shaders::hrc_gather(f16), 4, 68},
       {f16 ? "hrc_fan f16" : "hrc_fan", shaders::hrc_fan(f16), 6, 36},
       {"hrc_fan_cells", shaders::hrc_fan_cells(), 4, 16}};
@@ -253,8 +253,8 @@ Status record_hrc(Cache& cache, Batch& batch, int W, int H, Buffer& step, Buffer
       const int P = v.probes(n), P1 = v.probes(n + 1), rows = (1 << n) * P;
       struct {
         std::int32_t h, n, P, P1, rows, top;
-        float er, eg, eb;
-      } push{v.h, n, P, P1, rows, top ? 1 : 0, env.r, env.g, env.b};
+        float er, eg, eb, wd;
+      } push{v.h, n, P, P1, rows, top ? 1 : 0, env.r, env.g, env.b, o.even_weight};
       Buffer* b[] = {t[std::size_t(n)], t[std::size_t(n + 1)], upper, *angles, out};
       batch.dispatch(*k[4], b, &push, groups(std::size_t(v.h), 64), groups(std::size_t(rows), 4));
       upper = out;

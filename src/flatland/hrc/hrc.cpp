@@ -407,13 +407,15 @@ inline void odd_cone(float ap, float am, const Interval& ep, const Interval& em,
   b = ap * ep.b + ep.t * fp.b + am * em.b + em.t * fm.b;
 }
 
-// Eqs. 15-17 for one row: the mean of the cones at p and the merges along the doubled edges.
-inline void even_cone(float ap, float am, const Interval& ep, const Interval& em, const Rad& f0p,
-                      const Rad& f0m, const Rad& f1p, const Rad& f1m, float& r, float& g,
-                      float& b) {
-  r = 0.5f * (f0p.r + ap * ep.r + ep.t * f1p.r + f0m.r + am * em.r + em.t * f1m.r);
-  g = 0.5f * (f0p.g + ap * ep.g + ep.t * f1p.g + f0m.g + am * em.g + em.t * f1m.g);
-  b = 0.5f * (f0p.b + ap * ep.b + ep.t * f1p.b + f0m.b + am * em.b + em.t * f1m.b);
+// Eqs. 15-17 for one row: the cones at p, weighted wd (the seed's mean: 1/2), and the merges
+// along the doubled edges, weighted 1 - wd (HrcOptions::even_weight).
+inline void even_cone(float ap, float am, float wd, const Interval& ep, const Interval& em,
+                      const Rad& f0p, const Rad& f0m, const Rad& f1p, const Rad& f1m, float& r,
+                      float& g, float& b) {
+  const float we = 1.0f - wd;
+  r = wd * (f0p.r + f0m.r) + we * (ap * ep.r + ep.t * f1p.r + am * em.r + em.t * f1m.r);
+  g = wd * (f0p.g + f0m.g) + we * (ap * ep.g + ep.t * f1p.g + am * em.g + em.t * f1m.g);
+  b = wd * (f0p.b + f0m.b) + we * (ap * ep.b + ep.t * f1p.b + am * em.b + em.t * f1m.b);
 }
 
 template <class S>
@@ -430,14 +432,14 @@ template <class S>
 }
 
 template <class S>
-[[gnu::noinline]] void down_even_rows(int lo, int hi, int h, float ap, float am,
+[[gnu::noinline]] void down_even_rows(int lo, int hi, int h, float ap, float am, float wd,
                                       const S* __restrict up, const S* __restrict um,
                                       const S* __restrict r0p, int d0p, const S* __restrict r0m,
                                       int d0m, const S* __restrict r1p, int dyp,
                                       const S* __restrict r1m, int dym, S* __restrict o) {
   for (int y = lo; y < hi; ++y) {
     float r, g, b;
-    even_cone(ap, am, get_t(up, y, h), get_t(um, y, h), get_r(r0p, y + d0p, h),
+    even_cone(ap, am, wd, get_t(up, y, h), get_t(um, y, h), get_r(r0p, y + d0p, h),
               get_r(r0m, y + d0m, h), get_r(r1p, y + dyp, h), get_r(r1m, y + dym, h), r, g, b);
     put_r(o, y, h, r, g, b);
   }
@@ -502,9 +504,9 @@ void down_odd_rows<Half>(int lo, int hi, int h, float ap, float am, const Half* 
 }
 
 template <>
-void down_even_rows<Half>(int lo, int hi, int h, float ap, float am, const Half* up, const Half* um,
-                          const Half* r0p, int d0p, const Half* r0m, int d0m, const Half* r1p,
-                          int dyp, const Half* r1m, int dym, Half* o) {
+void down_even_rows<Half>(int lo, int hi, int h, float ap, float am, float wd, const Half* up,
+                          const Half* um, const Half* r0p, int d0p, const Half* r0m, int d0m,
+                          const Half* r1p, int dyp, const Half* r1m, int dym, Half* o) {
   half_rows<6>(lo, hi, h,
                {{{up, kTChannels, 0},
                  {um, kTChannels, 0},
@@ -513,8 +515,8 @@ void down_even_rows<Half>(int lo, int hi, int h, float ap, float am, const Half*
                  {r1p, kRChannels, dyp},
                  {r1m, kRChannels, dym}}},
                o, kRChannels, [&](int n, const auto& f, float* out) {
-                 down_even_rows<float>(0, n, kBlock, ap, am, f[0], f[1], f[2], 0, f[3], 0, f[4], 0,
-                                       f[5], 0, out);
+                 down_even_rows<float>(0, n, kBlock, ap, am, wd, f[0], f[1], f[2], 0, f[3], 0, f[4],
+                                       0, f[5], 0, out);
                });
 }
 
@@ -597,10 +599,11 @@ void fill_column(S* col, int h, int lo, int hi, const std::array<float, C>& v) {
   for (std::size_t c = 0; c < C; ++c) std::fill(col + c * h + lo, col + c * h + hi, S(v[c]));
 }
 
-// R_n from R_{n+1} (null at n + 1 = N: the environment), T_n and T_{n+1}.
+// R_n from R_{n+1} (null at n + 1 = N: the environment), T_n and T_{n+1}; wd: the weight of
+// the cones at an even column's own probe (HrcOptions::even_weight).
 template <class S>
 void merge_down(const View& view, int n, const S* tn, const S* tn1, const S* rn1, S* rn,
-                const Rgb& env) {
+                const Rgb& env, float wd) {
   const int P = view.probes(n), P1 = view.probes(n + 1), h = view.h;
   auto rcol = [&](int j, int x) -> const S* {
     return rn1 && x < P1 ? rn1 + (std::size_t(j) * P1 + x) * kRChannels * h : nullptr;
@@ -645,7 +648,7 @@ void merge_down(const View& view, int n, const S* tn, const S* tn1, const S* rn1
             {rcol(2 * a + 1, xq), vy(n + 1, 2 * a + 2), outp},
             {rcol(2 * a, xq), vy(n + 1, 2 * a), outm}}},
           [&](int lo, int hi, const auto& c, const auto& d) {
-            down_even_rows(lo, hi, h, ap, am, up, um, c[0], d[0], c[1], d[1], c[2], d[2], c[3],
+            down_even_rows(lo, hi, h, ap, am, wd, up, um, c[0], d[0], c[1], d[1], c[2], d[2], c[3],
                            d[3], o);
           },
           prepare);
@@ -851,7 +854,7 @@ void solve_with(const Medium& m, const Rgb& env, const HrcOptions& o, Buffers<S>
     const int fan_level = wall_fan_level(view, o.wall_fan);
     for (int n = view.levels - 1; n >= 0; --n) {
       S* out = upper == r[0] ? r[1] : r[0];
-      merge_down(view, n, t[n], t[n + 1], upper, out, env);
+      merge_down(view, n, t[n], t[n + 1], upper, out, env, o.even_weight);
       upper = out;
       if (n != fan_level || fan.cells.empty()) continue;
       ms_down += watch.ms();

@@ -11,6 +11,7 @@ layout(std430, binding = 3) readonly buffer Angles { float angle[]; };  // level
 layout(std430, binding = 4) writeonly buffer Rn { stored_t rn[]; };
 layout(push_constant) uniform Push {
   int h; int n; int P; int P1; int rows; int top; float er; float eg; float eb;
+  float wd;  // HrcOptions::even_weight
 } p;
 
 vec4 get_t(int k, int x, int y) {  // T_n, always inside
@@ -48,7 +49,7 @@ void main() {
     vec3 f0p = get_r(2 * a + 1, xp, y, ap), f0m = get_r(2 * a, xp, y, am);
     vec3 f1p = get_r(2 * a + 1, xq, y + vy(p.n + 1, 2 * a + 2), ap);
     vec3 f1m = get_r(2 * a, xq, y + vy(p.n + 1, 2 * a), am);
-    o = 0.5 * (f0p + ap * ep.rgb + ep.a * f1p + f0m + am * em.rgb + em.a * f1m);
+    o = p.wd * (f0p + f0m) + (1.0 - p.wd) * (ap * ep.rgb + ep.a * f1p + am * em.rgb + em.a * f1m);
   }
   uint c = uint(row * 3) * uint(p.h) + uint(y);
   rn[c] = stored_t(o.r);

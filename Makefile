@@ -3,6 +3,8 @@ BUILD    ?= build
 WERROR   ?= OFF
 JOBS     ?= $(shell nproc)
 PREFIX   ?= /usr/local
+# cmake's make runs as a top-level make, so it does not print "Entering directory" lines.
+CMAKE_BUILD = env -u MAKELEVEL -u MAKEFLAGS -u MFLAGS cmake --build
 CMAKE_FLAGS = -DCMAKE_BUILD_TYPE=Release -DPENUMBRA_WERROR=$(WERROR) -DCMAKE_INSTALL_PREFIX=$(PREFIX)
 # The sanitizer build (docs/RELIABILITY.md): ASan + UBSan, no benchmarks (no test runs them).
 ASAN_BUILD ?= build-asan
@@ -22,23 +24,22 @@ configure: deps
 	@cmake -S . -B $(BUILD) $(CMAKE_FLAGS) > $(BUILD).configure.log 2>&1 || (cat $(BUILD).configure.log; exit 1)
 
 build: configure
-	@cmake --build $(BUILD) -j $(JOBS)
+	@$(CMAKE_BUILD) $(BUILD) -j $(JOBS)
 
 demo:
 	@BUILD=$(BUILD) JOBS=$(JOBS) WERROR=$(WERROR) bash scripts/demo.sh
 
 test: build
-	@cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
+	@bash scripts/ctest.sh $(BUILD) $(JOBS)
 
 build-sanitize: deps
 	@cmake -S . -B $(ASAN_BUILD) $(ASAN_FLAGS) > $(ASAN_BUILD).configure.log 2>&1 || (cat $(ASAN_BUILD).configure.log; exit 1)
-	@cmake --build $(ASAN_BUILD) -j $(JOBS)
+	@$(CMAKE_BUILD) $(ASAN_BUILD) -j $(JOBS)
 
 # Every test under ASan + UBSan; ctest passes LSAN_OPTIONS (tests/lsan.supp) to each test.
 # UBSan aborts on any report (-fno-sanitize-recover); these options add the stack.
 test-sanitize: build-sanitize
-	@cd $(ASAN_BUILD) && UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
-	  ctest --output-on-failure -j $(JOBS)
+	@UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 bash scripts/ctest.sh $(ASAN_BUILD) $(JOBS)
 
 # Each libFuzzer target for FUZZ_SECONDS (scripts/fuzz.sh; clang, build dir build-fuzz).
 fuzz: deps

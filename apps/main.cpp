@@ -2,8 +2,11 @@
 // own file (render_cmd, compare_cmd, quality_cmd, paint_cmd).
 // Exit codes: 0 success, 1 bad input or runtime failure, 2 usage error.
 #include <CLI/CLI.hpp>
+#include <algorithm>
+#include <iostream>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "compare_cmd.hpp"
 #include "paint_cmd.hpp"
@@ -13,7 +16,64 @@
 
 namespace {
 constexpr int kUsage = 2;
+
+std::size_t edit_distance(const std::string& a, const std::string& b) {
+  std::vector<std::size_t> row(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    std::size_t diagonal = row[0];
+    row[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t up = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] != b[j - 1])});
+      diagonal = up;
+    }
+  }
+  return row[b.size()];
 }
+
+// The name closest to `word` within 2 edits (1 for words of 4 letters or fewer), or "".
+std::string closest(const std::string& word, const std::vector<std::string>& names) {
+  std::string best;
+  std::size_t best_d = word.size() <= 4 ? 2 : 3;
+  for (const std::string& n : names)
+    if (const std::size_t d = edit_distance(word, n); d < best_d) best = n, best_d = d;
+  return best;
+}
+
+// After a usage error: "did you mean" for a mistyped subcommand or option of the subcommand.
+void suggest(const CLI::App& app, int argc, char** argv) {
+  std::vector<std::string> commands;
+  const CLI::App* sub = nullptr;
+  for (const CLI::App* s : app.get_subcommands([](const CLI::App*) { return true; }))
+    commands.push_back(s->get_name());
+  int i = 1;
+  for (; i < argc; ++i) {
+    const std::string word = argv[i];
+    if (word.starts_with("-")) continue;
+    for (const CLI::App* s : app.get_subcommands([](const CLI::App*) { return true; }))
+      if (s->get_name() == word) sub = s;
+    if (!sub) {
+      if (const std::string c = closest(word, commands); !c.empty())
+        std::cerr << "Did you mean 'penumbra " << c << "'?\n";
+      return;
+    }
+    break;
+  }
+  if (!sub) return;
+  std::vector<std::string> names;
+  for (const CLI::Option* opt : sub->get_options())
+    for (const std::string& n : opt->get_lnames()) names.push_back("--" + n);
+  for (++i; i < argc; ++i) {
+    std::string word = argv[i];
+    if (!word.starts_with("--")) continue;
+    word = word.substr(0, word.find('='));
+    if (std::find(names.begin(), names.end(), word) != names.end()) continue;
+    if (const std::string c = closest(word, names); !c.empty())
+      std::cerr << "Did you mean " << c << " (for " << word << ")?\n";
+  }
+}
+}  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"Penumbra: global illumination with radiance cascades."};
@@ -31,6 +91,7 @@ int main(int argc, char** argv) {
     return app.exit(e);  // --help, --version
   } catch (const CLI::ParseError& e) {
     app.exit(e);
+    suggest(app, argc, argv);
     return kUsage;
   }
   if (render->parsed()) return run_render(render->args);

@@ -30,13 +30,6 @@ constexpr std::string_view kCommon[] = {"scene",     "--output",     "--method",
                                         "--threads", "--max-memory", "--exposure", "--json",
                                         "--quiet",   "--device"};
 
-template <std::size_t N>
-bool listed(const std::string& name, const std::string_view (&list)[N]) {
-  for (std::string_view n : list)
-    if (name == n) return true;
-  return false;
-}
-
 }  // namespace
 
 int render_scene_3d(const RenderArgs& a) {

@@ -114,6 +114,35 @@ const CLI::Option* given_3d_option(const RenderArgs& a) {
   return nullptr;
 }
 
+// An option of another 2D method given: refused, naming the methods that read it (as
+// render3d_cmd.cpp refuses in 3D), rather than ignored.
+int check_method_options(const RenderArgs& a, penumbra::flatland::Method method) {
+  if (!a.app) return 0;
+  using penumbra::flatland::Method;
+  for (const CLI::Option* opt : a.app->get_options()) {
+    if (opt->count() == 0) continue;
+    const std::string name = opt->get_name();
+    std::string readers;
+    bool read = false;
+    for (const penumbra::flatland::MethodInfo& m : penumbra::flatland::methods()) {
+      const bool reads = (m.method == Method::pt && listed(name, kPt2dOptions)) ||
+                         (m.method == Method::rc && listed(name, kRc2dOptions)) ||
+                         (m.method == Method::hrc && listed(name, kHrc2dOptions)) ||
+                         (m.skips_empty_space && listed(name, kTraversalOptions));
+      if (!reads) continue;
+      readers += std::string(readers.empty() ? "--method " : " or ") + m.name;
+      read = read || m.method == method;
+    }
+    if (!readers.empty() && !read) {
+      std::cerr << "penumbra render: " << name << " applies to " << readers << " only, not "
+                << penumbra::flatland::to_string(method)
+                << (a.method.empty() ? " (the default)" : "") << "\n";
+      return kUsage;
+    }
+  }
+  return 0;
+}
+
 int render_scene(const RenderArgs& a) {
   if (!a.scene.empty()) {
     penumbra::Expected<int> dims = penumbra::spaceland::scene_dimensions(a.scene);
@@ -146,6 +175,7 @@ int render_scene(const RenderArgs& a) {
     }
   }
   if (int code = check_render_args(a, options.max_memory); code != 0) return code;
+  if (int code = check_method_options(a, options.method); code != 0) return code;
   finish_render_options(options, a.flags);
 
   penumbra::Stopwatch load_watch;

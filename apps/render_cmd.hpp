@@ -67,6 +67,25 @@ inline constexpr std::string_view kGridSharedOptions[] = {
 // The 3D path tracer's (read into `options.pt`, as 2D's path tracer reads them).
 inline constexpr std::string_view kPtOptions[] = {"--spp", "--time", "--seed"};
 
+// The 2D methods' own options: render_cmd.cpp refuses one given with another 2D method.
+inline constexpr std::string_view kPt2dOptions[] = {"--spp", "--time", "--nee", "--sampler",
+                                                    "--seed"};
+inline constexpr std::string_view kRc2dOptions[] = {
+    "--probe-spacing", "--directions", "--branching", "--interval",     "--cascades",
+    "--fix",           "--preaverage", "--extend",    "--extend-length"};
+inline constexpr std::string_view kHrc2dOptions[] = {
+    "--storage",         "--no-cross-blur", "--blur-near-segment", "--corners",
+    "--no-near-segment", "--wall-fan",      "--near-fan",          "--even-weight"};
+// Read by the 2D methods that jump over empty space (MethodEntry::skips_empty_space).
+inline constexpr std::string_view kTraversalOptions[] = {"--no-distance-field", "--no-blocks"};
+
+template <std::size_t N>
+bool listed(const std::string& name, const std::string_view (&list)[N]) {
+  for (std::string_view n : list)
+    if (name == n) return true;
+  return false;
+}
+
 // What both worlds check before loading a scene: output types and writability, --max-memory
 // (parsed into `max_memory`) and --exposure. Prints the message; returns 0 or the exit code.
 int check_render_args(const RenderArgs& args, std::uint64_t& max_memory);

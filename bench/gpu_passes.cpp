@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -20,6 +21,7 @@
 #include "core/timer.hpp"
 #include "flatland/hrc/hrc.hpp"
 #include "penumbra/flatland/render.hpp"
+#include "tool_cli.hpp"
 
 namespace {
 
@@ -53,7 +55,8 @@ std::map<std::string, double> hrc_traffic(int w, int h, double value) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"Per-pass times of RC and HRC on the GPU (or the CPU), warm, median of runs"};
+  CLI::App app{"Per-pass times of RC and HRC on the GPU (or the CPU), warm, median of runs",
+               "penumbra_gpu_passes"};
   std::vector<int> sizes = {512, 1024, 2048};
   int runs = 5;
   std::string method = "both", device = "gpu", storage = "f32";
@@ -65,7 +68,7 @@ int main(int argc, char** argv) {
   app.add_option("--device", device, "gpu or cpu")->check(CLI::IsMember({"gpu", "cpu"}));
   app.add_option("--storage", storage, "hrc: f32 or f16 (the paper's)")
       ->check(CLI::IsMember({"f32", "f16"}));
-  CLI11_PARSE(app, argc, argv);
+  if (const std::optional<int> stop = penumbra::tool::parse(app, argc, argv)) return *stop;
 
   std::vector<Method> methods;
   if (method != "hrc") methods.push_back(Method::rc);

@@ -10,6 +10,7 @@
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cstdio>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -18,6 +19,7 @@
 #include "penumbra/spaceland/scene.hpp"
 #include "spaceland/camera.hpp"
 #include "spaceland/grid/grid.hpp"
+#include "tool_cli.hpp"
 
 namespace {
 
@@ -54,7 +56,8 @@ Timed time_solve(const grid::Voxels& v, const Background& bg, const GridOptions&
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"The probe grid's time and memory per cascade against the grid's size"};
+  CLI::App app{"The probe grid's time and memory per cascade against the grid's size",
+               "penumbra_grid_scaling"};
   std::string path = std::string(PENUMBRA_SCENES_DIR) + "/3d/cornell.json";
   std::vector<int> sizes = {32, 64, 128, 256};
   int runs = 3;
@@ -64,7 +67,7 @@ int main(int argc, char** argv) {
   app.add_option("--runs", runs, "Solves per configuration (median)")->check(CLI::Range(1, 100));
   app.add_option("--extend-length", extend_length, "Traced length with extension, voxels")
       ->check(CLI::Range(1.0f, 1e6f));
-  CLI11_PARSE(app, argc, argv);
+  if (const std::optional<int> stop = penumbra::tool::parse(app, argc, argv)) return *stop;
 
   Expected<Scene> scene = load_scene(path);
   if (!scene) {

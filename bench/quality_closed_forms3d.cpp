@@ -23,13 +23,14 @@
 #include "penumbra/io.hpp"
 #include "penumbra/spaceland/io.hpp"
 #include "penumbra/spaceland/render.hpp"
+#include "tool_cli.hpp"
 
 namespace {
 
 using namespace penumbra;
 using namespace penumbra::spaceland;
 
-constexpr int kUsage = 2, kCannotWrite = 1;
+using penumbra::tool::kCannotWrite;
 
 // A scene, how many bounces it is rendered with, and its closed form: the exact radiance towards
 // the camera given the pixel's first hit (world position, object index), or nothing where the
@@ -625,7 +626,8 @@ std::string slug(const std::string& name) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"The 3D path tracer against closed forms: errors at 1 to 1024 samples per pixel"};
+  CLI::App app{"The 3D path tracer against closed forms: errors at 1 to 1024 samples per pixel",
+               "penumbra_quality3d"};
   std::string dir;
   bool quick = false;
   app.add_option("folder", dir, "Where the CSV, the plot and the pictures go (must exist)")
@@ -636,14 +638,7 @@ int main(int argc, char** argv) {
                "Only SPWI's table (spwi3d.md, spwi3d.csv), not the path tracer's curves");
   app.add_flag("--grid-only", grid_only,
                "Only the probe grid's table (grid3d.md, grid3d.csv), not the path tracer's");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::Success& e) {
-    return app.exit(e);
-  } catch (const CLI::ParseError& e) {
-    app.exit(e);
-    return kUsage;
-  }
+  if (const std::optional<int> stop = penumbra::tool::parse(app, argc, argv)) return *stop;
   for (const char* f : {"/quality3d.csv", "/quality3d.png"})
     if (Status st = check_output(dir + f); !st) {
       std::fprintf(stderr, "%s\n", st.error().message.c_str());

@@ -6,6 +6,7 @@
 //   build/bin/penumbra_quality docs/images > table.md
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -14,6 +15,7 @@
 #include "flatland/trace.hpp"
 #include "io/image_io.hpp"
 #include "penumbra/penumbra.hpp"
+#include "tool_cli.hpp"
 
 namespace {
 
@@ -62,7 +64,7 @@ struct Row {
 };
 
 // Signed relative error as a picture: blue below, red above, white at 0, saturating at +-10%.
-void write_error_png(const std::string& path, const Disk& d, const ImageRgb& f) {
+Status write_error_png(const std::string& path, const Disk& d, const ImageRgb& f) {
   std::vector<unsigned char> px(std::size_t(d.n) * d.n * 3, 40);
   for (int y = 0; y < d.n; ++y)
     for (int x = 0; x < d.n; ++x) {
@@ -74,18 +76,18 @@ void write_error_png(const std::string& path, const Disk& d, const ImageRgb& f) 
       p[1] = (unsigned char)(255 * w);
       p[2] = (unsigned char)(255 * (e < 0 ? 1 : w));
     }
-  if (Status st = io::write_png8(path, d.n, d.n, px); !st)
-    std::fprintf(stderr, "%s\n", st.error().message.c_str());
+  return io::write_png8(path, d.n, d.n, px);
 }
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  const std::string dir = argc > 1 ? argv[1] : ".";
+static int run(const std::string& program, const std::string& dir) {
   Disk d;
   SceneDesc desc;
   desc.width = desc.height = d.n;
-  desc.shapes.push_back({Circle{{d.cx, d.cy}, d.r}, Material{{d.L, d.L, d.L}, 1, {}}});
+  desc.shapes.resize(1);  // (a braced Shape here trips GCC 12's -Wmaybe-uninitialized)
+  desc.shapes[0].geometry = Circle{{d.cx, d.cy}, d.r};
+  desc.shapes[0].material = Material{{d.L, d.L, d.L}, 1, {}};
   const Scene scene = *build_scene(desc);
   const std::vector<double> ref = grid_reference(d, scene);
 
@@ -155,9 +157,33 @@ int main(int argc, char** argv) {
     std::fflush(stdout);
     if (row.name == "t0 4, fix bilinear" || row.name == "t0 4, fix none") {
       const std::string tag = row.name == "t0 4, fix bilinear" ? "bilinear" : "vanilla";
-      write_error_png(dir + "/disk_error_" + tag + ".png", d, r->fluence);
-      write_image(dir + "/disk_" + tag + ".png", r->fluence, scene, {-1});
+      Status st = write_error_png(dir + "/disk_error_" + tag + ".png", d, r->fluence);
+      if (st) st = write_image(dir + "/disk_" + tag + ".png", r->fluence, scene, {-1});
+      if (!st) {
+        std::fprintf(stderr, "%s: %s\n", program.c_str(), st.error().message.c_str());
+        return tool::kCannotWrite;
+      }
     }
   }
   return 0;
+}
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "RC and the path tracer against the closed form of a disk light: a markdown table "
+      "on stdout, pictures into the folder (about 35 s)",
+      "penumbra_quality"};
+  std::string dir = ".";
+  app.add_option("folder", dir, "Where the pictures go (made if missing, in a folder that exists)")
+      ->capture_default_str();
+  if (const std::optional<int> stop = tool::parse(app, argc, argv)) return *stop;
+  if (!tool::output_folder(app.get_name(), dir)) return tool::kCannotWrite;
+  for (const char* tag : {"bilinear", "vanilla"})
+    for (const std::string& f :
+         {dir + "/disk_error_" + tag + ".png", dir + "/disk_" + tag + ".png"})
+      if (Status st = check_output(f); !st) {
+        std::fprintf(stderr, "%s: %s\n", app.get_name().c_str(), st.error().message.c_str());
+        return tool::kCannotWrite;
+      }
+  return run(app.get_name(), dir);
 }

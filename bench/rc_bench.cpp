@@ -71,5 +71,3 @@ void BM_RcVariants512(benchmark::State& state) {
 BENCHMARK(BM_RcVariants512)->DenseRange(0, 3)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
-
-BENCHMARK_MAIN();

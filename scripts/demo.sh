@@ -18,7 +18,10 @@ stage() {  # stage NAME COMMAND...
 
 stage "install dependencies" bash scripts/install-deps.sh
 stage "configure (Release)" bash -c "cmake -S . -B '$BUILD' -DCMAKE_BUILD_TYPE=Release -DPENUMBRA_WERROR=${WERROR:-OFF} > '$BUILD.configure.log' 2>&1 || { cat '$BUILD.configure.log'; exit 1; }"
-stage "build" bash -c "cmake --build '$BUILD' -j '$JOBS' --target penumbra_cli > '$BUILD.build.log' 2>&1 || { cat '$BUILD.build.log'; exit 1; }"
+# The build's own percentage lines as it goes (a couple of minutes from scratch), the rest in the
+# log, shown when the build fails. cmake's make runs as a top-level make (no directory lines).
+echo "demo: building penumbra (the whole log: $BUILD.build.log)"
+stage "build" bash -c "set -o pipefail; env -u MAKELEVEL -u MAKEFLAGS -u MFLAGS cmake --build '$BUILD' -j '$JOBS' --target penumbra_cli 2>&1 | tee '$BUILD.build.log' | { grep --line-buffered -E '^\[ *[0-9]+%\]' || true; } || { tail -n 40 '$BUILD.build.log'; exit 1; }"
 mkdir -p out
 echo "demo: rendering the built-in scene with radiance cascades:"
 stage "render" "$BUILD/bin/penumbra" render -o out/demo.png -o out/demo.exr

@@ -132,11 +132,19 @@ struct CliResult {
   std::string out, err;
 };
 
-// Runs the command line (PENUMBRA_CLI) with `args`, each quoted, capturing stdout and stderr in
-// files under `dir` and the exit code (124 when it ran for more than 5 minutes).
-inline CliResult run_cli(const std::vector<std::string>& args, const std::filesystem::path& dir) {
+// Runs `program` with `args`, each quoted, capturing stdout and stderr in files under `dir` and
+// the exit code (124 when it ran for more than 5 minutes); with `in_dir`, from inside `dir`.
+inline CliResult run_program(const std::string& program, const std::vector<std::string>& args,
+                             const std::filesystem::path& dir, bool in_dir = false) {
+  std::string cmd;
+  if (in_dir) {
+    cmd += "cd ";
+    cmd += quote(dir.string());
+    cmd += " && ";
+  }
   // A hang fails the test after 5 minutes (status 124) instead of holding ctest for its limit.
-  std::string cmd = "timeout -k 10 300 " + quote(PENUMBRA_CLI);
+  cmd += "timeout -k 10 300 ";
+  cmd += quote(program);
   // Appended piece by piece: GCC 12 warns falsely (-Wrestrict) on "literal" + std::string&&.
   for (const std::string& a : args) {
     cmd += ' ';
@@ -154,6 +162,11 @@ inline CliResult run_cli(const std::vector<std::string>& args, const std::filesy
   r.out = slurp(o);
   r.err = slurp(e);
   return r;
+}
+
+// The command line (PENUMBRA_CLI), as run_program.
+inline CliResult run_cli(const std::vector<std::string>& args, const std::filesystem::path& dir) {
+  return run_program(PENUMBRA_CLI, args, dir);
 }
 
 }  // namespace penumbra::testing

@@ -19,6 +19,7 @@
 #include "io/image_io.hpp"
 #include "penumbra/flatland/scene.hpp"
 #include "penumbra/io.hpp"
+#include "tool_cli.hpp"
 
 namespace penumbra::flatland {
 namespace {
@@ -374,7 +375,7 @@ int run(const std::filesystem::path& dir) {
   scene(painted_scene);
 
   std::error_code ec;
-  std::filesystem::create_directories(dir / "layers", ec);
+  std::filesystem::create_directory(dir / "layers", ec);
   // Pictures, then scene files, each set all or nothing: a scene never names a missing layer.
   Status s = write_pictures(pictures);
   if (s) s = io::write_text_files(texts);
@@ -391,11 +392,13 @@ int run(const std::filesystem::path& dir) {
 }  // namespace penumbra::flatland
 
 int main(int argc, char** argv) {
-  if (argc != 2) {
-    std::fprintf(stderr,
-                 "usage: %s DIR    (writes the generated example scenes, e.g. into scenes)\n",
-                 argv[0]);
-    return 2;
-  }
-  return penumbra::flatland::run(argv[1]);
+  CLI::App app{"Writes the generated example scenes and their image layers (scenes/README.md)",
+               "penumbra_make_scenes"};
+  std::string dir;
+  app.add_option("folder", dir,
+                 "Where they go, e.g. scenes (made if missing, in a folder that exists)")
+      ->required();
+  if (const std::optional<int> stop = penumbra::tool::parse(app, argc, argv)) return *stop;
+  if (!penumbra::tool::output_folder(app.get_name(), dir)) return penumbra::tool::kCannotWrite;
+  return penumbra::flatland::run(dir);
 }

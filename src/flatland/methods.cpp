@@ -173,7 +173,7 @@ std::span<const MethodEntry> method_table() {
 std::vector<MethodInfo> methods() {
   std::vector<MethodInfo> list;
   for (const MethodEntry& m : kMethods)
-    list.push_back({m.method, m.name, m.summary, m.gpu != nullptr});
+    list.push_back({m.method, m.name, m.summary, m.gpu != nullptr, m.skips_empty_space});
   return list;
 }
 

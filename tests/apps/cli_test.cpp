@@ -188,11 +188,13 @@ TEST_F(Cli, HolographicCascadesReportStagesAndParameters) {
   EXPECT_FALSE(jd.at("stages").contains("cross blur"));
   EXPECT_EQ(jd.at("parameters").at("wall_fan"), 3);
   EXPECT_EQ(jd.at("parameters").at("near_fan"), 2);
+  EXPECT_FLOAT_EQ(jd.at("parameters").at("even_weight").get<float>(), 0.575f);
   EXPECT_TRUE(jd.at("stages").contains("fan"));
   const Result w =
       render_ok({"--json", "--method", "hrc", "--corners", "walls", "--blur-near-segment",
-                 "--wall-fan", "0", "--near-fan", "5", "-o", out("w.pfm")});
+                 "--wall-fan", "0", "--near-fan", "5", "--even-weight", "0.5", "-o", out("w.pfm")});
   const nlohmann::json jw = nlohmann::json::parse(w.out);
+  EXPECT_FLOAT_EQ(jw.at("parameters").at("even_weight").get<float>(), 0.5f);
   EXPECT_EQ(jw.at("parameters").at("corners"), "walls");
   EXPECT_EQ(jw.at("parameters").at("wall_fan"), 0);
   EXPECT_EQ(jw.at("parameters").at("near_fan"), 5);
@@ -207,6 +209,8 @@ TEST_F(Cli, HolographicCascadesReportStagesAndParameters) {
                  2);
   expect_failure(run({"render", scene_, "--method", "hrc", "--near-fan", "17", "-o", out("x.pfm")}),
                  2);
+  expect_failure(
+      run({"render", scene_, "--method", "hrc", "--even-weight", "1.5", "-o", out("x.pfm")}), 2);
 }
 
 // Half precision converts with F16C where the CPU has it and through tables otherwise
@@ -308,6 +312,52 @@ TEST_F(Cli, UnknownOptionIsAUsageError) {
   expect_failure(run({"render", scene_, "-o", out("x.png"), "--bogus"}), 2);
 }
 
+// An option another 2D method reads was silently ignored (`--method hrc --fix none`); it is
+// refused, naming the methods that read it, and nothing is written.
+TEST_F(Cli, OptionsOfAnotherMethodAreRefused) {
+  struct Case {
+    std::vector<std::string> args;
+    const char* message;
+  };
+  for (const Case& c : {
+           Case{{"--method", "hrc", "--fix", "none"}, "--fix applies to --method rc only, not hrc"},
+           Case{{"--method", "hrc", "--extend"}, "--extend applies to --method rc only, not hrc"},
+           Case{{"--spp", "10"}, "--spp applies to --method pt only, not rc (the default)"},
+           Case{{"--method", "pt", "--interval", "2"}, "--interval applies to --method rc only"},
+           Case{{"--method", "rc", "--near-fan", "3"}, "--near-fan applies to --method hrc only"},
+           Case{{"--method", "rc", "--even-weight", "0.5"},
+                "--even-weight applies to --method hrc"},
+           Case{{"--method", "hrc", "--no-distance-field"},
+                "--no-distance-field applies to --method rc or pt only, not hrc"},
+       }) {
+    std::vector<std::string> args = {"render", scene_, "-o", out("x.png")};
+    args.insert(args.end(), c.args.begin(), c.args.end());
+    const Result r = run(args);
+    expect_failure(r, 2);
+    EXPECT_NE(r.err.find(c.message), std::string::npos) << r.err;
+  }
+  // Each method still takes its own.
+  render_ok({"--method", "hrc", "--near-fan", "3", "--even-weight", "0.5", "-o", out("h.png")});
+  render_ok({"--method", "pt", "--spp", "2", "--no-blocks", "-o", out("p.png")});
+}
+
+// A mistyped subcommand or option is a usage error that names the closest one.
+TEST_F(Cli, MistypedNamesGetADidYouMean) {
+  Result r = run({"rendr", scene_});
+  expect_failure(r, 2);
+  EXPECT_NE(r.err.find("Did you mean 'penumbra render'?"), std::string::npos) << r.err;
+  r = run({"render", scene_, "-o", out("x.png"), "--bounce", "2"});
+  expect_failure(r, 2);
+  EXPECT_NE(r.err.find("Did you mean --bounces (for --bounce)?"), std::string::npos) << r.err;
+  r = run({"compare", scene_, scene_, "--heatmp=x.png"});
+  expect_failure(r, 2);
+  EXPECT_NE(r.err.find("Did you mean --heatmap"), std::string::npos) << r.err;
+  // Nothing close: no guess.
+  r = run({"render", scene_, "-o", out("x.png"), "--zzzzzzzz"});
+  expect_failure(r, 2);
+  EXPECT_EQ(r.err.find("Did you mean"), std::string::npos) << r.err;
+}
+
 TEST_F(Cli, MissingOutputIsAUsageError) {
   const Result r = run({"render", scene_});
   expect_failure(r, 2);
@@ -376,13 +426,16 @@ TEST_F(Cli, SceneTooBrightForFloatsIsRefusedNamingTheValue) {
   })");
   const std::string sky = write("sky.json", R"({
     "penumbra": 1, "width": 64, "height": 64, "environment": [0, 3e38, 0] })");
-  for (const char* method : {"rc", "hrc", "pt"}) {
-    Result r = run({"render", light, "--method", method, "--spp", "4", "-o", out("x.pfm")});
+  for (const std::string method : {"rc", "hrc", "pt"}) {
+    std::vector<std::string> args = {"render", light, "--method", method, "-o", out("x.pfm")};
+    if (method == "pt") args.insert(args.end(), {"--spp", "4"});
+    Result r = run(args);
     expect_failure(r, 1);
     EXPECT_NE(r.err.find("light.json: shapes[0].emission: 3e+38 is too bright to render"),
               std::string::npos)
         << r.err;
-    r = run({"render", sky, "--method", method, "--spp", "4", "-o", out("x.pfm")});
+    args[1] = sky;
+    r = run(args);
     expect_failure(r, 1);
     EXPECT_NE(r.err.find("sky.json: environment: 3e+38 is too bright"), std::string::npos) << r.err;
   }

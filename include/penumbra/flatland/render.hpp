@@ -203,6 +203,7 @@ struct MethodInfo {
   const char* name;
   const char* summary;
   bool gpu;
+  bool skips_empty_space;  // reads RenderOptions::distance_field and blocks
 };
 // Every method, in the order of the Method enum (the dispatcher's table, docs/ARCHITECTURE.md).
 std::vector<MethodInfo> methods();

@@ -45,7 +45,9 @@ std::unique_ptr<PaintCommand> add_paint_command(CLI::App& app) {
   first.method = first.device = true;
   first.methods = {Method::hrc, Method::rc, Method::pt};
   first.method_help = "Method (switchable in the window)";
-  first.device_help = "Where the solver runs: cpu, gpu (Vulkan; HRC, one bounce, f32), auto";
+  first.device_help =
+      "Where the solver runs: cpu, gpu (Vulkan: RC and HRC, every bounce and storage; the path "
+      "tracer stays on the CPU), auto";
   second.storage = second.bounces = second.threads = true;
   second.max_bounces = 8;
   second.bounces_help = "Diffuse bounces";
@@ -67,7 +69,10 @@ std::unique_ptr<PaintCommand> add_paint_command(CLI::App& app) {
       ->each([&a](const std::string&) { a.emission_scale_given = true; })
       ->capture_default_str();
   add_render_options(c, a.options, a.flags, second);
-  c->add_option("--exposure", a.exposure, "Display exposure in EV")->capture_default_str();
+  c->add_option("--exposure", a.exposure,
+                "Display exposure in EV (default: automatic, from each frame's picture; the "
+                "panel shows it)")
+      ->each([&a](const std::string&) { a.exposure_given = true; });
   c->add_option("--frames", a.frames,
                 "Solve continuously and exit after this many solver frames (measurement)")
       ->check(CLI::Range(0, 1 << 20));

@@ -28,7 +28,8 @@ struct PaintArgs {
   float emission_scale = 64;
   bool emission_scale_given = false;  // else a loaded painting keeps its own scale
   float exposure = 0;
-  int frames = 0;  // > 0: solve continuously, exit after this many solver frames
+  bool exposure_given = false;  // else each frame is exposed from its picture
+  int frames = 0;               // > 0: solve continuously, exit after this many solver frames
   bool stats = false;
   bool plain = false;  // no material overlay: the window shows what `penumbra render` writes
 };

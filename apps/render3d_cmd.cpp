@@ -152,7 +152,9 @@ int render_scene_3d(const RenderArgs& a) {
     return kFailure;
   }
   penumbra::Stopwatch write_watch;
-  if (penumbra::Status s = sl::write_images(a.outputs, result->radiance, options.aov, {a.exposure});
+  penumbra::DisplayOptions display{a.exposure};
+  if (!exposure_given(a)) display.exposure = sl::auto_exposure(result->radiance, options.aov);
+  if (penumbra::Status s = sl::write_images(a.outputs, result->radiance, options.aov, display);
       !s) {
     std::cerr << "penumbra render: " << s.error().message << "\n";
     return kFailure;
@@ -211,6 +213,8 @@ int render_scene_3d(const RenderArgs& a) {
                         {"samples", result->samples},
                         {"cancelled", result->cancelled},
                         {"parameters", parameters},
+                        {"exposure", display.exposure},
+                        {"exposure_auto", !exposure_given(a)},
                         {"outputs", a.outputs}};
     std::cout << j.dump(2) << "\n";
   } else if (!a.quiet) {
@@ -245,6 +249,9 @@ int render_scene_3d(const RenderArgs& a) {
                 double(result->memory_bytes) / (1 << 20), double(result->rays) / 1e6,
                 double(result->rays) / 1e3 / result->time_ms);
     for (const std::string& out : a.outputs) std::printf("  wrote %s\n", out.c_str());
+    if (has_png(a.outputs))
+      std::printf("  PNG exposure %+.2f EV (%s)\n", display.exposure,
+                  exposure_given(a) ? "--exposure" : "automatic; --exposure sets it");
   }
   if (result->cancelled) {
     std::fprintf(stderr,

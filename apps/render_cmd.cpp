@@ -72,6 +72,16 @@ nlohmann::json parameters_json(const penumbra::flatland::RenderOptions& o) {
 
 }  // namespace
 
+bool exposure_given(const RenderArgs& a) {
+  return a.app && a.app->get_option("--exposure")->count() > 0;
+}
+
+bool has_png(const std::vector<std::string>& outputs) {
+  for (const std::string& out : outputs)
+    if (out.size() >= 4 && (out.ends_with(".png") || out.ends_with(".PNG"))) return true;
+  return false;
+}
+
 int check_render_args(const RenderArgs& a, std::uint64_t& max_memory) {
   for (const std::string& out : a.outputs)
     if (!penumbra::is_supported_output(out)) {
@@ -235,9 +245,12 @@ int render_scene(const RenderArgs& a) {
     return kFailure;
   }
   penumbra::Stopwatch write_watch;
+  penumbra::DisplayOptions display{a.exposure, a.show_walls};
+  if (!exposure_given(a))
+    display.exposure = penumbra::flatland::auto_exposure(result->fluence, &*scene);
   // All outputs or none; files already there stay untouched if any output fails.
   if (penumbra::Status s =
-          penumbra::flatland::write_images(a.outputs, result->fluence, *scene, {a.exposure});
+          penumbra::flatland::write_images(a.outputs, result->fluence, *scene, display);
       !s) {
     std::cerr << "penumbra render: " << s.error().message << "\n";
     return kFailure;
@@ -264,6 +277,9 @@ int render_scene(const RenderArgs& a) {
                         {"samples", result->samples},
                         {"cancelled", result->cancelled},
                         {"parameters", parameters_json(result->options)},
+                        {"exposure", display.exposure},
+                        {"exposure_auto", !exposure_given(a)},
+                        {"show_walls", a.show_walls},
                         {"outputs", a.outputs}};
     std::cout << j.dump(2) << "\n";
   } else if (!a.quiet) {
@@ -297,6 +313,9 @@ int render_scene(const RenderArgs& a) {
                   double(result->gpu_memory_bytes) / (1 << 20),
                   double(result->uploaded_bytes) / (1 << 20));
     for (const std::string& out : a.outputs) std::printf("  wrote %s\n", out.c_str());
+    if (has_png(a.outputs))
+      std::printf("  PNG exposure %+.2f EV (%s)\n", display.exposure,
+                  exposure_given(a) ? "--exposure" : "automatic; --exposure sets it");
   }
   if (result->cancelled) {
     std::fprintf(stderr, "penumbra render: interrupted; wrote the image of %llu samples per cell\n",
@@ -407,7 +426,12 @@ std::unique_ptr<RenderCommand> add_render_command(CLI::App& app) {
   add_render_options(render, a.options, a.flags, all);
   render->add_option("--max-memory", a.max_memory, "Refuse work needing more working memory")
       ->capture_default_str();
-  render->add_option("--exposure", a.exposure, "PNG exposure in EV")->capture_default_str();
+  render->add_option("--exposure", a.exposure,
+                     "PNG exposure in EV (default: automatic, the log-average of the lit open "
+                     "cells or pixels to middle grey; --json reports it)");
+  render->add_flag("--show-walls,!--no-show-walls", a.show_walls,
+                   "2D PNG: walls and fog in the dark keep a dim floor of their colour, as the "
+                   "painter shows them (default on)");
   render->add_flag("--json", a.json, "Print one JSON object with timings, memory and parameters");
   render->add_flag("-q,--quiet", a.quiet, "Print nothing on success");
   return cmd;

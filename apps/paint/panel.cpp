@@ -27,7 +27,10 @@ void Painter::draw_panel() {
                 (unsigned long long)shown_.serial);
     ImGui::Text("solve %.1f ms (%.0f fps), display %.1f ms", shown_.solve_ms,
                 shown_.solve_ms > 0 ? 1000.0 / shown_.solve_ms : 0.0, shown_.display_ms);
-    for (const StageTime& s : shown_.stages) ImGui::Text("  %-22s %7.2f ms", s.name.c_str(), s.ms);
+    if (ImGui::TreeNode("stages", "%zu stages", shown_.stages.size())) {
+      for (const StageTime& s : shown_.stages) ImGui::Text("%-22s %7.2f ms", s.name.c_str(), s.ms);
+      ImGui::TreePop();
+    }
     ImGui::Text("window: %.1f ms to draw a frame", ui_ms_.empty() ? 0.0 : ui_ms_.back());
     if (!shown_.error.empty()) ImGui::TextWrapped("render refused: %s", shown_.error.c_str());
   }
@@ -52,7 +55,9 @@ void Painter::draw_panel() {
                          ImGuiSliderFlags_Logarithmic);
     ImGui::SliderFloat("radius", &brush_.radius, 0.5f, paint::kMaxBrushRadius, "%.1f cells",
                        ImGuiSliderFlags_Logarithmic);
-    ImGui::TextDisabled("keys 1-4: tool; wheel: radius; Ctrl-Z: undo; Ctrl-Q: quit");
+    ImGui::PushStyleColor(ImGuiCol_Text, ImGui::GetStyle().Colors[ImGuiCol_TextDisabled]);
+    ImGui::TextWrapped("keys 1-4: tool; wheel: radius; Ctrl-Z: undo; Ctrl-S: save; Ctrl-Q: quit");
+    ImGui::PopStyleColor();
     if (ImGui::Button("Undo") && canvas_.undo() && !recorded_.empty()) recorded_.pop_back();
     ImGui::SameLine();
     if (ImGui::Button("Clear")) {
@@ -98,8 +103,11 @@ void Painter::draw_panel() {
       bool f16 = options_.hrc.storage == Storage::f16;
       if (ImGui::Checkbox("f16 storage", &f16))
         options_.hrc.storage = f16 ? Storage::f16 : Storage::f32, changed = true;
+      // Two checkboxes a line, so that the panel fits the window with every section open.
+      ImGui::SameLine(kPanelWidth / 2);
       changed |= ImGui::Checkbox("cross blur", &options_.hrc.cross_blur);
       changed |= ImGui::Checkbox("blur near segment", &options_.hrc.blur_near);
+      ImGui::SameLine(kPanelWidth / 2);
       changed |= ImGui::Checkbox("near segment", &options_.hrc.near_segment);
       bool walls = options_.hrc.corners == Corners::walls;
       if (ImGui::Checkbox("corners: walls only", &walls))
@@ -120,8 +128,16 @@ void Painter::draw_panel() {
       changed |= ImGui::SliderInt("spp", &options_.pt.spp, 1, 256);
       changed |= ImGui::Checkbox("next event estimation", &options_.pt.nee);
     }
-    changed |= ImGui::SliderFloat("exposure (EV)", &look_.exposure, -8.0f, 8.0f, "%.1f");
+    changed |= ImGui::Checkbox("auto exposure", &look_.auto_exposure);
+    if (look_.auto_exposure) {
+      ImGui::SameLine();
+      ImGui::Text("%+.1f EV", shown_.exposure);
+      look_.exposure = shown_.exposure;  // the slider starts from it when turned off
+    } else {
+      changed |= ImGui::SliderFloat("exposure (EV)", &look_.exposure, -8.0f, 8.0f, "%.1f");
+    }
     changed |= ImGui::Checkbox("show walls and fog", &look_.materials);
+    ImGui::SameLine(kPanelWidth / 2);
     ImGui::Checkbox("solve every frame", &continuous_);
     if (changed) ++options_version_;
   }
@@ -130,7 +146,9 @@ void Painter::draw_panel() {
     ImGui::InputText("scene file", &file_);
     if (ImGui::Button("Save")) {
       Status s = canvas_.save(file_);
-      message_ = s ? "saved " + file_ : s.error().message;
+      message_ = s ? "saved " + file_ + "; as shown here: " +
+                         painter::render_command(file_, options_, look_, shown_.exposure)
+                   : s.error().message;
     }
     ImGui::SameLine();
     if (ImGui::Button("Load")) {

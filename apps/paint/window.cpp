@@ -74,6 +74,7 @@ Painter::Painter(const PaintArgs& args, paint::Canvas canvas, std::vector<paint:
   options_ = args.options;
   zoom_ = args.zoom;
   look_.exposure = args.exposure;
+  look_.auto_exposure = !args.exposure_given;
   look_.materials = !args.plain;
   environment_ = canvas_.scene().environment;
   brush_.intensity = std::min(1.0f, canvas_.emission_scale());
@@ -81,8 +82,12 @@ Painter::Painter(const PaintArgs& args, paint::Canvas canvas, std::vector<paint:
 
 float Painter::zoom() const {
   if (zoom_ > 0) return zoom_;
+  // About 800 pixels, as tall as the panel needs: whole pixels per cell where that makes at
+  // least 700 (a 256^2 canvas at 3), otherwise the fraction that makes 800 (a 512^2 canvas at
+  // 1.5625, not 512 pixels beside an 800-pixel panel).
   const int side = std::max(canvas_.width(), canvas_.height());
-  return side <= 800 ? float(std::max(1, 800 / side)) : 800.0f / float(side);
+  const int whole = 800 / side;
+  return whole * side >= 700 ? float(whole) : 800.0f / float(side);
 }
 
 void Painter::resize_window() {
@@ -122,6 +127,10 @@ void Painter::submit() {
 void Painter::upload(const Frame& f) {
   if (f.rgb.empty()) return;
   glBindTexture(GL_TEXTURE_2D, texture_);
+  // Whole pixels per cell show cells as squares; a fractional zoom would make them uneven.
+  const float z = zoom();
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER,
+                  z == std::floor(z) ? GL_NEAREST : GL_LINEAR);
   glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
   if (f.width != tex_w_ || f.height != tex_h_) {
     glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB8, f.width, f.height, 0, GL_RGB, GL_UNSIGNED_BYTE,
@@ -229,6 +238,10 @@ int Painter::write_outputs(const std::vector<unsigned char>* shot, int shot_w, i
     std::cerr << "penumbra paint: " << s.error().message << "; nothing written\n";
     return kFailure;
   }
+  if (!args_.save.empty())
+    std::cout << "penumbra paint: saved " << args_.save
+              << "; render it as the window showed it:\n  "
+              << painter::render_command(args_.save, options_, look_, shown_.exposure) << "\n";
   return 0;
 }
 

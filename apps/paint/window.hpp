@@ -18,7 +18,8 @@ struct GLFWwindow;
 namespace painter {
 
 constexpr float kPanelWidth = 340;
-constexpr float kMinHeight = 800;  // the panel scrolls when its open sections need more
+// The panel's height with its sections open as they start (it scrolls when more are open).
+constexpr float kMinHeight = 780;
 
 // The method's working memory plus the painter's copies of the canvas (the canvas, a stroke's
 // starting cells, the worker's two) and its undo steps, against the method's memory limit.

@@ -1,6 +1,7 @@
 #include "paint/worker.hpp"
 
 #include <algorithm>
+#include <sstream>
 #include <utility>
 
 #include "core/timer.hpp"
@@ -11,26 +12,37 @@ using namespace penumbra::flatland;
 
 namespace painter {
 
-namespace {
-
-// Unlit walls are black like the dark around them, so a wall painted in the dark would be
-// invisible: non-emitting walls and fog get a dim floor of their albedo's colour. Off, the
-// window shows exactly what `penumbra render` writes.
-void show_materials(const Scene& s, std::vector<unsigned char>& rgb) {
-  for (std::size_t i = 0; i < s.cells(); ++i) {
-    const float a = s.opacity[i];
-    const float* le = &s.emission[3 * i];
-    if (a <= 0 || le[0] + le[1] + le[2] > 0) continue;
-    const float k = a >= 1 ? 0.3f : 0.3f * std::min(1.0f, 5 * a);
-    for (int c = 0; c < 3; ++c) {
-      const float floor = 255 * k * (0.25f + 0.75f * s.albedo[3 * i + c]);
-      unsigned char& v = rgb[3 * i + c];
-      v = std::max(v, static_cast<unsigned char>(floor));
-    }
+std::string render_command(const std::string& file, const RenderOptions& o, const Look& look,
+                           float exposure) {
+  const RenderOptions d;  // render's defaults
+  std::ostringstream c;
+  c << "penumbra render " << file << " --method " << to_string(o.method);
+  if (o.bounces != d.bounces) c << " --bounces " << o.bounces;
+  if (o.method == Method::hrc) {
+    const HrcOptions &h = o.hrc, &hd = d.hrc;
+    if (h.storage != hd.storage) c << " --storage " << to_string(h.storage);
+    if (!h.cross_blur) c << " --no-cross-blur";
+    if (h.blur_near) c << " --blur-near-segment";
+    if (!h.near_segment) c << " --no-near-segment";
+    if (h.corners != hd.corners) c << " --corners " << to_string(h.corners);
+    if (h.wall_fan != hd.wall_fan) c << " --wall-fan " << h.wall_fan;
+    if (h.near_fan != hd.near_fan) c << " --near-fan " << h.near_fan;
+    if (h.even_weight != hd.even_weight) c << " --even-weight " << h.even_weight;
+  } else if (o.method == Method::rc) {
+    const RcOptions &r = o.rc, &rd = d.rc;
+    if (r.probe_spacing != rd.probe_spacing) c << " --probe-spacing " << r.probe_spacing;
+    if (r.directions != rd.directions) c << " --directions " << r.directions;
+    if (r.interval != rd.interval) c << " --interval " << r.interval;
+    if (r.fix != rd.fix) c << " --fix " << to_string(r.fix);
+  } else {
+    c << " --spp " << o.pt.spp;
+    if (o.pt.nee) c << " --nee";
   }
+  if (!look.auto_exposure) c << " --exposure " << exposure;
+  if (!look.materials) c << " --no-show-walls";
+  c << " -o out.png";
+  return c.str();
 }
-
-}  // namespace
 
 Worker::Worker(std::function<void()> on_frame)
     : on_frame_(std::move(on_frame)), thread_([this] { loop(); }) {}
@@ -102,8 +114,8 @@ void Worker::loop() {
         f.device = r->device;
         f.stages = std::move(r->stages);
         watch.restart();
-        f.rgb = display_picture(r->fluence, scene.get(), {look.exposure}).rgb;
-        if (look.materials) show_materials(*scene, f.rgb);
+        f.exposure = look.auto_exposure ? auto_exposure(r->fluence, scene.get()) : look.exposure;
+        f.rgb = display_picture(r->fluence, scene.get(), {f.exposure, look.materials}).rgb;
         f.display_ms = watch.ms();
       } else {
         f.error = with_flags(r.error().message);

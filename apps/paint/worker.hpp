@@ -18,9 +18,15 @@ namespace painter {
 
 // How the fluence is shown.
 struct Look {
-  float exposure = 0;     // EV
-  bool materials = true;  // walls and fog stay visible where no light reaches them
+  float exposure = 0;         // EV, when not automatic
+  bool auto_exposure = true;  // each frame's exposure from its picture (flatland::auto_exposure)
+  bool materials = true;      // walls and fog stay visible where no light reaches them
 };
+
+// The `penumbra render` command that renders the scene file `file` as the window shows it: the
+// method and its options where they differ from render's defaults, the bounces, and the look.
+std::string render_command(const std::string& file, const penumbra::flatland::RenderOptions& o,
+                           const Look& look, float exposure);
 
 // What the worker shows: the display picture of one render, and how long it took.
 struct Frame {
@@ -28,6 +34,7 @@ struct Frame {
   std::vector<unsigned char> rgb;  // 8-bit sRGB, row 0 at the top
   std::vector<penumbra::flatland::StageTime> stages;
   double solve_ms = 0, display_ms = 0;
+  float exposure = 0;  // EV the picture was shown with
   std::uint64_t scene_version = 0, options_version = 0;
   std::uint64_t serial = 0;  // counts solved frames
   std::string device;        // what rendered it

@@ -13,7 +13,15 @@ namespace penumbra {
 
 struct DisplayOptions {
   float exposure = 0;  // EV: the displayed radiance is multiplied by 2^exposure
+  // 2D: opaque cells that emit nothing, and fog, keep a dim floor of their albedo's colour, so
+  // that walls in the dark stay visible (the painter's default; `penumbra render --show-walls`).
+  bool show_walls = false;
 };
+
+// What an automatic exposure maps a picture's key value (the median of its lit open cells or
+// pixels) to, before the tone curve. 1/8 matches the exposures chosen by hand for the example
+// scenes within about 0.5 EV (docs/QUALITY.md, "Pictures").
+inline constexpr float kAutoExposureKey = 0.125f;
 
 // Writes 8-bit pictures (heatmaps, montages) as PNG files (.png names only), all or nothing:
 // every file is first written under a temporary name beside its target, and they are renamed

@@ -1,4 +1,5 @@
 // Writing 2D results: linear PFM/EXR, and the display PNG of fluence with the scene's emitters.
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -12,6 +13,25 @@
 
 namespace penumbra::flatland {
 namespace {
+
+// Unlit walls are black like the dark around them, so a wall in the dark would be invisible:
+// with DisplayOptions::show_walls, non-emitting walls and fog get a dim floor of their albedo's
+// colour (0.3 of it for a wall, less for thin fog).
+void show_walls(const Scene& s, std::vector<unsigned char>& rgb) {
+  parallel_for(s.height, [&](int y) {
+    for (std::size_t i = std::size_t(y) * s.width, end = i + s.width; i < end; ++i) {
+      const float a = s.opacity[i];
+      const float* le = &s.emission[3 * i];
+      if (a <= 0 || le[0] + le[1] + le[2] > 0) continue;
+      const float k = a >= 1 ? 0.3f : 0.3f * std::min(1.0f, 5 * a);
+      for (int c = 0; c < 3; ++c) {
+        const float floor = 255 * k * (0.25f + 0.75f * s.albedo[3 * i + c]);
+        unsigned char& v = rgb[3 * i + c];
+        v = std::max(v, static_cast<unsigned char>(floor));
+      }
+    }
+  });
+}
 
 std::vector<unsigned char> display_rgb8(const ImageRgb& fluence, const Scene* scene,
                                         const DisplayOptions& display) {
@@ -34,6 +54,7 @@ std::vector<unsigned char> display_rgb8(const ImageRgb& fluence, const Scene* sc
       }
     }
   });
+  if (scene && display.show_walls) show_walls(*scene, rgb);
   return rgb;
 }
 
@@ -66,6 +87,28 @@ Expected<io::StagedFile> stage_image(const std::string& path, const ImageRgb& fl
 }
 
 }  // namespace
+
+float auto_exposure(const ImageRgb& fluence, const Scene* scene) {
+  const std::size_t cells = std::size_t(fluence.width()) * fluence.height();
+  const bool layers =
+      scene && scene->opacity.size() == cells && scene->emission.size() == 3 * cells;
+  const float* f = fluence.data();
+  std::vector<float> lit;
+  lit.reserve(cells);
+  for (std::size_t i = 0; i < cells; ++i) {
+    if (layers) {
+      const float* le = &scene->emission[3 * i];
+      if (scene->opacity[i] >= 1 || le[0] + le[1] + le[2] > 0) continue;
+    }
+    const float m = (0.2126f * f[3 * i] + 0.7152f * f[3 * i + 1] + 0.0722f * f[3 * i + 2]) *
+                    float(1 / (2 * kPi));
+    if (m > 0 && std::isfinite(m)) lit.push_back(m);
+  }
+  if (lit.empty()) return 0;
+  const auto mid = lit.begin() + std::ptrdiff_t(lit.size() / 2);
+  std::nth_element(lit.begin(), mid, lit.end());
+  return std::log2(kAutoExposureKey / *mid);
+}
 
 ImageRgb8 display_picture(const ImageRgb& fluence, const Scene* scene,
                           const DisplayOptions& display) {

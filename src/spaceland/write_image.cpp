@@ -31,6 +31,21 @@ void finite_range(const ImageRgb& img, float& lo, float& hi) {
 
 }  // namespace
 
+float auto_exposure(const ImageRgb& image, Aov aov) {
+  if (aov != Aov::radiance && aov != Aov::emission) return 0;
+  std::vector<float> lit;
+  lit.reserve(std::size_t(image.width()) * image.height());
+  const float* p = image.data();
+  for (std::size_t i = 0; i < image.size(); i += 3) {
+    const float m = 0.2126f * p[i] + 0.7152f * p[i + 1] + 0.0722f * p[i + 2];
+    if (m > 0 && std::isfinite(m)) lit.push_back(m);
+  }
+  if (lit.empty()) return 0;
+  const auto mid = lit.begin() + std::ptrdiff_t(lit.size() / 2);
+  std::nth_element(lit.begin(), mid, lit.end());
+  return std::log2(kAutoExposureKey3d / *mid);
+}
+
 ImageRgb8 display_picture(const ImageRgb& image, Aov aov, const DisplayOptions& display) {
   ImageRgb8 pic{image.width(), image.height(), std::vector<unsigned char>(image.size())};
   const float gain = std::exp2(display.exposure);

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "penumbra/io.hpp"
+#include "penumbra/spaceland/io.hpp"
 #include "test_support.hpp"
 
 namespace {
@@ -63,6 +64,10 @@ TEST_F(Cli3d, RendersA3dSceneToEveryFormatWithAJsonReport) {
   // The sky above the horizon (top row) is what a miss sees.
   EXPECT_NEAR(exr->at(0, 0).b, 0.2f, 1e-6f);
   EXPECT_TRUE(fs::exists(out("a.png")));
+  // The PNG was exposed automatically, from the image written.
+  EXPECT_EQ(j["exposure_auto"], true);
+  EXPECT_FLOAT_EQ(j["exposure"].get<float>(),
+                  penumbra::spaceland::auto_exposure(*exr, penumbra::spaceland::Aov::radiance));
 }
 
 TEST_F(Cli3d, SpwiReportsItsDerivedIntervalAndCascades) {

@@ -13,6 +13,9 @@
 #include <thread>
 #include <vector>
 
+#include "penumbra/flatland/io.hpp"
+#include "penumbra/flatland/scene.hpp"
+#include "penumbra/io.hpp"
 #include "penumbra/version.hpp"
 #include "test_support.hpp"
 
@@ -133,6 +136,35 @@ TEST_F(Cli, JsonReportsTimingsMemoryAndParameters) {
   EXPECT_EQ(p.at("branching"), 2);
   EXPECT_GT(p.at("cascades").get<int>(), 0);  // derived: 0 on the command line means automatic
   EXPECT_TRUE(fs::exists(out("j.pfm")));
+}
+
+// PNGs are exposed automatically unless --exposure says otherwise; the report says which, and
+// the exposure is the library's meter reading of the fluence written. Walls in the dark show
+// their colour by default (--no-show-walls: as black as the fluence says).
+TEST_F(Cli, PngExposureIsAutomaticUnlessGivenAndReported) {
+  const Result a = render_ok({"--json", "-o", out("a.png"), "-o", out("a.pfm")});
+  const nlohmann::json ja = nlohmann::json::parse(a.out);
+  EXPECT_EQ(ja.at("exposure_auto"), true);
+  EXPECT_EQ(ja.at("show_walls"), true);
+  const penumbra::Expected<penumbra::ImageRgb> f = penumbra::read_rgb_image(out("a.pfm"));
+  ASSERT_TRUE(f.ok());
+  const penumbra::Expected<penumbra::flatland::SceneDesc> d =
+      penumbra::flatland::load_scene(scene_);
+  ASSERT_TRUE(d.ok());
+  const penumbra::Expected<penumbra::flatland::Scene> sc = penumbra::flatland::build_scene(*d);
+  ASSERT_TRUE(sc.ok());
+  EXPECT_FLOAT_EQ(ja.at("exposure").get<float>(), penumbra::flatland::auto_exposure(*f, &*sc));
+  EXPECT_NE(ja.at("exposure").get<float>(), 0.0f);
+  const Result b =
+      render_ok({"--json", "--exposure", "1.5", "--no-show-walls", "-o", out("b.png")});
+  const nlohmann::json jb = nlohmann::json::parse(b.out);
+  EXPECT_EQ(jb.at("exposure_auto"), false);
+  EXPECT_EQ(jb.at("exposure").get<float>(), 1.5f);
+  EXPECT_EQ(jb.at("show_walls"), false);
+  // The text report says it too.
+  const Result c = render_ok({"-o", out("c.png")});
+  EXPECT_NE(c.out.find("PNG exposure"), std::string::npos) << c.out;
+  EXPECT_NE(c.out.find("automatic"), std::string::npos) << c.out;
 }
 
 TEST_F(Cli, ThreadCountDoesNotChangeTheResult) {

@@ -6,10 +6,12 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -171,9 +173,10 @@ TEST_F(PaintWindow, BadInputIsReportedBeforeTheWindow) {
 // wall's shadow; the saved painting renders to the same picture; the recording replays it.
 TEST_F(PaintWindow, ReplayShowsLightAndShadowAndSavesWhatItShows) {
   if (!have_display()) GTEST_SKIP() << x_server().why();
-  CliResult r = paint({"--size", "128x128", "--zoom", "1", "--plain", "--replay", strokes_,
-                       "--screenshot", tmp_.file("shot.png"), "--save", tmp_.file("painting.json"),
-                       "--record", tmp_.file("recorded.json")});
+  // At a fixed exposure, for the brightness thresholds below (the printed command carries it).
+  CliResult r = paint({"--size", "128x128", "--zoom", "1", "--plain", "--exposure", "0", "--replay",
+                       strokes_, "--screenshot", tmp_.file("shot.png"), "--save",
+                       tmp_.file("painting.json"), "--record", tmp_.file("recorded.json")});
   ASSERT_EQ(r.status, 0) << r.err;
   const penumbra::io::RawImage shot = read_png("shot.png");
   ASSERT_GE(shot.width, 128 + 300);  // the canvas and the panel beside it
@@ -186,10 +189,24 @@ TEST_F(PaintWindow, ReplayShowsLightAndShadowAndSavesWhatItShows) {
   EXPECT_GT(open, 0.3f);
   EXPECT_LT(shadow, 0.3f * open) << "open " << open << " shadow " << shadow;
 
-  // `penumbra render` of the saved painting draws the same pixels as the window's canvas.
-  r = run_cli({"render", tmp_.file("painting.json"), "--method", "hrc", "-o",
-               tmp_.file("render.png"), "-q"},
-              tmp_.root());
+  // The painter prints the `penumbra render` command for the saved painting; it draws the same
+  // pixels as the window's canvas (the method, --no-show-walls for --plain, automatic exposure
+  // in both).
+  const std::string lead = "  penumbra render ";
+  const std::size_t at = r.out.find(lead);
+  ASSERT_NE(at, std::string::npos) << r.out;
+  std::istringstream words(r.out.substr(at + lead.size(), r.out.find('\n', at) - at - lead.size()));
+  std::vector<std::string> args = {"render"};
+  for (std::string w; words >> w;) args.push_back(w);
+  ASSERT_GE(args.size(), 4u);
+  EXPECT_EQ(args[1], tmp_.file("painting.json"));
+  EXPECT_EQ(args[2], "--method");
+  EXPECT_EQ(args[3], "hrc");
+  EXPECT_NE(std::find(args.begin(), args.end(), "--no-show-walls"), args.end()) << r.out;
+  ASSERT_EQ(args.back(), "out.png");
+  args.back() = tmp_.file("render.png");
+  args.push_back("-q");
+  r = run_cli(args, tmp_.root());
   ASSERT_EQ(r.status, 0) << r.err;
   const penumbra::io::RawImage rendered = read_png("render.png");
   ASSERT_EQ(rendered.width, 128);
@@ -209,13 +226,13 @@ TEST_F(PaintWindow, ReplayShowsLightAndShadowAndSavesWhatItShows) {
   EXPECT_EQ(rec->strokes[1].brush.tool, penumbra::flatland::paint::Tool::wall);
   EXPECT_EQ(rec->strokes[1].points.size(), 2u);
   EXPECT_EQ(rec->width, 128);
-  r = paint({"--size", "128x128", "--zoom", "1", "--plain", "--replay", tmp_.file("recorded.json"),
-             "--screenshot", tmp_.file("again.png")});
+  r = paint({"--size", "128x128", "--zoom", "1", "--plain", "--exposure", "0", "--replay",
+             tmp_.file("recorded.json"), "--screenshot", tmp_.file("again.png")});
   ASSERT_EQ(r.status, 0) << r.err;
   const penumbra::io::RawImage again = read_png("again.png");
   // The window shows walls dimly where no light reaches them, unless --plain.
-  r = paint({"--size", "128x128", "--zoom", "1", "--replay", strokes_, "--screenshot",
-             tmp_.file("overlay.png")});
+  r = paint({"--size", "128x128", "--zoom", "1", "--exposure", "0", "--replay", strokes_,
+             "--screenshot", tmp_.file("overlay.png")});
   ASSERT_EQ(r.status, 0) << r.err;
   const penumbra::io::RawImage overlay = read_png("overlay.png");
   EXPECT_LT(grey(shot, 70, 64), 0.05f);  // the wall, as `penumbra render` shows it
@@ -239,9 +256,9 @@ TEST_F(PaintWindow, GpuCanvasMatchesTheCpu) {
     std::vector<penumbra::io::RawImage> shots;
     for (const char* device : {"cpu", "gpu"}) {
       const std::string name = std::string(method) + "_" + device + ".png";
-      CliResult r =
-          paint({"--size", "128x128", "--zoom", "1", "--plain", "--method", method, "--device",
-                 device, "--replay", strokes_, "--screenshot", tmp_.file(name)});
+      CliResult r = paint({"--size", "128x128", "--zoom", "1", "--plain", "--exposure", "0",
+                           "--method", method, "--device", device, "--replay", strokes_,
+                           "--screenshot", tmp_.file(name)});
       ASSERT_EQ(r.status, 0) << r.err;
       shots.push_back(read_png(name));
     }
@@ -374,8 +391,9 @@ TEST_F(PaintWindow, LoadsASceneFileAndReportsFrameTimes) {
   EXPECT_NE(r.out.find("method hrc, 3 solver frames"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("merge down R"), std::string::npos) << r.out;
   const penumbra::io::RawImage shot = read_png("occluder.png");
-  r = run_cli({"render", scene, "--method", "hrc", "-o", tmp_.file("render.png"), "-q"},
-              tmp_.root());
+  r = run_cli(
+      {"render", scene, "--method", "hrc", "--no-show-walls", "-o", tmp_.file("render.png"), "-q"},
+      tmp_.root());
   ASSERT_EQ(r.status, 0) << r.err;
   const penumbra::io::RawImage rendered = read_png("render.png");
   ASSERT_GE(shot.width, rendered.width);

@@ -477,6 +477,11 @@ TEST_F(ImageIo, SrgbCurvesAtKnownPoints) {
 // x = 0.18: ACES 0.2668989, sRGB 0.5534576, 141.13 -> 141.
 // x = 1.0:  ACES 0.8037975, sRGB 0.9082305, 231.60 -> 232.
 constexpr int kByteOf018 = 141;
+
+// The display bytes of `f` (no scene) at `exposure`.
+std::vector<unsigned char> png_bytes_of(const ImageRgb& f, float exposure) {
+  return display_picture(f, nullptr, {.exposure = exposure}).rgb;
+}
 constexpr int kByteOf1 = 232;
 
 TEST_F(ImageIo, WriteImagePngShowsToneMappedMeanRadiance) {
@@ -516,6 +521,55 @@ TEST_F(ImageIo, WriteImagePngCompositesEmittersAndLitWalls) {
   EXPECT_EQ(png_bytes(p), (std::vector<int>{kByteOf1, 0, kByteOf018,                //
                                             kByteOf018, kByteOf018, kByteOf018,     //
                                             kByteOf018, kByteOf018, kByteOf018}));  // clear
+}
+
+// The automatic exposure meters the median lit open cell to kAutoExposureKey: a uniform field
+// of mean radiance m gives exactly log2(key / m); opaque and emitting cells, and cells in full
+// darkness, are not metered; the median, not the mean, so that a few bright cells do not move it.
+TEST_F(ImageIo, AutoExposureMetersTheMedianLitOpenCell) {
+  for (float m : {0.01f, 0.18f, 3.0f}) {
+    const float ev = auto_exposure(uniform(4, 3, kTwoPiF * m), nullptr);
+    EXPECT_NEAR(ev, std::log2(kAutoExposureKey / m), 1e-5f) << m;
+    // Exposed so, the picture is the key grey everywhere.
+    EXPECT_EQ(png_bytes_of(uniform(4, 3, kTwoPiF * m), ev),
+              png_bytes_of(uniform(4, 3, kTwoPiF * kAutoExposureKey), 0));
+  }
+  Scene s = empty_scene(5, 1);
+  ImageRgb f = uniform(5, 1, kTwoPiF * 0.5f);
+  f.set(0, 0, {kTwoPiF * 100, kTwoPiF * 100, kTwoPiF * 100});  // an opaque wall: not metered
+  s.opacity[0] = 1;
+  f.set(1, 0, {kTwoPiF * 200, kTwoPiF * 200, kTwoPiF * 200});  // a glowing cell: not metered
+  s.opacity[1] = 0.5f;
+  s.emission[3] = 1;
+  f.set(2, 0, {0, 0, 0});                                         // full darkness: not metered
+  f.set(3, 0, {kTwoPiF * 1000, kTwoPiF * 1000, kTwoPiF * 1000});  // one bright open cell of two
+  // The lit open cells: 1000 and 0.5; the median of two is the upper one.
+  EXPECT_NEAR(auto_exposure(f, &s), std::log2(kAutoExposureKey / 1000.0f), 1e-5f);
+  f.set(2, 0, {kTwoPiF * 0.4f, kTwoPiF * 0.4f, kTwoPiF * 0.4f});  // now 0.4, 0.5, 1000
+  EXPECT_NEAR(auto_exposure(f, &s), std::log2(kAutoExposureKey / 0.5f), 1e-5f);
+  // Nothing lit: no exposure.
+  EXPECT_EQ(auto_exposure(uniform(3, 3, 0), nullptr), 0.0f);
+}
+
+// Walls and fog in the dark keep a dim floor of their albedo's colour when asked (the painter's
+// default, `render --show-walls`); lit cells and emitters are left as they were.
+TEST_F(ImageIo, ShowWallsLiftsOnlyDarkWallsAndFog) {
+  Scene s = empty_scene(4, 1);
+  s.opacity[0] = 1;  // a dark wall, albedo 1: floor 0.3 of white
+  s.albedo[0] = s.albedo[1] = s.albedo[2] = 1;
+  s.opacity[1] = 0.1f;  // thin fog, albedo 0: 0.25 of 0.3 * 0.5
+  s.opacity[2] = 1;     // a dark emitter showing nothing: stays black
+  s.emission[6] = 0;
+  s.emission[7] = 1e-9f;
+  ImageRgb f = uniform(4, 1, 0);
+  f.set(3, 0, {kTwoPiF, kTwoPiF, kTwoPiF});  // a lit open cell
+  const ImageRgb8 plain = display_picture(f, &s, {});
+  const ImageRgb8 shown = display_picture(f, &s, {.exposure = 0, .show_walls = true});
+  EXPECT_EQ(plain.rgb[0], 0);
+  EXPECT_EQ(shown.rgb[0], static_cast<unsigned char>(255 * 0.3f));
+  EXPECT_EQ(shown.rgb[3], static_cast<unsigned char>(255 * 0.3f * 0.5f * 0.25f));
+  EXPECT_EQ(shown.rgb[6], 0);
+  for (int c = 9; c < 12; ++c) EXPECT_EQ(shown.rgb[std::size_t(c)], plain.rgb[std::size_t(c)]);
 }
 
 TEST_F(ImageIo, WriteImageLinearFormatsKeepFluence) {

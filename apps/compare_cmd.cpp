@@ -105,7 +105,8 @@ void print_table(const CompareArgs& a, const penumbra::ImageRgb& ref,
   if (std::isnan(m.psnr))
     std::printf("  %-16s n/a (the reference has no positive value)\n", "PSNR");
   else
-    std::printf("  %-16s %.6g dB\n", "PSNR", m.psnr);  // prints "inf dB" for identical images
+    std::printf("  %-16s %.6g dB (peak %.6g: the reference's 99th percentile)\n", "PSNR", m.psnr,
+                m.psnr_peak);  // prints "inf dB" for identical images
   std::printf("  %-16s %+.6g (test - reference)\n", "bias", m.bias);
   std::printf("  %-16s %.6g\n", "reference mean", m.reference_mean);
   if (!a.heatmap.empty()) std::printf("  wrote %s\n", a.heatmap.c_str());
@@ -124,6 +125,8 @@ int compare(const CompareArgs& a) {
                                  std::filesystem::path(a.montage).lexically_normal())
     return fail(kUsage, a.heatmap + ": --heatmap and --montage name the same file");
   if (!std::isfinite(a.exposure)) return fail(kUsage, "--exposure: expected a finite number of EV");
+  if (!(a.heatmap_scale >= 0) || !std::isfinite(a.heatmap_scale))
+    return fail(kUsage, "--heatmap-scale: expected a finite number >= 0 (0: automatic)");
   // Refuse unwritable outputs before reading anything.
   for (const std::string& out : outputs)
     if (penumbra::Status s = penumbra::check_output(out); !s)
@@ -191,7 +194,8 @@ int compare(const CompareArgs& a) {
 
   std::vector<std::pair<std::string, penumbra::ImageRgb8>> pictures;
   if (!a.heatmap.empty()) {
-    penumbra::Expected<penumbra::ImageRgb8> p = penumbra::error_heatmap(*test, *ref, counted);
+    penumbra::Expected<penumbra::ImageRgb8> p =
+        penumbra::error_heatmap(*test, *ref, counted, {a.heatmap_scale});
     if (!p) return fail(kFailure, a.heatmap + ": " + p.error().message);
     pictures.emplace_back(a.heatmap, std::move(*p));
   }
@@ -199,9 +203,13 @@ int compare(const CompareArgs& a) {
     penumbra::flatland::MontageOptions o;
     o.test_label = "test: " + file_name(a.test);
     o.reference_label = "reference: " + file_name(a.reference);
-    o.display.exposure = a.exposure;
     o.scene = scene ? &*scene : nullptr;
     o.radiance = radiance;
+    o.display.exposure =
+        a.exposure_given ? a.exposure
+        : radiance ? penumbra::spaceland::auto_exposure(*ref, penumbra::spaceland::Aov::radiance)
+                   : penumbra::flatland::auto_exposure(*ref, o.scene);
+    o.heatmap.scale = a.heatmap_scale;
     penumbra::Expected<penumbra::ImageRgb8> p =
         penumbra::flatland::comparison_montage(*test, *ref, counted, o);
     if (!p) return fail(kFailure, a.montage + ": " + p.error().message);
@@ -225,6 +233,7 @@ int compare(const CompareArgs& a) {
         {"mean_abs", m->mean_abs},
         {"max_abs", m->max_abs},
         {"psnr", number_or_null(m->psnr)},
+        {"psnr_peak", m->psnr_peak},
         {"bias", m->bias},
         {"reference_mean", m->reference_mean}};
     std::cout << j.dump(2) << "\n";
@@ -255,7 +264,13 @@ std::unique_ptr<CompareCommand> add_compare_command(CLI::App& app) {
   c->add_flag("--json", a.json, "Print one JSON object with the metrics");
   c->add_option("--heatmap", a.heatmap, "Write the signed error with a colour bar (.png)");
   c->add_option("--montage", a.montage, "Write test, reference and error side by side (.png)");
-  c->add_option("--exposure", a.exposure, "Montage exposure in EV")->capture_default_str();
+  c->add_option("--heatmap-scale", a.heatmap_scale,
+                "Error of the end colours of the heatmap and the montage's error panel (default "
+                "0: the 99th percentile of the cells' |error|; larger errors saturate)");
+  c->add_option("--exposure", a.exposure,
+                "Montage exposure in EV (default: automatic, from the reference, as render's "
+                "PNGs)")
+      ->each([&a](const std::string&) { a.exposure_given = true; });
   c->add_option("--crop", a.crop, "Compare only the cells X Y W H (metrics and pictures)")
       ->expected(4);
   c->add_flag("-q,--quiet", a.quiet, "Print nothing on success");

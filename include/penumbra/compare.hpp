@@ -23,10 +23,23 @@ struct ErrorMetrics {
                               // and reference_mean <= 0
   double mean_abs = 0;        // sum |e| / n
   double max_abs = 0;         // max |e|
-  double psnr = 0;            // 20 log10(peak / rmse) dB, peak = the largest REF value counted;
-                              // +infinity when rmse is 0, NaN when rmse > 0 and peak <= 0
+  double psnr = 0;            // 20 log10(peak / rmse) dB, peak = psnr_peak; +infinity when
+                              // rmse is 0, NaN when rmse > 0 and peak <= 0
+  double psnr_peak = 0;       // REF's kPsnrPeakQuantile quantile over the counted values: the
+                              // bright end of what the picture shows, not a light's own cells
   double bias = 0;            // sum e / n: > 0 when TEST is brighter on average
   double reference_mean = 0;  // sum REF / n
+};
+
+// The quantile of the reference's values that PSNR takes as its peak, and the quantile of the
+// cells' |signed error| that scales the heatmap by default: the largest value would be set by
+// a few cells at or beside a light, and leave the rest of the picture near white.
+inline constexpr double kPsnrPeakQuantile = 0.99;
+inline constexpr double kHeatmapScaleQuantile = 0.99;
+
+// How the heatmap's colours are scaled.
+struct HeatmapOptions {
+  double scale = 0;  // > 0: errors of +-scale take the end colours; 0: kHeatmapScaleQuantile
 };
 
 // Refuses an image holding NaN or infinity; the message starts with `name` and gives the first
@@ -47,11 +60,15 @@ Expected<ErrorMetrics> compare_images(const ImageRgb& test, const ImageRgb& ref,
 // viewed fitted to a screen.
 //
 // error_heatmap: the signed error of each counted cell, the mean of its 3 channels' TEST - REF,
-// on a diverging scale (blue below, white at 0, red above) from -S to +S, S = the largest
-// |signed error| of a counted cell (so not max_abs, which is per channel); cells not counted are
-// mid grey. A label above the map; to its right a vertical colour bar, titled "S = max abs",
-// with ticks at +S, 0 and -S (values printed with %+.3g). Refused as compare_images refuses.
+// on a diverging scale (blue below, white at 0, red above) from -S to +S, S =
+// HeatmapOptions::scale, or by default the kHeatmapScaleQuantile quantile of the counted cells'
+// |signed error| (errors beyond S take the end colours); cells not counted are mid grey. A
+// label above the map; to its right a vertical colour bar, titled with how S was chosen
+// ("S = 99th pct |err|", "S = 99th pct, max 0.2" when cells exceed it, or "S given"), with ticks
+// at +S, 0 and -S (values printed with %+.3g). Refused as compare_images refuses, and for a
+// scale that is not finite and >= 0.
 Expected<ImageRgb8> error_heatmap(const ImageRgb& test, const ImageRgb& ref,
-                                  const std::vector<std::uint8_t>* mask = nullptr);
+                                  const std::vector<std::uint8_t>* mask = nullptr,
+                                  const HeatmapOptions& heatmap = {});
 
 }  // namespace penumbra

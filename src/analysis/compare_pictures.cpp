@@ -24,7 +24,9 @@ constexpr int kMetricLines = 2;  // below the montage
 constexpr Colour kBackground{255, 255, 255};
 constexpr Colour kInk{25, 25, 25};
 constexpr Colour kFrame{150, 150, 150};
-constexpr const char* kBarTitle = "S = max abs";
+// The colour bar's title: how S was chosen (HeatmapOptions).
+constexpr const char* kBarTitleQuantile = "S = 99th pct |err|";
+constexpr const char* kBarTitleGiven = "S = given";
 constexpr int kMaxPictureSide = 16384;  // pictures are shrunk to fit this a side
 
 // The layout for a given zoom; text and spacing scale with the panel width so that a large
@@ -46,7 +48,7 @@ PictureLayout layout_for(Zoom z, int w, int h, int panels, int metric_lines) {
   l.bar_h = std::max(l.panel_h, 3 * line);  // room for three tick labels
   // The widest tick label "%+.3g" can give, so the layout does not depend on the values.
   const int column = std::max(l.bar_w + 3 * l.text + text_width("-8.88e-888", l.text),
-                              text_width(kBarTitle, l.text));
+                              text_width(kBarTitleQuantile, l.text));
   l.width = l.bar_x + column + l.margin;
   l.metrics_y = l.panel_y + l.bar_h + l.gap / 2;
   l.height = metric_lines > 0 ? l.metrics_y + metric_lines * line + l.margin
@@ -118,17 +120,30 @@ std::string format(const char* fmt, double v) {
 }
 
 // The signed error of each cell (mean of its channels' TEST - REF) in colour, one pixel a cell,
-// and its scale S: the largest |error| of a counted cell.
+// and its scale S: HeatmapOptions::scale, or the kHeatmapScaleQuantile quantile of the counted
+// cells' |error|.
 ImageRgb8 error_colours(const ImageRgb& test, const ImageRgb& ref,
-                        const std::vector<std::uint8_t>* mask, double& scale) {
+                        const std::vector<std::uint8_t>* mask, const HeatmapOptions& heatmap,
+                        double& scale) {
   const std::size_t cells = std::size_t(ref.width()) * ref.height();
-  std::vector<double> err(cells);
-  scale = 0;
+  std::vector<double> err(cells), magnitudes;
+  magnitudes.reserve(cells);
   for (std::size_t i = 0; i < cells; ++i) {
     double e = 0;
     for (std::size_t k = i * 3; k < i * 3 + 3; ++k) e += double(test.data()[k]) - ref.data()[k];
     err[i] = e / 3;
-    if (!mask || (*mask)[i]) scale = std::max(scale, std::abs(err[i]));
+    if (!mask || (*mask)[i]) magnitudes.push_back(std::abs(err[i]));
+  }
+  scale = heatmap.scale;
+  if (!(scale > 0) && !magnitudes.empty()) {
+    const auto at =
+        magnitudes.begin() +
+        std::ptrdiff_t(std::min(magnitudes.size() - 1,
+                                std::size_t(kHeatmapScaleQuantile * magnitudes.size())));
+    std::nth_element(magnitudes.begin(), at, magnitudes.end());
+    scale = *at;
+    // All but a few cells exact: the quantile is 0, the largest error still shows.
+    if (scale == 0) scale = *std::max_element(magnitudes.begin(), magnitudes.end());
   }
   ImageRgb8 p = blank(ref.width(), ref.height(), kNotCounted);
   for (std::size_t i = 0; i < cells; ++i) {
@@ -141,9 +156,10 @@ ImageRgb8 error_colours(const ImageRgb& test, const ImageRgb& ref,
 
 // The last panel of `l` (the error map), its label and the colour bar with ticks at +S, 0, -S.
 void draw_error_panel(ImageRgb8& p, const PictureLayout& l, const ImageRgb& test,
-                      const ImageRgb& ref, const std::vector<std::uint8_t>* mask) {
+                      const ImageRgb& ref, const std::vector<std::uint8_t>* mask,
+                      const HeatmapOptions& heatmap) {
   double scale = 0;
-  const ImageRgb8 map = resample(error_colours(test, ref, mask, scale), l.zoom);
+  const ImageRgb8 map = resample(error_colours(test, ref, mask, heatmap, scale), l.zoom);
   const int x = l.panel_x[l.panels - 1];
   place(p, x, l.panel_y, map);
   draw_label(p, x, l.margin, "test - ref, RGB mean", l.panel_w, l.text);
@@ -152,7 +168,8 @@ void draw_error_panel(ImageRgb8& p, const PictureLayout& l, const ImageRgb& test
   for (int j = 0; j < l.bar_h; ++j)
     fill_rect(bar, 0, j, l.bar_w, 1, diverging(1 - 2 * (j + 0.5) / l.bar_h));
   place(p, l.bar_x, l.panel_y, bar);
-  draw_text(p, l.bar_x, l.margin, kBarTitle, kInk, l.text);
+  draw_text(p, l.bar_x, l.margin, heatmap.scale > 0 ? kBarTitleGiven : kBarTitleQuantile, kInk,
+            l.text);
 
   // Ticks inside the bar's right edge at +S, 0 and -S, labelled to its right.
   const int glyph = 7 * l.text;  // height of a digit
@@ -213,11 +230,14 @@ namespace penumbra {
 using namespace analysis;
 
 Expected<ImageRgb8> error_heatmap(const ImageRgb& test, const ImageRgb& ref,
-                                  const std::vector<std::uint8_t>* mask) {
+                                  const std::vector<std::uint8_t>* mask,
+                                  const HeatmapOptions& heatmap) {
+  if (!(heatmap.scale >= 0) || !std::isfinite(heatmap.scale))
+    return Error{"heatmap scale: expected a finite number >= 0 (0: automatic)"};
   if (auto m = compare_images(test, ref, mask); !m) return m.error();
   const PictureLayout l = heatmap_layout(ref.width(), ref.height());
   ImageRgb8 p = blank(l.width, l.height, kBackground);
-  draw_error_panel(p, l, test, ref, mask);
+  draw_error_panel(p, l, test, ref, mask, heatmap);
   return p;
 }
 
@@ -247,7 +267,9 @@ Expected<ImageRgb8> comparison_montage(const ImageRgb& test, const ImageRgb& ref
     place(p, l.panel_x[i], l.panel_y, resample(cells, l.zoom));
     draw_label(p, l.panel_x[i], l.margin, *labels[i], l.panel_w, l.text);
   }
-  draw_error_panel(p, l, test, ref, mask);
+  if (!(options.heatmap.scale >= 0) || !std::isfinite(options.heatmap.scale))
+    return Error{"heatmap scale: expected a finite number >= 0 (0: automatic)"};
+  draw_error_panel(p, l, test, ref, mask, options.heatmap);
 
   const std::string rel = std::isfinite(m->relative_rmse) ? format("%.3g%%", 100 * m->relative_rmse)
                                                           : std::string("inf");

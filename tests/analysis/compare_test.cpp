@@ -49,6 +49,23 @@ TEST(CompareMetrics, HandComputedValues) {
   EXPECT_NEAR(m->psnr, 10.2802872, 1e-6);          // 20 log10(4 / 1.2247)
 }
 
+// PSNR's peak is the reference's 99th percentile: one cell of a light 1000 times brighter than
+// the rest no longer sets it (it set 60 dB more before).
+TEST(CompareMetrics, PsnrPeakIsTheReferences99thPercentile) {
+  std::vector<float> ref(20 * 10 * 3, 1.0f), test(ref.size(), 1.1f);
+  ref[0] = ref[1] = ref[2] = 1000;  // 3 of 600 values: above the 99th percentile
+  test[0] = test[1] = test[2] = 1000;
+  const auto m = penumbra::compare_images(image(20, 10, test), image(20, 10, ref));
+  ASSERT_TRUE(m.ok());
+  EXPECT_DOUBLE_EQ(m->psnr_peak, 1.0);
+  EXPECT_NEAR(m->psnr, 20 * std::log10(1.0 / m->rmse), 1e-9);
+  // A light over more than 1% of the values does set it.
+  for (std::size_t k = 3; k < 9; ++k) ref[k] = test[k] = 1000;
+  const auto n = penumbra::compare_images(image(20, 10, test), image(20, 10, ref));
+  ASSERT_TRUE(n.ok());
+  EXPECT_DOUBLE_EQ(n->psnr_peak, 1000.0);
+}
+
 TEST(CompareMetrics, SwappingTheImagesFlipsTheBiasOnly) {
   const auto ab = penumbra::compare_images(kTest, kRef);
   const auto ba = penumbra::compare_images(kRef, kTest);
@@ -209,6 +226,25 @@ TEST_F(ComparePictures, HeatmapColoursTheSignedError) {
   const Px bottom = pixel(img, l.bar_x + 2, l.panel_y + l.bar_h - 2);
   EXPECT_GT(top.r, top.b + 0.2f);
   EXPECT_GT(bottom.b, bottom.r + 0.2f);
+}
+
+// One cell far off (a light's rim, say) no longer takes the whole scale: by default S is the 99th
+// percentile of the cells' |error|, so the many small errors show in colour and the one large
+// error saturates; a given scale is used as it is; a bad one is refused.
+TEST_F(ComparePictures, HeatmapScaleIsRobustOrGiven) {
+  std::vector<float> t(200 * 3, 2.1f);  // 200 cells of error +0.1
+  t[0] = t[1] = t[2] = 102;             // one of +100
+  const ImageRgb test = image(20, 10, t), ref = image(20, 10, std::vector<float>(600, 2.0f));
+  const auto l = penumbra::analysis::heatmap_layout(20, 10);
+  const auto robust = round_trip(*penumbra::error_heatmap(test, ref), "robust.png");
+  const Px small = cell_pixel(robust, l, 0, 5, 5), big = cell_pixel(robust, l, 0, 0, 0);
+  EXPECT_LT(small.g, 0.1f) << "the small errors take the full red";
+  EXPECT_LT(big.g, 0.1f);
+  const auto given = round_trip(*penumbra::error_heatmap(test, ref, nullptr, {100.0}), "given.png");
+  EXPECT_GT(cell_pixel(given, l, 0, 5, 5).g, 0.9f) << "0.1 of 100 is nearly white";
+  EXPECT_LT(cell_pixel(given, l, 0, 0, 0).g, 0.1f);
+  for (double bad : {-1.0, std::numeric_limits<double>::infinity()})
+    EXPECT_FALSE(penumbra::error_heatmap(test, ref, nullptr, {bad}).ok()) << bad;
 }
 
 TEST_F(ComparePictures, DivergingMapIsSymmetricAroundWhite) {
@@ -372,6 +408,7 @@ TEST_F(CompareCli, JsonMatchesTheLibrary) {
   EXPECT_EQ(j.at("mean_abs").get<double>(), m->mean_abs);
   EXPECT_EQ(j.at("max_abs").get<double>(), m->max_abs);
   EXPECT_EQ(j.at("psnr").get<double>(), m->psnr);
+  EXPECT_EQ(j.at("psnr_peak").get<double>(), m->psnr_peak);
   EXPECT_EQ(j.at("bias").get<double>(), m->bias);
   EXPECT_EQ(j.at("reference_mean").get<double>(), m->reference_mean);
   EXPECT_GT(m->rmse, 0.01);  // the inputs do differ
@@ -515,6 +552,8 @@ TEST_F(CompareCli, UsageErrorsExitTwo) {
                  2, {"x.png"});
   expect_failure(run({test_pfm_, ref_exr_, "--exposure", "inf", "--montage", out("m.png")}), 2,
                  {"exposure"});
+  expect_failure(run({test_pfm_, ref_exr_, "--heatmap-scale", "-1", "--heatmap", out("h.png")}), 2,
+                 {"--heatmap-scale"});
 }
 
 TEST_F(CompareCli, UnwritableOutputFailsBeforeWritingTheOther) {

@@ -25,6 +25,7 @@ struct MontageOptions {
   // The images are 3D radiance: shown as the 3D PNGs show them (spaceland::display_picture)
   // and counted as pixels.
   bool radiance = false;
+  HeatmapOptions heatmap;  // the error panel's scale
 };
 
 // Three panels side by side: TEST and REF tone-mapped alike (as write_image's PNG), then the

@@ -13,7 +13,7 @@ ASAN_FLAGS = -DCMAKE_BUILD_TYPE=Release -DPENUMBRA_WERROR=$(WERROR) -DPENUMBRA_S
 FUZZ_SECONDS ?= 60
 
 .PHONY: all deps configure build demo test bench quality install format clean \
-        build-sanitize test-sanitize fuzz
+        build-sanitize test-sanitize fuzz test-shared
 
 all: build
 
@@ -67,6 +67,18 @@ quality: build
 	@for b in 2 3 4; do \
 	  $(BUILD)/bin/penumbra bench-quality scenes/3d/cornell.json --bounces $$b -o docs/quality/3d/study/cornell-b$$b --doc docs/QUALITY.md --cache $(BUILD)/quality-cache || exit 1; \
 	done
+
+# The library as shared libraries (-DBUILD_SHARED_LIBS=ON): built, installed into a scratch
+# prefix and linked by examples/ through find_package(penumbra), which must then need no
+# dependency but TBB at link time (tests/apps/install_test.sh).
+SHARED_BUILD ?= build-shared
+test-shared: deps
+	@cmake -S . -B $(SHARED_BUILD) -DCMAKE_BUILD_TYPE=Release -DPENUMBRA_WERROR=$(WERROR) \
+	  -DBUILD_SHARED_LIBS=ON -DPENUMBRA_BUILD_TESTS=OFF -DPENUMBRA_BUILD_BENCH=OFF \
+	  > $(SHARED_BUILD).configure.log 2>&1 || (cat $(SHARED_BUILD).configure.log; exit 1)
+	@$(CMAKE_BUILD) $(SHARED_BUILD) -j $(JOBS)
+	@SHARED=1 bash tests/apps/install_test.sh $(abspath $(SHARED_BUILD)) $(CURDIR) \
+	  $(abspath $(SHARED_BUILD))/install_test
 
 install: build
 	@cmake --install $(BUILD)

@@ -44,6 +44,18 @@ found=$(sed -n 's/^penumbra_DIR:PATH=//p' "$example_build/CMakeCache.txt")
 step "building the example"
 "$cmake" --build "$example_build" --parallel || die "building the example against the install failed"
 
+if [[ ${SHARED:-0} == 1 ]]; then
+  # A shared install: the example links libpenumbra_*.so, found through the install's RUNPATH or
+  # here through LD_LIBRARY_PATH, and nothing of the static dependency list.
+  libdir=$(dirname "$(ls "$prefix"/lib*/libpenumbra_core.so | head -1)")
+  [[ -n $libdir ]] || die "no libpenumbra_core.so under $prefix/lib*"
+  export LD_LIBRARY_PATH=$libdir${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}
+  ldd "$example_build/render_in_code" | grep -q "libpenumbra_flatland.so" ||
+    die "the example is not linked against the shared libpenumbra_flatland.so"
+  ! grep -q "OpenEXR\|embree" "$example_build/CMakeFiles/render_in_code.dir/link.txt" ||
+    die "linking the example against the shared library named a private dependency"
+fi
+
 step "running the example"
 "$example_build/render_in_code" "$output" || die "the example program failed"
 [[ -s $output ]] || die "the example program did not write $output"

@@ -50,7 +50,8 @@ if [[ ${SHARED:-0} == 1 ]]; then
   libdir=$(dirname "$(ls "$prefix"/lib*/libpenumbra_core.so | head -1)")
   [[ -n $libdir ]] || die "no libpenumbra_core.so under $prefix/lib*"
   export LD_LIBRARY_PATH=$libdir${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}
-  ldd "$example_build/render_in_code" | grep -q "libpenumbra_flatland.so" ||
+  linked=$(ldd "$example_build/render_in_code")  # whole, so grep cannot cut the pipe short
+  [[ $linked == *libpenumbra_flatland.so* ]] ||
     die "the example is not linked against the shared libpenumbra_flatland.so"
   ! grep -q "OpenEXR\|embree" "$example_build/CMakeFiles/render_in_code.dir/link.txt" ||
     die "linking the example against the shared library named a private dependency"

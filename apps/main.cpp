@@ -43,15 +43,16 @@ std::string closest(const std::string& word, const std::vector<std::string>& nam
 
 // After a usage error: "did you mean" for a mistyped subcommand or option of the subcommand.
 void suggest(const CLI::App& app, int argc, char** argv) {
+  const std::vector<const CLI::App*> subs =
+      app.get_subcommands([](const CLI::App*) { return true; });
   std::vector<std::string> commands;
+  for (const CLI::App* s : subs) commands.push_back(s->get_name());
   const CLI::App* sub = nullptr;
-  for (const CLI::App* s : app.get_subcommands([](const CLI::App*) { return true; }))
-    commands.push_back(s->get_name());
   int i = 1;
   for (; i < argc; ++i) {
     const std::string word = argv[i];
     if (word.starts_with("-")) continue;
-    for (const CLI::App* s : app.get_subcommands([](const CLI::App*) { return true; }))
+    for (const CLI::App* s : subs)
       if (s->get_name() == word) sub = s;
     if (!sub) {
       if (const std::string c = closest(word, commands); !c.empty())

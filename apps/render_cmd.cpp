@@ -18,6 +18,7 @@
 
 #include "cli_enums.hpp"
 #include "core/timer.hpp"
+#include "io/path_util.hpp"
 #include "parse.hpp"
 #include "penumbra/penumbra.hpp"
 #include "progress.hpp"
@@ -77,9 +78,9 @@ bool exposure_given(const RenderArgs& a) {
 }
 
 bool has_png(const std::vector<std::string>& outputs) {
-  for (const std::string& out : outputs)
-    if (out.size() >= 4 && (out.ends_with(".png") || out.ends_with(".PNG"))) return true;
-  return false;
+  return std::any_of(outputs.begin(), outputs.end(), [](const std::string& out) {
+    return penumbra::io::lowercase_extension(out) == ".png";
+  });
 }
 
 int check_render_args(const RenderArgs& a, std::uint64_t& max_memory) {
@@ -427,8 +428,8 @@ std::unique_ptr<RenderCommand> add_render_command(CLI::App& app) {
   render->add_option("--max-memory", a.max_memory, "Refuse work needing more working memory")
       ->capture_default_str();
   render->add_option("--exposure", a.exposure,
-                     "PNG exposure in EV (default: automatic, the log-average of the lit open "
-                     "cells or pixels to middle grey; --json reports it)");
+                     "PNG exposure in EV (default: automatic, the median of the lit open cells "
+                     "or pixels to 1/8; --json reports it)");
   render->add_flag("--show-walls,!--no-show-walls", a.show_walls,
                    "2D PNG: walls and fog in the dark keep a dim floor of their colour, as the "
                    "painter shows them (default on)");

@@ -18,9 +18,10 @@ struct DisplayOptions {
   bool show_walls = false;
 };
 
-// What an automatic exposure maps a picture's key value (the median of its lit open cells or
-// pixels) to, before the tone curve. 1/8 matches the exposures chosen by hand for the example
-// scenes within about 0.5 EV (docs/QUALITY.md, "Pictures").
+// What an automatic exposure maps a picture's key value (the median of its lit open cells, or
+// of a 3D image's lit pixels) to, before the tone curve. 1/8 matches the exposures chosen by
+// hand for the 2D example scenes within about 0.35 EV on six of eight (docs/QUALITY.md,
+// "Pictures").
 inline constexpr float kAutoExposureKey = 0.125f;
 
 // Writes 8-bit pictures (heatmaps, montages) as PNG files (.png names only), all or nothing:

@@ -6,6 +6,7 @@
 #include <limits>
 #include <string>
 
+#include "core/median.hpp"
 #include "penumbra/flatland/compare.hpp"
 
 namespace penumbra {
@@ -66,11 +67,7 @@ Expected<ErrorMetrics> compare_images(const ImageRgb& test, const ImageRgb& ref,
   m.bias = sum_e / n;
   m.reference_mean = sum_ref / n;
   // The peak: REF's 99th percentile, not its maximum, which a light's own cells would set.
-  const auto at = values.begin() +
-                  std::ptrdiff_t(std::min(values.size() - 1,
-                                          std::size_t(kPsnrPeakQuantile * double(values.size()))));
-  std::nth_element(values.begin(), at, values.end());
-  const double peak = *at;
+  const double peak = quantile(values, kPsnrPeakQuantile);
   m.psnr_peak = peak;
   const double inf = std::numeric_limits<double>::infinity();
   if (m.rmse == 0) {

@@ -9,6 +9,7 @@
 
 #include "analysis/pictures.hpp"
 #include "analysis/text.hpp"
+#include "core/median.hpp"
 #include "penumbra/compare.hpp"
 #include "penumbra/flatland/compare.hpp"
 #include "penumbra/flatland/io.hpp"
@@ -136,12 +137,7 @@ ImageRgb8 error_colours(const ImageRgb& test, const ImageRgb& ref,
   }
   scale = heatmap.scale;
   if (!(scale > 0) && !magnitudes.empty()) {
-    const auto at =
-        magnitudes.begin() +
-        std::ptrdiff_t(std::min(magnitudes.size() - 1,
-                                std::size_t(kHeatmapScaleQuantile * magnitudes.size())));
-    std::nth_element(magnitudes.begin(), at, magnitudes.end());
-    scale = *at;
+    scale = quantile(magnitudes, kHeatmapScaleQuantile);
     // All but a few cells exact: the quantile is 0, the largest error still shows.
     if (scale == 0) scale = *std::max_element(magnitudes.begin(), magnitudes.end());
   }
@@ -152,6 +148,11 @@ ImageRgb8 error_colours(const ImageRgb& test, const ImageRgb& ref,
     std::copy(c.begin(), c.end(), &p.rgb[i * 3]);
   }
   return p;
+}
+
+Status check_heatmap(const HeatmapOptions& heatmap) {
+  if (heatmap.scale >= 0 && std::isfinite(heatmap.scale)) return {};
+  return Error{"heatmap scale: expected a finite number >= 0 (0: automatic)"};
 }
 
 // The last panel of `l` (the error map), its label and the colour bar with ticks at +S, 0, -S.
@@ -232,8 +233,7 @@ using namespace analysis;
 Expected<ImageRgb8> error_heatmap(const ImageRgb& test, const ImageRgb& ref,
                                   const std::vector<std::uint8_t>* mask,
                                   const HeatmapOptions& heatmap) {
-  if (!(heatmap.scale >= 0) || !std::isfinite(heatmap.scale))
-    return Error{"heatmap scale: expected a finite number >= 0 (0: automatic)"};
+  if (Status s = check_heatmap(heatmap); !s) return s.error();
   if (auto m = compare_images(test, ref, mask); !m) return m.error();
   const PictureLayout l = heatmap_layout(ref.width(), ref.height());
   ImageRgb8 p = blank(l.width, l.height, kBackground);
@@ -267,8 +267,7 @@ Expected<ImageRgb8> comparison_montage(const ImageRgb& test, const ImageRgb& ref
     place(p, l.panel_x[i], l.panel_y, resample(cells, l.zoom));
     draw_label(p, l.panel_x[i], l.margin, *labels[i], l.panel_w, l.text);
   }
-  if (!(options.heatmap.scale >= 0) || !std::isfinite(options.heatmap.scale))
-    return Error{"heatmap scale: expected a finite number >= 0 (0: automatic)"};
+  if (Status s = check_heatmap(options.heatmap); !s) return s.error();
   draw_error_panel(p, l, test, ref, mask, options.heatmap);
 
   const std::string rel = std::isfinite(m->relative_rmse) ? format("%.3g%%", 100 * m->relative_rmse)

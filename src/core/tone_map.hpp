@@ -3,8 +3,22 @@
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
+
+#include "core/median.hpp"
 
 namespace penumbra {
+
+// Rec. 709 luminance of linear RGB.
+inline float luminance(const float* rgb) {
+  return 0.2126f * rgb[0] + 0.7152f * rgb[1] + 0.0722f * rgb[2];
+}
+
+// A light meter: the exposure (EV) that takes the median of `lit` (the luminances of the lit
+// cells or pixels; reordered) to `key`. 0 when nothing is lit.
+inline float meter_exposure(std::vector<float>& lit, float key) {
+  return lit.empty() ? 0.0f : std::log2(key / quantile(lit, 0.5));
+}
 
 // Krzysztof Narkowicz's fit of the ACES filmic curve, clamped to [0, 1].
 inline float aces_fit(float x) {

@@ -100,14 +100,10 @@ float auto_exposure(const ImageRgb& fluence, const Scene* scene) {
       const float* le = &scene->emission[3 * i];
       if (scene->opacity[i] >= 1 || le[0] + le[1] + le[2] > 0) continue;
     }
-    const float m = (0.2126f * f[3 * i] + 0.7152f * f[3 * i + 1] + 0.0722f * f[3 * i + 2]) *
-                    float(1 / (2 * kPi));
+    const float m = luminance(f + 3 * i) * float(1 / (2 * kPi));  // mean radiance, as shown
     if (m > 0 && std::isfinite(m)) lit.push_back(m);
   }
-  if (lit.empty()) return 0;
-  const auto mid = lit.begin() + std::ptrdiff_t(lit.size() / 2);
-  std::nth_element(lit.begin(), mid, lit.end());
-  return std::log2(kAutoExposureKey / *mid);
+  return meter_exposure(lit, kAutoExposureKey);
 }
 
 ImageRgb8 display_picture(const ImageRgb& fluence, const Scene* scene,

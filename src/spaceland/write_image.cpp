@@ -37,13 +37,10 @@ float auto_exposure(const ImageRgb& image, Aov aov) {
   lit.reserve(std::size_t(image.width()) * image.height());
   const float* p = image.data();
   for (std::size_t i = 0; i < image.size(); i += 3) {
-    const float m = 0.2126f * p[i] + 0.7152f * p[i + 1] + 0.0722f * p[i + 2];
+    const float m = luminance(p + i);
     if (m > 0 && std::isfinite(m)) lit.push_back(m);
   }
-  if (lit.empty()) return 0;
-  const auto mid = lit.begin() + std::ptrdiff_t(lit.size() / 2);
-  std::nth_element(lit.begin(), mid, lit.end());
-  return std::log2(kAutoExposureKey3d / *mid);
+  return meter_exposure(lit, kAutoExposureKey);
 }
 
 ImageRgb8 display_picture(const ImageRgb& image, Aov aov, const DisplayOptions& display) {

@@ -16,13 +16,9 @@ namespace penumbra::spaceland {
 // to the range of the finite values (misses black); objects in distinct colours.
 ImageRgb8 display_picture(const ImageRgb& image, Aov aov, const DisplayOptions& display = {});
 
-// What an automatic exposure maps a 3D picture's key value (the median luminance of its lit
-// pixels) to; calibrated on the example scenes' hand-set exposures (docs/QUALITY.md, "Pictures").
-inline constexpr float kAutoExposureKey3d = 0.125f;
-
 // The exposure (EV) a light meter would choose for the PNG of a radiance or emission image:
-// the median luminance of its lit pixels goes to kAutoExposureKey3d. 0 for the other AOVs and
-// for a black image.
+// the median luminance of its lit pixels goes to kAutoExposureKey (penumbra/io.hpp, the same
+// key as 2D's; docs/QUALITY.md, "Pictures"). 0 for the other AOVs and for a black image.
 float auto_exposure(const ImageRgb& image, Aov aov);
 
 // Writes every path (.pfm, .exr: the linear values; .png: display_picture), all or nothing.

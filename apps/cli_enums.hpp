@@ -6,6 +6,7 @@
 #include <CLI/CLI.hpp>
 #include <cmath>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -44,4 +45,19 @@ inline CLI::Validator real_range(double lo, double hi) {
         return {};
       },
       "NUMBER in [" + bounds + "]");
+}
+
+// --exposure of render, paint and compare: a finite number of EV; left empty when not given,
+// which means automatic exposure.
+inline CLI::Option* add_exposure_option(CLI::App* app, std::optional<float>& ev,
+                                        const std::string& help) {
+  return app->add_option("--exposure", ev, help)
+      ->check(CLI::Validator(
+          [](std::string& text) -> std::string {
+            double v = 0;
+            if (!CLI::detail::lexical_cast(text, v) || !std::isfinite(v))
+              return "expected a finite number of EV, found '" + text + "'";
+            return {};
+          },
+          ""));
 }

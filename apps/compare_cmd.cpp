@@ -12,6 +12,7 @@
 #include <utility>
 #include <vector>
 
+#include "cli_enums.hpp"
 #include "io/path_util.hpp"
 #include "penumbra/penumbra.hpp"
 
@@ -124,7 +125,6 @@ int compare(const CompareArgs& a) {
   if (outputs.size() == 2 && std::filesystem::path(a.heatmap).lexically_normal() ==
                                  std::filesystem::path(a.montage).lexically_normal())
     return fail(kUsage, a.heatmap + ": --heatmap and --montage name the same file");
-  if (!std::isfinite(a.exposure)) return fail(kUsage, "--exposure: expected a finite number of EV");
   if (!(a.heatmap_scale >= 0) || !std::isfinite(a.heatmap_scale))
     return fail(kUsage, "--heatmap-scale: expected a finite number >= 0 (0: automatic)");
   // Refuse unwritable outputs before reading anything.
@@ -206,7 +206,7 @@ int compare(const CompareArgs& a) {
     o.scene = scene ? &*scene : nullptr;
     o.radiance = radiance;
     o.display.exposure =
-        a.exposure_given ? a.exposure
+        a.exposure ? *a.exposure
         : radiance ? penumbra::spaceland::auto_exposure(*ref, penumbra::spaceland::Aov::radiance)
                    : penumbra::flatland::auto_exposure(*ref, o.scene);
     o.heatmap.scale = a.heatmap_scale;
@@ -267,10 +267,9 @@ std::unique_ptr<CompareCommand> add_compare_command(CLI::App& app) {
   c->add_option("--heatmap-scale", a.heatmap_scale,
                 "Error of the end colours of the heatmap and the montage's error panel (default "
                 "0: the 99th percentile of the cells' |error|; larger errors saturate)");
-  c->add_option("--exposure", a.exposure,
-                "Montage exposure in EV (default: automatic, from the reference, as render's "
-                "PNGs)")
-      ->each([&a](const std::string&) { a.exposure_given = true; });
+  add_exposure_option(c, a.exposure,
+                      "Montage exposure in EV (default: automatic, from the reference, as "
+                      "render's PNGs)");
   c->add_option("--crop", a.crop, "Compare only the cells X Y W H (metrics and pictures)")
       ->expected(4);
   c->add_flag("-q,--quiet", a.quiet, "Print nothing on success");

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -11,11 +12,11 @@ class App;
 
 struct CompareArgs {
   std::string test, reference, scene;
-  std::string heatmap, montage;  // empty: not written
-  float exposure = 0;            // EV, for the montage's test and reference panels (given or
-  bool exposure_given = false;   // else chosen from the reference, as render's PNGs are)
-  double heatmap_scale = 0;      // the error colours' +-S (0: the 99th percentile of |error|)
-  std::vector<int> crop;         // empty, or X Y W H: compare only this rectangle of cells
+  std::string heatmap, montage;   // empty: not written
+  std::optional<float> exposure;  // EV of the montage's test and reference panels; empty:
+                                  // chosen from the reference, as render's PNGs are
+  double heatmap_scale = 0;       // the error colours' +-S (0: the 99th percentile of |error|)
+  std::vector<int> crop;          // empty, or X Y W H: compare only this rectangle of cells
   bool json = false;
   bool quiet = false;
   bool radiance = false;  // 3D images: pixels of radiance (set too by a 3D --scene)

@@ -69,10 +69,9 @@ std::unique_ptr<PaintCommand> add_paint_command(CLI::App& app) {
       ->each([&a](const std::string&) { a.emission_scale_given = true; })
       ->capture_default_str();
   add_render_options(c, a.options, a.flags, second);
-  c->add_option("--exposure", a.exposure,
-                "Display exposure in EV (default: automatic, from each frame's picture; the "
-                "panel shows it)")
-      ->each([&a](const std::string&) { a.exposure_given = true; });
+  add_exposure_option(c, a.exposure,
+                      "Display exposure in EV (default: automatic, from each frame's picture; "
+                      "the panel shows it)");
   c->add_option("--frames", a.frames,
                 "Solve continuously and exit after this many solver frames (measurement)")
       ->check(CLI::Range(0, 1 << 20));
@@ -86,10 +85,6 @@ std::unique_ptr<PaintCommand> add_paint_command(CLI::App& app) {
 int run_paint(const PaintArgs& args) {
   PaintArgs a = args;  // the painter starts from the finished options
   finish_render_options(a.options, a.flags);
-  if (!std::isfinite(a.exposure)) {
-    std::cerr << "penumbra paint: --exposure: expected a finite number of EV\n";
-    return kUsage;
-  }
   // Everything the files say is checked before a window opens.
   Expected<paint::Canvas> canvas = Error{""};
   if (a.scene.empty()) {

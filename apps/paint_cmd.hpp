@@ -2,6 +2,7 @@
 #pragma once
 
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "penumbra/flatland/render.hpp"
@@ -27,9 +28,8 @@ struct PaintArgs {
   float zoom = 0;                             // window pixels per cell (0: fit about 800 pixels)
   float emission_scale = 64;
   bool emission_scale_given = false;  // else a loaded painting keeps its own scale
-  float exposure = 0;
-  bool exposure_given = false;  // else each frame is exposed from its picture
-  int frames = 0;               // > 0: solve continuously, exit after this many solver frames
+  std::optional<float> exposure;      // empty: each frame is exposed from its picture
+  int frames = 0;                     // > 0: solve continuously, exit after this many solver frames
   bool stats = false;
   bool plain = false;  // no material overlay: the window shows what `penumbra render` writes
 };

@@ -152,8 +152,8 @@ int render_scene_3d(const RenderArgs& a) {
     return kFailure;
   }
   penumbra::Stopwatch write_watch;
-  penumbra::DisplayOptions display{a.exposure};
-  if (!exposure_given(a)) display.exposure = sl::auto_exposure(result->radiance, options.aov);
+  penumbra::DisplayOptions display;
+  display.exposure = a.exposure ? *a.exposure : sl::auto_exposure(result->radiance, options.aov);
   if (penumbra::Status s = sl::write_images(a.outputs, result->radiance, options.aov, display);
       !s) {
     std::cerr << "penumbra render: " << s.error().message << "\n";
@@ -214,7 +214,7 @@ int render_scene_3d(const RenderArgs& a) {
                         {"cancelled", result->cancelled},
                         {"parameters", parameters},
                         {"exposure", display.exposure},
-                        {"exposure_auto", !exposure_given(a)},
+                        {"exposure_auto", !a.exposure},
                         {"outputs", a.outputs}};
     std::cout << j.dump(2) << "\n";
   } else if (!a.quiet) {
@@ -251,7 +251,7 @@ int render_scene_3d(const RenderArgs& a) {
     for (const std::string& out : a.outputs) std::printf("  wrote %s\n", out.c_str());
     if (has_png(a.outputs))
       std::printf("  PNG exposure %+.2f EV (%s)\n", display.exposure,
-                  exposure_given(a) ? "--exposure" : "automatic; --exposure sets it");
+                  a.exposure ? "--exposure" : "automatic; --exposure sets it");
   }
   if (result->cancelled) {
     std::fprintf(stderr,

@@ -73,10 +73,6 @@ nlohmann::json parameters_json(const penumbra::flatland::RenderOptions& o) {
 
 }  // namespace
 
-bool exposure_given(const RenderArgs& a) {
-  return a.app && a.app->get_option("--exposure")->count() > 0;
-}
-
 bool has_png(const std::vector<std::string>& outputs) {
   return std::any_of(outputs.begin(), outputs.end(), [](const std::string& out) {
     return penumbra::io::lowercase_extension(out) == ".png";
@@ -98,10 +94,6 @@ int check_render_args(const RenderArgs& a, std::uint64_t& max_memory) {
   if (!parse_bytes(a.max_memory, max_memory)) {
     std::cerr << "penumbra render: --max-memory: expected a size such as 512M or 8G, found '"
               << a.max_memory << "'\n";
-    return kUsage;
-  }
-  if (!std::isfinite(a.exposure)) {
-    std::cerr << "penumbra render: --exposure: expected a finite number of EV\n";
     return kUsage;
   }
   return 0;
@@ -246,9 +238,9 @@ int render_scene(const RenderArgs& a) {
     return kFailure;
   }
   penumbra::Stopwatch write_watch;
-  penumbra::DisplayOptions display{a.exposure, a.show_walls};
-  if (!exposure_given(a))
-    display.exposure = penumbra::flatland::auto_exposure(result->fluence, &*scene);
+  penumbra::DisplayOptions display{0, a.show_walls};
+  display.exposure =
+      a.exposure ? *a.exposure : penumbra::flatland::auto_exposure(result->fluence, &*scene);
   // All outputs or none; files already there stay untouched if any output fails.
   if (penumbra::Status s =
           penumbra::flatland::write_images(a.outputs, result->fluence, *scene, display);
@@ -279,7 +271,7 @@ int render_scene(const RenderArgs& a) {
                         {"cancelled", result->cancelled},
                         {"parameters", parameters_json(result->options)},
                         {"exposure", display.exposure},
-                        {"exposure_auto", !exposure_given(a)},
+                        {"exposure_auto", !a.exposure},
                         {"show_walls", a.show_walls},
                         {"outputs", a.outputs}};
     std::cout << j.dump(2) << "\n";
@@ -316,7 +308,7 @@ int render_scene(const RenderArgs& a) {
     for (const std::string& out : a.outputs) std::printf("  wrote %s\n", out.c_str());
     if (has_png(a.outputs))
       std::printf("  PNG exposure %+.2f EV (%s)\n", display.exposure,
-                  exposure_given(a) ? "--exposure" : "automatic; --exposure sets it");
+                  a.exposure ? "--exposure" : "automatic; --exposure sets it");
   }
   if (result->cancelled) {
     std::fprintf(stderr, "penumbra render: interrupted; wrote the image of %llu samples per cell\n",
@@ -427,9 +419,9 @@ std::unique_ptr<RenderCommand> add_render_command(CLI::App& app) {
   add_render_options(render, a.options, a.flags, all);
   render->add_option("--max-memory", a.max_memory, "Refuse work needing more working memory")
       ->capture_default_str();
-  render->add_option("--exposure", a.exposure,
-                     "PNG exposure in EV (default: automatic, the median of the lit open cells "
-                     "or pixels to 1/8; --json reports it)");
+  add_exposure_option(render, a.exposure,
+                      "PNG exposure in EV (default: automatic, the median of the lit open cells "
+                      "or pixels to 1/8; --json reports it)");
   render->add_flag("--show-walls,!--no-show-walls", a.show_walls,
                    "2D PNG: walls and fog in the dark keep a dim floor of their colour, as the "
                    "painter shows them (default on)");

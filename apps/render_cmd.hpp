@@ -3,6 +3,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -28,7 +29,7 @@ struct RenderArgs {
   bool disjoint = false;  // --disjoint: spwi's thesis intervals (SpwiOptions::overlap off)
   std::vector<std::string> outputs;
   std::string max_memory = "8G";
-  float exposure = 0;      // with --exposure; otherwise chosen from the picture (auto_exposure)
+  std::optional<float> exposure;  // --exposure; empty: chosen from the picture (auto_exposure)
   bool show_walls = true;  // 2D PNGs: walls and fog in the dark keep a dim floor of their colour
   bool json = false;
   bool quiet = false;
@@ -88,11 +89,9 @@ bool listed(const std::string& name, const std::string_view (&list)[N]) {
 }
 
 // What both worlds check before loading a scene: output types and writability, --max-memory
-// (parsed into `max_memory`) and --exposure. Prints the message; returns 0 or the exit code.
+// (parsed into `max_memory`). Prints the message; returns 0 or the exit code.
 int check_render_args(const RenderArgs& args, std::uint64_t& max_memory);
 
-// Whether --exposure was given (otherwise PNGs are exposed automatically).
-bool exposure_given(const RenderArgs& args);
 // Whether any output is a PNG (the one output that is exposed).
 bool has_png(const std::vector<std::string>& outputs);
 

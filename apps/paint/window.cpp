@@ -73,8 +73,8 @@ Painter::Painter(const PaintArgs& args, paint::Canvas canvas, std::vector<paint:
     : args_(args), canvas_(std::move(canvas)), replay_(std::move(replay)) {
   options_ = args.options;
   zoom_ = args.zoom;
-  look_.exposure = args.exposure;
-  look_.auto_exposure = !args.exposure_given;
+  look_.exposure = args.exposure.value_or(0.0f);
+  look_.auto_exposure = !args.exposure;
   look_.materials = !args.plain;
   environment_ = canvas_.scene().environment;
   brush_.intensity = std::min(1.0f, canvas_.emission_scale());

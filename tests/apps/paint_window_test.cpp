@@ -166,6 +166,9 @@ TEST_F(PaintWindow, BadInputIsReportedBeforeTheWindow) {
   r = paint_headless({"--device", "gpu", "--method", "pt"});  // the path tracer is CPU only
   EXPECT_EQ(r.status, 2) << r.err;
   EXPECT_NE(r.err.find("path tracer runs on the CPU only"), std::string::npos) << r.err;
+  r = paint_headless({"--exposure", "nan"});
+  EXPECT_EQ(r.status, 2) << r.err;
+  EXPECT_NE(r.err.find("--exposure: expected a finite number of EV"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(tmp_.file("shot.png")));
 }
 

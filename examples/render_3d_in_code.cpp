@@ -22,7 +22,14 @@ int fail(const std::string& what) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // One optional argument, the output file; anything that looks like an option gets the usage
+  // (rather than becoming a file named "--help").
   const std::string output = argc > 1 ? argv[1] : "render_3d_in_code.png";
+  if (argc > 2 || (!output.empty() && output[0] == '-')) {
+    const bool help = argc == 2 && (output == "-h" || output == "--help");
+    std::fprintf(help ? stdout : stderr, "usage: render_3d_in_code [output.png|.exr|.pfm]\n");
+    return help ? 0 : 2;
+  }
 
   sl::Scene scene;
   scene.source = "render_3d_in_code";

@@ -43,7 +43,14 @@ float fluence_at(const penumbra::ImageRgb& f, int x, int y) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // One optional argument, the output file; anything that looks like an option gets the usage
+  // (rather than becoming a file named "--help").
   const std::string output = argc > 1 ? argv[1] : "render_in_code.png";
+  if (argc > 2 || (!output.empty() && output[0] == '-')) {
+    const bool help = argc == 2 && (output == "-h" || output == "--help");
+    std::fprintf(help ? stdout : stderr, "usage: render_in_code [output.png|.exr|.pfm]\n");
+    return help ? 0 : 2;
+  }
 
   // 1. Describe the scene: the same document a JSON scene file holds (docs/scene-format.md).
   penumbra::flatland::SceneDesc desc;

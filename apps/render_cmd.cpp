@@ -422,9 +422,17 @@ std::unique_ptr<RenderCommand> add_render_command(CLI::App& app) {
   add_exposure_option(render, a.exposure,
                       "PNG exposure in EV (default: automatic, the median of the lit open cells "
                       "or pixels to 1/8; --json reports it)");
-  render->add_flag("--show-walls,!--no-show-walls", a.show_walls,
-                   "2D PNG: walls and fog in the dark keep a dim floor of their colour, as the "
-                   "painter shows them (default on)");
+  // Two flags rather than CLI11's "--show-walls,!--no-show-walls", whose help line reads
+  // "{false}" beside a default that is on.
+  CLI::Option* show = render->add_flag(
+      "--show-walls", a.show_walls,
+      "2D PNG (the default): walls and fog in the dark keep a dim floor of their colour, as the "
+      "painter shows them");
+  render
+      ->add_flag_callback(
+          "--no-show-walls", [&a] { a.show_walls = false; },
+          "2D PNG: unlit walls and fog black, the fluence as it is")
+      ->excludes(show);
   render->add_flag("--json", a.json, "Print one JSON object with timings, memory and parameters");
   render->add_flag("-q,--quiet", a.quiet, "Print nothing on success");
   return cmd;

@@ -4,6 +4,8 @@
 #include <utility>
 
 #include "cli_enums.hpp"
+#include "io/json_reader.hpp"
+#include "penumbra/spaceland/render.hpp"
 
 using namespace penumbra::flatland;
 
@@ -39,28 +41,40 @@ void add_render_options(CLI::App* app, RenderOptions& options, RenderOptionFlags
         "tracer always does)");
     add_enum_option(
         app, "--sampler", pt.sampler, {Sampler::r1, Sampler::random},
-        "2D pt: direction sequence: r1 (low discrepancy), random (3D: Owen-scrambled Sobol)");
+        "2D pt: direction sequence: r1 (low discrepancy) or random (the 3D path tracer always "
+        "takes Owen-scrambled Sobol points)");
     app->add_option("--seed", pt.seed, "pt: random seed")->capture_default_str();
   }
   if (which.rc) {
     RcOptions& rc = options.rc;
-    app->add_option("--probe-spacing", rc.probe_spacing, "Cascade-0 probe spacing s0 in cells")
-        ->check(CLI::Range(1, 64))
-        ->capture_default_str();
-    app->add_option("--directions", rc.directions, "Directions Q0 of a cascade-0 probe")
-        ->check(CLI::Range(1, 64))
-        ->capture_default_str();
+    // 2D and 3D share these flags with different units and defaults, so the help states each
+    // world's default (from the option structs) rather than 2D's alone.
+    const penumbra::spaceland::SpwiOptions spwi;
+    const penumbra::spaceland::GridOptions grid;
+    auto n = [](auto v) { return penumbra::io::format_number(double(v)); };
+    app->add_option("--probe-spacing", rc.probe_spacing,
+                    "Cascade-0 probe spacing s0: cells in 2D (default " + n(rc.probe_spacing) +
+                        "), pixels in 3D spwi (default " + n(spwi.probe_spacing) +
+                        "), voxels in the 3D grid (default " + n(grid.probe_spacing) + ")")
+        ->check(CLI::Range(1, 64));
+    app->add_option("--directions", rc.directions,
+                    "Directions Q0 of a cascade-0 probe: 1 to 64 in 2D (default " +
+                        n(rc.directions) + "); in 3D the square of a power of two (spwi default " +
+                        n(spwi.directions) + ", grid " + n(grid.directions) + ")")
+        ->check(CLI::Range(1, 1024));
     app->add_option("--branching", rc.branching,
                     "Angular branching per cascade: 2 or 4 (2D); 4 or 16 (3D spwi, default 4)")
         ->check(CLI::IsMember({2, 4, 16}))
         ->capture_default_str();
     app->add_option(
            "--interval", rc.interval,
-           "Cascade-0 interval length t0: in cells (2D); in world units for 3D spwi (default "
-           "there: four probe spacings at the median depth)")
-        ->check(CLI::PositiveNumber)
-        ->capture_default_str();
-    app->add_option("--cascades", rc.cascades, "Number of cascades (0: reach the grid diagonal)")
+           "Cascade-0 interval length t0: cells in 2D (default " + n(rc.interval) +
+               "); world units in 3D (default: spwi, four probe spacings at the median depth; "
+               "grid, four probe spacings)")
+        ->check(CLI::PositiveNumber);
+    app->add_option("--cascades", rc.cascades,
+                    "Number of cascades (default 0: enough to reach across the 2D grid or the 3D "
+                    "scene)")
         ->check(CLI::Range(0, 16))
         ->capture_default_str();
     add_enum_option(app, "--fix", rc.fix, {MergeFix::bilinear, MergeFix::none, MergeFix::nearest},
@@ -165,6 +179,23 @@ std::string with_flags(std::string message) {
       {"`pt.nee`", "--nee"},
       {"`pt.sampler`", "--sampler"},
       {"`pt.seed`", "--seed"},
+      // 3D: SPWI's and the probe grid's own options, and those they share with 2D's cascades.
+      {"`spwi.probe_spacing`", "--probe-spacing"},
+      {"`spwi.directions`", "--directions"},
+      {"`spwi.interval`", "--interval"},
+      {"`spwi.branching`", "--branching"},
+      {"`spwi.cascades`", "--cascades"},
+      {"`spwi.preaverage`", "--preaverage"},
+      {"`spwi.depth_bias`", "--depth-bias"},
+      {"`spwi.merge_edge`", "--merge-edge"},
+      {"`spwi.gather_edge`", "--gather-edge"},
+      {"`spwi.gather_normal`", "--gather-normal"},
+      {"`grid.voxel`", "--voxel"},
+      {"`grid.probe_spacing`", "--probe-spacing"},
+      {"`grid.directions`", "--directions"},
+      {"`grid.interval`", "--interval"},
+      {"`grid.cascades`", "--cascades"},
+      {"`grid.extend_length`", "--extend-length"},
   };
   for (const auto& [field, flag] : kFlags)
     for (std::size_t at = message.find(field); at != std::string::npos;

@@ -210,8 +210,10 @@ Status check_options(const RenderOptions& o) {
           "`pt.spp` is 0 (no limit) and no `pt.seconds` is given: the render would "
           "never end"};
   }
-  // The grid's options (ranges and combinations) before any scene is read: the grid's own, and
-  // SPWI's later bounces, which come from the grid's radiance cache.
+  // Each method's options (ranges and combinations) before any scene is read: SPWI's, the
+  // grid's own, and the grid's for SPWI's later bounces, which come from its radiance cache.
+  if (o.method == Method::spwi)
+    if (Status s = spwi::check_options(o.spwi); !s) return s;
   if (o.method == Method::grid || (o.method == Method::spwi && o.bounces > 1))
     return grid::check_options(o.grid);
   return {};

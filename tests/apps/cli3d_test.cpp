@@ -96,8 +96,8 @@ TEST_F(Cli3d, SpwiReportsItsDerivedIntervalAndCascades) {
   EXPECT_EQ(gp["gather"], "probe");
   const auto two =
       run({"render", scene_, "--method", "spwi", "--branching", "2", "-o", out("two.pfm")});
-  EXPECT_EQ(two.status, 1);
-  EXPECT_NE(two.err.find("`spwi.branching`: expected 4 or 16"), std::string::npos) << two.err;
+  EXPECT_EQ(two.status, 2);
+  EXPECT_NE(two.err.find("--branching: expected 4 or 16"), std::string::npos) << two.err;
   EXPECT_FALSE(fs::exists(out("two.pfm")));
 }
 
@@ -151,6 +151,30 @@ TEST_F(Cli3d, GridReportsItsVoxelsAndIsRefusedItsOthersOptions) {
   EXPECT_NE(bad.err.find("applies to --method spwi or grid only, not pt"), std::string::npos)
       << bad.err;
   EXPECT_FALSE(fs::exists(out("x.pfm")));
+}
+
+// SPWI's and the grid's option values are usage errors (exit 2) named by their flags, checked
+// before the scene is read, as 2D's are.
+TEST_F(Cli3d, BadMethodOptionValuesAreUsageErrorsNamingTheFlag) {
+  const std::vector<std::vector<std::string>> cases = {
+      {"spwi", "--directions", "8", "--directions: expected the square of a power of two"},
+      {"spwi", "--cascades", "13", "--cascades: expected 0..12"},
+      {"spwi", "--branching", "2", "--branching: expected 4 or 16"},
+      {"grid", "--directions", "8", "--directions: expected the square of a power of two"},
+      {"grid", "--cascades", "13", "--cascades: expected 0..12"},
+  };
+  for (const auto& c : cases) {
+    const auto r = run({"render", scene_, "--method", c[0], c[1], c[2], "-o", out("x.pfm")});
+    EXPECT_EQ(r.status, 2) << c[0] << " " << c[1] << ": " << r.err;
+    EXPECT_NE(r.err.find(c[3]), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find('`'), std::string::npos) << "a field name, not a flag: " << r.err;
+  }
+  const auto r = run({"render", scene_, "--method", "spwi", "--merge", "minmax", "--preaverage",
+                      "-o", out("x.pfm")});
+  EXPECT_EQ(r.status, 2) << r.err;
+  EXPECT_NE(r.err.find("--preaverage does not combine with the min-max merge"), std::string::npos)
+      << r.err;
+  EXPECT_TRUE(out_empty());
 }
 
 TEST_F(Cli3d, WidthAndHeightReplaceTheCameraSize) {

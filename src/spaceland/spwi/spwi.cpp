@@ -315,11 +315,7 @@ std::uint64_t bytes_upper_bound(int width, int height, const SpwiOptions& o) {
   return p.bytes();
 }
 
-Status check(const Scene& scene, const RenderOptions& options) {
-  const SpwiOptions& o = options.spwi;
-  if (!scene.media.empty())
-    return Error{"spwi cannot carry fog: the scene has " + std::to_string(scene.media.size()) +
-                 " medium box(es); use --method pt"};
+Status check_options(const SpwiOptions& o) {
   if (o.probe_spacing < 1 || o.probe_spacing > 64)
     return Error{"`spwi.probe_spacing`: expected 1..64, found " + std::to_string(o.probe_spacing)};
   const int side = int(std::lround(std::sqrt(double(std::max(0, o.directions)))));
@@ -355,6 +351,13 @@ Status check(const Scene& scene, const RenderOptions& options) {
     return Error{"`spwi.gather_normal`: expected an exponent in [0, 64], found " +
                  io::format_number(o.gather_normal)};
   return {};
+}
+
+Status check(const Scene& scene, const RenderOptions& options) {
+  if (!scene.media.empty())
+    return Error{"spwi cannot carry fog: the scene has " + std::to_string(scene.media.size()) +
+                 " medium box(es); use --method pt"};
+  return check_options(options.spwi);
 }
 
 namespace {

@@ -58,8 +58,10 @@ struct Stats {
   std::vector<StageTime> stages;  // one per cascade, then the gather
 };
 
-// Options that cannot work: a map side that is not a power of two, bounces past 1 (there is no
-// world-space cache yet), fog.
+// The options' ranges and combinations (directions a square of a power of two, ...), before any
+// scene is read; fields are named as in SpwiOptions (`spwi.directions`).
+Status check_options(const SpwiOptions& options);
+// check_options, and what the scene adds: SPWI carries no fog.
 Status check(const Scene& scene, const RenderOptions& options);
 
 // Renders the camera's image. Refuses (Error) work whose plan passes options.max_memory.

@@ -13,7 +13,7 @@ ASAN_FLAGS = -DCMAKE_BUILD_TYPE=Release -DPENUMBRA_WERROR=$(WERROR) -DPENUMBRA_S
 FUZZ_SECONDS ?= 60
 
 .PHONY: all deps configure build demo test bench quality install format clean \
-        build-sanitize test-sanitize fuzz test-shared
+        build-sanitize test-sanitize fuzz test-shared scene-images
 
 all: build
 
@@ -67,6 +67,11 @@ quality: build
 	@for b in 2 3 4; do \
 	  $(BUILD)/bin/penumbra bench-quality scenes/3d/cornell.json --bounces $$b -o docs/quality/3d/study/cornell-b$$b --doc docs/QUALITY.md --cache $(BUILD)/quality-cache || exit 1; \
 	done
+
+# Every picture of scenes/README.md, from the command printed under it (minutes, mostly the 3D
+# path-traced ones); prints each command's time.
+scene-images: build
+	@bash scripts/scene-images.sh $(BUILD)
 
 # The library as shared libraries (-DBUILD_SHARED_LIBS=ON): built, installed into a scratch
 # prefix and linked by examples/ through find_package(penumbra), which must then need no

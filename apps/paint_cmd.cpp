@@ -96,6 +96,17 @@ int run_paint(const PaintArgs& args) {
     }
     canvas = paint::Canvas::blank(w, h, a.emission_scale);
   } else {
+    // The painter draws 2D scenes; a 3D one gets a message that says so.
+    const Expected<int> dims = penumbra::spaceland::scene_dimensions(a.scene);
+    if (!dims || *dims == 3) {
+      std::cerr << "penumbra paint: "
+                << (dims ? a.scene +
+                               ": a 3D scene; the painter draws 2D scenes (render it with "
+                               "`penumbra render`)"
+                         : dims.error().message)
+                << "\n";
+      return kFailure;
+    }
     Expected<SceneDesc> desc = load_scene(a.scene);
     canvas = desc ? paint::Canvas::from_scene(*desc, a.emission_scale_given ? a.emission_scale : 0)
                   : Expected<paint::Canvas>(desc.error());

@@ -162,7 +162,7 @@ int render_scene_3d(const RenderArgs& a) {
   const double write_ms = write_watch.ms();
   const sl::Camera& cam = scene->camera;
   if (a.json) {
-    nlohmann::json stages = nlohmann::json::object();
+    nlohmann::ordered_json stages = nlohmann::ordered_json::object();  // in pipeline order
     for (const sl::StageTime& s : result->stages) stages[s.name] = s.ms;
     nlohmann::json parameters = {{"bounces", options.bounces},
                                  {"threads", options.threads},
@@ -198,24 +198,24 @@ int render_scene_3d(const RenderArgs& a) {
                          {"extend_length", used.grid.extend_length},
                          {"fix", used.grid.fix ? "bilinear" : "none"}});
     }
-    nlohmann::json j = {{"method", sl::to_string(options.method)},
-                        {"dimensions", 3},
-                        {"device", result->device},
-                        {"scene", a.scene},
-                        {"width", cam.width},
-                        {"height", cam.height},
-                        {"time_ms", result->time_ms},
-                        {"stages", stages},
-                        {"load_ms", load_ms},
-                        {"write_ms", write_ms},
-                        {"memory_bytes", result->memory_bytes},
-                        {"rays", result->rays},
-                        {"samples", result->samples},
-                        {"cancelled", result->cancelled},
-                        {"parameters", parameters},
-                        {"exposure", display.exposure},
-                        {"exposure_auto", !a.exposure},
-                        {"outputs", a.outputs}};
+    nlohmann::ordered_json j = {{"method", sl::to_string(options.method)},
+                                {"dimensions", 3},
+                                {"device", result->device},
+                                {"scene", a.scene},
+                                {"width", cam.width},
+                                {"height", cam.height},
+                                {"time_ms", result->time_ms},
+                                {"stages", stages},
+                                {"load_ms", load_ms},
+                                {"write_ms", write_ms},
+                                {"memory_bytes", result->memory_bytes},
+                                {"rays", result->rays},
+                                {"samples", result->samples},
+                                {"cancelled", result->cancelled},
+                                {"parameters", parameters},
+                                {"exposure", display.exposure},
+                                {"exposure_auto", !a.exposure},
+                                {"outputs", a.outputs}};
     std::cout << j.dump(2) << "\n";
   } else if (!a.quiet) {
     std::size_t triangles = 0;

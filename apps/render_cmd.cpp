@@ -251,29 +251,29 @@ int render_scene(const RenderArgs& a) {
   const double write_ms = write_watch.ms();
 
   if (a.json) {
-    nlohmann::json stages = nlohmann::json::object();
+    nlohmann::ordered_json stages = nlohmann::ordered_json::object();  // in pipeline order
     for (const penumbra::flatland::StageTime& s : result->stages) stages[s.name] = s.ms;
-    nlohmann::json j = {{"method", penumbra::flatland::to_string(options.method)},
-                        {"device", result->device},
-                        {"scene", desc->source},
-                        {"width", scene->width},
-                        {"height", scene->height},
-                        {"time_ms", result->time_ms},
-                        {"stages", stages},
-                        {"rasterize_ms", raster_ms},
-                        {"load_ms", load_ms},
-                        {"write_ms", write_ms},
-                        {"memory_bytes", result->memory_bytes},
-                        {"gpu_memory_bytes", result->gpu_memory_bytes},
-                        {"uploaded_bytes", result->uploaded_bytes},
-                        {"intervals", result->intervals},
-                        {"samples", result->samples},
-                        {"cancelled", result->cancelled},
-                        {"parameters", parameters_json(result->options)},
-                        {"exposure", display.exposure},
-                        {"exposure_auto", !a.exposure},
-                        {"show_walls", a.show_walls},
-                        {"outputs", a.outputs}};
+    nlohmann::ordered_json j = {{"method", penumbra::flatland::to_string(options.method)},
+                                {"device", result->device},
+                                {"scene", desc->source},
+                                {"width", scene->width},
+                                {"height", scene->height},
+                                {"time_ms", result->time_ms},
+                                {"stages", stages},
+                                {"rasterize_ms", raster_ms},
+                                {"load_ms", load_ms},
+                                {"write_ms", write_ms},
+                                {"memory_bytes", result->memory_bytes},
+                                {"gpu_memory_bytes", result->gpu_memory_bytes},
+                                {"uploaded_bytes", result->uploaded_bytes},
+                                {"intervals", result->intervals},
+                                {"samples", result->samples},
+                                {"cancelled", result->cancelled},
+                                {"parameters", parameters_json(result->options)},
+                                {"exposure", display.exposure},
+                                {"exposure_auto", !a.exposure},
+                                {"show_walls", a.show_walls},
+                                {"outputs", a.outputs}};
     std::cout << j.dump(2) << "\n";
   } else if (!a.quiet) {
     std::printf("penumbra %s: %s, %dx%d cells, method %s on %s, ", penumbra::kVersion,

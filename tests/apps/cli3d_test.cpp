@@ -241,6 +241,20 @@ TEST_F(Cli3d, BadDocumentsNameTheFileAndThePathAndWriteNothing) {
   r = run({"render", dims, "-o", out("x.png")});
   EXPECT_EQ(r.status, 1);
   EXPECT_NE(r.err.find("dimensions"), std::string::npos) << r.err;
+  // A 3D document without `dimensions` is told what is missing, not that `camera` is unknown.
+  std::string text = kScene3d;
+  text.erase(text.find(R"("dimensions": 3,)"), std::string(R"("dimensions": 3,)").size());
+  const std::string nodims = tmp_.write("nodims.json", text);
+  r = run({"render", nodims, "-o", out("x.png")});
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("nodims.json: dimensions: missing, but the document has `camera` and "
+                       "`objects`, which only 3D scenes have: add \"dimensions\": 3"),
+            std::string::npos)
+      << r.err;
+  r = run({"paint", scene_});  // the painter is 2D; it says so before opening a window
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("scene3d.json: a 3D scene; the painter draws 2D scenes"), std::string::npos)
+      << r.err;
   r = run({"render", scene_, "--max-memory", "1K", "-o", out("x.png")});
   EXPECT_EQ(r.status, 1);
   EXPECT_NE(r.err.find("--max-memory"), std::string::npos) << r.err;

@@ -124,7 +124,8 @@ Expected<Scene> parse_scene(std::string_view json_text, const std::string& path,
 Expected<Scene> load_scene(const std::string& path, const LoadOptions& options = {});
 
 // 2 or 3: the `dimensions` of a scene document (2 when absent), for programs that read both
-// worlds. Errors: unreadable file, invalid JSON, `dimensions` not 2 or 3.
+// worlds. Errors: unreadable file, invalid JSON, `dimensions` not 2 or 3, or absent from a
+// document with 3D keys (`camera`, `objects`).
 Expected<int> scene_dimensions(const std::string& path);
 
 // Checks a scene built in code as parse_scene checks a document: finite values in range, indices

@@ -446,7 +446,19 @@ Expected<int> scene_dimensions(const std::string& path) {
     const io::JsonReader reader(path);
     if (!doc.is_object()) reader.expected("(document)", "a JSON object", doc);
     auto it = doc.find("dimensions");
-    if (it == doc.end() || is_integer(*it, 2)) return 2;
+    if (it == doc.end()) {
+      // A 3D document that forgot `dimensions` would otherwise fail as a 2D one, on "unknown
+      // key camera": say what is missing instead.
+      std::string keys;
+      for (const char* k : {"camera", "objects"})
+        if (doc.contains(k)) keys += std::string(keys.empty() ? "" : " and ") + "`" + k + "`";
+      if (!keys.empty())
+        return Error{path + ": dimensions: missing, but the document has " + keys +
+                     ", which only 3D scenes have: add \"dimensions\": 3 (a document without "
+                     "it is a 2D scene)"};
+      return 2;
+    }
+    if (is_integer(*it, 2)) return 2;
     if (is_integer(*it, 3)) return 3;
     reader.expected("dimensions", "the integer 2 or 3", *it);
   } catch (const io::JsonFailure& f) {

@@ -38,7 +38,9 @@ std::unique_ptr<PaintCommand> add_paint_command(CLI::App& app) {
   cmd->app = app.add_subcommand("paint", "Paint lights, walls and fog; see the light at once");
   CLI::App* c = cmd->app;
   c->add_option("scene", a.scene, "Scene file to start from (JSON, format 1)");
-  c->add_option("--size", a.size, "Grid of a blank canvas, WxH cells")->capture_default_str();
+  a.size_option = c->add_option("--size", a.size,
+                                "Grid of a blank canvas, WxH cells (a scene file has its own)")
+                      ->capture_default_str();
   // The render options the window can change too, in two calls to keep the help in its order;
   // paint says its own help and allows fewer bounces.
   RenderOptionSet first, second;
@@ -96,6 +98,11 @@ int run_paint(const PaintArgs& args) {
     }
     canvas = paint::Canvas::blank(w, h, a.emission_scale);
   } else {
+    if (a.size_option && a.size_option->count() > 0) {  // not silently ignored
+      std::cerr << "penumbra paint: --size is for a blank canvas; " << a.scene
+                << " has its own grid (resize it in the scene file)\n";
+      return kUsage;
+    }
     // The painter draws 2D scenes; a 3D one gets a message that says so.
     const Expected<int> dims = penumbra::spaceland::scene_dimensions(a.scene);
     if (!dims || *dims == 3) {

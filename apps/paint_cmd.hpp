@@ -10,7 +10,8 @@
 
 namespace CLI {
 class App;
-}
+class Option;
+}  // namespace CLI
 
 struct PaintArgs {
   PaintArgs() {
@@ -21,6 +22,7 @@ struct PaintArgs {
   RenderOptionFlags flags;                    // applied to `options` by run_paint
   std::string scene;                          // empty: a blank canvas of `size`
   std::string size = "256x256";               // cells, for a blank canvas
+  const CLI::Option* size_option = nullptr;   // --size, to refuse it beside a scene file
   std::string replay;                         // stroke file to paint at start
   std::string screenshot;                     // PNG of the window after the replay; then exit
   std::string record;                         // stroke file written at exit

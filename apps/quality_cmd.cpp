@@ -33,8 +33,10 @@ std::unique_ptr<QualityCommand> add_quality_command(CLI::App& app) {
       "reference");
   CLI::App* c = cmd->app;
   c->add_option("scene", a.scene, "Scene file (JSON, format 1; 2D or 3D)")->required();
-  c->add_option("-o,--out", a.out,
-                "Folder for quality.csv/.md/.svg/.png and {rc,hrc,spwi}_vs_reference.png")
+  c->add_option(
+       "-o,--out", a.out,
+       "Folder for quality.csv/.md/.svg/.png and the montages: {rc,hrc}_vs_reference.png (2D), "
+       "{spwi,grid}_vs_reference.png (3D)")
       ->capture_default_str();
   c->add_option("--cache", a.cache, "Folder for cached references (default: <out>/cache)");
   c->add_option("--doc", a.doc,

@@ -166,6 +166,10 @@ TEST_F(PaintWindow, BadInputIsReportedBeforeTheWindow) {
   r = paint_headless({"--device", "gpu", "--method", "pt"});  // the path tracer is CPU only
   EXPECT_EQ(r.status, 2) << r.err;
   EXPECT_NE(r.err.find("path tracer runs on the CPU only"), std::string::npos) << r.err;
+  r = paint_headless({tmp_.write("two.json", R"({"penumbra": 1, "width": 8, "height": 8})"),
+                      "--size", "16x16"});  // a scene file has its own grid
+  EXPECT_EQ(r.status, 2) << r.err;
+  EXPECT_NE(r.err.find("--size is for a blank canvas; "), std::string::npos) << r.err;
   r = paint_headless({"--exposure", "nan"});
   EXPECT_EQ(r.status, 2) << r.err;
   EXPECT_NE(r.err.find("--exposure: expected a finite number of EV"), std::string::npos) << r.err;

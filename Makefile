@@ -49,7 +49,7 @@ bench: build
 	@$(BUILD)/bin/penumbra_bench --benchmark_counters_tabular=true
 
 # The quality studies in docs/QUALITY.md (minutes: the path-traced references are cached; the
-# 3D closed forms, about 35 s on 2 cores, write docs/quality/3d/quality3d.md and spwi3d.md; the
+# 3D closed forms, about 16 s on 2 cores, write docs/quality/3d/quality3d.md and spwi3d.md; the
 # probe grid's, about 6 min, grid3d.md). The 3D scenes of the SPWI and probe grid study (a
 # reference of 1024 spp each, 20-50 s; then 1-5 min of runs), and the Cornell box at 2 to 4
 # bounces.

@@ -23,7 +23,8 @@ CC=clang-14 CXX=clang++-14 cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release \
   -DPENUMBRA_WERROR="${WERROR:-OFF}" >"$build.configure.log" 2>&1 ||
   { cat "$build.configure.log"; exit 1; }
 # Only the fuzzers and the seed writer: the command line and the tools are not needed here.
-cmake --build "$build" -j "$jobs" --target "${targets[@]}" penumbra_fuzz_seeds
+# cmake's make as a top-level make: no "Entering directory" lines under `make fuzz`.
+env -u MAKELEVEL -u MAKEFLAGS -u MFLAGS cmake --build "$build" -j "$jobs" --target "${targets[@]}" penumbra_fuzz_seeds
 echo "== fuzz.sh: build took $((SECONDS - start)) s"
 start=$SECONDS
 

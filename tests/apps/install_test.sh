@@ -42,7 +42,7 @@ found=$(sed -n 's/^penumbra_DIR:PATH=//p' "$example_build/CMakeCache.txt")
 [[ $found == "$prefix"/* ]] || die "find_package(penumbra) found '$found', not the install in $prefix"
 
 step "building the example"
-"$cmake" --build "$example_build" --parallel || die "building the example against the install failed"
+env -u MAKELEVEL -u MAKEFLAGS -u MFLAGS "$cmake" --build "$example_build" --parallel || die "building the example against the install failed"
 
 if [[ ${SHARED:-0} == 1 ]]; then
   # A shared install: the example links libpenumbra_*.so, found through the install's RUNPATH or

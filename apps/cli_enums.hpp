@@ -5,6 +5,7 @@
 
 #include <CLI/CLI.hpp>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <optional>
 #include <string>
@@ -47,6 +48,22 @@ inline CLI::Validator real_range(double lo, double hi) {
       "NUMBER in [" + bounds + "]");
 }
 
+// A real number above `lo` (or at least `lo`), said plainly: CLI::PositiveNumber's message
+// spells out DBL_MAX as its upper bound.
+inline CLI::Validator real_above(double lo, bool or_equal) {
+  const std::string bound = std::string(or_equal ? ">= " : "> ") + penumbra::io::format_number(lo);
+  return CLI::Validator(
+      [lo, or_equal, bound](std::string& text) -> std::string {
+        double v = 0;
+        if (!CLI::detail::lexical_cast(text, v) || std::isnan(v))
+          return "Value " + text + " is not a number";
+        if (!std::isfinite(v) || v < lo || (!or_equal && v == lo))
+          return "Value " + text + " is not a finite number " + bound;
+        return {};
+      },
+      "NUMBER " + bound);
+}
+
 // --exposure of render, paint and compare: a finite number of EV; left empty when not given,
 // which means automatic exposure.
 inline CLI::Option* add_exposure_option(CLI::App* app, std::optional<float>& ev,
@@ -54,8 +71,10 @@ inline CLI::Option* add_exposure_option(CLI::App* app, std::optional<float>& ev,
   return app->add_option("--exposure", ev, help)
       ->check(CLI::Validator(
           [](std::string& text) -> std::string {
+            // Stored as a float: a finite double past FLT_MAX would become inf there.
             double v = 0;
-            if (!CLI::detail::lexical_cast(text, v) || !std::isfinite(v))
+            if (!CLI::detail::lexical_cast(text, v) || !std::isfinite(v) ||
+                std::abs(v) > double(std::numeric_limits<float>::max()))
               return "expected a finite number of EV, found '" + text + "'";
             return {};
           },

@@ -109,6 +109,14 @@ int render_scene_3d(const RenderArgs& a) {
     }
     options.grid.fix = a.options.rc.fix == penumbra::flatland::MergeFix::bilinear;
   }
+  // Named here by the flags given: the library's message names `grid.extend_length` alone.
+  if (options.method == sl::Method::grid && options.grid.fix && options.grid.extend_length > 0) {
+    std::cerr << "penumbra render: " << (given("--extend") ? "--extend" : "--extend-length")
+              << " and --fix bilinear do not combine: extension doubles a probe's own intervals, "
+                 "which the bilinear fix does not use (it traces to the upper probes instead); "
+                 "use one or the other\n";
+    return kUsage;
+  }
   options.aov = a.aov;
   // The shared options, with --time alone meaning no sample limit, as in 2D.
   penumbra::flatland::RenderOptions shared = a.options;

@@ -382,7 +382,7 @@ std::unique_ptr<RenderCommand> add_render_command(CLI::App& app) {
         ->add_option("--voxel", a.grid.voxel,
                      "3D grid: voxel size in world units (0: the scene's longest side over 128, "
                      "larger if that passes a quarter of --max-memory)")
-        ->check(CLI::NonNegativeNumber)
+        ->check(real_above(0, true))
         ->capture_default_str();
     add_enum_option(render, "--gather", a.spwi.gather,
                     {sl::SpwiGather::pixel, sl::SpwiGather::probe},

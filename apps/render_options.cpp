@@ -34,7 +34,7 @@ void add_render_options(CLI::App* app, RenderOptions& options, RenderOptionFlags
             ->capture_default_str();
     flags.time =
         app->add_option("--time", pt.seconds, "pt: add samples until this many seconds have passed")
-            ->check(CLI::NonNegativeNumber);
+            ->check(real_above(0, true));
     app->add_flag(
         "--nee", pt.nee,
         "2D pt: next event estimation (aim at emitting regions, combined by MIS; the 3D path "
@@ -71,7 +71,7 @@ void add_render_options(CLI::App* app, RenderOptions& options, RenderOptionFlags
            "Cascade-0 interval length t0: cells in 2D (default " + n(rc.interval) +
                "); world units in 3D (default: spwi, four probe spacings at the median depth; "
                "grid, four probe spacings)")
-        ->check(CLI::PositiveNumber);
+        ->check(real_above(0, false));
     app->add_option("--cascades", rc.cascades,
                     "Number of cascades (default 0: enough to reach across the 2D grid or the 3D "
                     "scene)")

@@ -1,21 +1,24 @@
 #!/usr/bin/env bash
 # Renders every picture of scenes/README.md with the command printed under it: the README is
 # the list, so a picture and its command cannot drift apart. Prints each command's computation
-# time (`--json`'s time_ms), the figure the README quotes.
+# time (`--json`'s time_ms), the figure the README quotes. Stops at the first command that fails
+# (its message is shown); the pictures after it are left as they were.
 #   scripts/scene-images.sh [BUILD] [PATTERN]   (PATTERN: only commands containing it)
 set -euo pipefail
-build=${1:-build}
+build=$(realpath "${1:-build}")
 pattern=${2:-}
 cd "$(dirname "$0")/.."
-mapfile -t commands < <(grep -E '^    build/bin/penumbra render scenes/' scenes/README.md |
-                        sed -e 's/^ *//' -e "s#^build/#$build/#")
+[ -x "$build/bin/penumbra" ] || { echo "scene-images: no $build/bin/penumbra (make build)" >&2; exit 1; }
+mapfile -t commands < <(grep -E '^    build/bin/penumbra render scenes/' scenes/README.md | sed -e 's/^ *//')
 [ ${#commands[@]} -gt 0 ] || { echo "scene-images: no commands in scenes/README.md" >&2; exit 1; }
 for c in "${commands[@]}"; do
   [[ -z "$pattern" || "$c" == *"$pattern"* ]] || continue
-  read -r -a args <<< "$c"
+  read -r -a args <<< "${c#build/bin/penumbra }"
   start=$(date +%s.%N)
-  json=$("${args[@]}" --json -q)
-  ms=$(printf '%s\n' "$json" | grep -m1 '^  "time_ms"' | tr -dc '0-9.')
-  awk -v ms="$ms" -v t0="$start" -v t1="$(date +%s.%N)" -v c="${c#"$build"/bin/}" \
-    'BEGIN { printf "%8.2f s computation  %7.2f s wall  %s\n", ms / 1000, t1 - t0, c }' 
+  json=$("$build/bin/penumbra" "${args[@]}" --json -q)
+  # The report's top-level "time_ms" (two spaces in: stages nest deeper).
+  ms=$(printf '%s\n' "$json" | sed -n 's/^  "time_ms": \([^,]*\),\{0,1\}$/\1/p')
+  [ -n "$ms" ] || { echo "scene-images: no time_ms in the report of: $c" >&2; exit 1; }
+  awk -v ms="$ms" -v t0="$start" -v t1="$(date +%s.%N)" -v c="${c#build/bin/}" \
+    'BEGIN { printf "%8.2f s computation  %7.2f s wall  %s\n", ms / 1000, t1 - t0, c }'
 done

@@ -129,7 +129,8 @@ TEST_F(Cli3d, GridReportsItsVoxelsAndIsRefusedItsOthersOptions) {
   auto bad = run(
       {"render", scene_, "--method", "grid", "--extend", "--fix", "bilinear", "-o", out("x.pfm")});
   EXPECT_EQ(bad.status, 2);
-  EXPECT_NE(bad.err.find("use one or the other"), std::string::npos) << bad.err;
+  EXPECT_NE(bad.err.find("--extend and --fix bilinear do not combine"), std::string::npos)
+      << bad.err;
   bad = run({"render", scene_, "--method", "grid", "--fix", "nearest", "-o", out("x.pfm")});
   EXPECT_EQ(bad.status, 2);
   EXPECT_NE(bad.err.find("--fix nearest applies to 2D scenes only"), std::string::npos) << bad.err;

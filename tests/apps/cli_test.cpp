@@ -671,6 +671,9 @@ TEST_F(Cli, FailedRunKeepsExistingOutputs) {
 TEST_F(Cli, BadOptionValuesAreUsageErrors) {
   for (const std::vector<std::string>& bad : {std::vector<std::string>{"--interval", "nan"},
                                               {"--exposure", "inf"},
+                                              {"--exposure", "1e40"},  // finite, not as a float
+                                              {"--interval", "0"},
+                                              {"--time", "-1"},
                                               {"--max-memory", "1e30G"},
                                               {"--interval", "1e-18"}}) {
     std::vector<std::string> args = {"render", scene_, "-o", out("x.pfm")};

@@ -160,8 +160,9 @@ int render_scene_3d(const RenderArgs& a) {
     return kFailure;
   }
   penumbra::Stopwatch write_watch;
-  penumbra::DisplayOptions display;
-  display.exposure = a.exposure ? *a.exposure : sl::auto_exposure(result->radiance, options.aov);
+  const std::optional<float> exposure =
+      png_exposure(a, [&] { return sl::auto_exposure(result->radiance, options.aov); });
+  const penumbra::DisplayOptions display{exposure.value_or(0.0f)};
   if (penumbra::Status s = sl::write_images(a.outputs, result->radiance, options.aov, display);
       !s) {
     std::cerr << "penumbra render: " << s.error().message << "\n";
@@ -206,24 +207,25 @@ int render_scene_3d(const RenderArgs& a) {
                          {"extend_length", used.grid.extend_length},
                          {"fix", used.grid.fix ? "bilinear" : "none"}});
     }
-    nlohmann::ordered_json j = {{"method", sl::to_string(options.method)},
-                                {"dimensions", 3},
-                                {"device", result->device},
-                                {"scene", a.scene},
-                                {"width", cam.width},
-                                {"height", cam.height},
-                                {"time_ms", result->time_ms},
-                                {"stages", stages},
-                                {"load_ms", load_ms},
-                                {"write_ms", write_ms},
-                                {"memory_bytes", result->memory_bytes},
-                                {"rays", result->rays},
-                                {"samples", result->samples},
-                                {"cancelled", result->cancelled},
-                                {"parameters", parameters},
-                                {"exposure", display.exposure},
-                                {"exposure_auto", !a.exposure},
-                                {"outputs", a.outputs}};
+    nlohmann::ordered_json j = {
+        {"method", sl::to_string(options.method)},
+        {"dimensions", 3},
+        {"device", result->device},
+        {"scene", a.scene},
+        {"width", cam.width},
+        {"height", cam.height},
+        {"time_ms", result->time_ms},
+        {"stages", stages},
+        {"load_ms", load_ms},
+        {"write_ms", write_ms},
+        {"memory_bytes", result->memory_bytes},
+        {"rays", result->rays},
+        {"samples", result->samples},
+        {"cancelled", result->cancelled},
+        {"parameters", parameters},
+        {"exposure", exposure ? nlohmann::ordered_json(*exposure) : nlohmann::ordered_json()},
+        {"exposure_auto", !a.exposure},
+        {"outputs", a.outputs}};
     std::cout << j.dump(2) << "\n";
   } else if (!a.quiet) {
     std::size_t triangles = 0;
@@ -257,9 +259,7 @@ int render_scene_3d(const RenderArgs& a) {
                 double(result->memory_bytes) / (1 << 20), double(result->rays) / 1e6,
                 double(result->rays) / 1e3 / result->time_ms);
     for (const std::string& out : a.outputs) std::printf("  wrote %s\n", out.c_str());
-    if (has_png(a.outputs))
-      std::printf("  PNG exposure %+.2f EV (%s)\n", display.exposure,
-                  a.exposure ? "--exposure" : "automatic; --exposure sets it");
+    print_png_exposure(a, exposure);
   }
   if (result->cancelled) {
     std::fprintf(stderr,

@@ -79,6 +79,12 @@ bool has_png(const std::vector<std::string>& outputs) {
   });
 }
 
+void print_png_exposure(const RenderArgs& a, std::optional<float> exposure) {
+  if (exposure)
+    std::printf("  PNG exposure %+.2f EV (%s)\n", *exposure,
+                a.exposure ? "--exposure" : "automatic; --exposure sets it");
+}
+
 int check_render_args(const RenderArgs& a, std::uint64_t& max_memory) {
   for (const std::string& out : a.outputs)
     if (!penumbra::is_supported_output(out)) {
@@ -238,9 +244,9 @@ int render_scene(const RenderArgs& a) {
     return kFailure;
   }
   penumbra::Stopwatch write_watch;
-  penumbra::DisplayOptions display{0, a.show_walls};
-  display.exposure =
-      a.exposure ? *a.exposure : penumbra::flatland::auto_exposure(result->fluence, &*scene);
+  const std::optional<float> exposure =
+      png_exposure(a, [&] { return penumbra::flatland::auto_exposure(result->fluence, &*scene); });
+  const penumbra::DisplayOptions display{exposure.value_or(0.0f), a.show_walls};
   // All outputs or none; files already there stay untouched if any output fails.
   if (penumbra::Status s =
           penumbra::flatland::write_images(a.outputs, result->fluence, *scene, display);
@@ -253,27 +259,28 @@ int render_scene(const RenderArgs& a) {
   if (a.json) {
     nlohmann::ordered_json stages = nlohmann::ordered_json::object();  // in pipeline order
     for (const penumbra::flatland::StageTime& s : result->stages) stages[s.name] = s.ms;
-    nlohmann::ordered_json j = {{"method", penumbra::flatland::to_string(options.method)},
-                                {"device", result->device},
-                                {"scene", desc->source},
-                                {"width", scene->width},
-                                {"height", scene->height},
-                                {"time_ms", result->time_ms},
-                                {"stages", stages},
-                                {"rasterize_ms", raster_ms},
-                                {"load_ms", load_ms},
-                                {"write_ms", write_ms},
-                                {"memory_bytes", result->memory_bytes},
-                                {"gpu_memory_bytes", result->gpu_memory_bytes},
-                                {"uploaded_bytes", result->uploaded_bytes},
-                                {"intervals", result->intervals},
-                                {"samples", result->samples},
-                                {"cancelled", result->cancelled},
-                                {"parameters", parameters_json(result->options)},
-                                {"exposure", display.exposure},
-                                {"exposure_auto", !a.exposure},
-                                {"show_walls", a.show_walls},
-                                {"outputs", a.outputs}};
+    nlohmann::ordered_json j = {
+        {"method", penumbra::flatland::to_string(options.method)},
+        {"device", result->device},
+        {"scene", desc->source},
+        {"width", scene->width},
+        {"height", scene->height},
+        {"time_ms", result->time_ms},
+        {"stages", stages},
+        {"rasterize_ms", raster_ms},
+        {"load_ms", load_ms},
+        {"write_ms", write_ms},
+        {"memory_bytes", result->memory_bytes},
+        {"gpu_memory_bytes", result->gpu_memory_bytes},
+        {"uploaded_bytes", result->uploaded_bytes},
+        {"intervals", result->intervals},
+        {"samples", result->samples},
+        {"cancelled", result->cancelled},
+        {"parameters", parameters_json(result->options)},
+        {"exposure", exposure ? nlohmann::ordered_json(*exposure) : nlohmann::ordered_json()},
+        {"exposure_auto", !a.exposure},
+        {"show_walls", a.show_walls},
+        {"outputs", a.outputs}};
     std::cout << j.dump(2) << "\n";
   } else if (!a.quiet) {
     std::printf("penumbra %s: %s, %dx%d cells, method %s on %s, ", penumbra::kVersion,
@@ -306,9 +313,7 @@ int render_scene(const RenderArgs& a) {
                   double(result->gpu_memory_bytes) / (1 << 20),
                   double(result->uploaded_bytes) / (1 << 20));
     for (const std::string& out : a.outputs) std::printf("  wrote %s\n", out.c_str());
-    if (has_png(a.outputs))
-      std::printf("  PNG exposure %+.2f EV (%s)\n", display.exposure,
-                  a.exposure ? "--exposure" : "automatic; --exposure sets it");
+    print_png_exposure(a, exposure);
   }
   if (result->cancelled) {
     std::fprintf(stderr, "penumbra render: interrupted; wrote the image of %llu samples per cell\n",

@@ -95,5 +95,16 @@ int check_render_args(const RenderArgs& args, std::uint64_t& max_memory);
 // Whether any output is a PNG (the one output that is exposed).
 bool has_png(const std::vector<std::string>& outputs);
 
+// The exposure of the PNGs among the outputs: --exposure, or `meter()`'s reading of the
+// picture; none when no PNG is written (the meter's pass over the image is then skipped).
+template <class Meter>
+std::optional<float> png_exposure(const RenderArgs& args, Meter&& meter) {
+  if (!has_png(args.outputs)) return std::nullopt;
+  return args.exposure ? *args.exposure : meter();
+}
+
+// The text report's line for it (nothing without a PNG).
+void print_png_exposure(const RenderArgs& args, std::optional<float> exposure);
+
 // The 3D half of `render` (render3d_cmd.cpp): `args.scene` is a 3D document.
 int render_scene_3d(const RenderArgs& args);

@@ -95,11 +95,8 @@ Status hrc_check(Plan& p) {
     return bad("`hrc.near_fan`: expected 0 (off) to " + std::to_string(kMaxNearFan) +
                " cells, found " + std::to_string(near));
   const float w = p.options.hrc.even_weight;
-  if (!(w >= 0.0f && w <= 1.0f)) {
-    std::string m = "`hrc.even_weight`: expected a weight in [0, 1], found ";
-    m += std::to_string(w);
-    return bad(m);
-  }
+  if (!(w >= 0.0f && w <= 1.0f))
+    return bad("`hrc.even_weight`: expected a weight in [0, 1], found " + io::format_number(w));
   return {};
 }
 

@@ -61,7 +61,8 @@ struct Stats {
 // The options' ranges and combinations (directions a square of a power of two, ...), before any
 // scene is read; fields are named as in SpwiOptions (`spwi.directions`).
 Status check_options(const SpwiOptions& options);
-// check_options, and what the scene adds: SPWI carries no fog.
+// What the scene adds (the method table's check, run by render() after check_options, which
+// covers the options): SPWI carries no fog.
 Status check(const Scene& scene, const RenderOptions& options);
 
 // Renders the camera's image. Refuses (Error) work whose plan passes options.max_memory.

@@ -280,7 +280,7 @@ int run_quality3d(const QualityArgs& a) {
       if (!montage) return fail(montage.error().message);
       const std::string method = sl::to_string(o.method);
       montages.push_back({method + "_vs_reference.png",
-                          std::string(o.method == sl::Method::grid ? "the probe grid" : "SPWI") +
+                          std::string(sl::methods()[std::size_t(o.method)].title) +
                               " at its defaults against the reference",
                           *montage});
     }

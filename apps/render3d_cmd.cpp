@@ -8,7 +8,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 #include <string_view>
-#include <tuple>
+#include <variant>
 
 #include "core/timer.hpp"
 #include "io/json_reader.hpp"
@@ -32,13 +32,56 @@ constexpr std::string_view kCommon[] = {"scene",     "--output",     "--method",
 
 }  // namespace
 
-int render_scene_3d(const RenderArgs& a) {
-  if (a.options.device == penumbra::flatland::Device::gpu) {
-    std::cerr << "penumbra render: --device gpu: 3D scenes render on the CPU only for now ("
-              << a.scene << " is a 3D scene)\n";
-    return kUsage;
+namespace {
+
+// Whether `method` reads the option named `flag` (its MethodInfo's fields, by their flags).
+bool reads(const sl::MethodInfo& method, const std::string& flag) {
+  for (const std::string& field : method.options)
+    for (const std::string& f : flags_of(field))
+      if (f == flag) return true;
+  return false;
+}
+
+// An option given that the chosen method does not read: refused, naming the 3D methods that read
+// it (or the 2D world); 0 when every option given is read.
+int check_method_options(const RenderArgs& a, sl::Method method) {
+  if (!a.app) return 0;
+  for (const CLI::Option* opt : a.app->get_options()) {
+    const std::string name = opt->get_name();
+    if (opt->count() == 0 || listed(name, kCommon) || listed(name, k3dOptions)) continue;
+    std::string readers;
+    bool read = false;
+    for (const sl::MethodInfo& m : sl::methods())
+      if (reads(m, name)) {
+        readers += std::string(readers.empty() ? "--method " : " or ") + m.name;
+        read = read || m.method == method;
+      }
+    if (readers.empty()) {
+      std::cerr << "penumbra render: " << name << " applies to 2D scenes only (" << a.scene
+                << " is a 3D scene)\n";
+      return kUsage;
+    }
+    if (!read) {
+      std::cerr << "penumbra render: " << name << " applies to " << readers << " only, not "
+                << sl::to_string(method) << "\n";
+      return kUsage;
+    }
   }
+  return 0;
+}
+
+}  // namespace
+
+bool read_by_3d_method(const std::string& flag) {
+  for (const sl::MethodInfo& m : sl::methods())
+    if (reads(m, flag)) return true;
+  return false;
+}
+
+int render_scene_3d(const RenderArgs& a) {
   sl::RenderOptions options;
+  options.device =
+      a.options.device == penumbra::flatland::Device::gpu ? sl::Device::gpu : sl::Device::cpu;
   if (!a.method.empty()) {
     bool known = false;
     for (const sl::MethodInfo& m : sl::methods())
@@ -54,34 +97,7 @@ int render_scene_3d(const RenderArgs& a) {
       return kUsage;
     }
   }
-  if (a.app)
-    for (const CLI::Option* opt : a.app->get_options()) {
-      const std::string name = opt->get_name();
-      if (opt->count() == 0 || listed(name, kCommon) || listed(name, k3dOptions)) continue;
-      // The 3D methods that read it.
-      std::string readers;
-      bool read = false;
-      for (const auto& [method, own, shared] :
-           {std::tuple{sl::Method::pt, listed(name, kPtOptions), false},
-            std::tuple{sl::Method::spwi, listed(name, kSpwiOptions),
-                       listed(name, kSpwiSharedOptions)},
-            std::tuple{sl::Method::grid, listed(name, kGridOptions),
-                       listed(name, kGridSharedOptions)}})
-        if (own || shared) {
-          readers += std::string(readers.empty() ? "--method " : " or ") + sl::to_string(method);
-          read = read || options.method == method;
-        }
-      if (readers.empty()) {
-        std::cerr << "penumbra render: " << name << " applies to 2D scenes only (" << a.scene
-                  << " is a 3D scene)\n";
-        return kUsage;
-      }
-      if (!read) {
-        std::cerr << "penumbra render: " << name << " applies to " << readers << " only, not "
-                  << sl::to_string(options.method) << "\n";
-        return kUsage;
-      }
-    }
+  if (int code = check_method_options(a, options.method); code != 0) return code;
   // spwi and grid: their defaults, and the options they share with 2D's cascades where given.
   auto given = [&](const char* name) { return a.app && a.app->get_option(name)->count() > 0; };
   auto cascade_options = [&](auto& m) {
@@ -109,8 +125,9 @@ int render_scene_3d(const RenderArgs& a) {
     }
     options.grid.fix = a.options.rc.fix == penumbra::flatland::MergeFix::bilinear;
   }
-  // Named here by the flags given: the library's message names `grid.extend_length` alone.
-  if (options.method == sl::Method::grid && options.grid.fix && options.grid.extend_length > 0) {
+  // Named here by the flags given: the library's message names `grid.extend_length` alone (only
+  // the grid reads both: another method has refused them above).
+  if (options.grid.fix && options.grid.extend_length > 0) {
     std::cerr << "penumbra render: " << (given("--extend") ? "--extend" : "--extend-length")
               << " and --fix bilinear do not combine: extension doubles a probe's own intervals, "
                  "which the bilinear fix does not use (it traces to the upper probes instead); "
@@ -177,36 +194,8 @@ int render_scene_3d(const RenderArgs& a) {
                                  {"threads", options.threads},
                                  {"aov", sl::to_string(options.aov)},
                                  {"max_memory", options.max_memory}};
-    const sl::RenderOptions& used = result->options;
-    if (options.method == sl::Method::pt)
-      parameters.update(
-          {{"spp", options.pt.spp}, {"time", options.pt.seconds}, {"seed", options.pt.seed}});
-    auto cascade_parameters = [&](const auto& m) {
-      parameters.update({{"probe_spacing", m.probe_spacing},
-                         {"directions", m.directions},
-                         {"interval", m.interval},
-                         {"cascades", m.cascades}});
-    };
-    if (options.method == sl::Method::spwi) {
-      cascade_parameters(used.spwi);
-      parameters.update({{"branching", used.spwi.branching},
-                         {"merge", sl::to_string(used.spwi.merge)},
-                         {"sun", sl::to_string(used.spwi.sun)},
-                         {"gather", sl::to_string(used.spwi.gather)},
-                         {"depth_bias", used.spwi.depth_bias},
-                         {"overlap", used.spwi.overlap},
-                         {"preaverage", used.spwi.preaverage},
-                         {"merge_edge", used.spwi.merge_edge},
-                         {"gather_edge", used.spwi.gather_edge},
-                         {"gather_normal", used.spwi.gather_normal}});
-    }
-    if (options.method == sl::Method::grid) {
-      cascade_parameters(used.grid);
-      parameters.update({{"voxel", used.grid.voxel},
-                         {"voxel_memory_bytes", result->voxel_bytes},
-                         {"extend_length", used.grid.extend_length},
-                         {"fix", used.grid.fix ? "bilinear" : "none"}});
-    }
+    for (const sl::Parameter& p : sl::describe(*result))
+      std::visit([&](const auto& v) { parameters[p.name] = v; }, p.value);
     nlohmann::ordered_json j = {
         {"method", sl::to_string(options.method)},
         {"dimensions", 3},
@@ -238,18 +227,8 @@ int render_scene_3d(const RenderArgs& a) {
         result->device.c_str());
     if (options.aov != sl::Aov::radiance)
       std::printf(", %s\n", sl::to_string(options.aov));
-    else if (options.method == sl::Method::spwi)
-      std::printf(", %d cascades, t0 %s, merge %s, sun %s\n", result->options.spwi.cascades,
-                  penumbra::io::format_rounded(result->options.spwi.interval).c_str(),
-                  sl::to_string(options.spwi.merge), sl::to_string(options.spwi.sun));
-    else if (options.method == sl::Method::grid)
-      std::printf(", voxel %s (%.1f MiB of voxels), %d cascades, t0 %s\n",
-                  penumbra::io::format_rounded(result->options.grid.voxel).c_str(),
-                  double(result->voxel_bytes) / (1 << 20), result->options.grid.cascades,
-                  penumbra::io::format_rounded(result->options.grid.interval).c_str());
     else
-      std::printf(", %llu samples per pixel, %d bounce%s\n", (unsigned long long)result->samples,
-                  options.bounces, options.bounces == 1 ? "" : "s");
+      std::printf("%s\n", sl::describe_line(*result).c_str());
     std::printf("  %-24s %9.1f ms\n", "load scene", load_ms);
     for (const sl::StageTime& s : result->stages)
       std::printf("  %-24s %9.1f ms\n", s.name.c_str(), s.ms);

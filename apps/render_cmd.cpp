@@ -115,10 +115,10 @@ const CLI::Option* given_3d_option(const RenderArgs& a) {
     const std::string name = opt->get_name();
     for (std::string_view n : k3dOptions)
       if (name == n) return opt;
-    for (std::string_view n : kSpwiOptions)
-      if (name == n) return opt;
-    for (std::string_view n : kGridOptions)
-      if (name == n) return opt;
+    // A 3D method's option that no 2D method reads.
+    if (read_by_3d_method(name) && !listed(name, kPt2dOptions) && !listed(name, kRc2dOptions) &&
+        !listed(name, kHrc2dOptions) && !listed(name, kTraversalOptions))
+      return opt;
   }
   return nullptr;
 }

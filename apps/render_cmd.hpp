@@ -51,23 +51,9 @@ std::unique_ptr<RenderCommand> add_render_command(CLI::App& app);
 // samples so far is still written).
 int run_render(const RenderArgs& args);
 
-// Which options a 3D render reads: render3d_cmd.cpp refuses any other that was given (naming
-// the method or the world it belongs to), render_cmd.cpp refuses the 3D-only ones with a 2D
-// scene. One list each, so that a new option is declared once.
+// The options only a 3D render reads (render_cmd.cpp refuses them with a 2D scene); which 3D
+// method reads which option comes from the method table (MethodInfo::options, by flags_of).
 inline constexpr std::string_view k3dOptions[] = {"--width", "--height", "--aov"};
-// spwi's own options, and those it shares with 2D's cascades (read into `options.rc`).
-inline constexpr std::string_view kSpwiOptions[] = {
-    "--merge",       "--sun",      "--depth-bias",    "--merge-edge",
-    "--gather-edge", "--disjoint", "--gather-normal", "--gather"};
-inline constexpr std::string_view kSpwiSharedOptions[] = {
-    "--probe-spacing", "--directions", "--interval", "--cascades", "--preaverage", "--branching"};
-// The probe grid's own options, and those it shares with 2D's cascades.
-inline constexpr std::string_view kGridOptions[] = {"--voxel"};
-inline constexpr std::string_view kGridSharedOptions[] = {
-    "--probe-spacing", "--directions",    "--interval", "--cascades",
-    "--extend",        "--extend-length", "--fix"};
-// The 3D path tracer's (read into `options.pt`, as 2D's path tracer reads them).
-inline constexpr std::string_view kPtOptions[] = {"--spp", "--time", "--seed"};
 
 // The 2D methods' own options: render_cmd.cpp refuses one given with another 2D method.
 inline constexpr std::string_view kPt2dOptions[] = {"--spp", "--time", "--nee", "--sampler",
@@ -105,6 +91,9 @@ std::optional<float> png_exposure(const RenderArgs& args, Meter&& meter) {
 
 // The text report's line for it (nothing without a PNG).
 void print_png_exposure(const RenderArgs& args, std::optional<float> exposure);
+
+// Whether some 3D method reads the option named `flag` (render3d_cmd.cpp).
+bool read_by_3d_method(const std::string& flag);
 
 // The 3D half of `render` (render3d_cmd.cpp): `args.scene` is a 3D document.
 int render_scene_3d(const RenderArgs& args);

@@ -147,56 +147,78 @@ void finish_render_options(RenderOptions& options, const RenderOptionFlags& flag
     options.pt.spp = 0;
 }
 
+namespace {
+
+// Each RenderOptions field and the flag that sets it; a field set by two flags is listed twice
+// (messages name it by the first). Beside add_render_options, so that a flag and its field are
+// renamed together.
+const std::pair<const char*, const char*> kFlags[] = {
+    {"`method`", "--method"},
+    {"`device`", "--device"},
+    {"`bounces`", "--bounces"},
+    {"`threads`", "--threads"},
+    {"`max_memory`", "--max-memory"},
+    {"`distance_field`", "--no-distance-field"},
+    {"`blocks`", "--no-blocks"},
+    {"`rc.probe_spacing`", "--probe-spacing"},
+    {"`rc.directions`", "--directions"},
+    {"`rc.branching`", "--branching"},
+    {"`rc.interval`", "--interval"},
+    {"`rc.cascades`", "--cascades"},
+    {"`rc.fix`", "--fix"},
+    {"`rc.preaverage`", "--preaverage"},
+    {"`rc.extend_length`", "--extend-length"},
+    {"`rc.extend`", "--extend"},
+    {"`hrc.storage`", "--storage"},
+    {"`hrc.cross_blur`", "--no-cross-blur"},
+    {"`hrc.blur_near`", "--blur-near-segment"},
+    {"`hrc.near_segment`", "--no-near-segment"},
+    {"`hrc.corners`", "--corners"},
+    {"`hrc.wall_fan`", "--wall-fan"},
+    {"`hrc.near_fan`", "--near-fan"},
+    {"`hrc.even_weight`", "--even-weight"},
+    {"`pt.spp`", "--spp"},
+    {"`pt.seconds`", "--time"},
+    {"`pt.nee`", "--nee"},
+    {"`pt.sampler`", "--sampler"},
+    {"`pt.seed`", "--seed"},
+    // 3D: SPWI's and the probe grid's own options, and those they share with 2D's cascades.
+    {"`spwi.probe_spacing`", "--probe-spacing"},
+    {"`spwi.directions`", "--directions"},
+    {"`spwi.interval`", "--interval"},
+    {"`spwi.branching`", "--branching"},
+    {"`spwi.cascades`", "--cascades"},
+    {"`spwi.preaverage`", "--preaverage"},
+    {"`spwi.depth_bias`", "--depth-bias"},
+    {"`spwi.merge_edge`", "--merge-edge"},
+    {"`spwi.gather_edge`", "--gather-edge"},
+    {"`spwi.gather_normal`", "--gather-normal"},
+    {"`grid.voxel`", "--voxel"},
+    {"`grid.probe_spacing`", "--probe-spacing"},
+    {"`grid.directions`", "--directions"},
+    {"`grid.interval`", "--interval"},
+    {"`grid.cascades`", "--cascades"},
+    {"`grid.extend_length`", "--extend-length"},
+    // Fields no message names, listed for the 3D methods' option groups (flags_of).
+    {"`spwi.merge`", "--merge"},
+    {"`spwi.sun`", "--sun"},
+    {"`spwi.gather`", "--gather"},
+    {"`spwi.overlap`", "--disjoint"},
+    {"`grid.extend_length`", "--extend"},
+    {"`grid.fix`", "--fix"},
+};
+
+}  // namespace
+
+std::vector<std::string> flags_of(const std::string& field) {
+  std::vector<std::string> flags;
+  const std::string quoted = "`" + field + "`";
+  for (const auto& [f, flag] : kFlags)
+    if (quoted == f) flags.push_back(flag);
+  return flags;
+}
+
 std::string with_flags(std::string message) {
-  // Beside add_render_options, so that a flag and its field are renamed together.
-  static const std::pair<const char*, const char*> kFlags[] = {
-      {"`method`", "--method"},
-      {"`device`", "--device"},
-      {"`bounces`", "--bounces"},
-      {"`threads`", "--threads"},
-      {"`max_memory`", "--max-memory"},
-      {"`distance_field`", "--no-distance-field"},
-      {"`blocks`", "--no-blocks"},
-      {"`rc.probe_spacing`", "--probe-spacing"},
-      {"`rc.directions`", "--directions"},
-      {"`rc.branching`", "--branching"},
-      {"`rc.interval`", "--interval"},
-      {"`rc.cascades`", "--cascades"},
-      {"`rc.fix`", "--fix"},
-      {"`rc.preaverage`", "--preaverage"},
-      {"`rc.extend_length`", "--extend-length"},
-      {"`rc.extend`", "--extend"},
-      {"`hrc.storage`", "--storage"},
-      {"`hrc.cross_blur`", "--no-cross-blur"},
-      {"`hrc.blur_near`", "--blur-near-segment"},
-      {"`hrc.near_segment`", "--no-near-segment"},
-      {"`hrc.corners`", "--corners"},
-      {"`hrc.wall_fan`", "--wall-fan"},
-      {"`hrc.near_fan`", "--near-fan"},
-      {"`hrc.even_weight`", "--even-weight"},
-      {"`pt.spp`", "--spp"},
-      {"`pt.seconds`", "--time"},
-      {"`pt.nee`", "--nee"},
-      {"`pt.sampler`", "--sampler"},
-      {"`pt.seed`", "--seed"},
-      // 3D: SPWI's and the probe grid's own options, and those they share with 2D's cascades.
-      {"`spwi.probe_spacing`", "--probe-spacing"},
-      {"`spwi.directions`", "--directions"},
-      {"`spwi.interval`", "--interval"},
-      {"`spwi.branching`", "--branching"},
-      {"`spwi.cascades`", "--cascades"},
-      {"`spwi.preaverage`", "--preaverage"},
-      {"`spwi.depth_bias`", "--depth-bias"},
-      {"`spwi.merge_edge`", "--merge-edge"},
-      {"`spwi.gather_edge`", "--gather-edge"},
-      {"`spwi.gather_normal`", "--gather-normal"},
-      {"`grid.voxel`", "--voxel"},
-      {"`grid.probe_spacing`", "--probe-spacing"},
-      {"`grid.directions`", "--directions"},
-      {"`grid.interval`", "--interval"},
-      {"`grid.cascades`", "--cascades"},
-      {"`grid.extend_length`", "--extend-length"},
-  };
   for (const auto& [field, flag] : kFlags)
     for (std::size_t at = message.find(field); at != std::string::npos;
          at = message.find(field, at))

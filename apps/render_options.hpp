@@ -61,3 +61,7 @@ void finish_render_options(penumbra::flatland::RenderOptions& options,
 // The library names options by their RenderOptions field in messages (`rc.probe_spacing`); the
 // command line shows `message` with each such field replaced by the flag registered above for it.
 std::string with_flags(std::string message);
+
+// The flags that set a RenderOptions field (`field` as the library names it: "spwi.merge"); a
+// method's option group is the flags of the fields its MethodInfo lists.
+std::vector<std::string> flags_of(const std::string& field);

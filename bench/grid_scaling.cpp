@@ -17,8 +17,8 @@
 #include "core/median.hpp"
 #include "core/timer.hpp"
 #include "penumbra/spaceland/scene.hpp"
-#include "spaceland/camera.hpp"
 #include "spaceland/grid/grid.hpp"
+#include "spaceland/sky.hpp"
 #include "tool_cli.hpp"
 
 namespace {
@@ -38,7 +38,7 @@ Timed time_solve(const grid::Voxels& v, const Background& bg, const GridOptions&
   Timed t;
   for (int r = 0; r < runs; ++r) {
     Stopwatch watch;
-    Expected<grid::Solution> sol = grid::solve(v, bg, o, std::uint64_t(64) << 30);
+    Expected<grid::RadianceField> sol = grid::solve(v, bg, o, std::uint64_t(64) << 30);
     if (!sol) {
       std::fprintf(stderr, "%s\n", sol.error().message.c_str());
       std::exit(1);

@@ -5,9 +5,9 @@
 #include <limits>
 
 #include "core/math.hpp"
-#include "spaceland/camera.hpp"
 #include "spaceland/color.hpp"
 #include "spaceland/sampling.hpp"
+#include "spaceland/sky.hpp"
 
 namespace penumbra::spaceland {
 

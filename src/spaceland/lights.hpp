@@ -8,8 +8,8 @@
 #include <vector>
 
 #include "penumbra/spaceland/scene.hpp"
-#include "spaceland/camera.hpp"
-#include "spaceland/embree/ray_scene.hpp"
+#include "spaceland/ray.hpp"
+#include "spaceland/sky.hpp"
 
 namespace penumbra::spaceland {
 

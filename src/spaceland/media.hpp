@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "penumbra/spaceland/scene.hpp"
-#include "spaceland/embree/ray_scene.hpp"
+#include "spaceland/ray.hpp"
 
 namespace penumbra::spaceland {
 

@@ -1,20 +1,19 @@
-// The 3D dispatcher: checks, the memory estimate, the ray tracer's scene, the G-buffer, then the
-// method from the method table.
+// The 3D dispatcher: checks, the memory estimate, the ray tracer's scene, the G-buffer, the
+// radiance cache where the method needs one, then the method's solve from the method table.
 #include "penumbra/spaceland/render.hpp"
 
 #include <tbb/task_arena.h>
 
 #include <cmath>
+#include <optional>
 #include <string>
 
 #include "core/timer.hpp"
 #include "io/json_reader.hpp"
 #include "spaceland/embree/ray_scene.hpp"
 #include "spaceland/gbuffer.hpp"
-#include "spaceland/grid/grid.hpp"
-#include "spaceland/grid/voxels.hpp"
-#include "spaceland/pt/pt.hpp"
-#include "spaceland/spwi/spwi.hpp"
+#include "spaceland/method.hpp"
+#include "spaceland/radiance_cache.hpp"
 
 namespace penumbra::spaceland {
 
@@ -23,115 +22,13 @@ namespace {
 // The result image: 3 floats per pixel.
 constexpr std::uint64_t kImageBytesPerPixel = 3 * sizeof(float);
 
-std::uint64_t pt_bytes(const Scene& scene, const RenderOptions&) {
-  return std::uint64_t(scene.camera.width) * scene.camera.height * pt::kBytesPerPixel;
+bool known(Method m) {
+  return int(m) >= 0 && std::size_t(m) < method_table().size();
 }
 
-// What a method's solver is handed, and what it gives back besides the image.
-struct Solved {
-  std::vector<StageTime> stages;
-  std::uint64_t rays = 0, samples = 0, memory_bytes = 0, voxel_bytes = 0;
-  bool cancelled = false;
-  RenderOptions derived;  // the options with the values the method derived filled in
-};
-using Solve = Expected<ImageRgb> (*)(const Scene&, const RayScene&, const GBuffer&,
-                                     const RenderOptions&, Solved&);
-
-Expected<ImageRgb> pt_solve(const Scene& scene, const RayScene& rays, const GBuffer& g,
-                            const RenderOptions& options, Solved& out) {
-  pt::Stats stats;
-  Stopwatch watch;
-  ImageRgb img = pt::render(scene, rays, g, options, stats);
-  out.stages.push_back({"path trace", watch.ms()});
-  out.rays = stats.rays;
-  out.samples = stats.samples;
-  out.cancelled = stats.cancelled;
-  out.memory_bytes = pt_bytes(scene, options);
-  return img;
-}
-
-// What every method's stats report alike.
-template <class Stats>
-void take_common(Stats& stats, Solved& out) {
-  out.stages = std::move(stats.stages);
-  out.rays = stats.rays;
-  out.memory_bytes = stats.memory_bytes;
-}
-
-Expected<ImageRgb> spwi_solve(const Scene& scene, const RayScene& rays, const GBuffer& g,
-                              const RenderOptions& options, Solved& out) {
-  spwi::Stats stats;
-  Expected<ImageRgb> img = spwi::render(scene, rays, g, options, stats);
-  take_common(stats, out);
-  out.derived.spwi.interval = stats.plan.t0;
-  out.derived.spwi.cascades = stats.plan.cascades;
-  return img;
-}
-
-Expected<ImageRgb> grid_solve(const Scene& scene, const RayScene& rays, const GBuffer& g,
-                              const RenderOptions& options, Solved& out) {
-  grid::Stats stats;
-  Expected<ImageRgb> img = grid::render(scene, rays, g, options, stats);
-  take_common(stats, out);
-  out.derived.grid.voxel = stats.voxel;
-  out.derived.grid.interval = stats.t0;
-  out.derived.grid.cascades = stats.cascades;
-  out.voxel_bytes = stats.voxel_bytes;
-  return img;
-}
-
-// The voxels; the cascades' share is checked when they are planned (the grid's size is known
-// only once the voxel size is).
-std::uint64_t grid_bytes(const Scene& scene, const RenderOptions& options) {
-  const std::array<double, 3> d =
-      grid::grid_dims(grid::grid_bounds(scene), grid::voxel_size(scene, options));
-  return std::uint64_t(
-      std::min(d[0] * d[1] * d[2] * double(grid::voxel_bytes(1, options.bounces > 1)), 1.8e19));
-}
-
-Status no_check(const Scene&, const RenderOptions&) {
-  return {};
-}
-
-// Its later bounces come from the probe grid's radiance cache: its voxels too.
-std::uint64_t spwi_bytes(const Scene& scene, const RenderOptions& options) {
-  return spwi::bytes_upper_bound(scene.camera.width, scene.camera.height, options.spwi) +
-         (options.bounces > 1 ? grid_bytes(scene, options) : 0);
-}
-
-// The method table (docs/ARCHITECTURE.md): name, help, the method's own option check, its
-// working memory besides the G-buffer (known before anything is allocated), its solver.
-struct MethodEntry {
-  MethodInfo info;
-  Status (*check)(const Scene&, const RenderOptions&);
-  std::uint64_t (*bytes)(const Scene&, const RenderOptions&);
-  Solve solve;
-};
-
-const MethodEntry kMethods[] = {
-    {{Method::pt, "pt",
-      "reference path tracer (next event estimation + MIS, fog, Owen-scrambled Sobol points)"},
-     no_check,
-     pt_bytes,
-     pt_solve},
-    {{Method::spwi, "spwi",
-      "screen-space probes with world-space intervals (seed 000): radiance cascades on the "
-      "G-buffer, later bounces from the probe grid's radiance cache"},
-     spwi::check,
-     spwi_bytes,
-     spwi_solve},
-    {{Method::grid, "grid",
-      "the world-space probe grid (seed 001 4.3): radiance cascades over the scene's voxels, "
-      "fog and light shafts, later bounces, the radiance cache spwi's come from"},
-     no_check,  // check_options checks the grid's options; any scene will do
-     grid_bytes,
-     grid_solve},
-};
-
-const MethodEntry& entry(Method m) {
-  for (const MethodEntry& e : kMethods)
-    if (e.info.method == m) return e;
-  return kMethods[0];
+// Later bounces from the radiance cache: a method that does not follow them, more than one.
+bool needs_cache(const RenderOptions& o) {
+  return known(o.method) && !entry(o.method).bounces_itself && o.bounces > 1;
 }
 
 std::string mib(std::uint64_t bytes) {
@@ -142,12 +39,19 @@ std::string mib(std::uint64_t bytes) {
 
 std::vector<MethodInfo> methods() {
   std::vector<MethodInfo> list;
-  for (const MethodEntry& e : kMethods) list.push_back(e.info);
+  for (const MethodEntry& e : method_table())
+    list.push_back({e.method, e.name, e.title, e.summary,
+                    std::vector<std::string>(e.options.begin(), e.options.end()),
+                    e.gpu != nullptr});
   return list;
 }
 
 const char* to_string(Method m) {
-  return entry(m).info.name;
+  return known(m) ? entry(m).name : "?";
+}
+
+const char* to_string(Device d) {
+  return d == Device::gpu ? "gpu" : "cpu";
 }
 
 const char* to_string(Aov a) {
@@ -193,37 +97,62 @@ const char* to_string(SpwiSun s) {
   return s == SpwiSun::direct ? "direct" : "cascades";
 }
 
+std::vector<Parameter> describe(const RenderResult& result) {
+  std::vector<Parameter> parameters;
+  std::string line;
+  if (known(result.options.method)) entry(result.options.method).describe(result, parameters, line);
+  return parameters;
+}
+
+std::string describe_line(const RenderResult& result) {
+  std::vector<Parameter> parameters;
+  std::string line;
+  if (known(result.options.method)) entry(result.options.method).describe(result, parameters, line);
+  return line;
+}
+
 Status check_options(const RenderOptions& o) {
   // Fields are named as in RenderOptions; the command line shows its flags instead.
   if (o.bounces < 1 || o.bounces > 64)
     return Error{"`bounces`: expected 1..64, found " + std::to_string(o.bounces)};
   if (o.threads < 0 || o.threads > 1024)
     return Error{"`threads`: expected 0..1024, found " + std::to_string(o.threads)};
-  if (o.method == Method::pt) {
-    if (o.pt.spp < 0)
-      return Error{"`pt.spp`: expected a count >= 0, found " + std::to_string(o.pt.spp)};
-    if (!std::isfinite(o.pt.seconds) || o.pt.seconds < 0)
-      return Error{"`pt.seconds`: expected a number of seconds >= 0, found " +
-                   io::format_number(o.pt.seconds)};
-    if (o.pt.spp == 0 && o.pt.seconds == 0)
-      return Error{
-          "`pt.spp` is 0 (no limit) and no `pt.seconds` is given: the render would "
-          "never end"};
-  }
-  // Each method's options (ranges and combinations) before any scene is read: SPWI's, the
-  // grid's own, and the grid's for SPWI's later bounces, which come from its radiance cache.
-  if (o.method == Method::spwi)
-    if (Status s = spwi::check_options(o.spwi); !s) return s;
-  if (o.method == Method::grid || (o.method == Method::spwi && o.bounces > 1))
-    return grid::check_options(o.grid);
+  if (!known(o.method)) return Error{"`method`: unknown method " + std::to_string(int(o.method))};
+  const MethodEntry& m = entry(o.method);
+  if (o.device == Device::gpu && !m.gpu)
+    return Error{std::string("`device` gpu: ") + m.title + " (" + m.name +
+                 ") runs on the CPU only (docs/GPU.md)"};
+  // The method's own options (ranges and combinations) before any scene is read, then the
+  // radiance cache's where the method takes its later bounces from it.
+  if (m.check_options)
+    if (Status s = m.check_options(o); !s) return s;
+  if (needs_cache(o)) return RadianceCache::check_options(o.grid);
   return {};
+}
+
+Expected<Plan> make_plan(const Scene& scene, const RenderOptions& options) {
+  if (Status s = check_options(options); !s) return s.error();
+  if (Status s = check_scene(scene); !s) return s.error();
+  const MethodEntry& m = entry(options.method);
+  if (options.aov == Aov::radiance && m.check_scene)
+    if (Status s = m.check_scene(scene); !s) return s.error();
+  Plan plan;
+  plan.options = options;
+  plan.width = scene.camera.width;
+  plan.height = scene.camera.height;
+  plan.radiance_cache = options.aov == Aov::radiance && needs_cache(options);
+  return plan;
 }
 
 std::uint64_t estimate_memory(const Scene& scene, const RenderOptions& options) {
   const std::uint64_t pixels = std::uint64_t(scene.camera.width) * scene.camera.height;
   const std::uint64_t per_pixel = GBuffer::bytes_per_pixel() + kImageBytesPerPixel;
-  const std::uint64_t method =
-      options.aov == Aov::radiance ? entry(options.method).bytes(scene, options) : 0;
+  std::uint64_t method = 0;
+  if (options.aov == Aov::radiance && known(options.method)) {
+    method = entry(options.method).working_bytes(scene, options);
+    if (needs_cache(options))
+      method += RadianceCache::estimate_bytes(scene, options.grid, options.max_memory);
+  }
   return RayScene::estimate_bytes(scene) + pixels * per_pixel + method;
 }
 
@@ -238,17 +167,67 @@ Status check_memory(const Scene& scene, const RenderOptions& options) {
   return {};
 }
 
+namespace {
+
+// The method's image: the radiance cache first where it needs one, then its solve.
+Status solve(const Plan& plan, const Scene& scene, const RayScene& rays, const GBuffer& g,
+             RenderResult& result) {
+  const RenderOptions& o = plan.options;
+  const MethodEntry& m = entry(o.method);
+  SolveContext ctx{scene, rays, g, o.bounces, o.max_memory};
+  ctx.progress = &o.progress;
+  ctx.cancel = o.cancel;
+  std::optional<RadianceCache> cache;
+  if (plan.radiance_cache) {
+    Stopwatch watch;
+    Expected<RadianceCache> built =
+        RadianceCache::build(scene, rays, o.grid, o.max_memory, o.bounces - 1);
+    if (!built) return built.error();
+    cache = std::move(*built);
+    ctx.cache = &*cache;
+    result.memory_bytes += cache->bytes();
+    result.stages.push_back({"radiance cache", watch.ms()});
+  }
+  SolveReport report;
+  RenderOptions used = o;
+  Expected<ImageRgb> img = (o.device == Device::gpu ? m.gpu : m.cpu)(ctx, o, report, used);
+  if (!img) return img.error();
+  result.radiance = std::move(*img);
+  for (StageTime& st : report.stages) result.stages.push_back(std::move(st));
+  result.rays += report.rays;
+  result.samples = report.samples;
+  result.cancelled = report.cancelled;
+  result.memory_bytes += report.memory_bytes;
+  result.voxel_bytes = report.voxel_bytes;
+  result.options = used;
+  return {};
+}
+
+// Only a miss's depth may be infinite.
+Status check_finite(const ImageRgb& image, Aov aov) {
+  const float* p = image.data();
+  for (std::size_t i = 0; i < image.size(); ++i) {
+    if (std::isfinite(p[i])) continue;
+    if (aov == Aov::depth && std::isinf(p[i]) && p[i] > 0) continue;
+    const std::size_t px = i / 3;
+    return Error{"the result is not finite at pixel (" + std::to_string(px % image.width()) + ", " +
+                 std::to_string(px / image.width()) + "): a bug; please report it with the scene"};
+  }
+  return {};
+}
+
+}  // namespace
+
 Expected<RenderResult> render(const Scene& scene, const RenderOptions& options) {
-  if (Status s = check_options(options); !s) return s.error();
-  if (Status s = check_scene(scene); !s) return s.error();
-  if (options.aov == Aov::radiance)
-    if (Status s = entry(options.method).check(scene, options); !s) return s.error();
+  Expected<Plan> plan = make_plan(scene, options);
+  if (!plan) return plan.error();
   if (Status s = check_memory(scene, options); !s) return s.error();
 
   tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
   return arena.execute([&]() -> Expected<RenderResult> {
     RenderResult result;
     result.options = options;
+    result.device = to_string(options.device);
     Stopwatch total;
     Stopwatch stage;
     // Embree may not allocate past the limit (its estimate was checked above; this holds it).
@@ -259,37 +238,17 @@ Expected<RenderResult> render(const Scene& scene, const RenderOptions& options) 
     const GBuffer g = make_gbuffer(scene, *rays);
     result.stages.push_back({"G-buffer", stage.ms()});
     stage.restart();
-    const std::uint64_t pixels = std::uint64_t(g.width) * g.height;
     result.memory_bytes =
-        rays->bytes() + pixels * (GBuffer::bytes_per_pixel() + kImageBytesPerPixel);
-    result.rays = pixels;  // the G-buffer's camera rays
+        rays->bytes() + plan->pixels() * (GBuffer::bytes_per_pixel() + kImageBytesPerPixel);
+    result.rays = plan->pixels();  // the G-buffer's camera rays
     if (options.aov != Aov::radiance) {
       result.radiance = aov_image(scene, g, options.aov);
       result.stages.push_back({"AOV", stage.ms()});
-    } else {
-      Solved solved;
-      solved.derived = options;
-      Expected<ImageRgb> img = entry(options.method).solve(scene, *rays, g, options, solved);
-      if (!img) return img.error();
-      result.radiance = std::move(*img);
-      for (StageTime& st : solved.stages) result.stages.push_back(std::move(st));
-      result.rays += solved.rays;
-      result.samples = solved.samples;
-      result.cancelled = solved.cancelled;
-      result.memory_bytes += solved.memory_bytes;
-      result.voxel_bytes = solved.voxel_bytes;
-      result.options = solved.derived;
+    } else if (Status s = solve(*plan, scene, *rays, g, result); !s) {
+      return s.error();
     }
     result.time_ms = total.ms();
-    // Only a miss's depth may be infinite.
-    const float* p = result.radiance.data();
-    for (std::size_t i = 0; i < result.radiance.size(); ++i) {
-      if (std::isfinite(p[i])) continue;
-      if (options.aov == Aov::depth && std::isinf(p[i]) && p[i] > 0) continue;
-      const std::size_t px = i / 3;
-      return Error{"the result is not finite at pixel (" + std::to_string(px % g.width) + ", " +
-                   std::to_string(px / g.width) + "): a bug; please report it with the scene"};
-    }
+    if (Status s = check_finite(result.radiance, options.aov); !s) return s.error();
     return result;
   });
 }

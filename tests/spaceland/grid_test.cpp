@@ -21,8 +21,8 @@ using namespace penumbra::spaceland::testing;
 
 constexpr std::uint64_t kGiB = std::uint64_t(1) << 30;
 
-Solution solved(const Scene& s, const Voxels& v, const GridOptions& o = {}) {
-  Expected<Solution> r = solve(v, Background(s), o, kGiB);
+RadianceField solved(const Scene& s, const Voxels& v, const GridOptions& o = {}) {
+  Expected<RadianceField> r = solve(v, Background(s), o, kGiB);
   EXPECT_TRUE(r.ok()) << (r.ok() ? "" : r.error().message);
   return std::move(*r);
 }
@@ -39,7 +39,7 @@ TEST(Grid, EmittingEnclosureGivesLeAtEveryWallPoint) {
   const Rgb le{1, 0.5f, 0.25f};
   add_box(s, {-1, -1.25f, -1.5f}, {1, 1.25f, 1.5f}, add_material(s, {0.6f, 0.6f, 0.6f}, le));
   const Voxels v = voxels_of(s, 0.1f);
-  const Solution sol = solved(s, v);
+  const RadianceField sol = solved(s, v);
   EXPECT_GE(sol.cascades().size(), 3u);
   std::mt19937 rng(3);
   std::uniform_real_distribution<float> u(-0.9f, 0.9f);
@@ -71,7 +71,7 @@ TEST(Grid, UniformSkyOverAFloorGivesL) {
   s.sky = {l, l, l};
   add_box(s, {-3, -0.2f, -3}, {3, 0, 3}, add_material(s, {0.6f, 0.6f, 0.6f}));
   const Voxels v = voxels_of(s, 0.1f);
-  const Solution sol = solved(s, v);
+  const RadianceField sol = solved(s, v);
   std::mt19937 rng(5);
   std::uniform_real_distribution<float> u(-2, 2);
   double worst = 0;
@@ -87,7 +87,7 @@ TEST(Grid, UniformSkyOverAFloorGivesL) {
 TEST(Grid, NoLightCrossesAWallOneVoxelThick) {
   const Scene s = two_closed_rooms(0);  // the plane x = 1 shared: one voxel thick there
   const Voxels v = voxels_of(s, 0.1f);
-  const Solution sol = solved(s, v);
+  const RadianceField sol = solved(s, v);
   double most = 0;
   int found = 0;
   for (float y : {-0.8f, 0.0f, 0.8f})
@@ -140,7 +140,7 @@ TEST(Grid, MemoryPerCascadeHalvesAsTheSeedSays) {
   o.probe_spacing = 0;
   EXPECT_FALSE(plan_cascades(v, o).ok());
   o.probe_spacing = 2;
-  const Expected<Solution> small = solve(v, Background(s), o, 1 << 16);
+  const Expected<RadianceField> small = solve(v, Background(s), o, 1 << 16);
   ASSERT_FALSE(small.ok());
   EXPECT_NE(small.error().message.find("max_memory"), std::string::npos);
 }
@@ -154,7 +154,7 @@ TEST(Grid, TheUmbraStaysDark) {
   add_box(s, {-0.6f, 0.8f, -0.6f}, {0.6f, 1.0f, 0.6f}, add_material(s, {0.5f, 0.5f, 0.5f}));
   add_sphere(s, {0, 2, 0}, 0.3f, add_material(s, {0, 0, 0}, {10, 10, 10}));
   const Voxels v = voxels_of(s, 0.05f);
-  const Solution sol = solved(s, v);
+  const RadianceField sol = solved(s, v);
   for (float x : {0.0f, 0.3f}) {
     Rgb umbra;
     ASSERT_TRUE(sol.mean_radiance({x, 0, 0.1f}, {0, 1, 0}, umbra));
@@ -230,7 +230,7 @@ TEST(Grid, TheFixAndExtensionKeepTheClosedForms) {
     const Expected<std::vector<CascadePlan>> plan = plan_cascades(vs, o);
     ASSERT_TRUE(plan.ok());
     EXPECT_EQ(extension_doublings((*plan)[1], o, vs.size, false) > 0, !fix) << name;
-    const Solution se = solved(enclosure, ve, o), ss = solved(sky, vs, o);
+    const RadianceField se = solved(enclosure, ve, o), ss = solved(sky, vs, o);
     for (float x : {-1.5f, 0.0f, 0.7f})
       for (float z : {-1.0f, 0.0f, 1.2f}) {
         Rgb got;
@@ -242,7 +242,7 @@ TEST(Grid, TheFixAndExtensionKeepTheClosedForms) {
       }
     const Scene rooms = two_closed_rooms(0);
     const Voxels vr = voxels_of(rooms, 0.1f);
-    const Solution sr = solved(rooms, vr, o);
+    const RadianceField sr = solved(rooms, vr, o);
     Rgb lit, dark;
     ASSERT_TRUE(sr.mean_radiance({2, -1, 0}, {0, 1, 0}, lit));
     EXPECT_GT(lit.r, 5.0f);
@@ -259,7 +259,7 @@ TEST(Grid, TheFixAndExtensionKeepTheClosedForms) {
             add_material(umbra, {0.5f, 0.5f, 0.5f}));
     add_sphere(umbra, {0, 2, 0}, 0.3f, add_material(umbra, {0, 0, 0}, {10, 10, 10}));
     const Voxels vu = voxels_of(umbra, 0.05f);
-    const Solution su = solved(umbra, vu, o);
+    const RadianceField su = solved(umbra, vu, o);
     ASSERT_TRUE(su.mean_radiance({2, 0, 0.1f}, {0, 1, 0}, lit));
     ASSERT_TRUE(su.mean_radiance({0, 0, 0.1f}, {0, 1, 0}, dark));
     EXPECT_LT(dark.r, 1e-3f * lit.r) << name;
@@ -281,7 +281,7 @@ TEST(Grid, ExtensionComposesFogIntervals) {
   const Expected<std::vector<CascadePlan>> plan = plan_cascades(v, extended);
   ASSERT_TRUE(plan.ok());
   EXPECT_EQ(extension_doublings((*plan)[1], extended, v.size, false), 2);
-  const Solution whole = solved(s, v), doubled = solved(s, v, extended);
+  const RadianceField whole = solved(s, v), doubled = solved(s, v, extended);
   for (Vec3 p : {Vec3{0, 0, 0}, Vec3{0.5f, -0.3f, 0.2f}, Vec3{-1, 1, 0.5f}}) {
     Rgb a, b;
     ASSERT_TRUE(whole.sphere_radiance(p, a));

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <functional>
 #include <string>
+#include <variant>
 #include <vector>
 
 #include "penumbra/error.hpp"
@@ -19,6 +20,10 @@ enum class Method {
   spwi,  // screen-space probes with world-space intervals (seed 000, seed 001 section 4.5)
   grid,  // the world-space probe grid (seed 001 section 4.3): radiance cascades over voxels
 };
+
+// Where a method runs (--device). No 3D method has a GPU port yet: gpu is refused, naming the
+// method (docs/GPU.md).
+enum class Device { cpu, gpu };
 
 // How a ray of an SPWI cascade continues into the probes of the cascade above (--merge).
 enum class SpwiMerge {
@@ -121,6 +126,7 @@ struct GridOptions {
 
 struct RenderOptions {
   Method method = Method::pt;
+  Device device = Device::cpu;
   PtOptions pt;
   SpwiOptions spwi;
   GridOptions grid;
@@ -168,12 +174,29 @@ Expected<RenderResult> render(const Scene& scene, const RenderOptions& options);
 struct MethodInfo {
   Method method;
   const char* name;
+  const char* title;  // in sentences: "the world-space probe grid"
   const char* summary;
+  // The RenderOptions fields the method reads, named as messages name them ("spwi.merge"); the
+  // command line refuses an option of another method by these.
+  std::vector<std::string> options;
+  bool gpu = false;  // has a GPU port
 };
 // Every 3D method, in the order of the Method enum.
 std::vector<MethodInfo> methods();
 
+// A parameter a render ran with, derived values filled in (--json's "parameters").
+struct Parameter {
+  std::string name;
+  std::variant<bool, std::int64_t, std::uint64_t, double, std::string> value;
+};
+// The parameters of the method of `result` as it used them.
+std::vector<Parameter> describe(const RenderResult& result);
+// The same in a few words for a report's first line (", 6 cascades, t0 0.25, merge bilinear3d,
+// sun direct"), starting with a comma.
+std::string describe_line(const RenderResult& result);
+
 const char* to_string(Method m);
+const char* to_string(Device d);
 const char* to_string(Aov a);
 const char* to_string(SpwiMerge m);
 const char* to_string(SpwiSun s);

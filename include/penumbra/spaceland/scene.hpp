@@ -17,7 +17,8 @@ namespace penumbra::spaceland {
 // Largest image side the format allows (camera width and height, --width, --height).
 inline constexpr int kMaxImageSide = 8192;
 
-// The pinhole camera of the format: one ray through each pixel centre (camera.cpp).
+// The pinhole camera of the format: one ray through each pixel centre (CameraRays, in
+// src/spaceland/camera.hpp).
 struct Camera {
   Vec3 position{0, 0, 1};
   Vec3 look_at{0, 0, 0};

@@ -6,7 +6,6 @@
 
 #include <algorithm>
 #include <atomic>
-#include <bit>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -104,13 +103,6 @@ struct GeomRef {
 
 Vec3 vertex(const float* p, std::uint32_t i) {
   return {p[4 * i], p[4 * i + 1], p[4 * i + 2]};
-}
-
-float as_float(std::int32_t i) {
-  return std::bit_cast<float>(i);
-}
-std::int32_t as_int(float f) {
-  return std::bit_cast<std::int32_t>(f);
 }
 
 // Hits are refined in double from the primitive Embree found, so that single rays and streams
@@ -505,26 +497,8 @@ void RayScene::occluded(std::span<const Ray> rays, std::span<std::uint8_t> block
   for (std::size_t i = 0; i < rays.size(); ++i) blocked[i] = occluded(rays[i]);
 }
 
-// Wächter and Binder, "A Fast and Robust Method for Avoiding Self-Intersection" (Ray Tracing
-// Gems, ch. 6): 256 ulps of each coordinate along the normal. A coordinate near zero has ulps too
-// small to cover the hit's rounding error, which is that of the point's largest coordinate m:
-// there the offset is 16 ulps of m (m 2^-19), or of the scene's scale at the origin. It is not a
-// fraction of the scene's scale: a ground disk 1000 across would lift every point of y = 0 by
-// 0.015 and bias light from objects a unit away (docs/QUALITY.md, the sky over a plane).
 Vec3 RayScene::spawn(Vec3 p, Vec3 n, Vec3 direction) const {
-  if (dot(n, direction) < 0) n = -n;
-  const float m = std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)});
-  const float near_zero = m / 32;
-  const float floor_offset = (m > 0 ? m : impl_->scale) * 0x1.0p-19f;
-  Vec3 r;
-  for (int i = 0; i < 3; ++i) {
-    const auto ulps = std::int32_t(256 * n[i]);
-    if (std::abs(p[i]) <= near_zero)
-      r[i] = p[i] + floor_offset * n[i];
-    else
-      r[i] = as_float(as_int(p[i]) + (p[i] < 0 ? -ulps : ulps));
-  }
-  return r;
+  return spawn_point(p, n, direction, impl_->scale);
 }
 
 Ray RayScene::shadow_ray(Vec3 p, Vec3 n, Vec3 target) const {
@@ -544,9 +518,8 @@ Ray RayScene::shadow_ray(Vec3 p, Vec3 n, Vec3 target, Vec3 target_normal) const 
   return r;
 }
 
-// An upper bound of spawn's offset: 256 ulps of a coordinate are at most 2^-15 of it.
 float RayScene::epsilon() const {
-  return impl_->scale / 32768;
+  return spawn_epsilon(impl_->scale);
 }
 
 std::uint64_t RayScene::bytes() const {

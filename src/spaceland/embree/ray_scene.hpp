@@ -7,31 +7,9 @@
 
 #include "penumbra/error.hpp"
 #include "penumbra/spaceland/scene.hpp"
+#include "spaceland/ray.hpp"
 
 namespace penumbra::spaceland {
-
-struct Ray {
-  Vec3 origin;
-  Vec3 direction;  // need not be unit; t is in units of its length
-  float tmin = 0;
-  float tmax = 3.0e38f;
-};
-
-// What a closest-hit query found.
-enum class ShapeKind : std::uint8_t { triangle, sphere, disk };
-
-struct Hit {
-  float t = 0;
-  Vec3 position;          // on the surface (origin + t direction, refined for analytic shapes)
-  Vec3 geometric_normal;  // unit, as the surface is oriented (not yet turned to the ray)
-  Vec3 shading_normal;    // unit: interpolated vertex normal where the mesh has them
-  float u = 0, v = 0;     // texture coordinates (0 where the mesh has none)
-  std::uint32_t material = 0;
-  int object = -1;
-  ShapeKind kind = ShapeKind::triangle;
-  std::uint32_t shape = 0;      // mesh, sphere or disk index in the Scene
-  std::uint32_t primitive = 0;  // triangle index within the mesh
-};
 
 // One Embree scene per Scene: a triangle geometry per mesh, the spheres and the disks as exact
 // point geometries. Queries are thread-safe.
@@ -59,9 +37,8 @@ class RayScene {
                  bool coherent = false) const;
   void occluded(std::span<const Ray> rays, std::span<std::uint8_t> blocked) const;
 
-  // Where to start a ray leaving a surface at `p` with geometric normal `n` towards `direction`:
-  // p moved off the surface, to the side `direction` goes, by a distance scaled to the scene's
-  // size and p's magnitude (not a fixed epsilon).
+  // Where to start a ray leaving a surface at `p` with geometric normal `n` towards `direction`
+  // (spawn_point at this scene's scale).
   Vec3 spawn(Vec3 p, Vec3 n, Vec3 direction) const;
   // A shadow ray from a surface point towards a target point: ends short of the target by the
   // same scaled offset, so the target's own surface does not block it.

@@ -153,7 +153,26 @@ float default_voxel_size(const Scene& scene, std::uint64_t max_bytes) {
   return float(size);
 }
 
-Expected<Voxels> voxelise(const Scene& scene, float size, std::uint64_t max_bytes) {
+namespace {
+
+// The voxel range [lo, hi] (inclusive, clamped to the grid) that a box of world corners [a, c]
+// touches, a voxel more on every side.
+void voxel_range(const Voxels& v, Vec3 a, Vec3 c, std::array<int, 3>& lo, std::array<int, 3>& hi) {
+  const int dim[3] = {v.nx, v.ny, v.nz};
+  for (int k = 0; k < 3; ++k) {
+    lo[std::size_t(k)] = std::clamp(v.cell(a, k) - 1, 0, dim[k] - 1);
+    hi[std::size_t(k)] = std::clamp(v.cell(c, k) + 1, 0, dim[k] - 1);
+  }
+}
+
+// The lowest corner of voxel (x, y, z).
+Vec3 voxel_lo(const Voxels& v, int x, int y, int z) {
+  return v.origin + Vec3{float(x) * v.size, float(y) * v.size, float(z) * v.size};
+}
+
+// The empty grid of voxels of `size` over the scene's bounds, refused when an axis or the whole
+// passes what memory allows.
+Expected<Voxels> empty_grid(const Scene& scene, float size, std::uint64_t max_bytes) {
   if (!(size > 0) || !std::isfinite(size))
     return Error{"`grid.voxel`: expected a voxel size > 0 in world units, found " +
                  io::format_number(size)};
@@ -184,139 +203,172 @@ Expected<Voxels> voxelise(const Scene& scene, float size, std::uint64_t max_byte
   v.extinction.assign(count, Rgb{});
   v.emission.assign(count, Rgb{});
   v.albedo.assign(count, Rgb{});
+  return v;
+}
 
-  // The voxel range [lo, hi] (inclusive) that a box of world corners [a, b] touches.
-  auto range = [&](Vec3 a, Vec3 c, std::array<int, 3>& lo, std::array<int, 3>& hi) {
-    const int dim[3] = {v.nx, v.ny, v.nz};
-    for (int k = 0; k < 3; ++k) {
-      lo[std::size_t(k)] = std::clamp(v.cell(a, k) - 1, 0, dim[k] - 1);
-      hi[std::size_t(k)] = std::clamp(v.cell(c, k) + 1, 0, dim[k] - 1);
-    }
-  };
-  auto voxel_lo = [&](int x, int y, int z) {
-    return v.origin + Vec3{float(x) * size, float(y) * size, float(z) * size};
-  };
+// The voxels each surface touches (conservatively), with its area share.
+class SurfaceRaster {
+ public:
+  SurfaceRaster(const Scene& scene, const Voxels& v) : scene_(scene), v_(v) {
+    const std::size_t count = std::size_t(v.count());
+    sums_.weight.assign(count, 0);
+    sums_.emission.assign(count, Rgb{});
+    sums_.albedo.assign(count, Rgb{});
+    albedos_ = mean_albedos(scene);
+  }
 
-  // Surfaces: every voxel a surface touches, with its area share.
-  SurfaceSums sums;
-  sums.weight.assign(count, 0);
-  sums.emission.assign(count, Rgb{});
-  sums.albedo.assign(count, Rgb{});
-  const std::vector<Rgb> albedos = mean_albedos(scene);
-  std::vector<std::size_t> touched;
-  auto add = [&](double area, std::uint32_t material) {
-    if (touched.empty()) return;
-    const float w = float(area / double(touched.size()));
-    const Material& m = scene.materials[material];
-    for (std::size_t k : touched) {
-      sums.weight[k] += w;
-      sums.emission[k] += m.emission * w;
-      sums.albedo[k] += albedos[material] * w;
-    }
-  };
-  const double half = 0.5 * double(size);
-  for (const TriangleMesh& mesh : scene.meshes)
-    for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
-      const std::array<Vec3, 3> tri = {mesh.positions[mesh.triangles[t][0]],
-                                       mesh.positions[mesh.triangles[t][1]],
-                                       mesh.positions[mesh.triangles[t][2]]};
-      std::array<int, 3> lo, hi;
-      range(min(tri[0], min(tri[1], tri[2])), max(tri[0], max(tri[1], tri[2])), lo, hi);
-      touched.clear();
-      for (int z = lo[2]; z <= hi[2]; ++z)
-        for (int y = lo[1]; y <= hi[1]; ++y)
-          for (int x = lo[0]; x <= hi[0]; ++x) {
-            const Vec3 c = v.centre(x, y, z);
-            if (triangle_overlaps_box(tri, c, half)) touched.push_back(v.index(x, y, z));
-          }
-      const Vec3 n = cross(tri[1] - tri[0], tri[2] - tri[0]);
-      add(0.5 * std::sqrt(double(dot(n, n))), mesh.materials[t]);
-    }
+  void triangle(const std::array<Vec3, 3>& tri, std::uint32_t material) {
+    const double half = 0.5 * double(v_.size);
+    std::array<int, 3> lo, hi;
+    voxel_range(v_, min(tri[0], min(tri[1], tri[2])), max(tri[0], max(tri[1], tri[2])), lo, hi);
+    touched_.clear();
+    for (int z = lo[2]; z <= hi[2]; ++z)
+      for (int y = lo[1]; y <= hi[1]; ++y)
+        for (int x = lo[0]; x <= hi[0]; ++x)
+          if (triangle_overlaps_box(tri, v_.centre(x, y, z), half))
+            touched_.push_back(v_.index(x, y, z));
+    const Vec3 n = cross(tri[1] - tri[0], tri[2] - tri[0]);
+    add(0.5 * std::sqrt(double(dot(n, n))), material);
+  }
+
   // A sphere: the voxels its surface passes through (nearest point inside, farthest outside).
-  for (const Sphere& s : scene.spheres) {
+  void sphere(const Sphere& s) {
     const Vec3 r{s.radius, s.radius, s.radius};
     std::array<int, 3> lo, hi;
-    range(s.center - r, s.center + r, lo, hi);
-    touched.clear();
+    voxel_range(v_, s.center - r, s.center + r, lo, hi);
+    touched_.clear();
     for (int z = lo[2]; z <= hi[2]; ++z)
       for (int y = lo[1]; y <= hi[1]; ++y)
         for (int x = lo[0]; x <= hi[0]; ++x) {
-          const Vec3 a = voxel_lo(x, y, z), c = a + Vec3{size, size, size};
+          const Vec3 a = voxel_lo(v_, x, y, z), c = a + Vec3{v_.size, v_.size, v_.size};
           if (nearest_distance(s.center, a, c) <= s.radius &&
               farthest_distance(s.center, a, c) >= s.radius)
-            touched.push_back(v.index(x, y, z));
+            touched_.push_back(v_.index(x, y, z));
         }
     add(4 * kPi * double(s.radius) * s.radius, s.material);
   }
+
   // A disk: the voxels its plane crosses within its radius of its centre (a superset near the
   // rim: conservative).
-  for (const Disk& d : scene.disks) {
+  void disk(const Disk& d) {
     const Vec3 r{d.radius, d.radius, d.radius};
     std::array<int, 3> lo, hi;
-    range(d.center - r, d.center + r, lo, hi);
-    touched.clear();
-    const double reach =
-        half * (std::abs(d.normal.x) + std::abs(d.normal.y) + std::abs(d.normal.z)) * (1 + 1e-5);
+    voxel_range(v_, d.center - r, d.center + r, lo, hi);
+    touched_.clear();
+    const double reach = 0.5 * double(v_.size) *
+                         (std::abs(d.normal.x) + std::abs(d.normal.y) + std::abs(d.normal.z)) *
+                         (1 + 1e-5);
     for (int z = lo[2]; z <= hi[2]; ++z)
       for (int y = lo[1]; y <= hi[1]; ++y)
         for (int x = lo[0]; x <= hi[0]; ++x) {
-          const Vec3 a = voxel_lo(x, y, z), c = a + Vec3{size, size, size};
-          const Vec3 mid = v.centre(x, y, z);
+          const Vec3 a = voxel_lo(v_, x, y, z), c = a + Vec3{v_.size, v_.size, v_.size};
+          const Vec3 mid = v_.centre(x, y, z);
           if (std::abs(double(dot(d.normal, mid - d.center))) <= reach &&
               nearest_distance(d.center, a, c) <= d.radius)
-            touched.push_back(v.index(x, y, z));
+            touched_.push_back(v_.index(x, y, z));
         }
     add(kPi * double(d.radius) * d.radius, d.material);
   }
-  for (std::size_t k = 0; k < count; ++k) {
-    if (!(sums.weight[k] > 0)) continue;
-    v.extinction[k] = {kOpaque, kOpaque, kOpaque};
-    v.emission[k] = sums.emission[k] * (1 / sums.weight[k]);
-    v.albedo[k] = sums.albedo[k] * (1 / sums.weight[k]);
+
+  // Every voxel a surface touched becomes opaque, with the area-weighted mean emission and albedo.
+  void finish(Voxels& v) const {
+    for (std::size_t k = 0; k < sums_.weight.size(); ++k) {
+      if (!(sums_.weight[k] > 0)) continue;
+      v.extinction[k] = {kOpaque, kOpaque, kOpaque};
+      v.emission[k] = sums_.emission[k] * (1 / sums_.weight[k]);
+      v.albedo[k] = sums_.albedo[k] * (1 / sums_.weight[k]);
+    }
   }
 
-  // Fog: the coefficients of every box, times the fraction of the voxel's points inside it.
-  if (!scene.media.empty()) {
-    std::vector<Rgb> scattering(count, Rgb{});
-    for (const Medium& m : scene.media) {
-      const Bounds mb = box_bounds(m);
-      std::array<int, 3> lo, hi;
-      range(mb.lo, mb.hi, lo, hi);
-      const Rgb sigma_s = m.extinction * m.albedo;
-      parallel_for(hi[2] - lo[2] + 1, [&](int dz) {
-        const int z = lo[2] + dz;
-        for (int y = lo[1]; y <= hi[1]; ++y)
-          for (int x = lo[0]; x <= hi[0]; ++x) {
-            const std::size_t k = v.index(x, y, z);
-            if (v.opaque(k)) continue;
-            const Vec3 a = voxel_lo(x, y, z);
-            int inside = 0;
-            for (int i = 0; i < kPerAxis * kPerAxis * kPerAxis; ++i) {
-              const Vec3 p = a + Vec3{(float(i % kPerAxis) + 0.5f) / kPerAxis * size,
-                                      (float(i / kPerAxis % kPerAxis) + 0.5f) / kPerAxis * size,
-                                      (float(i / (kPerAxis * kPerAxis)) + 0.5f) / kPerAxis * size};
-              const Vec3 q = p - m.center;
-              bool in = true;
-              for (int j = 0; j < 3 && in; ++j)
-                in = std::abs(dot(q, m.axes[std::size_t(j)])) <= m.half_size[j];
-              inside += in;
-            }
-            if (inside == 0) continue;
-            const float f = float(inside) / float(kPerAxis * kPerAxis * kPerAxis);
-            v.extinction[k] += m.extinction * f;
-            v.emission[k] += m.emission * f;
-            scattering[k] += sigma_s * f;
-          }
-      });
-    }
-    for (std::size_t k = 0; k < count; ++k) {
-      if (v.opaque(k)) continue;
-      const Rgb& s = v.extinction[k];
-      v.albedo[k] = {s.r > 0 ? scattering[k].r / s.r : 0, s.g > 0 ? scattering[k].g / s.g : 0,
-                     s.b > 0 ? scattering[k].b / s.b : 0};
+ private:
+  // The surface's area shared among the voxels it touched.
+  void add(double area, std::uint32_t material) {
+    if (touched_.empty()) return;
+    const float w = float(area / double(touched_.size()));
+    const Material& m = scene_.materials[material];
+    for (std::size_t k : touched_) {
+      sums_.weight[k] += w;
+      sums_.emission[k] += m.emission * w;
+      sums_.albedo[k] += albedos_[material] * w;
     }
   }
-  build_distance_field(v);
+
+  const Scene& scene_;
+  const Voxels& v_;
+  SurfaceSums sums_;
+  std::vector<Rgb> albedos_;
+  std::vector<std::size_t> touched_;
+};
+
+void rasterise_surfaces(const Scene& scene, Voxels& v) {
+  SurfaceRaster raster(scene, v);
+  for (const TriangleMesh& mesh : scene.meshes)
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
+      raster.triangle({mesh.positions[mesh.triangles[t][0]], mesh.positions[mesh.triangles[t][1]],
+                       mesh.positions[mesh.triangles[t][2]]},
+                      mesh.materials[t]);
+  for (const Sphere& s : scene.spheres) raster.sphere(s);
+  for (const Disk& d : scene.disks) raster.disk(d);
+  raster.finish(v);
+}
+
+// The fraction of voxel (x, y, z)'s kPerAxis^3 points inside fog box m.
+float covered(const Voxels& v, const Medium& m, int x, int y, int z) {
+  const Vec3 a = voxel_lo(v, x, y, z);
+  int inside = 0;
+  for (int i = 0; i < kPerAxis * kPerAxis * kPerAxis; ++i) {
+    const Vec3 p = a + Vec3{(float(i % kPerAxis) + 0.5f) / kPerAxis * v.size,
+                            (float(i / kPerAxis % kPerAxis) + 0.5f) / kPerAxis * v.size,
+                            (float(i / (kPerAxis * kPerAxis)) + 0.5f) / kPerAxis * v.size};
+    const Vec3 q = p - m.center;
+    bool in = true;
+    for (int j = 0; j < 3 && in; ++j)
+      in = std::abs(dot(q, m.axes[std::size_t(j)])) <= m.half_size[j];
+    inside += in;
+  }
+  return float(inside) / float(kPerAxis * kPerAxis * kPerAxis);
+}
+
+// Fog: the coefficients of every box, times the fraction of the voxel's points inside it.
+void add_fog(const Scene& scene, Voxels& v) {
+  if (scene.media.empty()) return;
+  const std::size_t count = std::size_t(v.count());
+  std::vector<Rgb> scattering(count, Rgb{});
+  for (const Medium& m : scene.media) {
+    const Bounds mb = box_bounds(m);
+    std::array<int, 3> lo, hi;
+    voxel_range(v, mb.lo, mb.hi, lo, hi);
+    const Rgb sigma_s = m.extinction * m.albedo;
+    parallel_for(hi[2] - lo[2] + 1, [&](int dz) {
+      const int z = lo[2] + dz;
+      for (int y = lo[1]; y <= hi[1]; ++y)
+        for (int x = lo[0]; x <= hi[0]; ++x) {
+          const std::size_t k = v.index(x, y, z);
+          if (v.opaque(k)) continue;
+          const float f = covered(v, m, x, y, z);
+          if (f == 0) continue;
+          v.extinction[k] += m.extinction * f;
+          v.emission[k] += m.emission * f;
+          scattering[k] += sigma_s * f;
+        }
+    });
+  }
+  for (std::size_t k = 0; k < count; ++k) {
+    if (v.opaque(k)) continue;
+    const Rgb& s = v.extinction[k];
+    v.albedo[k] = {s.r > 0 ? scattering[k].r / s.r : 0, s.g > 0 ? scattering[k].g / s.g : 0,
+                   s.b > 0 ? scattering[k].b / s.b : 0};
+  }
+}
+
+}  // namespace
+
+Expected<Voxels> voxelise(const Scene& scene, float size, std::uint64_t max_bytes) {
+  Expected<Voxels> v = empty_grid(scene, size, max_bytes);
+  if (!v) return v;
+  rasterise_surfaces(scene, *v);
+  add_fog(scene, *v);
+  build_distance_field(*v);
   return v;
 }
 

@@ -13,6 +13,7 @@
 
 #include "penumbra/error.hpp"
 #include "penumbra/spaceland/scene.hpp"
+#include "spaceland/cascade/radiance.hpp"
 #include "spaceland/color.hpp"
 
 namespace penumbra::spaceland::grid {
@@ -97,13 +98,9 @@ inline Rgb stretch_light(Rgb sigma, Rgb source, float len, Rgb pass) {
   return out;
 }
 
-// What a ray segment picks up crossing the grid.
-struct Segment {
-  Rgb radiance{};              // light reaching the segment's start from inside it
-  Rgb transmittance{1, 1, 1};  // 0 once an opaque voxel is met
-  float t_end = 0;             // where it stopped: tmax, or the entry into an opaque voxel
-  bool blocked = false;        // an opaque voxel ended it
-};
+// What a ray segment picks up crossing the grid (the cascade core's: blocked by an opaque voxel,
+// t_end its entry).
+using cascade::Segment;
 
 // Walks the voxels along origin + t dir (dir unit), t in [tmin, tmax], one voxel at a time
 // (Amanatides-Woo), leaping over empty space by the distance field: in a fog voxel, Beer-Lambert

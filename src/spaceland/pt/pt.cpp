@@ -10,11 +10,12 @@
 #include "core/parallel.hpp"
 #include "core/sobol.hpp"
 #include "core/timer.hpp"
-#include "spaceland/camera.hpp"
 #include "spaceland/color.hpp"
 #include "spaceland/lights.hpp"
 #include "spaceland/media.hpp"
 #include "spaceland/sampling.hpp"
+#include "spaceland/sky.hpp"
+#include "spaceland/surface.hpp"
 
 namespace penumbra::spaceland::pt {
 
@@ -201,18 +202,19 @@ Rgb trace(const Context& ctx, std::size_t k, std::uint32_t pixel_seed, std::uint
 
 }  // namespace
 
-ImageRgb render(const Scene& scene, const RayScene& rays, const GBuffer& g,
-                const RenderOptions& options, Stats& stats) {
+ImageRgb render(const SolveContext& in, const PtOptions& pt, SolveReport& report) {
+  Stopwatch stage;
+  const Scene& scene = in.scene;
+  const GBuffer& g = in.g;
   const Lights lights(scene);
   const Media media(scene);
-  const Context ctx{scene, rays, g, lights, media, scene.camera.position, options.bounces};
+  const Context ctx{scene, in.rays, g, lights, media, scene.camera.position, in.bounces};
   const int w = g.width, h = g.height;
   const std::size_t n = std::size_t(w) * h;
   std::vector<double> sum(n * 3, 0.0);
   std::atomic<std::uint64_t> ray_count{0};
-  const std::uint32_t seed = sobol::hash(options.pt.seed);
+  const std::uint32_t seed = sobol::hash(pt.seed);
 
-  const PtOptions& pt = options.pt;
   const std::uint64_t target = pt.spp > 0 ? std::uint64_t(pt.spp) : 0;
   Stopwatch watch;
   std::uint64_t done = 0;
@@ -247,9 +249,9 @@ ImageRgb render(const Scene& scene, const RayScene& rays, const GBuffer& g,
     });
     done += pass;
     const double elapsed = watch.ms() / 1000;
-    const bool cancelled = options.cancel && options.cancel->load();
+    const bool cancelled = in.cancel && in.cancel->load();
     const bool timed_out = pt.seconds > 0 && elapsed >= pt.seconds;
-    if (options.progress) {
+    if (in.progress && *in.progress) {
       RenderProgress p;
       p.samples = done;
       p.target = target;
@@ -257,19 +259,21 @@ ImageRgb render(const Scene& scene, const RayScene& rays, const GBuffer& g,
       const double by_samples = target > 0 ? double(done) / double(target) : 0;
       const double by_time = pt.seconds > 0 ? elapsed / pt.seconds : 0;
       p.fraction = std::min(1.0, std::max(by_samples, by_time));
-      options.progress(p);
+      (*in.progress)(p);
     }
     if (cancelled) {
-      stats.cancelled = target == 0 || done < target;
+      report.cancelled = target == 0 || done < target;
       break;
     }
     if (timed_out) break;
   }
-  stats.samples = done;
-  stats.rays = ray_count.load();
+  report.samples = done;
+  report.rays += ray_count.load();
   ImageRgb img(w, h);
   const double inv = done > 0 ? 1.0 / double(done) : 0;
   for (std::size_t k = 0; k < n * 3; ++k) img.data()[k] = float(sum[k] * inv);
+  report.stages.push_back({"path trace", stage.ms()});
+  report.memory_bytes += std::uint64_t(n) * kBytesPerPixel;
   return img;
 }
 

@@ -8,22 +8,16 @@
 
 #include "penumbra/image.hpp"
 #include "penumbra/spaceland/render.hpp"
-#include "spaceland/embree/ray_scene.hpp"
-#include "spaceland/gbuffer.hpp"
+#include "spaceland/solve.hpp"
 
 namespace penumbra::spaceland::pt {
-
-struct Stats {
-  std::uint64_t rays = 0;     // continuation and shadow rays traced (not the G-buffer's)
-  std::uint64_t samples = 0;  // per pixel
-  bool cancelled = false;
-};
 
 // Bytes of working memory per pixel (the accumulator).
 inline constexpr std::uint64_t kBytesPerPixel = 3 * sizeof(double);
 
-// Renders the radiance towards the camera of every pixel, starting from the G-buffer's first hits.
-ImageRgb render(const Scene& scene, const RayScene& rays, const GBuffer& g,
-                const RenderOptions& options, Stats& stats);
+// Renders the radiance towards the camera of every pixel, starting from the G-buffer's first hits
+// (ctx.bounces of them); reports the continuation and shadow rays it traced, the samples per
+// pixel, and whether ctx.cancel stopped it early.
+ImageRgb render(const SolveContext& ctx, const PtOptions& pt, SolveReport& report);
 
 }  // namespace penumbra::spaceland::pt

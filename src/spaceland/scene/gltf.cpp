@@ -273,7 +273,7 @@ struct Instance {
 };
 
 // A primitive of a mesh instance, checked, with the counts it adds.
-struct Plan {
+struct PrimitivePlan {
   const Instance* instance;
   std::string name;  // "meshes[0].primitives[1]"
   int mode;
@@ -289,19 +289,20 @@ class Reader {
 
   MeshFile read() {
     walk_nodes();
-    std::vector<Plan> plans;
+    std::vector<PrimitivePlan> plans;
     for (const Instance& inst : instances_) {
       const auto& mesh = m_.meshes[std::size_t(inst.mesh)];
       // Counted too: a small file can instance a mesh of many primitives many times.
-      budget_.take(mesh.primitives.size() * sizeof(Plan), "the primitives of the mesh instances");
+      budget_.take(mesh.primitives.size() * sizeof(PrimitivePlan),
+                   "the primitives of the mesh instances");
       for (std::size_t p = 0; p < mesh.primitives.size(); ++p)
         plans.push_back(plan(inst, mesh.primitives[p],
                              at("meshes", std::size_t(inst.mesh)) + "." + at("primitives", p)));
     }
     bool any_normals = false, any_uvs = false;
-    for (const Plan& p : plans) any_normals |= p.has_normals, any_uvs |= p.has_uvs;
+    for (const PrimitivePlan& p : plans) any_normals |= p.has_normals, any_uvs |= p.has_uvs;
     std::uint64_t vertices = 0, triangles = 0;
-    for (Plan& p : plans) {
+    for (PrimitivePlan& p : plans) {
       p.vertices = any_normals && !p.has_normals ? 3 * p.triangles : p.positions.count;
       vertices += p.vertices;
       triangles += p.triangles;
@@ -316,7 +317,7 @@ class Reader {
     if (any_uvs) mesh.uvs.reserve(vertices);
     mesh.triangles.reserve(triangles);
     mesh.materials.reserve(triangles);
-    for (const Plan& p : plans) emit(p, any_normals, any_uvs);
+    for (const PrimitivePlan& p : plans) emit(p, any_normals, any_uvs);
     if (out_.materials.empty()) out_.materials.push_back(default_material());
     return std::move(out_);
   }
@@ -510,8 +511,9 @@ class Reader {
     return buffer.data.data() + bv.byteOffset;
   }
 
-  Plan plan(const Instance& inst, const tinygltf::Primitive& prim, const std::string& name) {
-    Plan p;
+  PrimitivePlan plan(const Instance& inst, const tinygltf::Primitive& prim,
+                     const std::string& name) {
+    PrimitivePlan p;
     p.instance = &inst;
     p.name = name;
     p.mode = prim.mode < 0 ? TINYGLTF_MODE_TRIANGLES : prim.mode;
@@ -597,7 +599,7 @@ class Reader {
     return t + std::size_t(k);
   }
 
-  void emit(const Plan& p, bool any_normals, bool any_uvs) {
+  void emit(const PrimitivePlan& p, bool any_normals, bool any_uvs) {
     TriangleMesh& mesh = out_.mesh;
     const Affine& world = p.instance->world;
     const std::size_t n = p.positions.count, base = mesh.positions.size();

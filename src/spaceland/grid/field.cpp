@@ -1,0 +1,218 @@
+// Reading the probe grid's cascade-0 field at surface points and in fog, and one more bounce.
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+
+#include "core/math.hpp"
+#include "core/parallel.hpp"
+#include "spaceland/cascade/radiance.hpp"
+#include "spaceland/color.hpp"
+#include "spaceland/grid/grid.hpp"
+#include "spaceland/grid/probes.hpp"
+
+namespace penumbra::spaceland::grid {
+
+using cascade::kInfinity;
+
+// The weighted mean of what the cascade-0 probes around p give: a tent of `radius` probe
+// spacings, the 8 probes around p (trilinear weights) first, then 2 and up to `max_radius`
+// spacings where none of those serves. `serve(q, probe, value)` says whether probe q (at world
+// position `probe`, outside opaque voxels) takes part, and with what value.
+template <class Serve>
+bool RadianceField::tent(Vec3 p, int max_radius, Serve&& serve, Rgb& out) const {
+  const Voxels& v = *voxels_;
+  const CascadePlan& c = plan_[0];
+  const int dims[3] = {c.nx, c.ny, c.nz};
+  double g[3];
+  for (int k = 0; k < 3; ++k) g[k] = probe_coordinate(v, c.spacing, p, k);
+  for (int radius = 1; radius <= max_radius; radius *= 2) {
+    int lo[3];
+    for (int k = 0; k < 3; ++k) lo[k] = int(std::floor(g[k])) - (radius - 1);
+    Rgb sum{};
+    float weight = 0;
+    for (int dz = 0; dz < 2 * radius; ++dz)
+      for (int dy = 0; dy < 2 * radius; ++dy)
+        for (int dx = 0; dx < 2 * radius; ++dx) {
+          const int at[3] = {lo[0] + dx, lo[1] + dy, lo[2] + dz};
+          float w = 1;
+          for (int k = 0; k < 3; ++k) {
+            if (at[k] < 0 || at[k] >= dims[k]) w = 0;
+            w *= std::max(0.0f, float(1 - std::abs(g[k] - at[k]) / radius));
+          }
+          if (w <= 0) continue;
+          const std::uint64_t q = (std::uint64_t(at[2]) * c.ny + at[1]) * c.nx + at[0];
+          if (!valid_[std::size_t(q)]) continue;
+          Rgb value;
+          if (!serve(q, position_of(v, c, q), value)) continue;
+          sum += value * w;
+          weight += w;
+        }
+    if (weight > 0) {
+      out = sum * (1 / weight);
+      return true;
+    }
+  }
+  return false;
+}
+
+bool RadianceField::sphere_radiance(Vec3 p, Rgb& out) const {
+  const Voxels& v = *voxels_;
+  const int vdims[3] = {v.nx, v.ny, v.nz};
+  int own[3];
+  for (int k = 0; k < 3; ++k) own[k] = std::clamp(v.cell(p, k), 0, vdims[k] - 1);
+  auto serve = [&](std::uint64_t q, Vec3 probe, Rgb& value) {
+    // Marched from the probe: the only opaque voxel it may meet is p's own (p close to a surface
+    // lies in the surface's voxels).
+    const Vec3 to = p - probe;
+    const float dist = length(to);
+    if (dist > 0) {
+      const Vec3 dir = to * (1 / dist);
+      const Segment s = march(v, probe, dir, 0, dist);
+      if (s.blocked) {
+        const Vec3 in = probe + dir * (s.t_end + 1e-3f * v.size);
+        for (int k = 0; k < 3; ++k)
+          if (v.cell(in, k) != own[k]) return false;
+      }
+    }
+    value = sphere_[std::size_t(q)];
+    return true;
+  };
+  return tent(p, 2, serve, out);
+}
+
+// The free voxel nearest p in front of its surface (within 2 voxels each way), whose centre
+// probes must see; p itself lies in its surface's opaque voxels (near an edge, in the other
+// surface's too, so a step along the normal alone may not leave them).
+Vec3 RadianceField::free_point_near(Vec3 p, Vec3 n) const {
+  const Voxels& v = *voxels_;
+  Vec3 free_point = p + n * (2 * v.size);
+  int at[3];
+  const int vdims[3] = {v.nx, v.ny, v.nz};
+  for (int k = 0; k < 3; ++k) at[k] = v.cell(p, k);
+  float best = kInfinity;
+  for (int dz = -2; dz <= 2; ++dz)
+    for (int dy = -2; dy <= 2; ++dy)
+      for (int dx = -2; dx <= 2; ++dx) {
+        const int q[3] = {at[0] + dx, at[1] + dy, at[2] + dz};
+        if (q[0] < 0 || q[1] < 0 || q[2] < 0 || q[0] >= vdims[0] || q[1] >= vdims[1] ||
+            q[2] >= vdims[2] || v.opaque(v.index(q[0], q[1], q[2])))
+          continue;
+        const Vec3 centre = v.centre(q[0], q[1], q[2]);
+        const float d = length(centre - p);
+        if (dot(centre - p, n) > 0.25f * v.size && d < best) best = d, free_point = centre;
+      }
+  return free_point;
+}
+
+bool RadianceField::mean_radiance(Vec3 p, Vec3 n, Rgb& out, const RayScene* rays) const {
+  const Voxels& v = *voxels_;
+  const Vec3 free_point = rays ? p + n * (2 * v.size) : free_point_near(p, n);
+  auto serve = [&](std::uint64_t q, Vec3 probe, Rgb& value) {
+    // In front of the surface, and seeing it (from the free point): no light from behind a
+    // wall, however thin.
+    if (dot(p - probe, n) >= 0) return false;
+    if (rays) {
+      // The exact surfaces: near an edge the free voxel may lie past the other surface.
+      const Vec3 start = rays->spawn(p, n, probe - p);
+      if (rays->occluded(Ray{start, probe - start, 0, 1})) return false;
+    } else {
+      const Vec3 to = probe - free_point;
+      const float dist = length(to);
+      if (dist > 0 && march(v, free_point, to * (1 / dist), 0, dist).blocked) return false;
+    }
+    return cascade::cosine_mean(dirs_, n, radiance_, q, value);
+  };
+  // Where none of the 8 probes around p serves (they sit in the surface's own voxels, or behind
+  // it), up to 4 probe spacings out.
+  return tent(p, 4, serve, out);
+}
+
+Rgb in_scattered(const RadianceField& field, const SunLight* sun, Vec3 x, std::uint64_t& rays) {
+  Rgb in{};
+  field.sphere_radiance(x, in);
+  if (sun && sun->on()) in += sun->at(x, rays) * float(1 / (4 * kPi));
+  return in;
+}
+
+namespace {
+
+// The light leaving surface voxel k towards one side: albedo times the mean radiance about the
+// normal of its free faces on that side (`drop`: the thin axis's face on the other side), plus
+// the sun's E cos / pi where a shadow ray from one voxel out along that normal reaches it.
+Rgb reflected(const Voxels& v, const RadianceField& field, const SunLight* sun, std::size_t k,
+              Vec3 centre, const bool (&open)[3][2], int drop_axis, int drop_side, Vec3& normal,
+              std::uint64_t& rays) {
+  Vec3 n{};
+  for (int axis = 0; axis < 3; ++axis)
+    for (int side = 0; side < 2; ++side)
+      if (open[axis][side] && !(axis == drop_axis && side == drop_side))
+        n[axis] += side ? 1.0f : -1.0f;
+  const float len = length(n);
+  normal = {};
+  if (!(len > 0)) return Rgb{};
+  normal = n * (1 / len);
+  Rgb out{}, mean;
+  if (field.mean_radiance(centre, normal, mean)) out += v.albedo[k] * mean;
+  if (sun) out += sun->reflected(centre + n * v.size, normal, v.albedo[k], rays);
+  return out;
+}
+
+}  // namespace
+
+std::uint64_t add_bounce(Voxels& v, const RadianceField& field, const std::vector<Rgb>& base,
+                         const SunLight* sun, std::vector<Vec3>* normals) {
+  // Written aside: the field marches these voxels meanwhile.
+  std::vector<Rgb> next(v.emission.size()), minus(v.emission.size());
+  std::vector<std::uint8_t> thin(v.emission.size(), 0);
+  if (normals) normals->assign(v.emission.size(), Vec3{});
+  std::atomic<std::uint64_t> traced{0};
+  parallel_for(v.nz, [&](int z) {
+    std::uint64_t rays = 0;
+    for (int y = 0; y < v.ny; ++y)
+      for (int x = 0; x < v.nx; ++x) {
+        const std::size_t k = v.index(x, y, z);
+        next[k] = minus[k] = base[k];
+        const Vec3 centre = v.centre(x, y, z);
+        if (!v.opaque(k)) {
+          // Fog re-emits what it scatters: sigma_s times the sphere's mean radiance.
+          if (is_black(v.extinction[k]) || is_black(v.albedo[k])) continue;
+          next[k] += v.extinction[k] * v.albedo[k] * in_scattered(field, sun, centre, rays);
+          continue;
+        }
+        // The free 6-neighbours: the outward normal points towards them.
+        bool open[3][2] = {};
+        int thin_axis = -1, thin_count = 0;
+        const int at[3] = {x, y, z}, dims[3] = {v.nx, v.ny, v.nz};
+        for (int axis = 0; axis < 3; ++axis) {
+          for (int side = 0; side < 2; ++side) {
+            int q[3] = {at[0], at[1], at[2]};
+            q[axis] += side ? 1 : -1;
+            open[axis][side] =
+                q[axis] >= 0 && q[axis] < dims[axis] && !v.opaque(v.index(q[0], q[1], q[2]));
+          }
+          if (open[axis][0] && open[axis][1]) thin_axis = axis, ++thin_count;
+        }
+        // A voxel one voxel thin along two axes (a rod) has no side to tell: it keeps `base`.
+        if (thin_count > 1) continue;
+        Vec3 normal;
+        if (thin_axis < 0) {
+          next[k] += reflected(v, field, sun, k, centre, open, -1, -1, normal, rays);
+          minus[k] = next[k];
+        } else {
+          // Both sides: towards + (the - face dropped) and towards -.
+          Vec3 other;
+          next[k] += reflected(v, field, sun, k, centre, open, thin_axis, 0, normal, rays);
+          minus[k] += reflected(v, field, sun, k, centre, open, thin_axis, 1, other, rays);
+          thin[k] = std::uint8_t(1 + thin_axis);
+        }
+        if (normals) (*normals)[k] = normal;
+      }
+    traced.fetch_add(rays, std::memory_order_relaxed);
+  });
+  v.emission = std::move(next);
+  v.emission_minus = std::move(minus);
+  v.thin = std::move(thin);
+  return traced.load();
+}
+
+}  // namespace penumbra::spaceland::grid

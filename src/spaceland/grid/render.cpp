@@ -1,0 +1,128 @@
+// The probe grid as a 3D method: voxelise, solve (once per bounce), shade the camera's pixels and
+// the fog on their rays.
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <vector>
+
+#include "core/parallel.hpp"
+#include "core/timer.hpp"
+#include "spaceland/grid/grid.hpp"
+#include "spaceland/media.hpp"
+#include "spaceland/shade.hpp"
+#include "spaceland/surface.hpp"
+
+namespace penumbra::spaceland::grid {
+
+float voxel_size(const Scene& scene, const GridOptions& o, std::uint64_t max_memory) {
+  return o.voxel > 0 ? o.voxel : default_voxel_size(scene, max_memory / 4);
+}
+
+std::uint64_t estimate_bytes(const Scene& scene, const GridOptions& o, std::uint64_t max_memory,
+                             bool bounces) {
+  const std::array<double, 3> d = grid_dims(grid_bounds(scene), voxel_size(scene, o, max_memory));
+  return std::uint64_t(std::min(d[0] * d[1] * d[2] * double(voxel_bytes(1, bounces)), 1.8e19));
+}
+
+namespace {
+
+// The light reaching the camera along pixel k's ray: `behind` (what its hit, or the sky, sends)
+// through the fog, plus what the fog emits and scatters towards the camera, integrated a step's
+// length at a time (Beer-Lambert within each step, the in-scattered radiance at its middle).
+Rgb through_fog(const Media& media, const RadianceField& field, const SunLight& sun, float step,
+                Vec3 origin, Vec3 dir, float t_end, Rgb behind, std::vector<MediumPiece>& pieces,
+                std::uint64_t& rays) {
+  media.pieces(Ray{origin, dir, 0, t_end}, t_end, pieces);
+  Rgb l{}, tr{1, 1, 1};
+  for (const MediumPiece& piece : pieces) {
+    const float len = piece.t1 - piece.t0;
+    if (!(len > 0)) continue;
+    const int steps = int(std::clamp(std::ceil(double(len) / step), 1.0, 4096.0));
+    const float dt = len / float(steps);
+    const Rgb& sigma = piece.sigma_t;
+    const Rgb through = exp_neg(sigma * dt);
+    for (int i = 0; i < steps; ++i) {
+      const Vec3 x = origin + dir * (piece.t0 + (float(i) + 0.5f) * dt);
+      const Rgb in = is_black(piece.sigma_s) ? Rgb{} : in_scattered(field, &sun, x, rays);
+      l += tr * stretch_light(sigma, piece.emission + piece.sigma_s * in, dt, through);
+      tr *= through;
+    }
+  }
+  return l + tr * behind;
+}
+
+// The fog between the camera and what each pixel shows, a probe spacing a step (the
+// in-scattered light's own resolution), over the image of the surfaces behind it.
+std::uint64_t add_fog(const SolveContext& ctx, const RadianceField& field, const SunLight& sun,
+                      float step, ImageRgb& img) {
+  const Media media(ctx.scene);
+  if (media.empty()) return 0;
+  const GBuffer& g = ctx.g;
+  std::atomic<std::uint64_t> traced{0};
+  parallel_for(g.height, [&](int y) {
+    std::vector<MediumPiece> pieces;
+    std::uint64_t local = 0;
+    for (int x = 0; x < g.width; ++x) {
+      const std::size_t k = std::size_t(y) * std::size_t(g.width) + std::size_t(x);
+      const float t_end = g.found[k] ? g.hits[k].t : cascade::kInfinity;
+      img.set(x, y,
+              through_fog(media, field, sun, step, ctx.scene.camera.position, g.directions[k],
+                          t_end, img.at(x, y), pieces, local));
+    }
+    traced.fetch_add(local, std::memory_order_relaxed);
+  });
+  return traced.load();
+}
+
+}  // namespace
+
+Expected<ImageRgb> render(const SolveContext& ctx, const GridOptions& o, SolveReport& report,
+                          GridOptions& used) {
+  Stopwatch watch;
+  // A quarter of the limit for the voxels, the rest for the cascades (and what render holds).
+  Expected<Voxels> voxels =
+      voxelise(ctx.scene, voxel_size(ctx.scene, o, ctx.max_memory), ctx.max_memory / 4);
+  if (!voxels) return voxels.error();
+  report.stages.push_back({"voxelise", watch.ms()});
+  used.voxel = voxels->size;
+  watch.restart();
+  const Background bg(ctx.scene);
+  const SunLight sun(ctx.scene, ctx.rays);
+  const std::uint64_t voxel_memory = voxel_bytes(voxels->count(), ctx.bounces > 1);
+  const std::uint64_t left = ctx.max_memory - std::min(ctx.max_memory, voxel_memory);
+  Expected<RadianceField> field = solve(*voxels, bg, o, left);
+  if (!field) return field.error();
+  report.stages.push_back({"cascades", watch.ms()});
+  // Later bounces: the surfaces' and the fog's own emission plus what the last field (and the
+  // sun) brings them, solved again (the voxels' light after b bounces gives the pixels b + 1).
+  if (ctx.bounces > 1) {
+    const std::vector<Rgb> base = voxels->emission;
+    for (int b = 1; b < ctx.bounces; ++b) {
+      watch.restart();
+      report.rays += add_bounce(*voxels, *field, base, &sun);
+      *field = RadianceField{};  // its radiance freed before the next solve's
+      field = solve(*voxels, bg, o, left);
+      if (!field) return field.error();
+      report.stages.push_back({"bounce " + std::to_string(b + 1), watch.ms()});
+    }
+  }
+  used.cascades = int(field->cascades().size());
+  used.interval = field->cascades()[0].t_end;
+  report.voxel_bytes = voxel_memory;
+  report.memory_bytes += voxel_memory + cascades_bytes(field->cascades(), o, voxels->size);
+  watch.restart();
+
+  ImageRgb img = shade_pixels(
+      ctx.g, bg, report.rays, [&](int, int, std::size_t, const Hit& h, std::uint64_t& local) {
+        const Rgb albedo = albedo_at(ctx.scene, h);
+        Rgb l = emission_at(ctx.scene, h), mean;
+        if (field->mean_radiance(h.position, h.geometric_normal, mean, &ctx.rays))
+          l += albedo * mean;
+        return l + sun.reflected(h, albedo, local);
+      });
+  report.rays += add_fog(ctx, *field, sun, voxels->size * float(o.probe_spacing), img);
+  report.stages.push_back({"gather", watch.ms()});
+  return img;
+}
+
+}  // namespace penumbra::spaceland::grid

@@ -1,0 +1,173 @@
+// The table of 3D methods (spaceland/method.hpp): each method's options, checks, memory estimate,
+// description and solve.
+#include <cmath>
+#include <cstdio>
+#include <iterator>
+#include <string>
+
+#include "io/json_reader.hpp"
+#include "spaceland/grid/grid.hpp"
+#include "spaceland/method.hpp"
+#include "spaceland/pt/pt.hpp"
+#include "spaceland/radiance_cache.hpp"
+#include "spaceland/spwi/spwi.hpp"
+
+namespace penumbra::spaceland {
+namespace {
+
+// The cascade parameters SPWI and the grid share, as used.
+template <class Cascades>
+void cascade_parameters(const Cascades& m, std::vector<Parameter>& p) {
+  p.push_back({"probe_spacing", std::int64_t(m.probe_spacing)});
+  p.push_back({"directions", std::int64_t(m.directions)});
+  p.push_back({"interval", double(m.interval)});
+  p.push_back({"cascades", std::int64_t(m.cascades)});
+}
+
+// ---- pt: the reference path tracer ----
+
+constexpr const char* kPtOptions[] = {"pt.spp", "pt.seconds", "pt.seed"};
+
+Status pt_check(const RenderOptions& o) {
+  if (o.pt.spp < 0)
+    return Error{"`pt.spp`: expected a count >= 0, found " + std::to_string(o.pt.spp)};
+  if (!std::isfinite(o.pt.seconds) || o.pt.seconds < 0)
+    return Error{"`pt.seconds`: expected a number of seconds >= 0, found " +
+                 io::format_number(o.pt.seconds)};
+  if (o.pt.spp == 0 && o.pt.seconds == 0)
+    return Error{
+        "`pt.spp` is 0 (no limit) and no `pt.seconds` is given: the render would "
+        "never end"};
+  return {};
+}
+
+std::uint64_t pt_bytes(const Scene& scene, const RenderOptions&) {
+  return std::uint64_t(scene.camera.width) * scene.camera.height * pt::kBytesPerPixel;
+}
+
+void pt_describe(const RenderResult& r, std::vector<Parameter>& p, std::string& line) {
+  const PtOptions& o = r.options.pt;
+  p.push_back({"spp", std::int64_t(o.spp)});
+  p.push_back({"time", o.seconds});
+  p.push_back({"seed", o.seed});
+  line = ", " + std::to_string(r.samples) + " samples per pixel, " +
+         std::to_string(r.options.bounces) + (r.options.bounces == 1 ? " bounce" : " bounces");
+}
+
+Expected<ImageRgb> pt_solve(const SolveContext& ctx, const RenderOptions& o, SolveReport& report,
+                            RenderOptions&) {
+  return pt::render(ctx, o.pt, report);
+}
+
+// ---- spwi: screen-space probes with world-space intervals (seed 000) ----
+
+constexpr const char* kSpwiOptions[] = {
+    "spwi.probe_spacing", "spwi.directions",   "spwi.interval",   "spwi.branching",
+    "spwi.cascades",      "spwi.merge",        "spwi.sun",        "spwi.gather",
+    "spwi.depth_bias",    "spwi.overlap",      "spwi.preaverage", "spwi.merge_edge",
+    "spwi.gather_edge",   "spwi.gather_normal"};
+
+Status spwi_check(const RenderOptions& o) {
+  return spwi::check_options(o.spwi);
+}
+
+Status spwi_check_scene(const Scene& scene) {
+  return spwi::check_scene(scene);
+}
+
+std::uint64_t spwi_bytes(const Scene& scene, const RenderOptions& o) {
+  return spwi::bytes_upper_bound(scene.camera.width, scene.camera.height, o.spwi);
+}
+
+void spwi_describe(const RenderResult& r, std::vector<Parameter>& p, std::string& line) {
+  const SpwiOptions& o = r.options.spwi;
+  cascade_parameters(o, p);
+  p.push_back({"branching", std::int64_t(o.branching)});
+  p.push_back({"merge", std::string(to_string(o.merge))});
+  p.push_back({"sun", std::string(to_string(o.sun))});
+  p.push_back({"gather", std::string(to_string(o.gather))});
+  p.push_back({"depth_bias", double(o.depth_bias)});
+  p.push_back({"overlap", o.overlap});
+  p.push_back({"preaverage", o.preaverage});
+  p.push_back({"merge_edge", double(o.merge_edge)});
+  p.push_back({"gather_edge", double(o.gather_edge)});
+  p.push_back({"gather_normal", double(o.gather_normal)});
+  line = ", " + std::to_string(o.cascades) + " cascades, t0 " + io::format_rounded(o.interval) +
+         ", merge " + to_string(o.merge) + ", sun " + to_string(o.sun);
+}
+
+Expected<ImageRgb> spwi_solve(const SolveContext& ctx, const RenderOptions& o, SolveReport& report,
+                              RenderOptions& used) {
+  const spwi::Layout layout = spwi::make_layout(ctx.scene, ctx.g, o.spwi);
+  used.spwi.interval = layout.levels.t0;
+  used.spwi.cascades = layout.count();
+  return spwi::render(ctx, o.spwi, layout, report);
+}
+
+// ---- grid: the world-space probe grid (seed 001 4.3) ----
+
+constexpr const char* kGridOptions[] = {"grid.voxel",    "grid.probe_spacing", "grid.directions",
+                                        "grid.interval", "grid.cascades",      "grid.extend_length",
+                                        "grid.fix"};
+
+Status grid_check(const RenderOptions& o) {
+  return grid::check_options(o.grid);
+}
+
+std::uint64_t grid_bytes(const Scene& scene, const RenderOptions& o) {
+  // The voxels; the cascades' share is checked when they are planned (the grid's size is known
+  // only once the voxel size is).
+  return grid::estimate_bytes(scene, o.grid, o.max_memory, o.bounces > 1);
+}
+
+void grid_describe(const RenderResult& r, std::vector<Parameter>& p, std::string& line) {
+  const GridOptions& o = r.options.grid;
+  cascade_parameters(o, p);
+  p.push_back({"voxel", double(o.voxel)});
+  p.push_back({"voxel_memory_bytes", r.voxel_bytes});
+  p.push_back({"extend_length", double(o.extend_length)});
+  p.push_back({"fix", std::string(o.fix ? "bilinear" : "none")});
+  char mib[32];
+  std::snprintf(mib, sizeof mib, "%.1f", double(r.voxel_bytes) / (1 << 20));
+  line = ", voxel " + io::format_rounded(o.voxel) + " (" + mib + " MiB of voxels), " +
+         std::to_string(o.cascades) + " cascades, t0 " + io::format_rounded(o.interval);
+}
+
+Expected<ImageRgb> grid_solve(const SolveContext& ctx, const RenderOptions& o, SolveReport& report,
+                              RenderOptions& used) {
+  return grid::render(ctx, o.grid, report, used.grid);
+}
+
+// In the order of the Method enum.
+constexpr MethodEntry kMethods[] = {
+    {Method::pt, "pt", "the path tracer",
+     "reference path tracer (next event estimation + MIS, fog, Owen-scrambled Sobol points)",
+     kPtOptions, true, pt_check, nullptr, pt_bytes, pt_describe, pt_solve, nullptr},
+    {Method::spwi, "spwi", "screen-space probes with world-space intervals",
+     "screen-space probes with world-space intervals (seed 000): radiance cascades on the "
+     "G-buffer, later bounces from the probe grid's radiance cache",
+     kSpwiOptions, false, spwi_check, spwi_check_scene, spwi_bytes, spwi_describe, spwi_solve,
+     nullptr},
+    {Method::grid, "grid", "the world-space probe grid",
+     "the world-space probe grid (seed 001 4.3): radiance cascades over the scene's voxels, "
+     "fog and light shafts, later bounces, the radiance cache spwi's come from",
+     kGridOptions, true, grid_check, nullptr, grid_bytes, grid_describe, grid_solve, nullptr},
+};
+constexpr bool in_enum_order() {
+  for (std::size_t i = 0; i < std::size(kMethods); ++i)
+    if (std::size_t(kMethods[i].method) != i) return false;
+  return std::size(kMethods) == std::size_t(Method::grid) + 1;
+}
+static_assert(in_enum_order(), "one entry per Method, indexed by the enum");
+
+}  // namespace
+
+std::span<const MethodEntry> method_table() {
+  return kMethods;
+}
+
+const MethodEntry& entry(Method m) {
+  return kMethods[std::size_t(m)];
+}
+
+}  // namespace penumbra::spaceland

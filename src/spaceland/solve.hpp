@@ -1,0 +1,44 @@
+// What every 3D method's solve is handed and what it reports besides its image: the method table
+// (method.hpp) hands each solver this and its own options, never the whole RenderOptions.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include "penumbra/progress.hpp"
+#include "penumbra/spaceland/scene.hpp"
+#include "spaceland/embree/ray_scene.hpp"
+#include "spaceland/gbuffer.hpp"
+
+namespace penumbra::spaceland {
+
+class RadianceCache;
+
+// The scene, its ray tracer, the camera's first hits, and what every method shares.
+struct SolveContext {
+  const Scene& scene;
+  const RayScene& rays;
+  const GBuffer& g;
+  int bounces = 1;  // 1: direct light only
+  std::uint64_t max_memory = 0;
+  // Later bounces' light at the surfaces, for a method that does not follow them itself (the
+  // dispatcher builds it when bounces > 1); null otherwise.
+  const RadianceCache* cache = nullptr;
+  // Progressive methods call `progress` between passes and stop when `cancel` turns true.
+  const std::function<void(const RenderProgress&)>* progress = nullptr;
+  const std::atomic<bool>* cancel = nullptr;
+};
+
+// What a solve reports besides the image.
+struct SolveReport {
+  std::vector<StageTime> stages;   // in the order they ran
+  std::uint64_t rays = 0;          // rays traced (not the G-buffer's)
+  std::uint64_t samples = 0;       // per pixel, for progressive methods
+  std::uint64_t memory_bytes = 0;  // the method's working memory
+  std::uint64_t voxel_bytes = 0;   // the voxels' share of it (the probe grid)
+  bool cancelled = false;
+};
+
+}  // namespace penumbra::spaceland

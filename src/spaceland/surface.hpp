@@ -1,0 +1,17 @@
+// What a surface hit is made of: its albedo and emission from the scene's materials, and its
+// normals turned to the side a ray arrives from.
+#pragma once
+
+#include "penumbra/spaceland/scene.hpp"
+#include "spaceland/ray.hpp"
+
+namespace penumbra::spaceland {
+
+// The albedo (texture included) and the emission of the surface at a hit.
+Rgb albedo_at(const Scene& scene, const Hit& hit);
+Rgb emission_at(const Scene& scene, const Hit& hit);
+
+// Turns a hit's normals to the side the ray arrives from (surfaces are two-sided).
+void face_towards(Hit& hit, Vec3 ray_direction);
+
+}  // namespace penumbra::spaceland

@@ -279,34 +279,6 @@ struct GridCascade {
     return true;
   }
 
-  // The upper probes around this one, each through the mean of its 2x2 children of direction
-  // (du, dv) that hold light, weighted and normalised over those with light; false where none.
-  bool merge_upper(const cascade::Corners& around, int du, int dv, Rgb& merged) const {
-    Rgb sum{};
-    float weight = 0;
-    for (int j = 0; j < 8; ++j) {
-      const float w = around.w[std::size_t(j)];
-      if (w <= 0) continue;
-      Rgb mean{};
-      int n = 0;
-      for (int cv = 0; cv < 2; ++cv)
-        for (int cu = 0; cu < 2; ++cu) {
-          const std::size_t ud =
-              std::size_t(2 * dv + cv) * std::size_t(up->side) + std::size_t(2 * du + cu);
-          const Rgb& u = upper.at(around.index[std::size_t(j)], ud);
-          if (!holds_light(u)) continue;
-          mean += u;
-          ++n;
-        }
-      if (n == 0) continue;
-      sum += mean * (w / float(n));
-      weight += w;
-    }
-    if (!(weight > 0)) return false;
-    merged = sum * (1 / weight);
-    return true;
-  }
-
   // Direction (du, dv) of probe q: its interval, merged with the upper probes around it.
   Rgb ray(std::uint64_t q, Vec3 p, const cascade::Corners& around, int du, int dv) const {
     const std::size_t d = std::size_t(dv) * c.side + du;
@@ -314,7 +286,7 @@ struct GridCascade {
     if (!interval(q, p, d, s)) return kNoLight;
     if (s.blocked || !up) return then(s, tracer.sky(dirs[d]));
     Rgb merged;
-    if (merge_upper(around, du, dv, merged)) return s.radiance + s.transmittance * merged;
+    if (cascade::merge_children(upper, around, du, dv, 2, merged)) return s.radiance + s.transmittance * merged;
     // No upper probe has light this way: the ray continues itself to the sky.
     return then(s, cascade::continue_to_sky(tracer, p, dirs[d], c.t_end));
   }

@@ -221,6 +221,9 @@ TEST_F(Cli3d, OptionsOfTheOtherWorldAreRefused) {
   EXPECT_NE(r.err.find("--method hrc is a 2D method"), std::string::npos) << r.err;
   r = run({"render", scene_, "--device", "gpu", "-o", out("x.png")});
   EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("--device gpu: the path tracer (pt) runs on the CPU only"),
+            std::string::npos)
+      << r.err;
   r = run({"render", "--aov", "depth", "-o", out("x.png")});
   EXPECT_EQ(r.status, 2);
   EXPECT_NE(r.err.find("--aov applies to 3D scenes only"), std::string::npos) << r.err;

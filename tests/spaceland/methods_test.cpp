@@ -456,5 +456,61 @@ TEST(Methods, NoLightCrossesAWallAndTheLitSideConvergesInEveryMethod) {
   climb(kTwoRooms, two_rooms());
 }
 
+// The table is the only place a method is named: an unknown method is refused (it used to run
+// the path tracer), a method without a GPU port refuses --device gpu by its name, every method
+// lists the option fields it reads under its own name, and describes a render by the values it
+// used.
+TEST(Methods, TheTableRefusesWhatItDoesNotHold) {
+  RenderOptions o;
+  o.method = Method(int(methods().size()));
+  Status s = check_options(o);
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.error().message.find("unknown method"), std::string::npos) << s.error().message;
+  EXPECT_STREQ(to_string(o.method), "?");
+  int floor = 0;
+  const Scene scene = floor_scene(floor);
+  EXPECT_FALSE(render(scene, o).ok());
+  for (const MethodInfo& m : methods()) {
+    o = RenderOptions{};
+    o.method = m.method;
+    o.device = Device::gpu;
+    s = check_options(o);
+    ASSERT_EQ(s.ok(), m.gpu) << m.name;
+    if (!s.ok()) {
+      EXPECT_NE(s.error().message.find(std::string("(") + m.name + ") runs on the CPU only"),
+                std::string::npos)
+          << s.error().message;
+    }
+    EXPECT_FALSE(m.options.empty()) << m.name;
+    for (const std::string& field : m.options)
+      EXPECT_EQ(field.rfind(std::string(m.name) + ".", 0), 0u) << m.name << ": " << field;
+  }
+}
+
+TEST(Methods, EachDescribesTheValuesItUsed) {
+  int floor = 0;
+  Scene scene = floor_scene(floor);
+  scene.camera.width = 32;
+  scene.camera.height = 24;
+  add_sphere(scene, {0.3f, 1.4f, -0.4f}, 0.5f, add_material(scene, {0, 0, 0}, kLe));
+  for (const MethodInfo& m : methods()) {
+    RenderOptions o;
+    o.method = m.method;
+    o.pt.spp = 2;
+    const RenderResult r = render_ok(scene, o);
+    const std::vector<Parameter> parameters = describe(r);
+    EXPECT_FALSE(parameters.empty()) << m.name;
+    EXPECT_EQ(describe_line(r).rfind(", ", 0), 0u) << m.name << ": " << describe_line(r);
+    // Derived values are filled in: no cascade method reports the 0 that asks for them.
+    for (const Parameter& p : parameters)
+      if (p.name == "interval" || p.name == "cascades" || p.name == "voxel") {
+        const double v = std::holds_alternative<double>(p.value)
+                             ? std::get<double>(p.value)
+                             : double(std::get<std::int64_t>(p.value));
+        EXPECT_GT(v, 0) << m.name << ": " << p.name;
+      }
+  }
+}
+
 }  // namespace
 }  // namespace penumbra::spaceland

@@ -97,11 +97,11 @@ constexpr std::array<Rung, 3> kSpwiRungs{{
 // least Monte Carlo's rate (4x the samples halve the error).
 //
 // spwi (bilinear3d, the default): fitted k = 1.02, 1.15, 0.97; steps 0.35 to 0.70, `step` 0.85.
-// The final gather reads cascade 0 with corners()' screen-space weights, every merge with
-// bilinear3d()'s.
+// The final gather reads cascade 0 with screen_corners()' screen-space weights (spwi/probes.cpp),
+// every merge with bilinear3d()'s.
 //
-// spwi --merge bilinear: every merge with corners()' weights. Fitted k = 0.85, 0.45, 0.48 (it
-// converges slower than bilinear3d: its upper probes are interpolated on screen, not where the
+// spwi --merge bilinear: every merge with screen_corners()' weights. Fitted k = 0.85, 0.45, 0.48
+// (it converges slower than bilinear3d: its upper probes are interpolated on screen, not where the
 // lower probe lies in the world); steps 0.43 to 0.81, `step` 0.9.
 //
 // grid: h = the voxel, halved at the defaults (Q0 16, s0 2, t0 four probe spacings). Fitted

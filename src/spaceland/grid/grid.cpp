@@ -286,7 +286,8 @@ struct GridCascade {
     if (!interval(q, p, d, s)) return kNoLight;
     if (s.blocked || !up) return then(s, tracer.sky(dirs[d]));
     Rgb merged;
-    if (cascade::merge_children(upper, around, du, dv, 2, merged)) return s.radiance + s.transmittance * merged;
+    if (cascade::merge_children(upper, around, du, dv, 2, merged))
+      return s.radiance + s.transmittance * merged;
     // No upper probe has light this way: the ray continues itself to the sky.
     return then(s, cascade::continue_to_sky(tracer, p, dirs[d], c.t_end));
   }
@@ -300,7 +301,7 @@ struct GridCascade {
     }
     const Vec3 p = position_of(v, c, q);
     cascade::Corners around;
-    Vec3 upper_probe[8];
+    Vec3 upper_probe[8] = {};
     if (up) around = upper_corners(p, upper_probe);
     for (int dv = 0; dv < c.side; ++dv)
       for (int du = 0; du < c.side; ++du)

@@ -225,7 +225,7 @@ bool upper_corners(const Layout& layout, int up, double x, double y, const Probe
                    const std::vector<Probe>& upper, const SpwiOptions& o, Corners& c) {
   const int spacing = layout.spacing(up), nx = layout.nx[std::size_t(up)],
             ny = layout.ny[std::size_t(up)];
-  float fx, fy;
+  float fx = 0, fy = 0;
   if (o.merge == SpwiMerge::minmax) {
     c = minmax_corners(screen_corners(x, y, spacing, nx, ny, fx, fy), upper, probe.depth);
     return normalise(c, upper);
@@ -241,7 +241,7 @@ bool upper_corners(const Layout& layout, int up, double x, double y, const Probe
 
 bool gather_corners(const Layout& layout, int x, int y, float depth, Vec3 normal,
                     const std::vector<Probe>& probes, const SpwiOptions& o, Corners& c) {
-  float fx, fy;
+  float fx = 0, fy = 0;
   if (o.merge == SpwiMerge::minmax) {
     c = minmax_corners(
         screen_corners(x + 0.5, y + 0.5, layout.spacing(0), layout.nx[0], layout.ny[0], fx, fy),

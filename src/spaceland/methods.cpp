@@ -42,7 +42,7 @@ Status pt_check(const RenderOptions& o) {
 }
 
 std::uint64_t pt_bytes(const Scene& scene, const RenderOptions&) {
-  return std::uint64_t(scene.camera.width) * scene.camera.height * pt::kBytesPerPixel;
+  return pt::working_bytes(scene.camera.width, scene.camera.height);
 }
 
 void pt_describe(const RenderResult& r, std::vector<Parameter>& p, std::string& line) {

@@ -97,18 +97,28 @@ const char* to_string(SpwiSun s) {
   return s == SpwiSun::direct ? "direct" : "cascades";
 }
 
-std::vector<Parameter> describe(const RenderResult& result) {
+namespace {
+
+// The method's parameters as used and its line, from its table entry (none for an unknown one).
+struct Description {
   std::vector<Parameter> parameters;
   std::string line;
-  if (known(result.options.method)) entry(result.options.method).describe(result, parameters, line);
-  return parameters;
+};
+Description description(const RenderResult& result) {
+  Description d;
+  if (known(result.options.method))
+    entry(result.options.method).describe(result, d.parameters, d.line);
+  return d;
+}
+
+}  // namespace
+
+std::vector<Parameter> describe(const RenderResult& result) {
+  return description(result).parameters;
 }
 
 std::string describe_line(const RenderResult& result) {
-  std::vector<Parameter> parameters;
-  std::string line;
-  if (known(result.options.method)) entry(result.options.method).describe(result, parameters, line);
-  return line;
+  return description(result).line;
 }
 
 Status check_options(const RenderOptions& o) {

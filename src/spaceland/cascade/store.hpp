@@ -16,21 +16,9 @@ class RadianceStore {
   // `probes` probes of a side x side map each, every value `fill`; the memory is kept from one
   // cascade to the next where it is large enough.
   void assign(std::uint64_t probes, int side, Rgb fill = {}) {
-    probes_ = probes;
     side_ = side;
     directions_ = std::size_t(side) * std::size_t(side);
     data_.assign(std::size_t(probes) * directions_, fill);
-  }
-  // Frees the memory.
-  void release() {
-    std::vector<Rgb>().swap(data_);
-    probes_ = 0;
-    side_ = 0;
-    directions_ = 0;
-  }
-
-  Rgb& at(std::uint64_t probe, std::size_t d) {
-    return data_[std::size_t(probe) * directions_ + d];
   }
   const Rgb& at(std::uint64_t probe, std::size_t d) const {
     return data_[std::size_t(probe) * directions_ + d];
@@ -39,10 +27,7 @@ class RadianceStore {
   Rgb* probe(std::uint64_t q) { return data_.data() + std::size_t(q) * directions_; }
   const Rgb* probe(std::uint64_t q) const { return data_.data() + std::size_t(q) * directions_; }
 
-  std::uint64_t probes() const { return probes_; }
   int side() const { return side_; }
-  std::size_t directions() const { return directions_; }
-  bool empty() const { return data_.empty(); }
 
   // What a store of that size holds.
   static std::uint64_t bytes(std::uint64_t probes, int side) {
@@ -51,7 +36,6 @@ class RadianceStore {
 
  private:
   std::vector<Rgb> data_;
-  std::uint64_t probes_ = 0;
   int side_ = 0;
   std::size_t directions_ = 0;
 };

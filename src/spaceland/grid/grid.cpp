@@ -72,22 +72,31 @@ Expected<cascade::Levels> grid_levels(const Voxels& v, const GridOptions& o) {
   return l;
 }
 
-Expected<std::vector<CascadePlan>> plan_cascades(const Voxels& v, const GridOptions& o) {
-  Expected<cascade::Levels> levels = grid_levels(v, o);
-  if (!levels) return levels.error();
+namespace {
+
+// Each cascade's probe grid over the voxels, from the levels.
+std::vector<CascadePlan> cascades_of(const Voxels& v, const cascade::Levels& levels) {
   std::vector<CascadePlan> plan;
-  for (int i = 0; i < levels->count; ++i) {
+  for (int i = 0; i < levels.count; ++i) {
     CascadePlan c;
-    c.spacing = levels->spacing(i);
+    c.spacing = levels.spacing(i);
     c.nx = (v.nx + c.spacing - 1) / c.spacing;
     c.ny = (v.ny + c.spacing - 1) / c.spacing;
     c.nz = (v.nz + c.spacing - 1) / c.spacing;
-    c.side = levels->side(i);
-    c.t_start = levels->interval_start(i);
-    c.t_end = levels->interval_end(i);
+    c.side = levels.side(i);
+    c.t_start = levels.interval_start(i);
+    c.t_end = levels.interval_end(i);
     plan.push_back(c);
   }
   return plan;
+}
+
+}  // namespace
+
+Expected<std::vector<CascadePlan>> plan_cascades(const Voxels& v, const GridOptions& o) {
+  Expected<cascade::Levels> levels = grid_levels(v, o);
+  if (!levels) return levels.error();
+  return cascades_of(v, *levels);
 }
 
 int extension_doublings(const CascadePlan& c, const GridOptions& o, float voxel, bool top) {
@@ -316,9 +325,7 @@ Expected<RadianceField> solve(const Voxels& v, const Background& bg, const GridO
                               std::uint64_t max_bytes) {
   Expected<cascade::Levels> levels = grid_levels(v, o);
   if (!levels) return levels.error();
-  Expected<std::vector<CascadePlan>> planned = plan_cascades(v, o);
-  if (!planned) return planned.error();
-  const std::vector<CascadePlan>& plan = *planned;
+  const std::vector<CascadePlan> plan = cascades_of(v, *levels);
   const std::uint64_t need = cascades_bytes(plan, o, v.size);
   if (need > max_bytes)
     return Error{"the probe grid's cascades need " +

@@ -273,7 +273,7 @@ ImageRgb render(const SolveContext& in, const PtOptions& pt, SolveReport& report
   const double inv = done > 0 ? 1.0 / double(done) : 0;
   for (std::size_t k = 0; k < n * 3; ++k) img.data()[k] = float(sum[k] * inv);
   report.stages.push_back({"path trace", stage.ms()});
-  report.memory_bytes += std::uint64_t(n) * kBytesPerPixel;
+  report.memory_bytes += working_bytes(w, h);
   return img;
 }
 

@@ -12,8 +12,10 @@
 
 namespace penumbra::spaceland::pt {
 
-// Bytes of working memory per pixel (the accumulator).
-inline constexpr std::uint64_t kBytesPerPixel = 3 * sizeof(double);
+// Working memory of a w x h render: the accumulator, 3 doubles a pixel.
+inline std::uint64_t working_bytes(int width, int height) {
+  return std::uint64_t(width) * std::uint64_t(height) * 3 * sizeof(double);
+}
 
 // Renders the radiance towards the camera of every pixel, starting from the G-buffer's first hits
 // (ctx.bounces of them); reports the continuation and shadow rays it traced, the samples per

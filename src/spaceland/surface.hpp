@@ -11,6 +11,13 @@ namespace penumbra::spaceland {
 Rgb albedo_at(const Scene& scene, const Hit& hit);
 Rgb emission_at(const Scene& scene, const Hit& hit);
 
+// A sphere whose material emits: a sphere light, which the cascades spread over their direction
+// cells instead of tracing (cascade/sphere_lights.hpp).
+inline bool is_sphere_light(const Scene& scene, const Sphere& s) {
+  const Rgb& e = scene.materials[s.material].emission;
+  return e.r > 0 || e.g > 0 || e.b > 0;
+}
+
 // Turns a hit's normals to the side the ray arrives from (surfaces are two-sided).
 void face_towards(Hit& hit, Vec3 ray_direction);
 

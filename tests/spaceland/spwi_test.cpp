@@ -129,16 +129,15 @@ double sphere_light_error(const Scene& s, const Sphere& light, const RenderOptio
   return std::sqrt(sum2 / n) / (sum_want / n);
 }
 
-// Every merge mode converges on a sphere light over a plane as the probe spacing halves and the
-// directions quadruple (the resolution SPWI's error is first order in, tests/spaceland/
-// methods_test.cpp). Measured on 2026-11-26 at s0 4 / 2 / 1 with Q0 64 / 256 / 1024: bilinear
-// 0.259, 0.094, 0.029; bilateral 0.273, 0.094, 0.031; bilinear3d 0.260, 0.096, 0.030; minmax
-// 0.285, 0.115, 0.067: each step takes off 40-70%, so at least 15% is asked of the first. The fix
-// gave 0.268, 0.262, 0.210, far slower (its segments end at the upper probes' interval starts,
-// which a finer s0 moves closer together without shortening their bias): asked only not to grow
-// (the third rung alone takes 20 s). tests/spaceland/methods_test.cpp holds the default and the
-// bilinear merge to their fitted convergence over three rungs.
-TEST(Spwi, SphereLightOverAPlaneConvergesInEveryMergeMode) {
+// Every merge mode on a sphere light over a plane, at the defaults and at half the probe spacing
+// with 4x the directions. Measured on 2026-11-26 at s0 4 / 2 with Q0 64 / 256: bilinear 0.085,
+// 0.102; bilateral 0.083, 0.104; bilinear3d 0.083, 0.102; the fix 0.083, 0.116; minmax 0.098,
+// 0.136. At the defaults the light (radius 0.5, 2 high) is spread over the coarse maps' cells and
+// claimed by cascade 0 (cascade/sphere_lights.hpp), which took them from 0.26-0.29; at s0 2 the
+// finer cells resolve it and the cascades trace it, as before (0.094-0.115 then; the fix 0.262).
+// The convergence of the traced lights past that rung is methods_test's (its third rung, 6 s a
+// merge here). So: the defaults within 11%, the second rung within 15%.
+TEST(Spwi, SphereLightOverAPlaneInEveryMergeModeAtTwoResolutions) {
   Scene s;
   s.camera = camera({0, 3, 4}, {0, 0, 0}, 96, 72, 50);
   add_floor(s, 1000, {0.5f, 0.5f, 0.5f});
@@ -149,8 +148,8 @@ TEST(Spwi, SphereLightOverAPlaneConvergesInEveryMergeMode) {
     fine.spwi.directions = 256;
     const double e_coarse = sphere_light_error(s, light, coarse);
     const double e_fine = sphere_light_error(s, light, fine);
-    const double step = m == SpwiMerge::fix ? 1.0 : 0.85;
-    EXPECT_LT(e_fine, step * e_coarse) << to_string(m) << ": " << e_coarse << " -> " << e_fine;
+    EXPECT_LT(e_coarse, 0.11) << to_string(m);
+    EXPECT_LT(e_fine, 0.15) << to_string(m);
   }
 }
 

@@ -108,7 +108,7 @@ int extension_doublings(const CascadePlan& c, const GridOptions& o, float voxel,
 }
 
 std::uint64_t cascades_bytes(const std::vector<CascadePlan>& plan, const GridOptions& o,
-                             float voxel) {
+                             float voxel, bool lights) {
   std::uint64_t need = 0;
   for (std::size_t i = 0; i < plan.size(); ++i) {
     // Extending holds the cascade's intervals and transmittances twice (a doubling reads one
@@ -117,8 +117,9 @@ std::uint64_t cascades_bytes(const std::vector<CascadePlan>& plan, const GridOpt
     const std::uint64_t rays = plan[i].bytes() / sizeof(Rgb);
     const std::uint64_t extension =
         extension_doublings(plan[i], o, voxel, top) > 0 ? rays * (4 * sizeof(Rgb) + 1) : 0;
-    need = std::max(need,
-                    plan[i].bytes() + extension + (i + 1 < plan.size() ? plan[i + 1].bytes() : 0));
+    const std::uint64_t pair = plan[i].bytes() + (i + 1 < plan.size() ? plan[i + 1].bytes() : 0);
+    // Sphere lights: a float a ray besides its radiance, where it stopped.
+    need = std::max(need, pair + extension + (lights ? pair / sizeof(Rgb) * sizeof(float) : 0));
   }
   return need;
 }
@@ -221,6 +222,11 @@ struct GridCascade {
   const Extended& ext;
   int doublings;
   VoxelTracer tracer;
+  const cascade::SphereLights* lights;
+  // With sphere lights: where each ray of the cascade above stopped (read) and of this one
+  // (written), probe-major (-1: no light, infinity: no surface, or not known with the fix).
+  const std::vector<float>* upper_reach;
+  std::vector<float>* lower_reach;
   // The fix traces from each interval's start to the upper probes': no ray needs to know whether
   // a surface lies before its interval.
   bool fix = o.fix && up;
@@ -281,6 +287,7 @@ struct GridCascade {
       s.radiance = ext.radiance[k];
       s.transmittance = ext.transmittance[k];
       s.blocked = is_black(s.transmittance);
+      s.t_end = s.blocked ? c.t_start : c.t_end;  // where it stopped is not kept: at the start
       return true;
     }
     if (!o.fix && c.t_start > 0 && march(v, p, dirs[d], 0, c.t_start).blocked) return false;
@@ -288,11 +295,16 @@ struct GridCascade {
     return true;
   }
 
-  // Direction (du, dv) of probe q: its interval, merged with the upper probes around it.
-  Rgb ray(std::uint64_t q, Vec3 p, const cascade::Corners& around, int du, int dv) const {
+  // Direction (du, dv) of probe q: its interval, merged with the upper probes around it; `reach`
+  // is where its ray stopped (infinity: at no surface, or not known, with the fix).
+  Rgb ray(std::uint64_t q, Vec3 p, const cascade::Corners& around, int du, int dv,
+          float& reach) const {
     const std::size_t d = std::size_t(dv) * c.side + du;
+    reach = 0;  // stopped before its interval
     Segment s;
     if (!interval(q, p, d, s)) return kNoLight;
+    reach = kInfinity;
+    if (s.blocked) reach = s.t_end;
     if (s.blocked || !up) return then(s, tracer.sky(dirs[d]));
     Rgb merged;
     if (cascade::merge_children(upper, around, du, dv, 2, merged))
@@ -312,21 +324,48 @@ struct GridCascade {
     cascade::Corners around;
     Vec3 upper_probe[8] = {};
     if (up) around = upper_corners(p, upper_probe);
+    const bool spread = lights && !lights->empty();
+    float* reach = spread ? lower_reach->data() + std::size_t(q) * nd : nullptr;
+    float r = kInfinity;
     for (int dv = 0; dv < c.side; ++dv)
-      for (int du = 0; du < c.side; ++du)
-        out[std::size_t(dv) * c.side + du] =
-            fix ? fixed_ray(p, around, upper_probe, du, dv) : ray(q, p, around, du, dv);
+      for (int du = 0; du < c.side; ++du) {
+        const std::size_t k = std::size_t(dv) * c.side + du;
+        out[k] = fix ? fixed_ray(p, around, upper_probe, du, dv) : ray(q, p, around, du, dv, r);
+        if (spread) reach[k] = !fix ? r : holds_light(out[k]) ? kInfinity : 0.0f;
+      }
+    // Its share of the sphere lights left out of the voxels, in the cells whose ray got past them.
+    if (!spread) return;
+    cascade::Uppers ups;
+    if (up) {
+      ups.n = 8;
+      ups.a = up->t_start;
+      for (std::size_t j = 0; j < 8; ++j) {
+        ups.p[j] = upper_probe[j];
+        ups.w[j] = around.w[j];
+      }
+    }
+    const std::size_t up_cells = up ? std::size_t(up->side) * std::size_t(up->side) : 0;
+    lights->add(
+        p, Vec3{}, c.t_start, c.t_end, up ? &ups : nullptr, c.side, out,
+        [&](std::size_t k, float dist) { return reach[k] >= dist ? 1.0f : 0.0f; },
+        [&](const cascade::SphereLight& l) {
+          if (!up) return 1.0f;
+          return cascade::upper_clear(ups, up->side, l, [&](std::size_t j, std::size_t k) {
+            return (*upper_reach)[std::size_t(around.index[j]) * up_cells + k];
+          });
+        });
   }
 };
 
 }  // namespace
 
 Expected<RadianceField> solve(const Voxels& v, const Background& bg, const GridOptions& o,
-                              std::uint64_t max_bytes) {
+                              std::uint64_t max_bytes, const cascade::SphereLights* lights) {
   Expected<cascade::Levels> levels = grid_levels(v, o);
   if (!levels) return levels.error();
   const std::vector<CascadePlan> plan = cascades_of(v, *levels);
-  const std::uint64_t need = cascades_bytes(plan, o, v.size);
+  const bool spread = lights && !lights->empty();
+  const std::uint64_t need = cascades_bytes(plan, o, v.size, spread);
   if (need > max_bytes)
     return Error{"the probe grid's cascades need " +
                  io::format_rounded(double(need) / double(1 << 20)) +
@@ -335,6 +374,7 @@ Expected<RadianceField> solve(const Voxels& v, const Background& bg, const GridO
                  " MiB; use a larger --voxel or fewer --directions"};
 
   std::vector<Vec3> dirs, up_dirs;  // this cascade's directions and the one above's
+  std::vector<float> upper_reach, lower_reach;
   std::vector<double> ms(plan.size());
   RadianceStore cascade0 = cascade::top_down(*levels, [&](int i, const RadianceStore& upper,
                                                           RadianceStore& lower) {
@@ -343,19 +383,23 @@ Expected<RadianceField> solve(const Voxels& v, const Background& bg, const GridO
     const bool top = levels->top(i);
     dirs = cascade::direction_map(*levels, i);
     lower.assign(c.probes(), c.side);
+    if (spread) lower_reach.assign(std::size_t(c.probes()) * std::size_t(c.side) * c.side, -1.0f);
     const int doublings = extension_doublings(c, o, v.size, top);
     const Extended ext = doublings > 0 ? extend_cascade(v, c, dirs, doublings) : Extended{};
-    const GridCascade solver{v,         o,
-                             c,         top ? nullptr : &plan[std::size_t(i) + 1],
-                             dirs,      up_dirs,
-                             upper,     ext,
-                             doublings, VoxelTracer{v, bg}};
+    const GridCascade solver{v,           o,
+                             c,           top ? nullptr : &plan[std::size_t(i) + 1],
+                             dirs,        up_dirs,
+                             upper,       ext,
+                             doublings,   VoxelTracer{v, bg},
+                             lights,      &upper_reach,
+                             &lower_reach};
     parallel_for(c.nz, [&](int z) {
       for (std::uint64_t q = std::uint64_t(z) * c.ny * c.nx, end = q + std::uint64_t(c.ny) * c.nx;
            q < end; ++q)
         solver.probe(q, lower.probe(q));
     });
     std::swap(up_dirs, dirs);
+    std::swap(upper_reach, lower_reach);
     ms[std::size_t(i)] = watch.ms();
   });
   // cascade 0's directions, swapped up last

@@ -19,6 +19,7 @@
 #include "penumbra/spaceland/render.hpp"
 #include "penumbra/spaceland/scene.hpp"
 #include "spaceland/cascade/levels.hpp"
+#include "spaceland/cascade/sphere_lights.hpp"
 #include "spaceland/cascade/store.hpp"
 #include "spaceland/grid/voxels.hpp"
 #include "spaceland/sky.hpp"
@@ -64,7 +65,7 @@ class RadianceField {
 
  private:
   friend Expected<RadianceField> solve(const Voxels&, const Background&, const GridOptions&,
-                                       std::uint64_t);
+                                       std::uint64_t, const cascade::SphereLights*);
   // Cascade 0's field: each probe's validity and its mean over the sphere.
   static RadianceField make(const Voxels& v, std::vector<CascadePlan> plan, std::vector<Vec3> dirs,
                             cascade::RadianceStore radiance, std::vector<double> ms);
@@ -87,10 +88,13 @@ class RadianceField {
 Rgb in_scattered(const RadianceField& field, const SunLight* sun, Vec3 x, std::uint64_t& rays);
 
 // Traces and merges every cascade, top down; rays that leave the grid see the sky (the sun is
-// the renderer's, one shadow ray per pixel). Refuses (Error) plans whose memory passes
-// `max_bytes` (two cascades' radiance at once: the largest and the one above it).
+// the renderer's, one shadow ray per pixel), and `lights` (the sphere lights voxelise left out,
+// SphereLights(scene, voxel)) are spread over the cells that see them. Refuses (Error) plans
+// whose memory passes `max_bytes` (two cascades' radiance at once: the largest and the one above
+// it).
 Expected<RadianceField> solve(const Voxels& v, const Background& bg, const GridOptions& o,
-                              std::uint64_t max_bytes);
+                              std::uint64_t max_bytes,
+                              const cascade::SphereLights* lights = nullptr);
 
 // One more bounce: every surface voxel's emission becomes `base` (its own) plus its albedo times
 // the mean radiance the field brings to it, about the normal its free 6-neighbours give, plus
@@ -104,9 +108,9 @@ std::uint64_t add_bounce(Voxels& v, const RadianceField& field, const std::vecto
                          const SunLight* sun = nullptr, std::vector<Vec3>* normals = nullptr);
 
 // Working bytes of two cascades' radiance at once, the largest pair (with extension, the lower
-// one's intervals twice over besides).
+// one's intervals twice over besides; with sphere lights to spread, where each ray stopped).
 std::uint64_t cascades_bytes(const std::vector<CascadePlan>& plan, const GridOptions& o,
-                             float voxel);
+                             float voxel, bool lights = false);
 
 // How many times cascade c's traced intervals are doubled (0: traced whole).
 int extension_doublings(const CascadePlan& c, const GridOptions& o, float voxel, bool top);

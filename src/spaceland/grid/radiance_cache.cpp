@@ -46,8 +46,9 @@ Expected<RadianceCache> RadianceCache::build(const Scene& scene, const RayScene&
   grid::Voxels& v = impl->voxels;
   const std::vector<Rgb> base = v.emission;
   const SunLight sun(scene, rays);
+  const cascade::SphereLights lights(scene, v.size);
   for (int b = 0; b < bounces; ++b) {
-    Expected<grid::RadianceField> field = grid::solve(v, bg, o, left);
+    Expected<grid::RadianceField> field = grid::solve(v, bg, o, left, &lights);
     if (!field) return field.error();
     grid::add_bounce(v, *field, base, &sun, &impl->normals);
   }

@@ -90,7 +90,8 @@ Expected<ImageRgb> render(const SolveContext& ctx, const GridOptions& o, SolveRe
   const SunLight sun(ctx.scene, ctx.rays);
   const std::uint64_t voxel_memory = voxel_bytes(voxels->count(), ctx.bounces > 1);
   const std::uint64_t left = ctx.max_memory - std::min(ctx.max_memory, voxel_memory);
-  Expected<RadianceField> field = solve(*voxels, bg, o, left);
+  const cascade::SphereLights lights(ctx.scene, voxels->size);
+  Expected<RadianceField> field = solve(*voxels, bg, o, left, &lights);
   if (!field) return field.error();
   report.stages.push_back({"cascades", watch.ms()});
   // Later bounces: the surfaces' and the fog's own emission plus what the last field (and the
@@ -101,7 +102,7 @@ Expected<ImageRgb> render(const SolveContext& ctx, const GridOptions& o, SolveRe
       watch.restart();
       report.rays += add_bounce(*voxels, *field, base, &sun);
       *field = RadianceField{};  // its radiance freed before the next solve's
-      field = solve(*voxels, bg, o, left);
+      field = solve(*voxels, bg, o, left, &lights);
       if (!field) return field.error();
       report.stages.push_back({"bounce " + std::to_string(b + 1), watch.ms()});
     }
@@ -109,7 +110,8 @@ Expected<ImageRgb> render(const SolveContext& ctx, const GridOptions& o, SolveRe
   used.cascades = int(field->cascades().size());
   used.interval = field->cascades()[0].t_end;
   report.voxel_bytes = voxel_memory;
-  report.memory_bytes += voxel_memory + cascades_bytes(field->cascades(), o, voxels->size);
+  report.memory_bytes +=
+      voxel_memory + cascades_bytes(field->cascades(), o, voxels->size, !lights.empty());
   watch.restart();
 
   ImageRgb img = shade_pixels(

@@ -8,6 +8,7 @@
 #include "core/math.hpp"
 #include "core/parallel.hpp"
 #include "io/json_reader.hpp"
+#include "spaceland/cascade/sphere_lights.hpp"
 #include "spaceland/color.hpp"
 
 namespace penumbra::spaceland::grid {
@@ -307,7 +308,9 @@ void rasterise_surfaces(const Scene& scene, Voxels& v) {
       raster.triangle({mesh.positions[mesh.triangles[t][0]], mesh.positions[mesh.triangles[t][1]],
                        mesh.positions[mesh.triangles[t][2]]},
                       mesh.materials[t]);
-  for (const Sphere& s : scene.spheres) raster.sphere(s);
+  // Small sphere lights are not voxels: the cascades spread them (cascade/sphere_lights.hpp).
+  for (const Sphere& s : scene.spheres)
+    if (!cascade::spread_by_grid(scene, s, v.size)) raster.sphere(s);
   for (const Disk& d : scene.disks) raster.disk(d);
   raster.finish(v);
 }

@@ -14,6 +14,7 @@
 #include "core/timer.hpp"
 #include "io/json_reader.hpp"
 #include "spaceland/cascade/radiance.hpp"
+#include "spaceland/cascade/sphere_lights.hpp"
 #include "spaceland/color.hpp"
 #include "spaceland/radiance_cache.hpp"
 #include "spaceland/shade.hpp"
@@ -214,6 +215,11 @@ struct ScreenCascade {
   const std::vector<Probe>& upper_probes;
   const RadianceStore& upper;
   RadianceStore& lower;
+  const cascade::SphereLights& lights;
+  // With sphere lights: where each ray of the cascade above stopped (read) and of this one
+  // (written), probe-major as the stores (-1: no light, infinity: no surface).
+  const std::vector<float>& upper_reach;
+  std::vector<float>& lower_reach;
   std::vector<Vec3> dirs = cascade::direction_map(layout.levels, i);
   // The top cascade's interval runs to infinity: its misses see the sky, whatever the reach of
   // its nominal interval (the cascade count stops at the screen's diagonal).
@@ -221,7 +227,8 @@ struct ScreenCascade {
   bool top = layout.levels.top(i);
   int split = layout.levels.split();
 
-  // Per row of tiles: the probe being traced, the upper probes it merges with, its ray stream.
+  // Per row of tiles: the probe being traced, the upper probes it merges with, its ray stream,
+  // and where each of its cells' rays stopped (per sub-probe; -1: no ray, into its surface).
   struct Row {
     std::uint64_t rays = 0;
     Corners c;
@@ -230,13 +237,58 @@ struct ScreenCascade {
     std::vector<Hit> hits;
     std::vector<std::uint8_t> found;
     std::vector<int> cell;
+    std::vector<std::array<float, 4>> reach;
   };
+
+  // Probe p's share of the sphere lights, in the cells whose rays reach them (the fraction of a
+  // pre-averaged cell's sub-probe rays that do).
+  void add_lights(Row& row, const Probe& p, Rgb* out) const {
+    if (lights.empty()) return;
+    cascade::Uppers up;
+    if (row.merge) {
+      up.n = row.c.n;
+      up.a = b;
+      for (std::size_t j = 0; j < std::size_t(row.c.n); ++j) {
+        up.p[j] = upper_probes[std::size_t(row.c.index[j])].p;
+        up.w[j] = row.c.w[j];
+      }
+    }
+    auto seen = [&](std::size_t k, float d) {
+      int with_light = 0, past = 0;
+      for (float r : row.reach[k])  // a ray stopped before the interval holds no light
+        if (r >= a) ++with_light, past += r >= d;
+      return with_light > 0 ? float(past) / float(with_light) : 0.0f;
+    };
+    const std::size_t up_cells =
+        top ? 0 : std::size_t(layout.map_side(i + 1)) * layout.map_side(i + 1);
+    auto past = [&](const cascade::SphereLight& l) {
+      if (!row.merge) return 1.0f;  // only sky above: nothing beyond to stop it
+      return cascade::upper_clear(up, layout.map_side(i + 1), l, [&](std::size_t j, std::size_t k) {
+        return upper_reach[std::size_t(row.c.index[j]) * up_cells + k];
+      });
+    };
+    lights.add(p.p, p.n, a, b, row.merge ? &up : nullptr, layout.map_side(i), out, seen, past);
+  }
 
   EmbreeTracer tracer(Row& row) const { return {ctx.rays, surface, bg, o.sun, row.rays}; }
 
   // This cascade's ray from probe `from` along d (from the probe with the overlap).
   Ray interval_ray(const Probe& from, Vec3 d) const {
     return Ray{ctx.rays.spawn(from.p, from.n, d), d, o.overlap ? 0.0f : a, b};
+  }
+
+  // A ray from probe p that hit a sphere light small for this cascade's cells goes on past it
+  // (add_lights spreads its light instead); false where it then hits nothing.
+  bool pass_small_lights(Vec3 p, Ray r, bool found, Hit& h) const {
+    if (lights.empty()) return found;
+    for (int n = 0; found && h.kind == ShapeKind::sphere && n < 8; ++n) {
+      const float exit =
+          lights.pass(ctx.scene, ctx.scene.spheres[h.shape], p, r.origin, r.direction);
+      if (exit < 0) break;
+      r.tmin = exit;
+      found = ctx.rays.intersect(r, h);
+    }
+    return found;
   }
 
   // What the interval ray r (map cell (u, v)) brings, given its hit: the surface's emission, or
@@ -256,7 +308,8 @@ struct ScreenCascade {
 
   // The bilinear fix: a segment from this probe to the start of each upper probe's interval in
   // this direction, merged with that probe alone, so that the merged ray is continuous.
-  Rgb fixed_ray(Row& row, const Probe& from, Vec3 d, int u, int v) const {
+  // `reach`: the nearest surface its segments met, from the probe (infinity: none).
+  Rgb fixed_ray(Row& row, const Probe& from, Vec3 d, int u, int v, float& reach) const {
     Rgb sum{};
     float weight = 0;
     for (int j = 0; j < row.c.n; ++j) {
@@ -265,13 +318,16 @@ struct ScreenCascade {
       // From where this cascade's interval starts to where the upper one's starts.
       const Vec3 target = upper_probes[std::size_t(uq)].p + d * b;
       const Vec3 start = a > 0 ? from.p + d * a : ctx.rays.spawn(from.p, from.n, target - from.p);
-      const Ray r{start, target - start, 0, 1};
+      const float len = length(target - start);
+      if (!(len > 0)) continue;
+      const Ray r{start, (target - start) * (1 / len), 0, len};
       Rgb got;
       Hit h;
       ++row.rays;
-      if (ctx.rays.intersect(r, h))
+      if (pass_small_lights(from.p, r, ctx.rays.intersect(r, h), h)) {
         got = surface(h, r.direction);
-      else if (!cascade::children_mean(upper, uq, u, v, split, got))
+        reach = std::min(reach, length(h.position - from.p));
+      } else if (!cascade::children_mean(upper, uq, u, v, split, got))
         continue;
       sum += got * row.c.w[std::size_t(j)];
       weight += row.c.w[std::size_t(j)];
@@ -280,14 +336,30 @@ struct ScreenCascade {
   }
 
   // The radiance probe `from` receives along d from this cascade's interval and, through the
-  // merge, from beyond it.
-  Rgb ray_value(Row& row, const Probe& from, Vec3 d, int u, int v) const {
+  // merge, from beyond it; `reach` is where its ray stopped (infinity: at no surface).
+  Rgb ray_value(Row& row, const Probe& from, Vec3 d, int u, int v, float& reach) const {
+    reach = -1;                                // no ray
     if (dot(d, from.n) <= 0) return kNoLight;  // into the probe's own surface
-    if (row.merge && o.merge == SpwiMerge::fix) return fixed_ray(row, from, d, u, v);
+    reach = cascade::kInfinity;
+    if (row.merge && o.merge == SpwiMerge::fix) {
+      const Rgb got = fixed_ray(row, from, d, u, v, reach);
+      // Its segments start at the interval: with sphere lights to see past it, the stretch
+      // before is traced too (a wall there would otherwise let them through).
+      if (!lights.empty() && a > 0) {
+        const Ray before{ctx.rays.spawn(from.p, from.n, d), d, 0, a};
+        Hit h;
+        ++row.rays;
+        if (pass_small_lights(from.p, before, ctx.rays.intersect(before, h), h))
+          reach = std::min(reach, h.t);
+      }
+      return got;
+    }
     const Ray r = interval_ray(from, d);
     Hit h;
     ++row.rays;
-    return resolve(row, r, ctx.rays.intersect(r, h), h, u, v);
+    const bool found = pass_small_lights(from.p, r, ctx.rays.intersect(r, h), h);
+    if (found) reach = h.t;
+    return resolve(row, r, found, h, u, v);
   }
 
   // One stream of the probe's rays: from one point, through neighbouring map cells in order, as
@@ -308,30 +380,42 @@ struct ScreenCascade {
     row.found.resize(row.batch.size());
     ctx.rays.intersect(row.batch, row.hits, row.found, true);
     row.rays += row.batch.size();
+    if (!lights.empty()) row.reach.assign(std::size_t(side) * side, {-1, -1, -1, -1});
     for (std::size_t j = 0; j < row.batch.size(); ++j) {
       const int k = row.cell[j];
+      row.found[j] = pass_small_lights(pr.p, row.batch[j], row.found[j] != 0, row.hits[j]);
       out[k] = resolve(row, row.batch[j], row.found[j] != 0, row.hits[j], k % side, k / side);
+      if (!lights.empty())
+        row.reach[std::size_t(k)][0] = row.found[j] ? row.hits[j].t : cascade::kInfinity;
     }
+    add_lights(row, pr, out);
   }
 
   // Pre-averaging (seed 000 section 5.1): each direction traced from the 2x2 sub-probes of the
   // tile, averaged into the probe (4x the rays, the same storage); otherwise ray by ray.
   void trace_each(Row& row, const Probe& pr, const std::array<Probe, 4>* subs, Rgb* out) const {
     const int side = layout.map_side(i);
+    if (!lights.empty()) row.reach.assign(std::size_t(side) * side, {-1, -1, -1, -1});
     for (int v = 0; v < side; ++v)
       for (int u = 0; u < side; ++u) {
         const std::size_t k = std::size_t(v) * side + u;
         const Vec3 d = dirs[k];
+        std::array<float, 4> reach{-1, -1, -1, -1};
         if (!subs) {
-          out[k] = ray_value(row, pr, d, u, v);
-          continue;
+          out[k] = ray_value(row, pr, d, u, v, reach[0]);
+        } else {
+          std::array<Rgb, 4> got;
+          int n = 0;
+          for (const Probe& sp : *subs) {
+            if (!sp.valid) continue;
+            got[std::size_t(n)] = ray_value(row, sp, d, u, v, reach[std::size_t(n)]);
+            ++n;
+          }
+          out[k] = cascade::mean_with_light(std::span<const Rgb>(got.data(), std::size_t(n)));
         }
-        std::array<Rgb, 4> got;
-        int n = 0;
-        for (const Probe& sp : *subs)
-          if (sp.valid) got[std::size_t(n++)] = ray_value(row, sp, d, u, v);
-        out[k] = cascade::mean_with_light(std::span<const Rgb>(got.data(), std::size_t(n)));
+        if (!lights.empty()) row.reach[k] = reach;
       }
+    add_lights(row, pr, out);
   }
 
   void trace_probe(Row& row, int px, int py, std::uint64_t q) const {
@@ -350,6 +434,14 @@ struct ScreenCascade {
       trace_stream(row, pr, lower.probe(q));
     else
       trace_each(row, pr, subs, lower.probe(q));
+    if (lights.empty()) return;
+    // Where its rays stopped, for the cascade below's lights past its rays (the farthest of a
+    // pre-averaged cell's sub-probe rays).
+    const std::size_t cells = row.reach.size();
+    for (std::size_t k = 0; k < cells; ++k) {
+      const std::array<float, 4>& r = row.reach[k];
+      lower_reach[std::size_t(q) * cells + k] = std::max({r[0], r[1], r[2], r[3]});
+    }
   }
 
   // Traces every probe, rows of tiles in parallel; returns the rays traced.
@@ -433,14 +525,20 @@ std::string mib(std::uint64_t bytes) {
 
 Expected<ImageRgb> render(const SolveContext& ctx, const SpwiOptions& o, const Layout& layout,
                           SolveReport& report) {
-  report.memory_bytes += layout.bytes();
-  if (layout.bytes() > ctx.max_memory)
-    return Error{"spwi's cascades need about " + mib(layout.bytes()) + ", more than the `" +
+  const cascade::SphereLights lights(ctx.scene, layout.levels);
+  // With sphere lights, where each ray of two cascades stopped besides.
+  std::uint64_t largest = 0;
+  for (int i = 0; i < layout.count(); ++i) largest = std::max(largest, layout.rays(i));
+  const std::uint64_t need = layout.bytes() + (lights.empty() ? 0 : 2 * largest * sizeof(float));
+  report.memory_bytes += need;
+  if (need > ctx.max_memory)
+    return Error{"spwi's cascades need about " + mib(need) + ", more than the `" +
                  "max_memory` limit of " + mib(ctx.max_memory)};
   const Background bg(ctx.scene);
   const Surfaces surface{ctx.scene, ctx.cache};
   std::uint64_t rays = 0;
   std::vector<Probe> upper_probes;
+  std::vector<float> upper_reach, lower_reach;
   // Cascades from the top down: each merges with the one above, then takes its place.
   const RadianceStore store = cascade::top_down(
       layout.levels, [&](int i, const RadianceStore& upper, RadianceStore& lower) {
@@ -449,10 +547,13 @@ Expected<ImageRgb> render(const SolveContext& ctx, const SpwiOptions& o, const L
         std::vector<std::array<Probe, 4>> sub_probes;
         if (o.preaverage) sub_probes = place_sub_probes(ctx.scene, ctx.g, layout, i, o.depth_bias);
         lower.assign(layout.probes(i), layout.map_side(i));
-        const ScreenCascade traced{ctx,    o,          layout,       surface, bg,   i,
-                                   probes, sub_probes, upper_probes, upper,   lower};
+        if (!lights.empty()) lower_reach.assign(std::size_t(layout.rays(i)), -1.0f);
+        const ScreenCascade traced{ctx,   o,      layout,      surface,      bg,
+                                   i,     probes, sub_probes,  upper_probes, upper,
+                                   lower, lights, upper_reach, lower_reach};
         rays += traced.run();
         upper_probes = std::move(probes);
+        std::swap(upper_reach, lower_reach);
         report.stages.push_back({"cascade " + std::to_string(i), watch.ms()});
       });
   Stopwatch watch;

@@ -77,9 +77,11 @@ void add_render_options(CLI::App* app, RenderOptions& options, RenderOptionFlags
                     "scene)")
         ->check(CLI::Range(0, 16))
         ->capture_default_str();
+    // No default shown: it differs between worlds (the help would say bilinear for the grid).
     add_enum_option(app, "--fix", rc.fix, {MergeFix::bilinear, MergeFix::none, MergeFix::nearest},
-                    "Merge: bilinear (fix), none (vanilla), nearest; 3D grid: bilinear or none "
-                    "(default there: none)");
+                    "Merge: bilinear (fix), none (vanilla), nearest (2D default: bilinear); 3D "
+                    "grid: bilinear or none (default: none)")
+        ->default_str("");
     app->add_flag("--preaverage", rc.preaverage,
                   "Trace a 2x2 sub-probe neighbourhood and store the average");
     app->add_flag("--extend", rc.extend,

@@ -196,6 +196,9 @@ TEST(Grid, RenderGivesTheEnclosureAndRefusesBadOptions) {
     // The voxels' share, reported: 2 x 2.5 x 3 over voxels of 0.05 and the padding each side.
     EXPECT_EQ(r.voxel_bytes, voxel_bytes(48 * 58 * 68, bounces > 1));
     EXPECT_LT(r.voxel_bytes, r.memory_bytes);
+    // The cascades' rays are counted (a direction of each probe outside the walls, each solve):
+    // over 10,000 of cascade 0's 24 x 29 x 34 probes, 16 directions each, per bounce.
+    EXPECT_GT(r.rays, std::uint64_t(bounces) * 16 * 10000);
   }
   o.grid.directions = 12;
   EXPECT_FALSE(render(s, o).ok());

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <limits>
 
@@ -375,6 +376,7 @@ Expected<RadianceField> solve(const Voxels& v, const Background& bg, const GridO
 
   std::vector<Vec3> dirs, up_dirs;  // this cascade's directions and the one above's
   std::vector<float> upper_reach, lower_reach;
+  std::atomic<std::uint64_t> traced{0};
   std::vector<double> ms(plan.size());
   RadianceStore cascade0 = cascade::top_down(*levels, [&](int i, const RadianceStore& upper,
                                                           RadianceStore& lower) {
@@ -394,16 +396,23 @@ Expected<RadianceField> solve(const Voxels& v, const Background& bg, const GridO
                              lights,      &upper_reach,
                              &lower_reach};
     parallel_for(c.nz, [&](int z) {
+      std::uint64_t local = 0;
       for (std::uint64_t q = std::uint64_t(z) * c.ny * c.nx, end = q + std::uint64_t(c.ny) * c.nx;
-           q < end; ++q)
+           q < end; ++q) {
         solver.probe(q, lower.probe(q));
+        if (probe_free(v, c, q)) local += dirs.size();
+      }
+      traced.fetch_add(local, std::memory_order_relaxed);
     });
     std::swap(up_dirs, dirs);
     std::swap(upper_reach, lower_reach);
     ms[std::size_t(i)] = watch.ms();
   });
   // cascade 0's directions, swapped up last
-  return RadianceField::make(v, plan, std::move(up_dirs), std::move(cascade0), std::move(ms));
+  RadianceField f =
+      RadianceField::make(v, plan, std::move(up_dirs), std::move(cascade0), std::move(ms));
+  f.rays_ = traced.load();
+  return f;
 }
 
 RadianceField RadianceField::make(const Voxels& v, std::vector<CascadePlan> plan,

@@ -62,6 +62,9 @@ class RadianceField {
   const std::vector<CascadePlan>& cascades() const { return plan_; }
   // Milliseconds each cascade took to trace and merge (extension included), cascade 0 first.
   const std::vector<double>& cascade_ms() const { return cascade_ms_; }
+  // The interval rays its cascades traced (a probe direction each; a march may take several
+  // pieces: the stretch before the interval, extension, the fix's segments).
+  std::uint64_t rays() const { return rays_; }
 
  private:
   friend Expected<RadianceField> solve(const Voxels&, const Background&, const GridOptions&,
@@ -81,6 +84,7 @@ class RadianceField {
   std::vector<Rgb> sphere_;          // cascade 0: each probe's mean over its directions
   std::vector<std::uint8_t> valid_;  // cascade-0 probes outside opaque voxels
   std::vector<double> cascade_ms_;
+  std::uint64_t rays_ = 0;
 };
 
 // The radiance fog at x scatters, per unit sigma_s: the field's mean over the sphere (none where

@@ -93,6 +93,7 @@ Expected<ImageRgb> render(const SolveContext& ctx, const GridOptions& o, SolveRe
   const cascade::SphereLights lights(ctx.scene, voxels->size);
   Expected<RadianceField> field = solve(*voxels, bg, o, left, &lights);
   if (!field) return field.error();
+  report.rays += field->rays();
   report.stages.push_back({"cascades", watch.ms()});
   // Later bounces: the surfaces' and the fog's own emission plus what the last field (and the
   // sun) brings them, solved again (the voxels' light after b bounces gives the pixels b + 1).
@@ -104,6 +105,7 @@ Expected<ImageRgb> render(const SolveContext& ctx, const GridOptions& o, SolveRe
       *field = RadianceField{};  // its radiance freed before the next solve's
       field = solve(*voxels, bg, o, left, &lights);
       if (!field) return field.error();
+      report.rays += field->rays();
       report.stages.push_back({"bounce " + std::to_string(b + 1), watch.ms()});
     }
   }

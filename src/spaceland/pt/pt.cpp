@@ -219,11 +219,18 @@ ImageRgb render(const SolveContext& in, const PtOptions& pt, SolveReport& report
   Stopwatch watch;
   std::uint64_t done = 0;
   // Passes double in size (1, 2, 4, ... up to 64 samples), so that a time limit or Ctrl-C is
-  // honoured soon; a pixel's samples are summed in index order, so passes change no bit.
+  // honoured soon; a pixel's samples are summed in index order, so passes change no bit. With a
+  // time limit a pass holds no more samples than the time left allows at the rate so far, so
+  // that the last one does not run on past it (a 64-sample pass can take a second).
   while (true) {
     if (target > 0 && done >= target) break;
     std::uint64_t pass = std::min<std::uint64_t>(std::max<std::uint64_t>(done, 1), 64);
     if (target > 0) pass = std::min(pass, target - done);
+    if (pt.seconds > 0 && done > 0) {
+      const double elapsed = watch.ms() / 1000, per_sample = elapsed / double(done);
+      const double fit = std::floor((pt.seconds - elapsed) / std::max(per_sample, 1e-12));
+      pass = std::min(pass, std::uint64_t(std::max(1.0, std::min(fit, 64.0))));
+    }
     const std::uint32_t s0 = std::uint32_t(done), s1 = std::uint32_t(done + pass);
     parallel_for(h, [&](int j) {
       std::vector<MediumPiece> pieces;

@@ -26,9 +26,9 @@ constexpr int kInterrupted = 130;
 namespace sl = penumbra::spaceland;
 
 // What every 3D render reads besides k3dOptions.
-constexpr std::string_view kCommon[] = {"scene",     "--output",     "--method",   "--bounces",
-                                        "--threads", "--max-memory", "--exposure", "--json",
-                                        "--quiet",   "--device"};
+constexpr std::string_view kCommon[] = {"scene",     "--output",        "--method",   "--bounces",
+                                        "--threads", "--max-memory",    "--exposure", "--json",
+                                        "--quiet",   "--exposure-from", "--device"};
 
 }  // namespace
 
@@ -144,6 +144,8 @@ int render_scene_3d(const RenderArgs& a) {
   options.bounces = shared.bounces;
   options.threads = shared.threads;
   if (int code = check_render_args(a, options.max_memory); code != 0) return code;
+  std::optional<penumbra::ImageRgb> metered;
+  if (int code = read_exposure_source(a, metered); code != 0) return code;
   if (penumbra::Status s = sl::check_options(options); !s) {
     std::cerr << "penumbra render: " << with_flags(s.error().message) << "\n";
     return kUsage;
@@ -177,8 +179,8 @@ int render_scene_3d(const RenderArgs& a) {
     return kFailure;
   }
   penumbra::Stopwatch write_watch;
-  const std::optional<float> exposure =
-      png_exposure(a, [&] { return sl::auto_exposure(result->radiance, options.aov); });
+  const std::optional<float> exposure = png_exposure(
+      a, [&] { return sl::auto_exposure(metered ? *metered : result->radiance, options.aov); });
   const penumbra::DisplayOptions display{exposure.value_or(0.0f)};
   if (penumbra::Status s = sl::write_images(a.outputs, result->radiance, options.aov, display);
       !s) {
@@ -214,6 +216,8 @@ int render_scene_3d(const RenderArgs& a) {
         {"parameters", parameters},
         {"exposure", exposure ? nlohmann::ordered_json(*exposure) : nlohmann::ordered_json()},
         {"exposure_auto", !a.exposure},
+        {"exposure_from", a.exposure_from.empty() ? nlohmann::ordered_json()
+                                                  : nlohmann::ordered_json(a.exposure_from)},
         {"outputs", a.outputs}};
     std::cout << j.dump(2) << "\n";
   } else if (!a.quiet) {

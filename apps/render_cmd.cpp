@@ -80,9 +80,23 @@ bool has_png(const std::vector<std::string>& outputs) {
 }
 
 void print_png_exposure(const RenderArgs& a, std::optional<float> exposure) {
-  if (exposure)
+  if (!exposure) return;
+  if (!a.exposure_from.empty())
+    std::printf("  PNG exposure %+.2f EV (metered on %s)\n", *exposure, a.exposure_from.c_str());
+  else
     std::printf("  PNG exposure %+.2f EV (%s)\n", *exposure,
                 a.exposure ? "--exposure" : "automatic; --exposure sets it");
+}
+
+int read_exposure_source(const RenderArgs& a, std::optional<penumbra::ImageRgb>& image) {
+  if (a.exposure_from.empty()) return 0;
+  penumbra::Expected<penumbra::ImageRgb> read = penumbra::read_rgb_image(a.exposure_from);
+  if (!read) {
+    std::cerr << "penumbra render: --exposure-from: " << read.error().message << "\n";
+    return kUsage;
+  }
+  image = std::move(*read);
+  return 0;
 }
 
 int check_render_args(const RenderArgs& a, std::uint64_t& max_memory) {
@@ -185,6 +199,8 @@ int render_scene(const RenderArgs& a) {
   }
   if (int code = check_render_args(a, options.max_memory); code != 0) return code;
   if (int code = check_method_options(a, options.method); code != 0) return code;
+  std::optional<penumbra::ImageRgb> metered;
+  if (int code = read_exposure_source(a, metered); code != 0) return code;
   finish_render_options(options, a.flags);
 
   penumbra::Stopwatch load_watch;
@@ -244,8 +260,9 @@ int render_scene(const RenderArgs& a) {
     return kFailure;
   }
   penumbra::Stopwatch write_watch;
-  const std::optional<float> exposure =
-      png_exposure(a, [&] { return penumbra::flatland::auto_exposure(result->fluence, &*scene); });
+  const std::optional<float> exposure = png_exposure(a, [&] {
+    return penumbra::flatland::auto_exposure(metered ? *metered : result->fluence, &*scene);
+  });
   const penumbra::DisplayOptions display{exposure.value_or(0.0f), a.show_walls};
   // All outputs or none; files already there stay untouched if any output fails.
   if (penumbra::Status s =
@@ -279,6 +296,8 @@ int render_scene(const RenderArgs& a) {
         {"parameters", parameters_json(result->options)},
         {"exposure", exposure ? nlohmann::ordered_json(*exposure) : nlohmann::ordered_json()},
         {"exposure_auto", !a.exposure},
+        {"exposure_from", a.exposure_from.empty() ? nlohmann::ordered_json()
+                                                  : nlohmann::ordered_json(a.exposure_from)},
         {"show_walls", a.show_walls},
         {"outputs", a.outputs}};
     std::cout << j.dump(2) << "\n";
@@ -424,9 +443,16 @@ std::unique_ptr<RenderCommand> add_render_command(CLI::App& app) {
   add_render_options(render, a.options, a.flags, all);
   render->add_option("--max-memory", a.max_memory, "Refuse work needing more working memory")
       ->capture_default_str();
-  add_exposure_option(render, a.exposure,
-                      "PNG exposure in EV (default: automatic, the median of the lit open cells "
-                      "or pixels to 1/8; --json reports it)");
+  CLI::Option* exposure =
+      add_exposure_option(render, a.exposure,
+                          "PNG exposure in EV (default: automatic, the median of the lit open "
+                          "cells or pixels to 1/8; --json reports it)");
+  render
+      ->add_option("--exposure-from", a.exposure_from,
+                   "PNG exposure metered as the automatic one, on this image (.pfm or .exr of "
+                   "the same scene, e.g. a reference) instead of the render: renders of one "
+                   "scene by several methods exposed alike")
+      ->excludes(exposure);
   // Two flags rather than CLI11's "--show-walls,!--no-show-walls", whose help line reads
   // "{false}" beside a default that is on.
   CLI::Option* show = render->add_flag(

@@ -30,6 +30,8 @@ struct RenderArgs {
   std::vector<std::string> outputs;
   std::string max_memory = "8G";
   std::optional<float> exposure;  // --exposure; empty: chosen from the picture (auto_exposure)
+  // --exposure-from: the image the automatic exposure is metered on instead.
+  std::string exposure_from;
   bool show_walls = true;  // 2D PNGs: walls and fog in the dark keep a dim floor of their colour
   bool json = false;
   bool quiet = false;
@@ -77,6 +79,10 @@ bool listed(const std::string& name, const std::string_view (&list)[N]) {
 // What both worlds check before loading a scene: output types and writability, --max-memory
 // (parsed into `max_memory`). Prints the message; returns 0 or the exit code.
 int check_render_args(const RenderArgs& args, std::uint64_t& max_memory);
+
+// The --exposure-from image, read before the render so that a bad file fails first (empty without
+// the option). Prints the message; returns 0 or the exit code.
+int read_exposure_source(const RenderArgs& args, std::optional<penumbra::ImageRgb>& image);
 
 // Whether any output is a PNG (the one output that is exposed).
 bool has_png(const std::vector<std::string>& outputs);

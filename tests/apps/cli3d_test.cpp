@@ -70,6 +70,34 @@ TEST_F(Cli3d, RendersA3dSceneToEveryFormatWithAJsonReport) {
                   penumbra::spaceland::auto_exposure(*exr, penumbra::spaceland::Aov::radiance));
 }
 
+// --exposure-from: several renders of a scene exposed alike, metered on one image (a reference);
+// a file it cannot read fails before the render, naming it, and writes nothing.
+TEST_F(Cli3d, ExposureFromMetersThePngsOnTheGivenImage) {
+  const auto ref = run({"render", scene_, "--spp", "16", "-o", out("ref.pfm")});
+  ASSERT_EQ(ref.status, 0) << ref.err;
+  const penumbra::Expected<penumbra::ImageRgb> image = penumbra::read_rgb_image(out("ref.pfm"));
+  ASSERT_TRUE(image.ok());
+  const float want = penumbra::spaceland::auto_exposure(*image, penumbra::spaceland::Aov::radiance);
+  for (const char* method : {"spwi", "grid"}) {
+    const auto r = run({"render", scene_, "--method", method, "--exposure-from", out("ref.pfm"),
+                        "--json", "-o", out("m.png")});
+    ASSERT_EQ(r.status, 0) << r.err;
+    const nlohmann::json j = nlohmann::json::parse(r.out);
+    EXPECT_FLOAT_EQ(j["exposure"].get<float>(), want) << method;
+    EXPECT_EQ(j["exposure_from"], out("ref.pfm"));
+  }
+  fs::remove(out("m.png"));
+  const auto bad = run({"render", scene_, "--method", "spwi", "--exposure-from", out("none.pfm"),
+                        "-o", out("m.png")});
+  EXPECT_EQ(bad.status, 2);
+  EXPECT_NE(bad.err.find("none.pfm"), std::string::npos) << bad.err;
+  EXPECT_FALSE(fs::exists(out("m.png")));
+  EXPECT_NE(run({"render", scene_, "--exposure", "1", "--exposure-from", out("ref.pfm"), "-o",
+                 out("m.png")})
+                .status,
+            0);
+}
+
 TEST_F(Cli3d, SpwiReportsItsDerivedIntervalAndCascades) {
   const auto r = run({"render", scene_, "--method", "spwi", "--merge", "bilateral", "--directions",
                       "16", "--json", "-o", out("s.pfm")});

@@ -192,4 +192,27 @@ inline FirstHits first_hits(const Scene& s) {
   return f;
 }
 
+// The relative RMSE of img's green over the pixels of object 0 (a floor of albedo `a`) against a
+// sphere light's closed form a Le (r/d)^2 cos(theta) (`le`: the light's green emission); `pixels`
+// receives how many were counted.
+inline double sphere_light_floor_error(const Scene& s, const Sphere& light, double a, double le,
+                                       const ImageRgb& img, int& pixels) {
+  const FirstHits hits = first_hits(s);
+  double sum2 = 0, sum_want = 0;
+  pixels = 0;
+  for (int j = 0; j < img.height(); ++j)
+    for (int i = 0; i < img.width(); ++i) {
+      if (hits.object.at(i, j).r != 0) continue;
+      const Rgb p = hits.position.at(i, j);
+      const double dx = light.center.x - p.r, dy = light.center.y - p.g, dz = light.center.z - p.b;
+      const double d2 = dx * dx + dy * dy + dz * dz;
+      const double r2 = double(light.radius) * light.radius;
+      const double want = a * le * r2 / d2 * (dy / std::sqrt(d2));
+      sum2 += (img.at(i, j).g - want) * (img.at(i, j).g - want);
+      sum_want += want;
+      ++pixels;
+    }
+  return pixels > 0 ? std::sqrt(sum2 / pixels) / (sum_want / pixels) : 0;
+}
+
 }  // namespace penumbra::spaceland::testing

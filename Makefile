@@ -12,7 +12,7 @@ ASAN_FLAGS = -DCMAKE_BUILD_TYPE=Release -DPENUMBRA_WERROR=$(WERROR) -DPENUMBRA_S
              -DPENUMBRA_BUILD_BENCH=OFF
 FUZZ_SECONDS ?= 60
 
-.PHONY: all deps configure build demo test bench quality install format clean \
+.PHONY: all deps configure build demo test bench quality quality-family install format clean \
         build-sanitize test-sanitize fuzz test-shared scene-images
 
 all: build
@@ -67,6 +67,12 @@ quality: build
 	@for b in 2 3 4; do \
 	  $(BUILD)/bin/penumbra bench-quality scenes/3d/cornell.json --bounces $$b -o docs/quality/3d/study/cornell-b$$b --doc docs/QUALITY.md --cache $(BUILD)/quality-cache || exit 1; \
 	done
+	@bash scripts/quality-family.sh $(BUILD) docs/quality/family 4 1024
+
+# The random scene family alone (docs/QUALITY.md, "The scene family": 12 scenes at 1 and 2
+# bounces; the path-traced references, 1024 spp, cached in $(BUILD)/quality-cache/family).
+quality-family: build
+	@bash scripts/quality-family.sh $(BUILD) docs/quality/family 4 1024
 
 # Every picture of scenes/README.md, from the command printed under it (minutes, mostly the 3D
 # path-traced ones); prints each command's time.

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "penumbra/spaceland/scene.hpp"
 #include "penumbra/version.hpp"
 #include "test_support.hpp"
 
@@ -24,6 +25,7 @@ struct Tool {
 // The benchmarks' front ends where bench/ is built (not in the sanitizer build).
 const std::vector<Tool> kTools = {
     {"penumbra_make_scenes", PENUMBRA_MAKE_SCENES},
+    {"penumbra_scene_family", PENUMBRA_SCENE_FAMILY},
 #ifdef PENUMBRA_QUALITY
     {"penumbra_quality", PENUMBRA_QUALITY},
     {"penumbra_quality3d", PENUMBRA_QUALITY3D},
@@ -101,7 +103,7 @@ TEST_F(ToolsCli, BenchmarksTakeVersionAndRefuseUnknownFlags) {
 
 TEST_F(ToolsCli, AFolderThatCannotBeMadeExitsOneBeforeTheWork) {
   const std::string bad = (tmp_.root() / "missing" / "deeper").string();
-  std::vector<const char*> tools = {PENUMBRA_MAKE_SCENES};
+  std::vector<const char*> tools = {PENUMBRA_MAKE_SCENES, PENUMBRA_SCENE_FAMILY};
 #ifdef PENUMBRA_QUALITY
   tools.push_back(PENUMBRA_QUALITY);
 #endif
@@ -116,6 +118,25 @@ TEST_F(ToolsCli, AFolderThatCannotBeMadeExitsOneBeforeTheWork) {
   const std::string file = tmp_.write("taken", "x");
   const CliResult r = run(PENUMBRA_MAKE_SCENES, {file});
   EXPECT_EQ(r.status, 1) << r.err;
+}
+
+// The scene family: each class's scenes load as 3D scenes (their meshes from Debian's packages
+// found), and a seed writes the same bytes again, another seed other scenes.
+TEST_F(ToolsCli, SceneFamilyWritesLoadableScenesTheSameForASeed) {
+  ASSERT_EQ(run(PENUMBRA_SCENE_FAMILY, {"a", "--count", "2"}).status, 0);
+  ASSERT_EQ(run(PENUMBRA_SCENE_FAMILY, {"b", "--count", "2"}).status, 0);
+  ASSERT_EQ(run(PENUMBRA_SCENE_FAMILY, {"c", "--count", "2", "--seed", "7"}).status, 0);
+  for (const char* cls : {"night", "behind", "window"})
+    for (int k = 0; k < 2; ++k) {
+      const std::string name = std::string(cls) + "_" + std::to_string(k) + ".json";
+      const fs::path a = tmp_.root() / "a" / name;
+      const penumbra::Expected<penumbra::spaceland::Scene> scene =
+          penumbra::spaceland::load_scene(a.string());
+      ASSERT_TRUE(scene.ok()) << name << ": " << scene.error().message;
+      EXPECT_FALSE(scene->meshes.empty() && scene->spheres.empty()) << name;
+      EXPECT_EQ(penumbra::testing::slurp(a), penumbra::testing::slurp(tmp_.root() / "b" / name));
+      EXPECT_NE(penumbra::testing::slurp(a), penumbra::testing::slurp(tmp_.root() / "c" / name));
+    }
 }
 
 TEST_F(ToolsCli, MakeScenesMakesOneMissingFolder) {

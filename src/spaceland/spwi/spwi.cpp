@@ -217,7 +217,8 @@ struct ScreenCascade {
   RadianceStore& lower;
   const cascade::SphereLights& lights;
   // With sphere lights: where each ray of the cascade above stopped (read) and of this one
-  // (written), probe-major as the stores (-1: no light, infinity: no surface).
+  // (written), probe-major as the stores (-1: no ray, into the probe's surface; infinity: it met
+  // no surface).
   const std::vector<float>& upper_reach;
   std::vector<float>& lower_reach;
   std::vector<Vec3> dirs = cascade::direction_map(layout.levels, i);

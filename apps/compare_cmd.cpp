@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "cli_enums.hpp"
+#include "io/image_io.hpp"
 #include "io/path_util.hpp"
 #include "penumbra/penumbra.hpp"
 
@@ -155,6 +156,17 @@ int compare(const CompareArgs& a) {
   std::optional<penumbra::flatland::Scene> scene;
   std::vector<std::uint8_t> mask;
   bool radiance = a.radiance;
+  // Without --scene or --radiance, EXRs that say they hold 3D radiance (render writes it in
+  // their header) are compared as such; a PFM cannot say, and is taken for 2D fluence.
+  if (a.scene.empty() && !a.radiance) {
+    const std::string test_world = penumbra::io::image_world(a.test);
+    const std::string ref_world = penumbra::io::image_world(a.reference);
+    radiance = test_world == "3d radiance" && ref_world == "3d radiance";
+    if (!radiance && !a.quiet && (test_world.empty() || ref_world.empty()))
+      std::cerr << "penumbra compare: note: compared as 2D fluence (cells); a PFM or an EXR "
+                   "without Penumbra's header cannot say it is 3D: --radiance or --scene for a "
+                   "3D render\n";
+  }
   if (!a.scene.empty()) {
     penumbra::Expected<int> dims = penumbra::spaceland::scene_dimensions(a.scene);
     if (!dims) return fail(kFailure, dims.error().message);
@@ -224,6 +236,7 @@ int compare(const CompareArgs& a) {
         {"test", a.test},
         {"reference", a.reference},
         {"scene", a.scene.empty() ? nlohmann::json(nullptr) : nlohmann::json(a.scene)},
+        {"radiance", radiance},
         {"width", w},
         {"height", h},
         {"crop", cropped ? nlohmann::json(a.crop) : nlohmann::json(nullptr)},

@@ -79,7 +79,7 @@ Expected<io::StagedFile> stage_image(const std::string& path, const ImageRgb& fl
                                      const Scene& scene, const DisplayOptions& display) {
   const std::string ext = io::lowercase_extension(path);
   if (ext == ".pfm") return io::stage_pfm(path, fluence);
-  if (ext == ".exr") return io::stage_exr(path, fluence);
+  if (ext == ".exr") return io::stage_exr(path, fluence, "2d fluence");
   if (ext == ".png") return stage_display_png(path, fluence, scene, display);
   return Error{path + ": unsupported output format " +
                (ext.empty() ? std::string("(no extension)") : "'" + ext + "'") +

@@ -9,6 +9,7 @@
 #include <ImfInputFile.h>
 #include <ImfOutputFile.h>
 #include <ImfStdIO.h>
+#include <ImfStringAttribute.h>
 #include <ImfTileDescription.h>
 #include <ImfVersion.h>
 #include <png.h>
@@ -622,13 +623,15 @@ Expected<StagedFile> stage_pfm(const std::string& path, const ImageRgb& image) {
   });
 }
 
-Expected<StagedFile> stage_exr(const std::string& path, const ImageRgb& image) {
+Expected<StagedFile> stage_exr(const std::string& path, const ImageRgb& image,
+                               const std::string& world) {
   if (Status s = check_writable_size(path, image.width(), image.height()); !s) return s.error();
   const int w = image.width(), h = image.height();
   MemoryOStream out(path.c_str());
   try {
     Imf::Header header(w, h);
     header.compression() = Imf::ZIP_COMPRESSION;
+    if (!world.empty()) header.insert("penumbra", Imf::StringAttribute(world));
     for (const char* name : {"R", "G", "B"})
       header.channels().insert(name, Imf::Channel(Imf::FLOAT));
     Imf::FrameBuffer fb;
@@ -716,6 +719,17 @@ Expected<StagedFile> stage_png16(const std::string& path, int width, int height,
   if (!encode_png16(encoded, width, height, channels, codes.data()))
     return fail(path, "cannot encode PNG");
   return stage(path, [&](std::FILE* f) { return write_bytes(f, encoded.data(), encoded.size()); });
+}
+
+std::string image_world(const std::string& path) {
+  if (lowercase_extension(path) != ".exr") return "";
+  try {
+    Imf::InputFile file(path.c_str());
+    const auto* a = file.header().findTypedAttribute<Imf::StringAttribute>("penumbra");
+    return a ? a->value() : "";
+  } catch (...) {
+    return "";
+  }
 }
 
 Status write_pfm(const std::string& path, const ImageRgb& image) {

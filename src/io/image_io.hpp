@@ -40,7 +40,13 @@ struct StagedFile {
   int slot = -1;  // its place in the signal handler's list (-1: not listed)
 };
 Expected<StagedFile> stage_pfm(const std::string& path, const ImageRgb& image);
-Expected<StagedFile> stage_exr(const std::string& path, const ImageRgb& image);
+// `world`, when given, goes into the EXR's header as the string attribute "penumbra" (what the
+// image holds: "2d fluence", "3d radiance", "3d depth", ...), which image_world reads back.
+Expected<StagedFile> stage_exr(const std::string& path, const ImageRgb& image,
+                               const std::string& world = "");
+// What a Penumbra EXR says it holds (stage_exr's `world`); "" for an EXR without it, another
+// format (a PFM cannot say) or a file that cannot be read.
+std::string image_world(const std::string& path);
 Expected<StagedFile> stage_png8(const std::string& path, int width, int height,
                                 const std::vector<unsigned char>& rgb);
 // A 16-bit PNG (through libpng) of 1 (grey) or 3 (RGB) channels: the codes are written as given,

@@ -93,7 +93,7 @@ Status write_images(const std::vector<std::string>& paths, const ImageRgb& image
     const std::string& path = paths[i];
     const std::string ext = io::lowercase_extension(path);
     if (ext == ".pfm") return io::stage_pfm(path, image);
-    if (ext == ".exr") return io::stage_exr(path, image);
+    if (ext == ".exr") return io::stage_exr(path, image, std::string("3d ") + to_string(aov));
     if (ext == ".png") {
       const ImageRgb8 pic = display_picture(image, aov, display);
       return io::stage_png8(path, pic.width, pic.height, pic.rgb);

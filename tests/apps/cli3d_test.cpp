@@ -98,6 +98,22 @@ TEST_F(Cli3d, ExposureFromMetersThePngsOnTheGivenImage) {
             0);
 }
 
+// compare without --scene or --radiance: EXRs that render wrote for a 3D scene say so in their
+// header and are compared as radiance (pixels); PFMs cannot, are taken for 2D fluence, with a
+// note that says how to ask for 3D.
+TEST_F(Cli3d, CompareKnowsA3dExrWithoutBeingTold) {
+  for (const char* ext : {"exr", "pfm"}) {
+    const std::string a = out(std::string("a.") + ext), b = out(std::string("b.") + ext);
+    ASSERT_EQ(run({"render", scene_, "--spp", "4", "-o", a}).status, 0);
+    ASSERT_EQ(run({"render", scene_, "--spp", "16", "-o", b}).status, 0);
+    const auto r = run({"compare", a, b, "--json"});
+    ASSERT_EQ(r.status, 0) << r.err;
+    const bool exr = std::string(ext) == "exr";
+    EXPECT_EQ(nlohmann::json::parse(r.out)["radiance"], exr) << ext;
+    EXPECT_EQ(r.err.find("--radiance") != std::string::npos, !exr) << ext << ": " << r.err;
+  }
+}
+
 TEST_F(Cli3d, SpwiReportsItsDerivedIntervalAndCascades) {
   const auto r = run({"render", scene_, "--method", "spwi", "--merge", "bilateral", "--directions",
                       "16", "--json", "-o", out("s.pfm")});

@@ -166,11 +166,11 @@ ordered_json night(Dice& d, int w, int h) {
 void add_room(ordered_json& objects, double sx, double sy, double sz, const double* window) {
   constexpr double m = 0.05;
   auto quad = [&](V corner, V u, V v, const char* material) {
-    // Grown by m at both ends of u and v.
+    // Grown by m at both ends of u and v (each along one axis: its length is the sum of |.|).
     V c = corner, uu = u, vv = v;
+    const double lu = std::abs(u[0]) + std::abs(u[1]) + std::abs(u[2]);
+    const double lv = std::abs(v[0]) + std::abs(v[1]) + std::abs(v[2]);
     for (int a = 0; a < 3; ++a) {
-      const double lu = std::abs(u[0]) + std::abs(u[1]) + std::abs(u[2]);
-      const double lv = std::abs(v[0]) + std::abs(v[1]) + std::abs(v[2]);
       const double du = lu > 0 ? u[std::size_t(a)] / lu : 0,
                    dv = lv > 0 ? v[std::size_t(a)] / lv : 0;
       c[std::size_t(a)] -= m * (du + dv);

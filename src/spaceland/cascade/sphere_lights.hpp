@@ -7,14 +7,14 @@
 // hypothesis breaking for small lights, seed 001 section 2.6). For sphere lights the cell's mean
 // is known: the emission times the fraction of the cell the light's disk covers. So a light that
 // is small for a probe's cells (its solid angle under kSmallCells cells) is passed through by the
-// probe's interval rays, and if its centre lies in the cascade's interval it spreads its solid
-// angle over the cells around its direction, with weights that sum to one (a tent between the
-// equal-area map's cell centres, averaged over the light's footprint): the probe receives exactly
-// the light's solid angle times its emission, and that share moves smoothly between cells and
-// probes as the light moves. A cell gets it only if its own ray got past the light's distance
-// (occlusion at the cells' resolution, as for any other surface). A larger light is traced as any
-// surface: the cells resolve its shape, which a footprint would only approximate (measured: the
-// penumbra under a plate converges with the finer maps only so).
+// probe's interval rays, and the probe that claims it (kClaimFrom) spreads its solid angle over
+// the cells around its direction, with weights that sum to one (a tent between the equal-area
+// map's cell centres, averaged over the light's footprint): the probe receives exactly the
+// light's solid angle times its emission, and that share moves smoothly between cells and probes
+// as the light moves. A cell gets it only if its own ray got past the light's distance (occlusion
+// at the cells' resolution, as for any other surface). A larger light is traced as any surface:
+// the cells resolve its shape, which a footprint would only approximate (measured: the penumbra
+// under a plate converges with the finer maps only so).
 #pragma once
 
 #include <algorithm>
@@ -83,6 +83,14 @@ inline double beyond(double d, double edge) {
   return x * x * (3 - 2 * x);
 }
 
+// The same from the squared distance, without the root and the log off the ramp (most calls).
+inline double beyond_squared(double d2, double edge) {
+  if (edge <= 0) return 1;
+  if (d2 <= 0.5 * edge * edge) return 0;
+  if (d2 >= 2 * edge * edge) return 1;
+  return beyond(std::sqrt(d2), edge);
+}
+
 }  // namespace detail
 
 // A light is small for a map when its solid angle is under this many of the map's cells.
@@ -121,6 +129,19 @@ struct Uppers {
   float a = 0;
 };
 
+// The upper probes of a merge's corners, probe j at position(j), whose interval starts at a.
+template <class Position>
+Uppers uppers_of(const Corners& c, float a, Position&& position) {
+  Uppers up;
+  up.n = c.n;
+  up.a = a;
+  for (std::size_t j = 0; j < std::size_t(c.n); ++j) {
+    up.p[j] = position(j);
+    up.w[j] = c.w[j];
+  }
+  return up;
+}
+
 // The fraction of the upper probes `up` (weighted) whose ray towards light l got to it, among those
 // that traced one: reach(j, k) is where upper probe j's ray of cell k (its side x side map)
 // stopped, infinity where no surface stopped it, negative where it traced none (into its own
@@ -148,15 +169,11 @@ class SphereLights {
   SphereLights() = default;
   // For cascades that trace the scene's spheres (SPWI): small by the cells that reach them.
   SphereLights(const Scene& scene, const Levels& levels) : levels_(levels) {
-    for (const Sphere& s : scene.spheres)
-      if (is_sphere_light(scene, s))
-        lights_.push_back({s.center, s.radius, scene.materials[s.material].emission});
+    collect(scene, [&](const Sphere& s) { return is_sphere_light(scene, s); });
   }
   // For the probe grid with voxels of that size: the lights it leaves out of its voxels.
   SphereLights(const Scene& scene, float voxel) : voxel_(voxel) {
-    for (const Sphere& s : scene.spheres)
-      if (spread_by_grid(scene, s, voxel))
-        lights_.push_back({s.center, s.radius, scene.materials[s.material].emission});
+    collect(scene, [&](const Sphere& s) { return spread_by_grid(scene, s, voxel); });
   }
   bool empty() const { return lights_.empty(); }
   std::size_t size() const { return lights_.size(); }
@@ -214,11 +231,15 @@ class SphereLights {
     // (the cost stays that of the cascades with hundreds of lights).
     const float near = kClaimFrom * a / std::numbers::sqrt2_v<float>;
     float far = kInfinity;
-    if (up && up->n > 0) {
+    double up_weight = 0;  // of the upper probes that take part
+    if (up) {
       float spread = 0;
       for (std::size_t j = 0; j < std::size_t(up->n); ++j)
-        if (up->w[j] > 0) spread = std::max(spread, length(up->p[j] - origin));
-      far = kClaimFrom * up->a * std::numbers::sqrt2_v<float> + spread;
+        if (up->w[j] > 0) {
+          spread = std::max(spread, length(up->p[j] - origin));
+          up_weight += double(up->w[j]);
+        }
+      if (up_weight > 0) far = kClaimFrom * up->a * std::numbers::sqrt2_v<float> + spread;
     }
     for (const SphereLight& l : lights_) {
       const Vec3 to = l.centre - origin;
@@ -227,17 +248,20 @@ class SphereLights {
       const float d = std::sqrt(d2);
       if (!small(l.radius, d) || dot(to, n) < 0) continue;
       double in = detail::beyond(d, kClaimFrom * a);
-      if (up && up->n > 0) {
-        double upper = 0, weight = 0;
+      if (up_weight > 0) {
+        double upper = 0;
         for (std::size_t j = 0; j < std::size_t(up->n); ++j) {
           if (!(up->w[j] > 0)) continue;
+          const Vec3 from_up = l.centre - up->p[j];
           upper +=
-              double(up->w[j]) * detail::beyond(length(l.centre - up->p[j]), kClaimFrom * up->a);
-          weight += double(up->w[j]);
+              double(up->w[j]) * detail::beyond_squared(dot(from_up, from_up), kClaimFrom * up->a);
         }
-        if (weight > 0) in -= upper / weight;
+        in -= upper / up_weight;
       }
       if (!(in > 1e-6)) continue;
+      const bool past = d > end;
+      const float beyond_end = past ? past_clear(l) : 1.0f;
+      if (!(beyond_end > 0)) continue;
       // The light's solid angle, and the half-width (in cells) of a square of the same area.
       const double omega = solid_angle(l.radius, d);
       const double h = 0.5 * std::sqrt(omega / cell);
@@ -249,9 +273,6 @@ class SphereLights {
       const int nu = detail::axis_weights(x, h, side, u0, wu);
       const int nv = detail::axis_weights(y, h, side, v0, wv);
       const Rgb share = l.emission * float(in * omega / cell);
-      const bool past = d > end;
-      const float beyond_end = past ? past_clear(l) : 1.0f;
-      if (!(beyond_end > 0)) continue;
       for (int j = 0; j < nv; ++j)
         for (int i = 0; i < nu; ++i) {
           const std::size_t k = std::size_t(v0 + j) * std::size_t(side) + std::size_t(u0 + i);
@@ -263,6 +284,12 @@ class SphereLights {
   }
 
  private:
+  template <class Keep>
+  void collect(const Scene& scene, Keep&& keep) {
+    for (const Sphere& s : scene.spheres)
+      if (keep(s)) lights_.push_back({s.center, s.radius, scene.materials[s.material].emission});
+  }
+
   Levels levels_;
   float voxel_ = 0;
   std::vector<SphereLight> lights_;

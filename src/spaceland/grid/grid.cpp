@@ -225,7 +225,8 @@ struct GridCascade {
   VoxelTracer tracer;
   const cascade::SphereLights* lights;
   // With sphere lights: where each ray of the cascade above stopped (read) and of this one
-  // (written), probe-major (-1: no light, infinity: no surface, or not known with the fix).
+  // (written), probe-major (-1: a probe inside a surface, no ray; 0: stopped before its interval;
+  // infinity: no surface met, or not known with the fix).
   const std::vector<float>* upper_reach;
   std::vector<float>* lower_reach;
   // The fix traces from each interval's start to the upper probes': no ray needs to know whether
@@ -314,12 +315,13 @@ struct GridCascade {
     return then(s, cascade::continue_to_sky(tracer, p, dirs[d], c.t_end));
   }
 
-  void probe(std::uint64_t q, Rgb* out) const {
+  // Returns the rays it traced (none for a probe inside a surface).
+  std::uint64_t probe(std::uint64_t q, Rgb* out) const {
     const std::size_t nd = dirs.size();
     // A probe inside a surface serves no one (those above: no probe below sees it).
     if (!probe_free(v, c, q)) {
       std::fill(out, out + nd, kNoLight);
-      return;
+      return 0;
     }
     const Vec3 p = position_of(v, c, q);
     cascade::Corners around;
@@ -335,16 +337,9 @@ struct GridCascade {
         if (spread) reach[k] = !fix ? r : holds_light(out[k]) ? kInfinity : 0.0f;
       }
     // Its share of the sphere lights left out of the voxels, in the cells whose ray got past them.
-    if (!spread) return;
-    cascade::Uppers ups;
-    if (up) {
-      ups.n = 8;
-      ups.a = up->t_start;
-      for (std::size_t j = 0; j < 8; ++j) {
-        ups.p[j] = upper_probe[j];
-        ups.w[j] = around.w[j];
-      }
-    }
+    if (!spread) return nd;
+    const cascade::Uppers ups = cascade::uppers_of(around, up ? up->t_start : 0,
+                                                   [&](std::size_t j) { return upper_probe[j]; });
     const std::size_t up_cells = up ? std::size_t(up->side) * std::size_t(up->side) : 0;
     lights->add(
         p, Vec3{}, c.t_start, c.t_end, up ? &ups : nullptr, c.side, out,
@@ -355,6 +350,7 @@ struct GridCascade {
             return (*upper_reach)[std::size_t(around.index[j]) * up_cells + k];
           });
         });
+    return nd;
   }
 };
 
@@ -398,10 +394,8 @@ Expected<RadianceField> solve(const Voxels& v, const Background& bg, const GridO
     parallel_for(c.nz, [&](int z) {
       std::uint64_t local = 0;
       for (std::uint64_t q = std::uint64_t(z) * c.ny * c.nx, end = q + std::uint64_t(c.ny) * c.nx;
-           q < end; ++q) {
-        solver.probe(q, lower.probe(q));
-        if (probe_free(v, c, q)) local += dirs.size();
-      }
+           q < end; ++q)
+        local += solver.probe(q, lower.probe(q));
       traced.fetch_add(local, std::memory_order_relaxed);
     });
     std::swap(up_dirs, dirs);

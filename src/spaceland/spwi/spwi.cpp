@@ -245,15 +245,8 @@ struct ScreenCascade {
   // pre-averaged cell's sub-probe rays that do).
   void add_lights(Row& row, const Probe& p, Rgb* out) const {
     if (lights.empty()) return;
-    cascade::Uppers up;
-    if (row.merge) {
-      up.n = row.c.n;
-      up.a = b;
-      for (std::size_t j = 0; j < std::size_t(row.c.n); ++j) {
-        up.p[j] = upper_probes[std::size_t(row.c.index[j])].p;
-        up.w[j] = row.c.w[j];
-      }
-    }
+    const cascade::Uppers up = cascade::uppers_of(
+        row.c, b, [&](std::size_t j) { return upper_probes[std::size_t(row.c.index[j])].p; });
     auto seen = [&](std::size_t k, float d) {
       int with_light = 0, past = 0;
       for (float r : row.reach[k])  // a ray stopped before the interval holds no light

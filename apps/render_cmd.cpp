@@ -404,9 +404,18 @@ std::unique_ptr<RenderCommand> add_render_command(CLI::App& app) {
                     "cascades (the top cascade sees its disk)");
     render
         ->add_option("--voxel", a.grid.voxel,
-                     "3D grid: voxel size in world units (0: the scene's longest side over 128, "
-                     "larger if that passes a quarter of --max-memory)")
+                     "3D grid (and spwi's radiance cache, for later bounces): voxel size in world "
+                     "units, of the finest level (0: the scene's "
+                     "longest side over 128, or the median distance to what the camera sees "
+                     "over 32 where finer; larger if that passes a quarter of --max-memory)")
         ->check(real_above(0, true))
+        ->capture_default_str();
+    render
+        ->add_option("--levels", a.grid.levels,
+                     "3D grid (and spwi's radiance cache): nested grids around the camera, voxels "
+                     "doubling per level, each "
+                     "136 voxels wide, the last holding the scene (0: as many as that takes; 1: "
+                     "one grid over the whole scene)")
         ->capture_default_str();
     add_enum_option(render, "--gather", a.spwi.gather,
                     {sl::SpwiGather::pixel, sl::SpwiGather::probe},

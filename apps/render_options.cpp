@@ -196,6 +196,7 @@ const std::pair<const char*, const char*> kFlags[] = {
     {"`spwi.gather_edge`", "--gather-edge"},
     {"`spwi.gather_normal`", "--gather-normal"},
     {"`grid.voxel`", "--voxel"},
+    {"`grid.levels`", "--levels"},
     {"`grid.probe_spacing`", "--probe-spacing"},
     {"`grid.directions`", "--directions"},
     {"`grid.interval`", "--interval"},

@@ -1,5 +1,6 @@
 #include "spaceland/gbuffer.hpp"
 
+#include <algorithm>
 #include <limits>
 #include <span>
 #include <vector>
@@ -81,6 +82,16 @@ ImageRgb aov_image(const Scene& scene, const GBuffer& g, Aov aov) {
     }
   });
   return img;
+}
+
+float focus_distance(const GBuffer& g) {
+  std::vector<float> t;
+  t.reserve(g.hits.size());
+  for (std::size_t k = 0; k < g.hits.size(); ++k)
+    if (g.found[k]) t.push_back(g.hits[k].t);
+  if (t.empty()) return 0;
+  std::nth_element(t.begin(), t.begin() + std::ptrdiff_t(t.size() / 2), t.end());
+  return t[t.size() / 2];
 }
 
 }  // namespace penumbra::spaceland

@@ -29,6 +29,9 @@ struct GBuffer {
 
 GBuffer make_gbuffer(const Scene& scene, const RayScene& rays);
 
+// The median distance from the camera to its first hits (0: none): where it looks.
+float focus_distance(const GBuffer& g);
+
 // A G-buffer channel as an image (Aov::radiance is not one).
 ImageRgb aov_image(const Scene& scene, const GBuffer& g, Aov aov);
 

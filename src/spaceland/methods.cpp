@@ -61,11 +61,12 @@ Expected<ImageRgb> pt_solve(const SolveContext& ctx, const RenderOptions& o, Sol
 
 // ---- spwi: screen-space probes with world-space intervals (seed 000) ----
 
+// With the grid's voxel size and levels: those of the radiance cache its later bounces read.
 constexpr const char* kSpwiOptions[] = {
-    "spwi.probe_spacing", "spwi.directions",   "spwi.interval",   "spwi.branching",
-    "spwi.cascades",      "spwi.merge",        "spwi.sun",        "spwi.gather",
-    "spwi.depth_bias",    "spwi.overlap",      "spwi.preaverage", "spwi.merge_edge",
-    "spwi.gather_edge",   "spwi.gather_normal"};
+    "spwi.probe_spacing", "spwi.directions",    "spwi.interval",   "spwi.branching",
+    "spwi.cascades",      "spwi.merge",         "spwi.sun",        "spwi.gather",
+    "spwi.depth_bias",    "spwi.overlap",       "spwi.preaverage", "spwi.merge_edge",
+    "spwi.gather_edge",   "spwi.gather_normal", "grid.voxel",      "grid.levels"};
 
 Status spwi_check(const RenderOptions& o) {
   return spwi::check_options(o.spwi);
@@ -92,8 +93,17 @@ void spwi_describe(const RenderResult& r, std::vector<Parameter>& p, std::string
   p.push_back({"merge_edge", double(o.merge_edge)});
   p.push_back({"gather_edge", double(o.gather_edge)});
   p.push_back({"gather_normal", double(o.gather_normal)});
+  if (r.options.bounces > 1 && r.options.aov == Aov::radiance) {
+    // The radiance cache of its later bounces.
+    p.push_back({"cache_voxel", double(r.options.grid.voxel)});
+    p.push_back({"cache_levels", std::int64_t(r.options.grid.levels)});
+  }
   line = ", " + std::to_string(o.cascades) + " cascades, t0 " + io::format_rounded(o.interval) +
          ", merge " + to_string(o.merge) + ", sun " + to_string(o.sun);
+  if (r.options.bounces > 1 && r.options.aov == Aov::radiance)
+    line += ", cache voxel " + io::format_rounded(r.options.grid.voxel) +
+            (r.options.grid.levels > 1 ? " in " + std::to_string(r.options.grid.levels) + " levels"
+                                       : std::string());
 }
 
 Expected<ImageRgb> spwi_solve(const SolveContext& ctx, const RenderOptions& o, SolveReport& report,
@@ -106,9 +116,9 @@ Expected<ImageRgb> spwi_solve(const SolveContext& ctx, const RenderOptions& o, S
 
 // ---- grid: the world-space probe grid (seed 001 4.3) ----
 
-constexpr const char* kGridOptions[] = {"grid.voxel",    "grid.probe_spacing", "grid.directions",
-                                        "grid.interval", "grid.cascades",      "grid.extend_length",
-                                        "grid.fix"};
+constexpr const char* kGridOptions[] = {"grid.voxel",         "grid.levels",   "grid.probe_spacing",
+                                        "grid.directions",    "grid.interval", "grid.cascades",
+                                        "grid.extend_length", "grid.fix"};
 
 Status grid_check(const RenderOptions& o) {
   return grid::check_options(o.grid);
@@ -124,13 +134,16 @@ void grid_describe(const RenderResult& r, std::vector<Parameter>& p, std::string
   const GridOptions& o = r.options.grid;
   cascade_parameters(o, p);
   p.push_back({"voxel", double(o.voxel)});
+  p.push_back({"levels", std::int64_t(o.levels)});
   p.push_back({"voxel_memory_bytes", r.voxel_bytes});
   p.push_back({"extend_length", double(o.extend_length)});
   p.push_back({"fix", std::string(o.fix ? "bilinear" : "none")});
   char mib[32];
   std::snprintf(mib, sizeof mib, "%.1f", double(r.voxel_bytes) / (1 << 20));
-  line = ", voxel " + io::format_rounded(o.voxel) + " (" + mib + " MiB of voxels), " +
-         std::to_string(o.cascades) + " cascades, t0 " + io::format_rounded(o.interval);
+  line = ", voxel " + io::format_rounded(o.voxel) +
+         (o.levels > 1 ? " in " + std::to_string(o.levels) + " levels" : std::string()) + " (" +
+         mib + " MiB of voxels), " + std::to_string(o.cascades) + " cascades, t0 " +
+         io::format_rounded(o.interval);
 }
 
 Expected<ImageRgb> grid_solve(const SolveContext& ctx, const RenderOptions& o, SolveReport& report,

@@ -17,11 +17,12 @@ namespace penumbra::spaceland {
 
 class RadianceCache {
  public:
-  // Voxelises the scene and solves the probe grid (`grid`'s options, a quarter of `max_memory`
-  // for the voxels) `bounces` times; `rays` carry the sun to the voxels.
+  // Voxelises the scene (the probe grid's levels around the camera, `focus` the median distance
+  // to what it sees: grid::plan_levels) and solves the probe grid (`grid`'s options, a quarter
+  // of `max_memory` for the voxels) `bounces` times; `rays` carry the sun to the voxels.
   static Expected<RadianceCache> build(const Scene& scene, const RayScene& rays,
                                        const GridOptions& grid, std::uint64_t max_memory,
-                                       int bounces);
+                                       int bounces, float focus);
   // The grid options' ranges (any scene will do), checked before a scene is read.
   static Status check_options(const GridOptions& grid);
   // Its memory need (the voxels), known before anything is allocated.
@@ -33,11 +34,15 @@ class RadianceCache {
   ~RadianceCache();
 
   // The reflected radiance at surface point p towards the side of unit normal n: the nearest
-  // surface voxel around p whose own normal faces n's way (a surface on a voxel face marks the
+  // surface voxel around p (of the finest level around it, blended into the next by its cut
+  // faces) whose own normal faces n's way (a surface on a voxel face marks the
   // voxels on both sides, and near an edge the other surface's too; a wall one voxel thick holds
   // both sides); 0 where there is none.
   Rgb reflected(Vec3 p, Vec3 n) const;
   std::uint64_t bytes() const;
+  // The finest level's voxel size and the levels (the grid options it ran with).
+  float voxel() const;
+  int levels() const;
 
   struct Impl;
 

@@ -191,7 +191,7 @@ Status solve(const Plan& plan, const Scene& scene, const RayScene& rays, const G
   if (plan.radiance_cache) {
     Stopwatch watch;
     Expected<RadianceCache> built =
-        RadianceCache::build(scene, rays, o.grid, o.max_memory, o.bounces - 1);
+        RadianceCache::build(scene, rays, o.grid, o.max_memory, o.bounces - 1, focus_distance(g));
     if (!built) return built.error();
     cache = std::move(*built);
     ctx.cache = &*cache;
@@ -200,6 +200,10 @@ Status solve(const Plan& plan, const Scene& scene, const RayScene& rays, const G
   }
   SolveReport report;
   RenderOptions used = o;
+  if (cache) {
+    used.grid.voxel = cache->voxel();
+    used.grid.levels = cache->levels();
+  }
   Expected<ImageRgb> img = (o.device == Device::gpu ? m.gpu : m.cpu)(ctx, o, report, used);
   if (!img) return img.error();
   result.radiance = std::move(*img);

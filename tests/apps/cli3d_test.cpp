@@ -182,11 +182,29 @@ TEST_F(Cli3d, GridReportsItsVoxelsAndIsRefusedItsOthersOptions) {
              out("x.pfm")});
   EXPECT_EQ(bad.status, 2);
   EXPECT_NE(bad.err.find("--extend-length"), std::string::npos) << bad.err;
-  // --voxel belongs to the grid, --merge to spwi.
-  bad = run({"render", scene_, "--method", "spwi", "--voxel", "0.25", "-o", out("x.pfm")});
+  // --levels: one grid over the scene, or nested levels (0: as many as the scene needs).
+  const auto one = run({"render", scene_, "--method", "grid", "--voxel", "0.25", "--levels", "1",
+                        "--json", "-o", out("one.pfm")});
+  ASSERT_EQ(one.status, 0) << one.err;
+  EXPECT_EQ(nlohmann::json::parse(one.out)["parameters"]["levels"], 1);
+  bad = run({"render", scene_, "--method", "grid", "--levels", "9", "-o", out("x.pfm")});
   EXPECT_EQ(bad.status, 2);
-  EXPECT_NE(bad.err.find("--voxel applies to --method grid only, not spwi"), std::string::npos)
+  EXPECT_NE(bad.err.find("--levels: expected 1..8 (0: derived), found 9"), std::string::npos)
       << bad.err;
+  // --voxel and --levels are also spwi's, for the radiance cache of its later bounces; --pt's
+  // not.
+  const auto cache = run({"render", scene_, "--method", "spwi", "--bounces", "2", "--voxel", "0.25",
+                          "--levels", "1", "--json", "-o", out("c.pfm")});
+  ASSERT_EQ(cache.status, 0) << cache.err;
+  const nlohmann::json cp = nlohmann::json::parse(cache.out)["parameters"];
+  EXPECT_FLOAT_EQ(cp["cache_voxel"].get<float>(), 0.25f);
+  EXPECT_EQ(cp["cache_levels"], 1);
+  bad = run({"render", scene_, "--method", "pt", "--voxel", "0.25", "-o", out("x.pfm")});
+  EXPECT_EQ(bad.status, 2);
+  EXPECT_NE(bad.err.find("--voxel applies to --method spwi or grid only, not pt"),
+            std::string::npos)
+      << bad.err;
+  // --merge belongs to spwi.
   bad = run({"render", scene_, "--method", "grid", "--merge", "fix", "-o", out("x.pfm")});
   EXPECT_EQ(bad.status, 2);
   EXPECT_NE(bad.err.find("--merge applies to --method spwi only, not grid"), std::string::npos)

@@ -105,8 +105,14 @@ struct SpwiOptions {
 
 // The world-space probe grid (docs/METHODS.md, "The world-space probe grid").
 struct GridOptions {
-  float voxel = 0;        // voxel size, world units (0: the scene's longest side over 128, larger
-                          // when that grid would pass a quarter of max_memory)
+  // Voxel size, world units: of the finest level (0: the scene's longest side over 128, or the
+  // median distance from the camera to what it sees over 32 where that is finer; larger when
+  // the voxels would pass a quarter of max_memory).
+  float voxel = 0;
+  // Nested grids centred on the camera (a clipmap): level l has voxels of voxel 2^l and is 136
+  // voxels wide (128 and the padding) along each axis where the scene is wider; the last holds
+  // the whole scene. 0: as many as that takes (at most 8); 1: one grid over the whole scene.
+  int levels = 0;
   int probe_spacing = 2;  // s0: voxels between cascade-0 probes; cascade i uses s0 2^i
   int directions = 16;    // Q0: a square of a power of two; cascade i has Q0 4^i
   float interval = 0;     // t0, world units: cascade 0 traces [0, t0], cascade i

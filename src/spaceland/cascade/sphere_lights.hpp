@@ -20,6 +20,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <vector>
 
@@ -102,11 +103,15 @@ inline double solid_angle(double r, double d) {
   return 2 * std::numbers::pi * (1 - std::sqrt(std::max(0.0, 1 - sin_t * sin_t)));
 }
 
-// The probe grid traces voxels, not spheres: a sphere light under this many voxels in radius would
-// be a glowing voxel or two. It is left out of the voxels and always spread.
-inline constexpr float kSpreadVoxels = 2;
-inline bool spread_by_grid(const Scene& scene, const Sphere& s, float voxel) {
-  return is_sphere_light(scene, s) && s.radius < kSpreadVoxels * voxel;
+// The probe grid traces voxels, not spheres: a sphere light under a few voxels in radius would be
+// a glowing blob of voxels, its shadows and pool star-shaped by the voxels' steps. Under this
+// many voxels in radius it is left out of the voxels and spread (a radius-0.3 light over a wide
+// floor, 2.2 voxels of the finest level in radius, relative RMSE over the floor against the
+// closed form at 96 x 72: 314% voxelised, 32% spread).
+inline constexpr float kSpreadVoxels = 4;
+inline bool spread_by_grid(const Scene& scene, const Sphere& s, float voxel,
+                           float within = kSpreadVoxels) {
+  return is_sphere_light(scene, s) && s.radius < within * voxel;
 }
 
 // A cascade claims lights from this many times its interval's start on, not from the start: its
@@ -172,8 +177,18 @@ class SphereLights {
     collect(scene, [&](const Sphere& s) { return is_sphere_light(scene, s); });
   }
   // For the probe grid with voxels of that size: the lights it leaves out of its voxels.
-  SphereLights(const Scene& scene, float voxel) : voxel_(voxel) {
-    collect(scene, [&](const Sphere& s) { return spread_by_grid(scene, s, voxel); });
+  SphereLights(const Scene& scene, float voxel, float within = kSpreadVoxels)
+      : voxel_(voxel), within_(within) {
+    collect(scene, [&](const Sphere& s) { return spread_by_grid(scene, s, voxel, within); });
+  }
+  // For a level of the probe grid's clipmap: the lights `spread(s)` names (those its rays meet
+  // in no voxels, whichever level's voxels they cross), every one small.
+  template <class Spread>
+  static SphereLights spread_by(const Scene& scene, Spread&& spread) {
+    SphereLights out;
+    out.voxel_ = std::numeric_limits<float>::infinity();
+    out.collect(scene, [&](const Sphere& s) { return is_sphere_light(scene, s) && spread(s); });
+    return out;
   }
   bool empty() const { return lights_.empty(); }
   std::size_t size() const { return lights_.size(); }
@@ -183,7 +198,7 @@ class SphereLights {
   // through treats the light alike (spread once, or traced once, never both nor neither).
   bool small(double r, double d) const {
     if (!(d > r)) return false;
-    if (voxel_ > 0) return r < double(kSpreadVoxels * voxel_);
+    if (voxel_ > 0) return r < double(within_ * voxel_);
     int j = 0;
     while (j + 1 < levels_.count && d >= double(levels_.nominal_end(j))) ++j;
     const double side = levels_.side(j);
@@ -291,7 +306,7 @@ class SphereLights {
   }
 
   Levels levels_;
-  float voxel_ = 0;
+  float voxel_ = 0, within_ = kSpreadVoxels;
   std::vector<SphereLight> lights_;
 };
 

@@ -13,6 +13,7 @@
 namespace penumbra::spaceland::grid {
 
 using cascade::kInfinity;
+using cascade::RadianceStore;
 
 // The weighted mean of what the cascade-0 probes around p give: a tent of `radius` probe
 // spacings, the 8 probes around p (trilinear weights) first, then 2 and up to `max_radius`
@@ -127,11 +128,35 @@ bool RadianceField::mean_radiance(Vec3 p, Vec3 n, Rgb& out, const RayScene* rays
   return tent(p, 4, serve, out);
 }
 
-Rgb in_scattered(const RadianceField& field, const SunLight* sun, Vec3 x, std::uint64_t& rays) {
-  Rgb in{};
-  field.sphere_radiance(x, in);
-  if (sun && sun->on()) in += sun->at(x, rays) * float(1 / (4 * kPi));
-  return in;
+std::uint64_t RadianceField::bytes() const {
+  return RadianceStore::bytes(plan_[0].probes(), plan_[0].side) + sphere_.size() * sizeof(Rgb) +
+         valid_.size();
+}
+
+namespace {
+
+// A level serves a point from a probe spacing inside its cut faces, blended into the next level
+// over 8 voxels: no seam where the voxels and probes double.
+constexpr float kBlendBand = 8;
+
+}  // namespace
+
+bool LevelFields::mean_radiance(Vec3 p, Vec3 n, Rgb& out, const RayScene* rays) const {
+  return map->blend(
+      p, float(fields[0].cascades()[0].spacing), kBlendBand,
+      [&](std::size_t l, Rgb& v) { return fields[l].mean_radiance(p, n, v, rays); }, out);
+}
+
+bool LevelFields::sphere_radiance(Vec3 p, Rgb& out) const {
+  return map->blend(
+      p, float(fields[0].cascades()[0].spacing), kBlendBand,
+      [&](std::size_t l, Rgb& v) { return fields[l].sphere_radiance(p, v); }, out);
+}
+
+std::uint64_t LevelFields::rays() const {
+  std::uint64_t n = 0;
+  for (const RadianceField& f : fields) n += f.rays();
+  return n;
 }
 
 namespace {

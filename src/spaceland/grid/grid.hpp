@@ -12,6 +12,7 @@
 #pragma once
 
 #include <cstdint>
+#include <numbers>
 #include <string>
 #include <vector>
 
@@ -21,6 +22,7 @@
 #include "spaceland/cascade/levels.hpp"
 #include "spaceland/cascade/sphere_lights.hpp"
 #include "spaceland/cascade/store.hpp"
+#include "spaceland/grid/clipmap.hpp"
 #include "spaceland/grid/voxels.hpp"
 #include "spaceland/sky.hpp"
 #include "spaceland/solve.hpp"
@@ -65,6 +67,8 @@ class RadianceField {
   // The interval rays its cascades traced (a probe direction each; a march may take several
   // pieces: the stretch before the interval, extension, the fix's segments).
   std::uint64_t rays() const { return rays_; }
+  // What it holds: cascade 0's radiance, its probes' means and marks.
+  std::uint64_t bytes() const;
 
  private:
   friend Expected<RadianceField> solve(const Voxels&, const Background&, const GridOptions&,
@@ -87,15 +91,33 @@ class RadianceField {
   std::uint64_t rays_ = 0;
 };
 
+// The fields of a clipmap's levels (clipmap.hpp), finest first: a point reads the finest level
+// around it, blended into the next over a band by its cut faces.
+struct LevelFields {
+  const Clipmap* map = nullptr;
+  std::vector<RadianceField> fields;
+  // RadianceField's, over the levels.
+  bool mean_radiance(Vec3 p, Vec3 n, Rgb& out, const RayScene* rays = nullptr) const;
+  bool sphere_radiance(Vec3 p, Rgb& out) const;
+  std::uint64_t rays() const;
+};
+
 // The radiance fog at x scatters, per unit sigma_s: the field's mean over the sphere (none where
 // no probe is seen) and the sun's irradiance spread over 4 pi (its shadow rays counted in `rays`).
-Rgb in_scattered(const RadianceField& field, const SunLight* sun, Vec3 x, std::uint64_t& rays);
+template <class Field>
+Rgb in_scattered(const Field& field, const SunLight* sun, Vec3 x, std::uint64_t& rays) {
+  Rgb in{};
+  field.sphere_radiance(x, in);
+  if (sun && sun->on()) in += sun->at(x, rays) * float(1 / (4 * std::numbers::pi));
+  return in;
+}
 
-// Traces and merges every cascade, top down; rays that leave the grid see the sky (the sun is
-// the renderer's, one shadow ray per pixel), and `lights` (the sphere lights voxelise left out,
-// SphereLights(scene, voxel)) are spread over the cells that see them. Refuses (Error) plans
-// whose memory passes `max_bytes` (two cascades' radiance at once: the largest and the one above
-// it).
+// Traces and merges every cascade, top down; rays that leave the grid go on through v.outer (a
+// clipmap's coarser levels) and then see the sky (the sun is the renderer's, one shadow ray per
+// pixel), and `lights` (the sphere lights the voxels leave out: Clipmap::lights, or
+// SphereLights(scene, voxel) for one grid) are spread over the cells that see them. Refuses (Error)
+// plans whose memory passes `max_bytes` (two cascades' radiance at once: the largest and the one
+// above it).
 Expected<RadianceField> solve(const Voxels& v, const Background& bg, const GridOptions& o,
                               std::uint64_t max_bytes,
                               const cascade::SphereLights* lights = nullptr);
@@ -119,11 +141,23 @@ std::uint64_t cascades_bytes(const std::vector<CascadePlan>& plan, const GridOpt
 // How many times cascade c's traced intervals are doubled (0: traced whole).
 int extension_doublings(const CascadePlan& c, const GridOptions& o, float voxel, bool top);
 
+// How many voxels in radius a sphere light must reach to be voxelised rather than spread
+// (cascade::kSpreadVoxels). With the bilinear fix or extension, 2: their rays do not say where
+// they stopped as the plain merge's do, and the spread lights' visibility rests on that.
+inline float spread_voxels(const GridOptions& o) {
+  return o.fix || o.extend_length > 0 ? 2.0f : cascade::kSpreadVoxels;
+}
+
+// Level l's options: an interval given in world units (the finest level's) doubles per level,
+// as the voxels do.
+inline GridOptions level_options(const GridOptions& o, std::size_t l) {
+  GridOptions out = o;
+  out.interval = o.interval * float(1 << l);
+  return out;
+}
+
 // The grid's options out of range or that do not go together (any scene will do).
 Status check_options(const GridOptions& o);
-
-// The voxel size a render uses: o.voxel, or the default for a quarter of `max_memory`.
-float voxel_size(const Scene& scene, const GridOptions& o, std::uint64_t max_memory);
 
 // The voxels' memory need, before anything is allocated.
 std::uint64_t estimate_bytes(const Scene& scene, const GridOptions& o, std::uint64_t max_memory,

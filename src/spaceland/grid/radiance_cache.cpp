@@ -10,11 +10,17 @@
 
 namespace penumbra::spaceland {
 
-struct RadianceCache::Impl {
-  grid::Voxels voxels;               // where the surfaces are (the extinction's opaque mark)
+// One level's lookups.
+struct CacheLevel {
   std::vector<Rgb> reflected;        // towards the + side of a thin wall's axis, or any side
   std::vector<Rgb> reflected_minus;  // thin walls: towards the - side
   std::vector<Vec3> normals;         // thin walls: the + side's
+};
+
+struct RadianceCache::Impl {
+  grid::Clipmap voxels;  // where the surfaces are (the extinction's opaque mark), per level
+  std::vector<CacheLevel> levels;
+  Rgb reflected(std::size_t l, Vec3 p, Vec3 n, bool& found) const;
 };
 
 RadianceCache::RadianceCache(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
@@ -33,46 +39,67 @@ std::uint64_t RadianceCache::estimate_bytes(const Scene& scene, const GridOption
 
 Expected<RadianceCache> RadianceCache::build(const Scene& scene, const RayScene& rays,
                                              const GridOptions& o, std::uint64_t max_memory,
-                                             int bounces) {
+                                             int bounces, float focus) {
   if (bounces < 1) return Error{"the radiance cache holds at least one bounce"};
-  Expected<grid::Voxels> voxels =
-      grid::voxelise(scene, grid::voxel_size(scene, o, max_memory), max_memory / 4);
-  if (!voxels) return voxels.error();
+  Expected<grid::Clipmap> map =
+      grid::Clipmap::build(scene, grid::plan_levels(scene, o, max_memory / 4, true, focus),
+                           max_memory / 4, grid::spread_voxels(o));
+  if (!map) return map.error();
   const Background bg(scene);
   const std::uint64_t left =
-      max_memory - std::min(max_memory, grid::voxel_bytes(voxels->count(), true));
+      max_memory - std::min(max_memory, grid::voxel_bytes(map->voxels(), true));
   auto impl = std::make_unique<Impl>();
-  impl->voxels = std::move(*voxels);
-  grid::Voxels& v = impl->voxels;
-  const std::vector<Rgb> base = v.emission;
+  impl->voxels = std::move(*map);
+  grid::Clipmap& levels = impl->voxels;
+  impl->levels.resize(levels.size());
+  std::vector<std::vector<Rgb>> base;
+  std::vector<cascade::SphereLights> lights;
+  for (std::size_t l = 0; l < levels.size(); ++l) {
+    base.push_back(levels[l].emission);
+    lights.push_back(levels.lights(scene, l));
+  }
   const SunLight sun(scene, rays);
-  const cascade::SphereLights lights(scene, v.size);
   for (int b = 0; b < bounces; ++b) {
-    Expected<grid::RadianceField> field = grid::solve(v, bg, o, left, &lights);
-    if (!field) return field.error();
-    grid::add_bounce(v, *field, base, &sun, &impl->normals);
+    // Every level solved before any is lit (a level's rays read the coarser ones' voxels).
+    std::vector<grid::RadianceField> fields;
+    std::uint64_t held = 0;
+    for (std::size_t l = 0; l < levels.size(); ++l) {
+      Expected<grid::RadianceField> field = grid::solve(levels[l], bg, grid::level_options(o, l),
+                                                        left - std::min(left, held), &lights[l]);
+      if (!field) return field.error();
+      held += field->bytes();
+      fields.push_back(std::move(*field));
+    }
+    for (std::size_t l = 0; l < levels.size(); ++l)
+      grid::add_bounce(levels[l], fields[l], base[l], &sun, &impl->levels[l].normals);
   }
-  impl->reflected.resize(base.size());
-  impl->reflected_minus.resize(base.size());
-  for (std::size_t k = 0; k < base.size(); ++k) {
-    impl->reflected[k] = v.emission[k] - base[k];
-    impl->reflected_minus[k] = v.emission_minus[k] - base[k];
+  for (std::size_t l = 0; l < levels.size(); ++l) {
+    grid::Voxels& v = levels[l];
+    CacheLevel& c = impl->levels[l];
+    c.reflected.resize(base[l].size());
+    c.reflected_minus.resize(base[l].size());
+    for (std::size_t k = 0; k < base[l].size(); ++k) {
+      c.reflected[k] = v.emission[k] - base[l][k];
+      c.reflected_minus[k] = v.emission_minus[k] - base[l][k];
+    }
+    // Lookups need only where the surfaces are (the extinction's opaque mark) and the thin walls.
+    std::vector<Rgb>().swap(v.emission);
+    std::vector<Rgb>().swap(v.emission_minus);
+    std::vector<Rgb>().swap(v.albedo);
+    std::vector<std::uint8_t>().swap(v.skip);
   }
-  // Lookups need only where the surfaces are (the extinction's opaque mark) and the thin walls.
-  std::vector<Rgb>().swap(v.emission);
-  std::vector<Rgb>().swap(v.emission_minus);
-  std::vector<Rgb>().swap(v.albedo);
-  std::vector<std::uint8_t>().swap(v.skip);
   return RadianceCache(std::move(impl));
 }
 
-Rgb RadianceCache::reflected(Vec3 p, Vec3 n) const {
-  const grid::Voxels& v = impl_->voxels;
+Rgb RadianceCache::Impl::reflected(std::size_t l, Vec3 p, Vec3 n, bool& found) const {
+  const grid::Voxels& v = voxels[l];
+  const CacheLevel& c = levels[l];
   int at[3];
   const int dims[3] = {v.nx, v.ny, v.nz};
   for (int k = 0; k < 3; ++k) at[k] = v.cell(p, k);
   float best = cascade::kInfinity;
   Rgb out{};
+  found = false;
   for (int dz = -1; dz <= 1; ++dz)
     for (int dy = -1; dy <= 1; ++dy)
       for (int dx = -1; dx <= 1; ++dx) {
@@ -83,7 +110,7 @@ Rgb RadianceCache::reflected(Vec3 p, Vec3 n) const {
         const std::size_t k = v.index(q[0], q[1], q[2]);
         if (!v.opaque(k)) continue;
         // A wall one voxel thick: the side n lies on, its normal mirrored for the - side.
-        Vec3 normal = impl_->normals[k];
+        Vec3 normal = c.normals[k];
         bool minus = false;
         if (v.thin[k]) {
           const int axis = v.thin[k] - 1;
@@ -92,15 +119,41 @@ Rgb RadianceCache::reflected(Vec3 p, Vec3 n) const {
         }
         if (!(dot(normal, n) > 0.5f)) continue;
         const float d = float(dx * dx + dy * dy + dz * dz);
-        if (d < best) best = d, out = minus ? impl_->reflected_minus[k] : impl_->reflected[k];
+        if (d < best) best = d, out = minus ? c.reflected_minus[k] : c.reflected[k], found = true;
       }
+  return out;
+}
+
+Rgb RadianceCache::reflected(Vec3 p, Vec3 n) const {
+  // The finest level around p, blended into the next over 4 voxels from a voxel inside its cut
+  // faces (the lookup reads the voxels next to p's).
+  Rgb out{};
+  impl_->voxels.blend(
+      p, 1, 4,
+      [&](std::size_t l, Rgb& v) {
+        bool found;
+        v = impl_->reflected(l, p, n, found);
+        return found;
+      },
+      out);
   return out;
 }
 
 // The opacity marks (the voxels' extinction), the reflected light (two sides), the normals and
 // the thin walls' marks.
 std::uint64_t RadianceCache::bytes() const {
-  return impl_->reflected.size() * (sizeof(Rgb) * 3 + sizeof(Vec3) + sizeof(std::uint8_t));
+  std::uint64_t n = 0;
+  for (const CacheLevel& c : impl_->levels)
+    n += c.reflected.size() * (sizeof(Rgb) * 3 + sizeof(Vec3) + sizeof(std::uint8_t));
+  return n;
+}
+
+float RadianceCache::voxel() const {
+  return impl_->voxels[0].size;
+}
+
+int RadianceCache::levels() const {
+  return int(impl_->voxels.size());
 }
 
 }  // namespace penumbra::spaceland

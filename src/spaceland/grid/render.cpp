@@ -3,10 +3,12 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <limits>
 #include <vector>
 
 #include "core/parallel.hpp"
 #include "core/timer.hpp"
+#include "spaceland/gbuffer.hpp"
 #include "spaceland/grid/grid.hpp"
 #include "spaceland/media.hpp"
 #include "spaceland/shade.hpp"
@@ -14,14 +16,13 @@
 
 namespace penumbra::spaceland::grid {
 
-float voxel_size(const Scene& scene, const GridOptions& o, std::uint64_t max_memory) {
-  return o.voxel > 0 ? o.voxel : default_voxel_size(scene, max_memory / 4);
-}
-
 std::uint64_t estimate_bytes(const Scene& scene, const GridOptions& o, std::uint64_t max_memory,
                              bool bounces) {
-  const std::array<double, 3> d = grid_dims(grid_bounds(scene), voxel_size(scene, o, max_memory));
-  return std::uint64_t(std::min(d[0] * d[1] * d[2] * double(voxel_bytes(1, bounces)), 1.8e19));
+  // Before the camera's first hits place the finest voxel: the finest it may be (the levels'
+  // voxels grow to fit a quarter of the limit).
+  const std::vector<ClipLevel> levels =
+      plan_levels(scene, o, max_memory / 4, bounces, std::numeric_limits<float>::min());
+  return std::uint64_t(std::min(double(voxel_bytes(1, bounces)) * clipmap_voxels(levels), 1.8e19));
 }
 
 namespace {
@@ -29,7 +30,7 @@ namespace {
 // The light reaching the camera along pixel k's ray: `behind` (what its hit, or the sky, sends)
 // through the fog, plus what the fog emits and scatters towards the camera, integrated a step's
 // length at a time (Beer-Lambert within each step, the in-scattered radiance at its middle).
-Rgb through_fog(const Media& media, const RadianceField& field, const SunLight& sun, float step,
+Rgb through_fog(const Media& media, const LevelFields& field, const SunLight& sun, float step,
                 Vec3 origin, Vec3 dir, float t_end, Rgb behind, std::vector<MediumPiece>& pieces,
                 std::uint64_t& rays) {
   media.pieces(Ray{origin, dir, 0, t_end}, t_end, pieces);
@@ -53,7 +54,7 @@ Rgb through_fog(const Media& media, const RadianceField& field, const SunLight& 
 
 // The fog between the camera and what each pixel shows, a probe spacing a step (the
 // in-scattered light's own resolution), over the image of the surfaces behind it.
-std::uint64_t add_fog(const SolveContext& ctx, const RadianceField& field, const SunLight& sun,
+std::uint64_t add_fog(const SolveContext& ctx, const LevelFields& field, const SunLight& sun,
                       float step, ImageRgb& img) {
   const Media media(ctx.scene);
   if (media.empty()) return 0;
@@ -76,44 +77,83 @@ std::uint64_t add_fog(const SolveContext& ctx, const RadianceField& field, const
 
 }  // namespace
 
+namespace {
+
+// Every level's cascades, each level's sphere lights spread over its cells; `held` is what the
+// fields already solved hold (the next level's cascades have the rest of `left`).
+Expected<LevelFields> solve_levels(const Clipmap& map, const Background& bg, const GridOptions& o,
+                                   std::uint64_t left,
+                                   const std::vector<cascade::SphereLights>& lights) {
+  LevelFields out;
+  out.map = &map;
+  std::uint64_t held = 0;
+  for (std::size_t l = 0; l < map.size(); ++l) {
+    Expected<RadianceField> f =
+        solve(map[l], bg, level_options(o, l), left - std::min(left, held), &lights[l]);
+    if (!f) return f.error();
+    held += f->bytes();
+    out.fields.push_back(std::move(*f));
+  }
+  return out;
+}
+
+}  // namespace
+
 Expected<ImageRgb> render(const SolveContext& ctx, const GridOptions& o, SolveReport& report,
                           GridOptions& used) {
   Stopwatch watch;
   // A quarter of the limit for the voxels, the rest for the cascades (and what render holds).
-  Expected<Voxels> voxels =
-      voxelise(ctx.scene, voxel_size(ctx.scene, o, ctx.max_memory), ctx.max_memory / 4);
-  if (!voxels) return voxels.error();
+  const bool bounces = ctx.bounces > 1;
+  Expected<Clipmap> map = Clipmap::build(
+      ctx.scene, plan_levels(ctx.scene, o, ctx.max_memory / 4, bounces, focus_distance(ctx.g)),
+      ctx.max_memory / 4, spread_voxels(o));
+  if (!map) return map.error();
   report.stages.push_back({"voxelise", watch.ms()});
-  used.voxel = voxels->size;
+  used.voxel = (*map)[0].size;
+  used.levels = int(map->size());
   watch.restart();
   const Background bg(ctx.scene);
   const SunLight sun(ctx.scene, ctx.rays);
-  const std::uint64_t voxel_memory = voxel_bytes(voxels->count(), ctx.bounces > 1);
+  const std::uint64_t voxel_memory = voxel_bytes(map->voxels(), bounces);
   const std::uint64_t left = ctx.max_memory - std::min(ctx.max_memory, voxel_memory);
-  const cascade::SphereLights lights(ctx.scene, voxels->size);
-  Expected<RadianceField> field = solve(*voxels, bg, o, left, &lights);
+  std::vector<cascade::SphereLights> lights;
+  for (std::size_t l = 0; l < map->size(); ++l) lights.push_back(map->lights(ctx.scene, l));
+  Expected<LevelFields> field = solve_levels(*map, bg, o, left, lights);
   if (!field) return field.error();
   report.rays += field->rays();
   report.stages.push_back({"cascades", watch.ms()});
   // Later bounces: the surfaces' and the fog's own emission plus what the last field (and the
   // sun) brings them, solved again (the voxels' light after b bounces gives the pixels b + 1).
-  if (ctx.bounces > 1) {
-    const std::vector<Rgb> base = voxels->emission;
+  if (bounces) {
+    std::vector<std::vector<Rgb>> base;
+    for (std::size_t l = 0; l < map->size(); ++l) base.push_back((*map)[l].emission);
     for (int b = 1; b < ctx.bounces; ++b) {
       watch.restart();
-      report.rays += add_bounce(*voxels, *field, base, &sun);
-      *field = RadianceField{};  // its radiance freed before the next solve's
-      field = solve(*voxels, bg, o, left, &lights);
+      // Each level's from its own field (a level's rays read the coarser levels' voxels: all
+      // are lit before any is solved again).
+      for (std::size_t l = 0; l < map->size(); ++l)
+        report.rays += add_bounce((*map)[l], field->fields[l], base[l], &sun);
+      *field = LevelFields{};  // their radiance freed before the next solve's
+      field = solve_levels(*map, bg, o, left, lights);
       if (!field) return field.error();
       report.rays += field->rays();
       report.stages.push_back({"bounce " + std::to_string(b + 1), watch.ms()});
     }
   }
-  used.cascades = int(field->cascades().size());
-  used.interval = field->cascades()[0].t_end;
+  const RadianceField& finest = field->fields[0];
+  used.cascades = int(finest.cascades().size());
+  used.interval = finest.cascades()[0].t_end;
   report.voxel_bytes = voxel_memory;
-  report.memory_bytes +=
-      voxel_memory + cascades_bytes(field->cascades(), o, voxels->size, !lights.empty());
+  // The largest level's cascades while the others' fields are held.
+  std::uint64_t fields = 0, cascades = 0;
+  for (std::size_t l = 0; l < map->size(); ++l) {
+    const RadianceField& f = field->fields[l];
+    fields += f.bytes();
+    const std::uint64_t solving =
+        cascades_bytes(f.cascades(), level_options(o, l), (*map)[l].size, !lights[l].empty());
+    cascades = std::max(cascades, solving - std::min(solving, f.bytes()));
+  }
+  report.memory_bytes += voxel_memory + fields + cascades;
   watch.restart();
 
   ImageRgb img = shade_pixels(
@@ -124,7 +164,7 @@ Expected<ImageRgb> render(const SolveContext& ctx, const GridOptions& o, SolveRe
           l += albedo * mean;
         return l + sun.reflected(h, albedo, local);
       });
-  report.rays += add_fog(ctx, *field, sun, voxels->size * float(o.probe_spacing), img);
+  report.rays += add_fog(ctx, *field, sun, used.voxel * float(o.probe_spacing), img);
   report.stages.push_back({"gather", watch.ms()});
   return img;
 }

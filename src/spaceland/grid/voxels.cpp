@@ -171,9 +171,10 @@ Vec3 voxel_lo(const Voxels& v, int x, int y, int z) {
   return v.origin + Vec3{float(x) * v.size, float(y) * v.size, float(z) * v.size};
 }
 
-// The empty grid of voxels of `size` over the scene's bounds, refused when an axis or the whole
-// passes what memory allows.
-Expected<Voxels> empty_grid(const Scene& scene, float size, std::uint64_t max_bytes) {
+// The empty grid of voxels of `size` over the scene's bounds (or `box`, a part of them), refused
+// when an axis or the whole passes what memory allows.
+Expected<Voxels> empty_grid(const Scene& scene, float size, std::uint64_t max_bytes,
+                            const VoxelBox* box) {
   if (!(size > 0) || !std::isfinite(size))
     return Error{"`grid.voxel`: expected a voxel size > 0 in world units, found " +
                  io::format_number(size)};
@@ -185,12 +186,13 @@ Expected<Voxels> empty_grid(const Scene& scene, float size, std::uint64_t max_by
   int dims[3];
   const std::array<double, 3> counts = grid_dims(b, size);
   for (int k = 0; k < 3; ++k) {
-    const double cells = counts[std::size_t(k)];
+    const double cells = box ? double(box->dims[std::size_t(k)]) : counts[std::size_t(k)];
     if (cells > double(1 << 20))
       return Error{"`grid.voxel`: " + io::format_number(size) + " makes " +
                    io::format_number(cells) + " voxels along an axis; use a larger voxel"};
     dims[k] = int(cells);
     n *= cells;
+    if (box) v.origin[k] += float(box->first[std::size_t(k)]) * size;
   }
   if (double(voxel_bytes(1)) * n > double(max_bytes))
     return Error{"the voxel grid (" + std::to_string(dims[0]) + " x " + std::to_string(dims[1]) +
@@ -229,7 +231,9 @@ class SurfaceRaster {
           if (triangle_overlaps_box(tri, v_.centre(x, y, z), half))
             touched_.push_back(v_.index(x, y, z));
     const Vec3 n = cross(tri[1] - tri[0], tri[2] - tri[0]);
-    add(0.5 * std::sqrt(double(dot(n, n))), material);
+    add(0.5 * std::sqrt(double(dot(n, n))) *
+            inside(min(tri[0], min(tri[1], tri[2])), max(tri[0], max(tri[1], tri[2]))),
+        material);
   }
 
   // A sphere: the voxels its surface passes through (nearest point inside, farthest outside).
@@ -246,7 +250,7 @@ class SurfaceRaster {
               farthest_distance(s.center, a, c) >= s.radius)
             touched_.push_back(v_.index(x, y, z));
         }
-    add(4 * kPi * double(s.radius) * s.radius, s.material);
+    add(4 * kPi * double(s.radius) * s.radius * inside(s.center - r, s.center + r), s.material);
   }
 
   // A disk: the voxels its plane crosses within its radius of its centre (a superset near the
@@ -268,7 +272,7 @@ class SurfaceRaster {
               nearest_distance(d.center, a, c) <= d.radius)
             touched_.push_back(v_.index(x, y, z));
         }
-    add(kPi * double(d.radius) * d.radius, d.material);
+    add(kPi * double(d.radius) * d.radius * inside(d.center - r, d.center + r), d.material);
   }
 
   // Every voxel a surface touched becomes opaque, with the area-weighted mean emission and albedo.
@@ -282,6 +286,23 @@ class SurfaceRaster {
   }
 
  private:
+  // The part of a surface with bounds [lo, hi] that lies in the grid's box, by its bounds' extent
+  // along each axis (1 for one grid over the whole scene). A clipmap level holds only part of a
+  // wide surface: the area it shares among its voxels is that part, else it would outweigh the
+  // surfaces beside it in their voxels.
+  double inside(Vec3 lo, Vec3 hi) const {
+    double f = 1;
+    for (int k = 0; k < 3; ++k) {
+      const double len = double(hi[k]) - lo[k];
+      if (!(len > 0)) continue;
+      const double a = v_.origin[k], b = a + double(v_.size) * (k == 0   ? v_.nx
+                                                                : k == 1 ? v_.ny
+                                                                         : v_.nz);
+      f *= std::clamp((std::min(double(hi[k]), b) - std::max(double(lo[k]), a)) / len, 0.0, 1.0);
+    }
+    return f;
+  }
+
   // The surface's area shared among the voxels it touched.
   void add(double area, std::uint32_t material) {
     if (touched_.empty()) return;
@@ -301,7 +322,7 @@ class SurfaceRaster {
   std::vector<std::size_t> touched_;
 };
 
-void rasterise_surfaces(const Scene& scene, Voxels& v) {
+void rasterise_surfaces(const Scene& scene, Voxels& v, const std::vector<std::uint8_t>* left_out) {
   SurfaceRaster raster(scene, v);
   for (const TriangleMesh& mesh : scene.meshes)
     for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
@@ -309,8 +330,11 @@ void rasterise_surfaces(const Scene& scene, Voxels& v) {
                        mesh.positions[mesh.triangles[t][2]]},
                       mesh.materials[t]);
   // Small sphere lights are not voxels: the cascades spread them (cascade/sphere_lights.hpp).
-  for (const Sphere& s : scene.spheres)
-    if (!cascade::spread_by_grid(scene, s, v.size)) raster.sphere(s);
+  for (std::size_t i = 0; i < scene.spheres.size(); ++i) {
+    const Sphere& s = scene.spheres[i];
+    if (!(left_out ? (*left_out)[i] != 0 : cascade::spread_by_grid(scene, s, v.size)))
+      raster.sphere(s);
+  }
   for (const Disk& d : scene.disks) raster.disk(d);
   raster.finish(v);
 }
@@ -366,10 +390,11 @@ void add_fog(const Scene& scene, Voxels& v) {
 
 }  // namespace
 
-Expected<Voxels> voxelise(const Scene& scene, float size, std::uint64_t max_bytes) {
-  Expected<Voxels> v = empty_grid(scene, size, max_bytes);
+Expected<Voxels> voxelise(const Scene& scene, float size, std::uint64_t max_bytes,
+                          const VoxelBox* box, const std::vector<std::uint8_t>* left_out) {
+  Expected<Voxels> v = empty_grid(scene, size, max_bytes, box);
   if (!v) return v;
-  rasterise_surfaces(scene, *v);
+  rasterise_surfaces(scene, *v, left_out);
   add_fog(scene, *v);
   build_distance_field(*v);
   return v;
@@ -407,23 +432,33 @@ void build_distance_field(Voxels& v) {
   pass(-1);
 }
 
-Segment march(const Voxels& v, Vec3 origin, Vec3 dir, float tmin, float tmax) {
+namespace {
+
+// The march within v's box; `enter` and `leave` receive where the ray's line enters and leaves
+// the box (enter > leave: it misses it).
+Segment march_box(const Voxels& v, Vec3 origin, Vec3 dir, float tmin, float tmax, double& enter,
+                  double& leave) {
   Segment out;
   out.t_end = tmax;
   // Clip [tmin, tmax] to the grid's box (slabs).
-  double t0 = tmin, t1 = tmax;
+  enter = -std::numeric_limits<double>::infinity();
+  leave = std::numeric_limits<double>::infinity();
   const double dims[3] = {double(v.nx), double(v.ny), double(v.nz)};
   for (int k = 0; k < 3; ++k) {
     const double lo = v.origin[k], hi = lo + dims[k] * v.size;
     if (dir[k] == 0) {
-      if (origin[k] < lo || origin[k] > hi) return out;
+      if (origin[k] < lo || origin[k] > hi) {
+        enter = 1, leave = 0;
+        return out;
+      }
       continue;
     }
     double a = (lo - origin[k]) / dir[k], b = (hi - origin[k]) / dir[k];
     if (a > b) std::swap(a, b);
-    t0 = std::max(t0, a);
-    t1 = std::min(t1, b);
+    enter = std::max(enter, a);
+    leave = std::min(leave, b);
   }
+  const double t0 = std::max(double(tmin), enter), t1 = std::min(double(tmax), leave);
   if (!(t0 < t1)) return out;
   // The voxel at the entry (the middle of the first step decides it, so that an entry on a
   // face does not round into the neighbour) and the DDA's state.
@@ -500,6 +535,26 @@ Segment march(const Voxels& v, Vec3 origin, Vec3 dir, float tmin, float tmax) {
     if (cell[axis] < 0 || cell[axis] >= int(dims[axis])) break;
     next[axis] = boundary(axis, cell[axis]);
   }
+  return out;
+}
+
+}  // namespace
+
+Segment march(const Voxels& v, Vec3 origin, Vec3 dir, float tmin, float tmax) {
+  double enter, leave;
+  if (!v.outer) return march_box(v, origin, dir, tmin, tmax, enter, leave);
+  // A clipmap level: a ray that starts in its box marches it to where it leaves, then goes on
+  // through the coarser levels; one that starts outside sees the coarser levels only (they hold
+  // this level's region too, coarser).
+  Segment out = march_box(v, origin, dir, tmin, tmax, enter, leave);
+  const bool inside = enter <= double(tmin) && double(tmin) < leave;
+  if (!inside) return march(*v.outer, origin, dir, tmin, tmax);
+  if (out.blocked || !(leave < double(tmax))) return out;
+  const Segment rest = march(*v.outer, origin, dir, float(leave), tmax);
+  out.radiance += out.transmittance * rest.radiance;
+  out.transmittance *= rest.transmittance;
+  out.blocked = rest.blocked;
+  out.t_end = rest.t_end;
   return out;
 }
 

@@ -42,6 +42,9 @@ struct Voxels {
   // distance d >= 2 jumps to the exit of the empty cube of d - 1 voxels around it. Empty: no
   // skipping (the same answer, a voxel at a time).
   std::vector<std::uint8_t> skip;
+  // In a clipmap (clipmap.hpp), the next coarser level: a ray that leaves this grid goes on
+  // through it (null: out of the grid there is nothing).
+  const Voxels* outer = nullptr;
 
   std::size_t index(int x, int y, int z) const {
     return (std::size_t(z) * std::size_t(ny) + std::size_t(y)) * std::size_t(nx) + std::size_t(x);
@@ -77,12 +80,24 @@ std::array<double, 3> grid_dims(const Bounds& b, double size);
 // more than `max_bytes`.
 float default_voxel_size(const Scene& scene, std::uint64_t max_bytes);
 
-// Voxelises the scene with voxels of `size` (world units) over grid_bounds, padded by kPadding.
-// A surface voxel takes the area-weighted mean emission and albedo (times its texture's mean) of
-// the surfaces in it; a fog voxel the coefficients of the boxes covering it, times the fraction
-// they cover (4^3 points a voxel; overlapping boxes add). Refuses (Error, nothing allocated) a
-// size that is not a positive number or a grid over `max_bytes`.
-Expected<Voxels> voxelise(const Scene& scene, float size, std::uint64_t max_bytes);
+// A part of the padded grid over grid_bounds, in its voxels: `dims` voxels from voxel `first`
+// (the whole grid: first 0, dims grid_dims).
+struct VoxelBox {
+  std::array<int, 3> first{}, dims{};
+  // In double: a box asked of a voxel far too small for it must be refused, not wrap.
+  double count() const { return double(dims[0]) * double(dims[1]) * double(dims[2]); }
+};
+
+// Voxelises the scene with voxels of `size` (world units) over grid_bounds, padded by kPadding,
+// or over `box`, a part of that grid. A surface voxel takes the area-weighted mean emission and
+// albedo (times its texture's mean) of the surfaces in it; a fog voxel the coefficients of the
+// boxes covering it, times the fraction they cover (4^3 points a voxel; overlapping boxes add).
+// Sphere lights the cascades spread are left out: `left_out`, per scene sphere, where given,
+// else those under cascade::kSpreadVoxels voxels in radius (cascade::spread_by_grid). Refuses
+// (Error, nothing allocated) a size that is not a positive number or a grid over `max_bytes`.
+Expected<Voxels> voxelise(const Scene& scene, float size, std::uint64_t max_bytes,
+                          const VoxelBox* box = nullptr,
+                          const std::vector<std::uint8_t>* left_out = nullptr);
 
 // The light a homogeneous stretch (extinction `sigma`, a source of `source` radiance per unit
 // length) of length `len` sends to its start, seen through its own extinction; `pass` is its
@@ -105,7 +120,8 @@ using cascade::Segment;
 // Walks the voxels along origin + t dir (dir unit), t in [tmin, tmax], one voxel at a time
 // (Amanatides-Woo), leaping over empty space by the distance field: in a fog voxel, Beer-Lambert
 // with its emission as the source; an opaque voxel adds its emission (seen through what came
-// before) and ends the segment. Outside the grid there is nothing.
+// before) and ends the segment. Past the grid's box the ray goes on through v.outer, if any
+// (else there is nothing).
 Segment march(const Voxels& v, Vec3 origin, Vec3 dir, float tmin, float tmax);
 
 // Fills v.skip from the voxels' contents (voxelise does; bounces change no empty voxel).

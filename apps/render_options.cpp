@@ -54,8 +54,12 @@ void add_render_options(CLI::App* app, RenderOptions& options, RenderOptionFlags
     auto n = [](auto v) { return penumbra::io::format_number(double(v)); };
     app->add_option("--probe-spacing", rc.probe_spacing,
                     "Cascade-0 probe spacing s0: cells in 2D (default " + n(rc.probe_spacing) +
-                        "), pixels in 3D spwi (default " + n(spwi.probe_spacing) +
-                        "), voxels in the 3D grid (default " + n(grid.probe_spacing) + ")")
+                        "), pixels in 3D spwi (default " + n(penumbra::spaceland::kSpwiSpacing) +
+                        ", or its half where that leaves under " +
+                        n(penumbra::spaceland::kSpwiProbesAcross) +
+                        " probes across the image's shorter side), voxels in the 3D grid "
+                        "(default " +
+                        n(grid.probe_spacing) + ")")
         ->check(CLI::Range(1, 64));
     app->add_option("--directions", rc.directions,
                     "Directions Q0 of a cascade-0 probe: 1 to 64 in 2D (default " +

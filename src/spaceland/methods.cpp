@@ -111,6 +111,7 @@ Expected<ImageRgb> spwi_solve(const SolveContext& ctx, const RenderOptions& o, S
   const spwi::Layout layout = spwi::make_layout(ctx.scene, ctx.g, o.spwi);
   used.spwi.interval = layout.levels.t0;
   used.spwi.cascades = layout.count();
+  used.spwi.probe_spacing = layout.levels.spacing0;
   return spwi::render(ctx, o.spwi, layout, report);
 }
 

@@ -29,15 +29,16 @@ double error_of(const ImageRgb& test, const ImageRgb& ref) {
   return m.ok() ? m->relative_rmse : 1e9;
 }
 
-// Measured 2026-11-27 (relative RMSE against the 256-spp reference): SPWI, the grid.
+// Measured 2026-11-27 (relative RMSE against the 256-spp reference): SPWI (s0 2 at this size;
+// 0.356, 0.591 and 0.274 at s0 4), the grid.
 struct Slice {
   const char* name;
   double spwi, grid;
 };
 constexpr Slice kSlice[] = {
-    {"night_0", 0.356, 0.261},
-    {"behind_0", 0.591, 0.429},
-    {"window_0", 0.274, 0.263},
+    {"night_0", 0.106, 0.261},
+    {"behind_0", 0.378, 0.429},
+    {"window_0", 0.271, 0.263},
 };
 
 TEST(Family, ASliceStaysNearThePathTracer) {

@@ -13,6 +13,7 @@
 #include "penumbra/spaceland/render.hpp"
 #include "penumbra/spaceland/scene.hpp"
 #include "spaceland/scene_builders.hpp"
+#include "spaceland/spwi/spwi.hpp"
 
 namespace penumbra::spaceland {
 namespace {
@@ -97,6 +98,25 @@ TEST(Spwi, BouncesFromTheGridsRadianceCacheGiveTheEnclosure) {
     for (const StageTime& st : r.stages) cached = cached || st.name == "radiance cache";
     EXPECT_TRUE(cached);
   }
+}
+
+// The derived probe spacing: 4 pixels, 2 on images under 240 pixels on their shorter side (fewer
+// than 60 probes across at 4); one given is kept. A render reports the one it used.
+TEST(Spwi, TheProbeSpacingFollowsTheImageSize) {
+  const SpwiOptions derived;
+  EXPECT_EQ(spwi::probe_spacing_for(derived, 96, 72), 2);
+  EXPECT_EQ(spwi::probe_spacing_for(derived, 320, 239), 2);
+  EXPECT_EQ(spwi::probe_spacing_for(derived, 320, 240), 4);
+  EXPECT_EQ(spwi::probe_spacing_for(derived, 1920, 1080), 4);
+  SpwiOptions given;
+  given.probe_spacing = 8;
+  EXPECT_EQ(spwi::probe_spacing_for(given, 96, 72), 8);
+  Scene s = enclosure();
+  s.camera.width = 48;
+  s.camera.height = 36;
+  RenderOptions o;
+  o.method = Method::spwi;
+  EXPECT_EQ(render_ok(s, o).options.spwi.probe_spacing, 2);
 }
 
 TEST(Spwi, EmittingEnclosureGivesLeTimesOnePlusAInEveryMergeMode) {

@@ -68,14 +68,21 @@ struct PtOptions {
   std::uint64_t seed = 0;  // changes every random number; same seed, same image
 };
 
+// SPWI's derived cascade-0 probe spacing: this many pixels, or half as many where that leaves
+// fewer than kSpwiProbesAcross probes across the image's shorter side (under 240 pixels).
+inline constexpr int kSpwiSpacing = 4;
+inline constexpr int kSpwiProbesAcross = 60;
+
 // Screen-space probes with world-space intervals (docs/METHODS.md, "SPWI").
 struct SpwiOptions {
   // With B the branching below:
-  int probe_spacing = 4;  // s0: pixels between cascade-0 probes; cascade i uses s0 sqrt(B)^i
-  int directions = 64;    // Q0: directions of a cascade-0 probe (a square: 4, 16, 64, ...);
-                          // cascade i has Q0 B^i
-  float interval = 0;     // t0: cascade 0 traces [0, t0], cascade i [t0 B^(i-1), t0 B^i], in
-                          // world units (0: four probe spacings at the median depth)
+  // s0: pixels between cascade-0 probes; cascade i uses s0 sqrt(B)^i. 0: derived from the image
+  // (kSpwiSpacing: 4, or 2 where the image's shorter side is under 240 pixels).
+  int probe_spacing = 0;
+  int directions = 64;  // Q0: directions of a cascade-0 probe (a square: 4, 16, 64, ...);
+                        // cascade i has Q0 B^i
+  float interval = 0;   // t0: cascade 0 traces [0, t0], cascade i [t0 B^(i-1), t0 B^i], in
+                        // world units (0: four probe spacings at the median depth)
   // Directions per cascade multiply by this (4: the thesis, map side x2, probe spacing x2,
   // intervals x4; 16: side x4, spacing x4, intervals x16, half the cascades).
   int branching = 4;

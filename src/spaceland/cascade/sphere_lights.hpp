@@ -168,6 +168,50 @@ float upper_clear(const Uppers& up, int side, const SphereLight& l, Reach&& reac
   return weight > 0 ? float(clear / weight) : 1.0f;
 }
 
+// Where a lower ray (map cell (u, v)) that merges with the upper probes `c` stopped, its
+// continuation included: of each upper probe its split x split child rays' nearest stop
+// (upper_reach(q, k): where upper probe q's ray of cell k of its side x side map stopped; 0 and
+// negative, no light: not merged), and over the probes the weighted median (the farthest stop
+// at least half the weight reaches); infinity where no child holds light. A cascade claims
+// lights past where its own rays end and sees them through the upper probes' reach, which must
+// say how far the whole continuation went, not the upper interval alone: else a wall past the
+// upper interval lets the light through.
+template <class UpperReach>
+float merged_reach(const Corners& c, int u, int v, int split, UpperReach&& upper_reach) {
+  std::array<float, 8> stop{}, weight{};
+  int n = 0;
+  float total = 0;
+  for (int j = 0; j < c.n; ++j) {
+    const float w = c.w[std::size_t(j)];
+    if (!(w > 0)) continue;
+    float nearest = kInfinity;
+    bool any = false;
+    for (int dv = 0; dv < split; ++dv)
+      for (int du = 0; du < split; ++du) {
+        const float r = upper_reach(c.index[std::size_t(j)], split * v + dv, split * u + du);
+        if (r > 0) nearest = std::min(nearest, r), any = true;
+      }
+    if (!any) continue;
+    // Insertion by stop, nearest first.
+    int at = n++;
+    for (; at > 0 && stop[std::size_t(at - 1)] > nearest; --at) {
+      stop[std::size_t(at)] = stop[std::size_t(at - 1)];
+      weight[std::size_t(at)] = weight[std::size_t(at - 1)];
+    }
+    stop[std::size_t(at)] = nearest;
+    weight[std::size_t(at)] = w;
+    total += w;
+  }
+  if (n == 0) return kInfinity;
+  // The farthest stop that at least half the weight reaches.
+  float beyond = total;
+  for (int i = 0; i < n; ++i) {
+    if (beyond < 0.5f * total) return stop[std::size_t(i - 1)];  // i > 0: beyond starts whole
+    beyond -= weight[std::size_t(i)];
+  }
+  return stop[std::size_t(n - 1)];
+}
+
 // The scene's sphere lights (every sphere whose material emits) for a hierarchy of cascades.
 class SphereLights {
  public:

@@ -297,49 +297,6 @@ struct GridCascade {
     return true;
   }
 
-  // Where a ray that merges with the upper probes stopped, its continuation included: the upper
-  // probes' 2x2 child rays, each probe's nearest stop, and over the probes the weighted median
-  // (where at least half the weight got to). A light claimed past the upper probes' own rays
-  // (from kClaimFrom times this cascade's start, past the upper rays' end at twice it) is seen
-  // through these, so the reach must say how far the whole continuation went, not the upper
-  // interval alone: else a wall past the upper interval lets the light through.
-  float merged_reach(const cascade::Corners& around, int du, int dv) const {
-    const std::size_t up_side = std::size_t(up->side), up_cells = up_side * up_side;
-    std::array<float, 8> stop{}, weight{};
-    int n = 0;
-    float total = 0;
-    for (int j = 0; j < around.n; ++j) {
-      const float w = around.w[std::size_t(j)];
-      if (!(w > 0)) continue;
-      float nearest = kInfinity;
-      bool any = false;
-      for (int cv = 0; cv < 2; ++cv)
-        for (int cu = 0; cu < 2; ++cu) {
-          const std::size_t ud = std::size_t(2 * dv + cv) * up_side + std::size_t(2 * du + cu);
-          const float r = (*upper_reach)[std::size_t(around.index[std::size_t(j)]) * up_cells + ud];
-          if (r > 0) nearest = std::min(nearest, r), any = true;  // 0 and -1: no light, not merged
-        }
-      if (!any) continue;
-      // Insertion by stop, nearest first.
-      int at = n++;
-      for (; at > 0 && stop[std::size_t(at - 1)] > nearest; --at) {
-        stop[std::size_t(at)] = stop[std::size_t(at - 1)];
-        weight[std::size_t(at)] = weight[std::size_t(at - 1)];
-      }
-      stop[std::size_t(at)] = nearest;
-      weight[std::size_t(at)] = w;
-      total += w;
-    }
-    if (n == 0) return kInfinity;
-    // The farthest stop that at least half the weight reaches.
-    float beyond = total;
-    for (int i = 0; i < n; ++i) {
-      if (beyond < 0.5f * total) return stop[std::size_t(i - 1)];  // i > 0: beyond starts whole
-      beyond -= weight[std::size_t(i)];
-    }
-    return stop[std::size_t(n - 1)];
-  }
-
   // Direction (du, dv) of probe q: its interval, merged with the upper probes around it; `reach`
   // is where its ray stopped, its merged continuation included (infinity: at no surface, or not
   // known, with the fix).
@@ -354,7 +311,14 @@ struct GridCascade {
     if (s.blocked || !up) return then(s, tracer.sky(dirs[d]));
     Rgb merged;
     if (cascade::merge_children(upper, around, du, dv, 2, merged)) {
-      if (lights && !lights->empty()) reach = merged_reach(around, du, dv);
+      if (lights && !lights->empty()) {
+        // Where its continuation stopped (cascade::merged_reach).
+        const std::size_t up_side = std::size_t(up->side);
+        reach = cascade::merged_reach(around, du, dv, 2, [&](std::uint64_t q, int y, int x) {
+          return (*upper_reach)[std::size_t(q) * up_side * up_side + std::size_t(y) * up_side +
+                                std::size_t(x)];
+        });
+      }
       return s.radiance + s.transmittance * merged;
     }
     // No upper probe has light this way: the ray continues itself to the sky (and says where

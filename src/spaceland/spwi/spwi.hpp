@@ -45,6 +45,11 @@ std::uint64_t bytes_upper_bound(int width, int height, const SpwiOptions& o);
 // The layout for a G-buffer: t0 and the cascade count derived where the options leave them 0.
 Layout make_layout(const Scene& scene, const GBuffer& g, const SpwiOptions& o);
 
+// The cascade-0 probe spacing for a width x height image: o.probe_spacing, or derived (0):
+// kSpwiSpacing, or its half where that leaves under kSpwiProbesAcross probes across the image's
+// shorter side.
+int probe_spacing_for(const SpwiOptions& o, int width, int height);
+
 // The options' ranges and combinations (directions a square of a power of two, ...), before any
 // scene is read; fields are named as in SpwiOptions (`spwi.directions`).
 Status check_options(const SpwiOptions& options);

@@ -13,7 +13,7 @@ ASAN_FLAGS = -DCMAKE_BUILD_TYPE=Release -DPENUMBRA_WERROR=$(WERROR) -DPENUMBRA_S
 FUZZ_SECONDS ?= 60
 
 .PHONY: all deps configure build demo test bench quality quality-family install format clean \
-        build-sanitize test-sanitize fuzz test-shared scene-images
+        build-sanitize test-sanitize fuzz test-shared scene-images reference-error
 
 all: build
 
@@ -78,6 +78,11 @@ quality-family: build
 # path-traced ones); prints each command's time.
 scene-images: build
 	@bash scripts/scene-images.sh $(BUILD)
+
+# The own error of each path-traced 3D picture of scenes/README.md (its command at two seeds;
+# the README quotes them; about 15 minutes on 2 cores).
+reference-error: build
+	@bash scripts/reference-error.sh $(BUILD)
 
 # The library as shared libraries (-DBUILD_SHARED_LIBS=ON): built, installed into a scratch
 # prefix and linked by examples/ through find_package(penumbra), which must then need no

@@ -5,12 +5,8 @@
 # (its message is shown); the pictures after it are left as they were.
 #   scripts/scene-images.sh [BUILD] [PATTERN]   (PATTERN: only commands containing it)
 set -euo pipefail
-build=$(realpath "${1:-build}")
-pattern=${2:-}
-cd "$(dirname "$0")/.."
-[ -x "$build/bin/penumbra" ] || { echo "scene-images: no $build/bin/penumbra (make build)" >&2; exit 1; }
-mapfile -t commands < <(grep -E '^    build/bin/penumbra render scenes/' scenes/README.md | sed -e 's/^ *//')
-[ ${#commands[@]} -gt 0 ] || { echo "scene-images: no commands in scenes/README.md" >&2; exit 1; }
+source "$(dirname "$0")/readme-commands.sh"
+readme_commands scene-images '^    build/bin/penumbra render scenes/' "$@"
 for c in "${commands[@]}"; do
   [[ -z "$pattern" || "$c" == *"$pattern"* ]] || continue
   read -r -a args <<< "${c#build/bin/penumbra }"

@@ -41,11 +41,15 @@ inline Rgb then(const Segment& s, Rgb beyond) {
 }
 
 // A ray that no upper ray continues (no probe above has light its way) goes on by itself from
-// `from` to infinity, then sees the sky. A tracer has trace(origin, dir, t0, t1) -> Segment and
-// sky(dir) -> Rgb (the methods' own: Embree rays, the voxel march).
+// `from` to infinity, then sees the sky; `reach`, where given, becomes where it stopped if a
+// surface stopped it (the spread sphere lights are seen through it). A tracer has
+// trace(origin, dir, t0, t1) -> Segment and sky(dir) -> Rgb (the methods' own: Embree rays, the
+// voxel march).
 template <class Tracer>
-Rgb continue_to_sky(Tracer& tracer, Vec3 origin, Vec3 dir, float from) {
-  return then(tracer.trace(origin, dir, from, kInfinity), tracer.sky(dir));
+Rgb continue_to_sky(Tracer& tracer, Vec3 origin, Vec3 dir, float from, float* reach = nullptr) {
+  const Segment rest = tracer.trace(origin, dir, from, kInfinity);
+  if (reach && rest.blocked) *reach = rest.t_end;
+  return then(rest, tracer.sky(dir));
 }
 
 // The probes of the cascade above that a point reads and their weights (4 on the screen, 8 in a

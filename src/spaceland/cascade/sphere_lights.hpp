@@ -170,26 +170,29 @@ float upper_clear(const Uppers& up, int side, const SphereLight& l, Reach&& reac
 
 // Where a lower ray (map cell (u, v)) that merges with the upper probes `c` stopped, its
 // continuation included: of each upper probe its split x split child rays' nearest stop
-// (upper_reach(q, k): where upper probe q's ray of cell k of its side x side map stopped; 0 and
-// negative, no light: not merged), and over the probes the weighted median (the farthest stop
-// at least half the weight reaches); infinity where no child holds light. A cascade claims
-// lights past where its own rays end and sees them through the upper probes' reach, which must
-// say how far the whole continuation went, not the upper interval alone: else a wall past the
-// upper interval lets the light through.
-template <class UpperReach>
-float merged_reach(const Corners& c, int u, int v, int split, UpperReach&& upper_reach) {
+// (upper_reach, probe-major over the upper up_side x up_side maps: where each ray stopped; one
+// that stopped before the upper interval's start `up_start`, or traced none, holds no light and
+// is not merged), and over the probes the weighted median (the farthest stop at least half the
+// weight reaches); infinity where no child holds light. A cascade claims lights past where its
+// own rays end and sees them through the upper probes' reach, which must say how far the whole
+// continuation went, not the upper interval alone: else a wall past the upper interval lets the
+// light through.
+inline float merged_reach(const Corners& c, int u, int v, int split, const float* upper_reach,
+                          int up_side, float up_start) {
+  const std::size_t side = std::size_t(up_side);
   std::array<float, 8> stop{}, weight{};
   int n = 0;
   float total = 0;
   for (int j = 0; j < c.n; ++j) {
     const float w = c.w[std::size_t(j)];
     if (!(w > 0)) continue;
+    const float* probe = upper_reach + std::size_t(c.index[std::size_t(j)]) * side * side;
     float nearest = kInfinity;
     bool any = false;
     for (int dv = 0; dv < split; ++dv)
       for (int du = 0; du < split; ++du) {
-        const float r = upper_reach(c.index[std::size_t(j)], split * v + dv, split * u + du);
-        if (r > 0) nearest = std::min(nearest, r), any = true;
+        const float r = probe[std::size_t(split * v + dv) * side + std::size_t(split * u + du)];
+        if (r >= up_start && r > 0) nearest = std::min(nearest, r), any = true;
       }
     if (!any) continue;
     // Insertion by stop, nearest first.

@@ -146,6 +146,18 @@ cascade::SphereLights Clipmap::lights(const Scene& scene, std::size_t l) const {
       scene, [&](const Sphere& s) { return spread_at(scene, plan_, l, s, within_); });
 }
 
+std::vector<cascade::SphereLights> Clipmap::lights(const Scene& scene) const {
+  std::vector<cascade::SphereLights> out;
+  for (std::size_t l = 0; l < size(); ++l) out.push_back(lights(scene, l));
+  return out;
+}
+
+std::vector<std::vector<Rgb>> Clipmap::emission() const {
+  std::vector<std::vector<Rgb>> out;
+  for (const std::unique_ptr<Voxels>& v : levels_) out.push_back(v->emission);
+  return out;
+}
+
 float Clipmap::weight(std::size_t l, Vec3 p, float margin, float band) const {
   if (l + 1 == levels_.size()) return 1;
   const Voxels& v = *levels_[l];

@@ -72,13 +72,16 @@ class Clipmap {
   std::size_t size() const { return levels_.size(); }
   Voxels& operator[](std::size_t l) { return *levels_[l]; }
   const Voxels& operator[](std::size_t l) const { return *levels_[l]; }
-  const ClipLevel& level(std::size_t l) const { return plan_[l]; }
   std::uint64_t voxels() const { return std::uint64_t(clipmap_voxels(plan_)); }
 
   // The sphere lights level l's cascades spread: those under `within` voxels in radius of the level
   // whose voxels its rays meet them in (l, or the finest level holding the light where that is
   // coarser: a ray of l reaches a light outside l's box through that level's voxels).
   cascade::SphereLights lights(const Scene& scene, std::size_t l) const;
+  // Every level's, finest first.
+  std::vector<cascade::SphereLights> lights(const Scene& scene) const;
+  // Every level's own emission (before bounces add to it), finest first.
+  std::vector<std::vector<Rgb>> emission() const;
 
   // How much level l serves point p: 1 inside, down to 0 over `band` voxels towards its cut
   // faces, `margin` voxels before them (the last level serves everywhere).

@@ -312,20 +312,13 @@ struct GridCascade {
     Rgb merged;
     if (cascade::merge_children(upper, around, du, dv, 2, merged)) {
       if (lights && !lights->empty()) {
-        // Where its continuation stopped (cascade::merged_reach).
-        const std::size_t up_side = std::size_t(up->side);
-        reach = cascade::merged_reach(around, du, dv, 2, [&](std::uint64_t q, int y, int x) {
-          return (*upper_reach)[std::size_t(q) * up_side * up_side + std::size_t(y) * up_side +
-                                std::size_t(x)];
-        });
+        reach =
+            cascade::merged_reach(around, du, dv, 2, upper_reach->data(), up->side, up->t_start);
       }
       return s.radiance + s.transmittance * merged;
     }
-    // No upper probe has light this way: the ray continues itself to the sky (and says where
-    // it stopped).
-    const Segment rest = tracer.trace(p, dirs[d], c.t_end, kInfinity);
-    if (rest.blocked) reach = rest.t_end;
-    return then(s, then(rest, tracer.sky(dirs[d])));
+    // No upper probe has light this way: the ray continues itself to the sky.
+    return then(s, cascade::continue_to_sky(tracer, p, dirs[d], c.t_end, &reach));
   }
 
   // Returns the rays it traced (none for a probe inside a surface).

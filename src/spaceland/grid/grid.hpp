@@ -122,6 +122,18 @@ Expected<RadianceField> solve(const Voxels& v, const Background& bg, const GridO
                               std::uint64_t max_bytes,
                               const cascade::SphereLights* lights = nullptr);
 
+// Every level's cascades (level_options), level l spreading lights[l] (Clipmap::lights); the
+// fields solved first hold part of `max_bytes`, the next level's cascades have the rest.
+Expected<LevelFields> solve_levels(const Clipmap& map, const Background& bg, const GridOptions& o,
+                                   std::uint64_t max_bytes,
+                                   const std::vector<cascade::SphereLights>& lights);
+
+// add_bounce on every level, each from its own field (`base`, `normals`: per level). A level's
+// rays read the coarser levels' voxels: all are lit before any is solved again.
+std::uint64_t add_bounces(Clipmap& map, const LevelFields& fields,
+                          const std::vector<std::vector<Rgb>>& base, const SunLight* sun,
+                          std::vector<std::vector<Vec3>>* normals = nullptr);
+
 // One more bounce: every surface voxel's emission becomes `base` (its own) plus its albedo times
 // the mean radiance the field brings to it, about the normal its free 6-neighbours give, plus
 // the sun's light reflected (when `sun` is on); a voxel with free neighbours on both sides of

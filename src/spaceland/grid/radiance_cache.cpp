@@ -52,27 +52,16 @@ Expected<RadianceCache> RadianceCache::build(const Scene& scene, const RayScene&
   impl->voxels = std::move(*map);
   grid::Clipmap& levels = impl->voxels;
   impl->levels.resize(levels.size());
-  std::vector<std::vector<Rgb>> base;
-  std::vector<cascade::SphereLights> lights;
-  for (std::size_t l = 0; l < levels.size(); ++l) {
-    base.push_back(levels[l].emission);
-    lights.push_back(levels.lights(scene, l));
-  }
+  const std::vector<std::vector<Rgb>> base = levels.emission();
+  const std::vector<cascade::SphereLights> lights = levels.lights(scene);
   const SunLight sun(scene, rays);
+  std::vector<std::vector<Vec3>> normals(levels.size());
   for (int b = 0; b < bounces; ++b) {
-    // Every level solved before any is lit (a level's rays read the coarser ones' voxels).
-    std::vector<grid::RadianceField> fields;
-    std::uint64_t held = 0;
-    for (std::size_t l = 0; l < levels.size(); ++l) {
-      Expected<grid::RadianceField> field = grid::solve(levels[l], bg, grid::level_options(o, l),
-                                                        left - std::min(left, held), &lights[l]);
-      if (!field) return field.error();
-      held += field->bytes();
-      fields.push_back(std::move(*field));
-    }
-    for (std::size_t l = 0; l < levels.size(); ++l)
-      grid::add_bounce(levels[l], fields[l], base[l], &sun, &impl->levels[l].normals);
+    Expected<grid::LevelFields> fields = grid::solve_levels(levels, bg, o, left, lights);
+    if (!fields) return fields.error();
+    grid::add_bounces(levels, *fields, base, &sun, &normals);
   }
+  for (std::size_t l = 0; l < levels.size(); ++l) impl->levels[l].normals = std::move(normals[l]);
   for (std::size_t l = 0; l < levels.size(); ++l) {
     grid::Voxels& v = levels[l];
     CacheLevel& c = impl->levels[l];

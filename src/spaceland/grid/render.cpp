@@ -77,16 +77,12 @@ std::uint64_t add_fog(const SolveContext& ctx, const LevelFields& field, const S
 
 }  // namespace
 
-namespace {
-
-// Every level's cascades, each level's sphere lights spread over its cells; `held` is what the
-// fields already solved hold (the next level's cascades have the rest of `left`).
 Expected<LevelFields> solve_levels(const Clipmap& map, const Background& bg, const GridOptions& o,
                                    std::uint64_t left,
                                    const std::vector<cascade::SphereLights>& lights) {
   LevelFields out;
   out.map = &map;
-  std::uint64_t held = 0;
+  std::uint64_t held = 0;  // what the fields already solved hold
   for (std::size_t l = 0; l < map.size(); ++l) {
     Expected<RadianceField> f =
         solve(map[l], bg, level_options(o, l), left - std::min(left, held), &lights[l]);
@@ -97,7 +93,14 @@ Expected<LevelFields> solve_levels(const Clipmap& map, const Background& bg, con
   return out;
 }
 
-}  // namespace
+std::uint64_t add_bounces(Clipmap& map, const LevelFields& fields,
+                          const std::vector<std::vector<Rgb>>& base, const SunLight* sun,
+                          std::vector<std::vector<Vec3>>* normals) {
+  std::uint64_t rays = 0;
+  for (std::size_t l = 0; l < map.size(); ++l)
+    rays += add_bounce(map[l], fields.fields[l], base[l], sun, normals ? &(*normals)[l] : nullptr);
+  return rays;
+}
 
 Expected<ImageRgb> render(const SolveContext& ctx, const GridOptions& o, SolveReport& report,
                           GridOptions& used) {
@@ -116,8 +119,7 @@ Expected<ImageRgb> render(const SolveContext& ctx, const GridOptions& o, SolveRe
   const SunLight sun(ctx.scene, ctx.rays);
   const std::uint64_t voxel_memory = voxel_bytes(map->voxels(), bounces);
   const std::uint64_t left = ctx.max_memory - std::min(ctx.max_memory, voxel_memory);
-  std::vector<cascade::SphereLights> lights;
-  for (std::size_t l = 0; l < map->size(); ++l) lights.push_back(map->lights(ctx.scene, l));
+  const std::vector<cascade::SphereLights> lights = map->lights(ctx.scene);
   Expected<LevelFields> field = solve_levels(*map, bg, o, left, lights);
   if (!field) return field.error();
   report.rays += field->rays();
@@ -125,14 +127,10 @@ Expected<ImageRgb> render(const SolveContext& ctx, const GridOptions& o, SolveRe
   // Later bounces: the surfaces' and the fog's own emission plus what the last field (and the
   // sun) brings them, solved again (the voxels' light after b bounces gives the pixels b + 1).
   if (bounces) {
-    std::vector<std::vector<Rgb>> base;
-    for (std::size_t l = 0; l < map->size(); ++l) base.push_back((*map)[l].emission);
+    const std::vector<std::vector<Rgb>> base = map->emission();
     for (int b = 1; b < ctx.bounces; ++b) {
       watch.restart();
-      // Each level's from its own field (a level's rays read the coarser levels' voxels: all
-      // are lit before any is solved again).
-      for (std::size_t l = 0; l < map->size(); ++l)
-        report.rays += add_bounce((*map)[l], field->fields[l], base[l], &sun);
+      report.rays += add_bounces(*map, *field, base, &sun);
       *field = LevelFields{};  // their radiance freed before the next solve's
       field = solve_levels(*map, bg, o, left, lights);
       if (!field) return field.error();

@@ -315,21 +315,14 @@ struct ScreenCascade {
     if (!row.merge) return t.sky(r.direction);
     Rgb merged;
     if (cascade::merge_children(upper, row.c, u, v, split, merged)) {
-      if (!lights.empty()) {
-        const std::size_t up_side = std::size_t(layout.map_side(i + 1));
-        reach = cascade::merged_reach(row.c, u, v, split, [&](std::uint64_t q, int y, int x) {
-          const float r_up = upper_reach[std::size_t(q) * up_side * up_side +
-                                         std::size_t(y) * up_side + std::size_t(x)];
-          return r_up >= b ? r_up : -1.0f;  // stopped before its interval: no light, not merged
-        });
-      }
+      if (!lights.empty())
+        reach = cascade::merged_reach(row.c, u, v, split, upper_reach.data(),
+                                      layout.map_side(i + 1), b);
       return merged;
     }
     // No upper probe has light for this direction (its rays met surfaces before their intervals,
     // or the upper map has only directions into their surfaces): the ray goes on by itself.
-    const cascade::Segment rest = t.trace(r.origin, r.direction, b, cascade::kInfinity);
-    if (rest.blocked) reach = rest.t_end;
-    return cascade::then(rest, t.sky(r.direction));
+    return cascade::continue_to_sky(t, r.origin, r.direction, b, &reach);
   }
 
   // The bilinear fix: a segment from this probe to the start of each upper probe's interval in

@@ -31,12 +31,13 @@ struct Probe {
   float reach = cascade::kInfinity;
   float past = 1;  // the fraction of the way past `end` its upper probes find clear
 };
-double received(const SphereLights& lights, const Probe& q, int side = 16) {
+double received(const SphereLights& lights, const Probe& q, int side = 16, int* claims = nullptr) {
   std::vector<Rgb> map(std::size_t(side) * side, Rgb{});
-  lights.add(
+  const int claimed = lights.add(
       q.p, Vec3{}, q.a, q.end, q.up, side, map.data(),
       [&](std::size_t, float d) { return q.reach >= d ? 1.0f : 0.0f; },
       [&](const cascade::SphereLight&) { return q.past; });
+  if (claims) *claims = claimed;
   double sum = 0;
   for (const Rgb& c : map) sum += c.g;
   return sum * 4 * kPi / (double(side) * side);
@@ -67,6 +68,40 @@ TEST(SphereLights, EachLightGivesItsSolidAngleWhereverItFallsOnTheMap) {
       EXPECT_NEAR(received(SphereLights(s, 1.0f), Probe{}, side), want, 1e-5 * want)
           << "side " << side << ", direction " << d.x << " " << d.y << " " << d.z;
     }
+}
+
+// A patch of many small lights seen from afar: the probe claims clusters of them, a few whatever
+// their number, and receives what they give one by one, the sum of Le times each one's solid angle
+// (a cluster's lights within a fraction of a cell of each other). A probe among them claims the
+// lights near it one by one.
+TEST(SphereLights, APatchOfManyLightsIsClaimedAsAFewClustersThatGiveWhatItsLightsGive) {
+  const Vec3 p{0.3f, 0.2f, 3};
+  for (int n : {10, 40, 160}) {  // n x n lights over the square [-0.5, 0.5]^2 at z = 0
+    Scene s;
+    const std::uint32_t lamp = add_material(s, {0, 0, 0}, {1, 2, 3});
+    const float r = 0.2f / float(n);
+    double want = 0;
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j) {
+        const Vec3 c{(float(i) + 0.5f) / float(n) - 0.5f, (float(j) + 0.5f) / float(n) - 0.5f, 0};
+        add_sphere(s, c, r, lamp);
+        want += 2 * cascade::solid_angle(r, length(c - p));
+      }
+    int claims = 0;
+    EXPECT_NEAR(received(SphereLights(s, 1.0f), Probe{p}, 16, &claims), want, 0.01 * want)
+        << n << " x " << n << " lights";
+    EXPECT_LT(claims, 16) << n << " x " << n << " lights";  // 4 to 8 measured
+    // Amid them, 0.1 over the patch: the nearest lights one by one, the far ones in clusters.
+    int near_claims = 0;
+    const Vec3 amid{0.05f, 0.05f, 0.1f};
+    double amid_want = 0;
+    for (const Sphere& l : s.spheres)
+      amid_want += 2 * cascade::solid_angle(l.radius, length(l.center - amid));
+    EXPECT_NEAR(received(SphereLights(s, 1.0f), Probe{amid}, 16, &near_claims), amid_want,
+                0.02 * amid_want)
+        << n << " x " << n << " lights, amid";
+    if (n == 160) EXPECT_LT(near_claims, n * n / 20);  // 593 of 25,600 measured
+  }
 }
 
 // A probe claims what its upper probes do not, from where they stand: the light is carried once

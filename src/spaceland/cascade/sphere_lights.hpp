@@ -125,6 +125,15 @@ inline bool spread_by_grid(const Scene& scene, const Sphere& s, float voxel,
 // grid): 35% and 25% at 1, 21% and 24% at 2, 15% and 22% at 4, 15% and 21% at 8.
 inline constexpr float kClaimFrom = 4;
 
+// A probe claims a cluster of lights as one when the cluster, seen from the probe, is under this
+// fraction of a cell of its map wide (and under kClusterDepth of its distance deep): the map cannot
+// tell its lights apart, and its cells get the same light either way but for the tent's shape
+// within a cell. Lights nearer than that are claimed one by one. So a probe claims about as many
+// lights and clusters as its map has cells near them, not every light in its reach: the cost stays
+// that of the cascades with hundreds of lights (Lightcuts' cut, with the cell as its error bound).
+inline constexpr double kClusterCells = 0.5;
+inline constexpr double kClusterDepth = 0.25;
+
 // The upper probes a probe merges with: where they are, their weights, where their interval
 // starts.
 struct Uppers {
@@ -246,9 +255,7 @@ class SphereLights {
   bool small(double r, double d) const {
     if (!(d > r)) return false;
     if (voxel_ > 0) return r < double(within_ * voxel_);
-    int j = 0;
-    while (j + 1 < levels_.count && d >= double(levels_.nominal_end(j))) ++j;
-    const double side = levels_.side(j);
+    const double side = levels_.side(holding(d));
     return solid_angle(r, d) * side * side < kSmallCells * 4 * std::numbers::pi;
   }
 
@@ -278,19 +285,22 @@ class SphereLights {
   // once, however far its upper probes are from it (a light a few upper spacings away is at quite
   // another distance from them, and shares by the probe's own distance would lose or double it).
   //
-  // The cost is a distance test per light and a few cells per light it claims: small beside the
-  // probe's side^2 rays unless thousands of lights are near.
+  // The cost is a walk down the lights' tree to its cut for this probe and a few cells per light
+  // or cluster of the cut: about the lights within a few cells of each other counting as one, so
+  // bounded by the map's cells near them however many lights there are.
   //
   // A light past `end`, where the probe's rays stop, is seen by the fraction seen(k, end) of a
   // cell's rays that reach the end, times past(light): the fraction of the way beyond that the
   // upper probes' rays towards the light find clear (the caller's; 1 where there are none).
+  //
+  // Returns how many lights and clusters it claimed: its work beside the rays.
   template <class Seen, class Past>
-  void add(Vec3 origin, Vec3 n, float a, float end, const Uppers* up, int side, Rgb* out,
-           Seen&& seen, Past&& past_clear) const {
+  int add(Vec3 origin, Vec3 n, float a, float end, const Uppers* up, int side, Rgb* out,
+          Seen&& seen, Past&& past_clear) const {
+    if (nodes_.empty()) return 0;
     const double cell = 4 * std::numbers::pi / (double(side) * side);  // a cell's solid angle
     // The distances between which the probe may claim anything (`beyond` is 0 under its edge
-    // over sqrt 2 and 1 past it times sqrt 2), so that a light out of them costs a distance test
-    // (the cost stays that of the cascades with hundreds of lights).
+    // over sqrt 2 and 1 past it times sqrt 2), so that a light out of them costs a distance test.
     const float near = kClaimFrom * a / std::numbers::sqrt2_v<float>;
     float far = kInfinity;
     double up_weight = 0;  // of the upper probes that take part
@@ -303,12 +313,9 @@ class SphereLights {
         }
       if (up_weight > 0) far = kClaimFrom * up->a * std::numbers::sqrt2_v<float> + spread;
     }
-    for (const SphereLight& l : lights_) {
-      const Vec3 to = l.centre - origin;
-      const float d2 = dot(to, to);
-      if (d2 < near * near || d2 > far * far) continue;
-      const float d = std::sqrt(d2);
-      if (!small(l.radius, d) || dot(to, n) < 0) continue;
+    // Claims light (or cluster) l, d away, whose lights' centres lie `spread` (RMS) about its
+    // centre.
+    const auto claim = [&](const SphereLight& l, float d, double spread) {
       double in = detail::beyond(d, kClaimFrom * a);
       if (up_weight > 0) {
         double upper = 0;
@@ -320,13 +327,15 @@ class SphereLights {
         }
         in -= upper / up_weight;
       }
-      if (!(in > 1e-6)) continue;
+      if (!(in > 1e-6)) return;
       const bool past = d > end;
       const float beyond_end = past ? past_clear(l) : 1.0f;
-      if (!(beyond_end > 0)) continue;
-      // The light's solid angle, and the half-width (in cells) of a square of the same area.
+      if (!(beyond_end > 0)) return;
+      // The light's solid angle, and the half-width (in cells) of a square of the same area,
+      // widened by a cluster's spread.
       const double omega = solid_angle(l.radius, d);
-      const double h = 0.5 * std::sqrt(omega / cell);
+      const double h = std::sqrt(0.25 * omega / cell + spread * spread / (double(d) * d * cell));
+      const Vec3 to = l.centre - origin;
       const std::array<float, 2> uv = octahedral::encode(to / d);
       const double x = (double(uv[0]) + 1) * 0.5 * side - 0.5;
       const double y = (double(uv[1]) + 1) * 0.5 * side - 0.5;
@@ -342,19 +351,165 @@ class SphereLights {
           if (w <= 0 || !holds_light(out[k])) continue;
           out[k] += share * float(w * double(seen(k, past ? end : d)) * double(beyond_end));
         }
+    };
+    // The tree's cut for this probe: a cluster narrower than kClusterCells of a cell (and
+    // kClusterDepth of its distance deep), wholly within the claiming distances, with every
+    // light's centre above the probe's horizon and of lights all small here is claimed as one; one
+    // out of reach or wholly below the horizon is skipped; any other is opened.
+    const bool horizon = dot(n, n) > 0;
+    const double wide = std::min(kClusterCells * std::sqrt(cell), kClusterDepth);
+    std::array<int, 64> stack;
+    int top = 0, claimed = 0;
+    stack[std::size_t(top++)] = 0;
+    while (top > 0) {
+      const Node& node = nodes_[std::size_t(stack[std::size_t(--top)])];
+      const Vec3 to = node.light.centre - origin;
+      const float d2 = dot(to, to);
+      if (node.child < 0) {  // one light
+        if (d2 < near * near || d2 > far * far) continue;
+        const float d = std::sqrt(d2);
+        if (!small(node.light.radius, d) || dot(to, n) < 0) continue;
+        claim(node.light, d, 0);
+        ++claimed;
+        continue;
+      }
+      const float d = std::sqrt(d2), b = node.bound;
+      if (d + b < near || d - b > far) continue;
+      // The heights of its lights' centres over the probe's plane lie within above +- tilt.
+      const float above = dot(node.middle - origin, n);
+      const float tilt = dot(node.half, Vec3{std::abs(n.x), std::abs(n.y), std::abs(n.z)});
+      if (horizon && above + tilt < 0) continue;
+      if (d - b >= near && d + b <= far && double(b) <= wide * d && (!horizon || above >= tilt) &&
+          all_small(node.max_radius, d - b, d + b)) {
+        claim(node.light, d, node.spread);
+        ++claimed;
+        continue;
+      }
+      stack[std::size_t(top++)] = node.child;
+      stack[std::size_t(top++)] = node.child + 1;
     }
+    return claimed;
   }
 
  private:
+  // A node of the lights' tree: one light (child < 0, `light` that light) or a cluster, children
+  // `child` and `child + 1`, `light` its equivalent: the centre its lights' power weighs to, a
+  // radius whose square is the sum of theirs and the emission that keeps their sum of Le r^2.
+  struct Node {
+    SphereLight light;
+    float bound = 0;       // from `light.centre`, the farthest point of its lights
+    float spread = 0;      // the RMS distance of its lights' centres from `light.centre`
+    float max_radius = 0;  // of its largest light
+    int child = -1;
+    Vec3 middle, half;  // the box of its lights' centres: its middle and half its size
+  };
+
   template <class Keep>
   void collect(const Scene& scene, Keep&& keep) {
     for (const Sphere& s : scene.spheres)
       if (keep(s)) lights_.push_back({s.center, s.radius, scene.materials[s.material].emission});
+    build_tree();
+  }
+
+  // Which cascade's interval holds distance d.
+  int holding(double d) const {
+    int j = 0;
+    while (j + 1 < levels_.count && d >= double(levels_.nominal_end(j))) ++j;
+    return j;
+  }
+
+  // Whether every light of radius at most r whose centre lies between near and far is small (for
+  // the grid a matter of radius; for SPWI, within one cascade's interval a light farther off is
+  // smaller: so at near and where each interval starts past it).
+  bool all_small(double r, double near, double far) const {
+    if (!(near > r)) return false;
+    if (voxel_ > 0) return r < double(within_ * voxel_);
+    if (!small(r, near)) return false;
+    for (int j = holding(near), last = holding(far); j < last; ++j)
+      if (!small(r, double(levels_.nominal_end(j)))) return false;
+    return true;
+  }
+
+  // A binary tree over the lights, split at the median of the longest side of their centres'
+  // box: a few milliseconds for thousands of lights.
+  void build_tree() {
+    nodes_.clear();
+    if (lights_.empty()) return;
+    std::vector<std::size_t> order(lights_.size());
+    for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+    nodes_.reserve(2 * lights_.size());
+    nodes_.emplace_back();
+    build_node(0, order, 0, order.size());
+  }
+
+  void build_node(std::size_t at, std::vector<std::size_t>& order, std::size_t lo, std::size_t hi) {
+    if (hi - lo == 1) {
+      const SphereLight& l = lights_[order[lo]];
+      nodes_[at] = Node{l, l.radius, 0, l.radius, -1, l.centre, Vec3{}};
+      return;
+    }
+    // The equivalent light: power (mean Le times r^2) weighs the centre.
+    double weight = 0, area = 0, centre[3] = {0, 0, 0}, le[3] = {0, 0, 0};
+    double lo_box[3] = {kInfinity, kInfinity, kInfinity},
+           hi_box[3] = {-kInfinity, -kInfinity, -kInfinity};
+    float max_radius = 0;
+    for (std::size_t i = lo; i < hi; ++i) {
+      const SphereLight& l = lights_[order[i]];
+      const double r2 = double(l.radius) * l.radius;
+      const double w = std::max(r2 * (double(l.emission.r) + l.emission.g + l.emission.b), 1e-30);
+      weight += w;
+      area += r2;
+      for (int k = 0; k < 3; ++k) {
+        centre[k] += w * double(l.centre[k]);
+        lo_box[k] = std::min(lo_box[k], double(l.centre[k]));
+        hi_box[k] = std::max(hi_box[k], double(l.centre[k]));
+      }
+      le[0] += r2 * double(l.emission.r);
+      le[1] += r2 * double(l.emission.g);
+      le[2] += r2 * double(l.emission.b);
+      max_radius = std::max(max_radius, l.radius);
+    }
+    const Vec3 c{float(centre[0] / weight), float(centre[1] / weight), float(centre[2] / weight)};
+    double bound = 0, spread = 0;
+    for (std::size_t i = lo; i < hi; ++i) {
+      const SphereLight& l = lights_[order[i]];
+      const Vec3 off = l.centre - c;
+      const double r2 = double(l.radius) * l.radius;
+      const double w = std::max(r2 * (double(l.emission.r) + l.emission.g + l.emission.b), 1e-30);
+      bound = std::max(bound, double(length(off)) + l.radius);
+      spread += w * double(dot(off, off));
+    }
+    Node node;
+    node.light = {c, float(std::sqrt(area)),
+                  Rgb{float(le[0] / area), float(le[1] / area), float(le[2] / area)}};
+    node.bound = float(bound);
+    node.spread = float(std::sqrt(spread / weight));
+    node.max_radius = max_radius;
+    for (int k = 0; k < 3; ++k) {
+      node.middle[k] = float(0.5 * (lo_box[k] + hi_box[k]));
+      node.half[k] = float(0.5 * (hi_box[k] - lo_box[k]));
+    }
+    // Split at the median along the box's longest side.
+    int axis = 0;
+    for (int k = 1; k < 3; ++k)
+      if (hi_box[k] - lo_box[k] > hi_box[axis] - lo_box[axis]) axis = k;
+    const std::size_t mid = lo + (hi - lo) / 2;
+    std::nth_element(order.begin() + std::ptrdiff_t(lo), order.begin() + std::ptrdiff_t(mid),
+                     order.begin() + std::ptrdiff_t(hi), [&](std::size_t x, std::size_t y) {
+                       return lights_[x].centre[axis] < lights_[y].centre[axis];
+                     });
+    node.child = int(nodes_.size());
+    nodes_[at] = node;
+    nodes_.emplace_back();
+    nodes_.emplace_back();
+    build_node(std::size_t(node.child), order, lo, mid);
+    build_node(std::size_t(node.child) + 1, order, mid, hi);
   }
 
   Levels levels_;
   float voxel_ = 0, within_ = kSpreadVoxels;
   std::vector<SphereLight> lights_;
+  std::vector<Node> nodes_;  // the root first
 };
 
 }  // namespace penumbra::spaceland::cascade

@@ -100,7 +100,9 @@ TEST(SphereLights, APatchOfManyLightsIsClaimedAsAFewClustersThatGiveWhatItsLight
     EXPECT_NEAR(received(SphereLights(s, 1.0f), Probe{amid}, 16, &near_claims), amid_want,
                 0.02 * amid_want)
         << n << " x " << n << " lights, amid";
-    if (n == 160) EXPECT_LT(near_claims, n * n / 20);  // 593 of 25,600 measured
+    if (n == 160) {
+      EXPECT_LT(near_claims, n * n / 20);  // 593 of 25,600 measured
+    }
   }
 }
 

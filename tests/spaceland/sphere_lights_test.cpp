@@ -112,7 +112,7 @@ TEST(SphereLights, AProbeAndTheUpperProbesItMergesWithCarryEachLightOnce) {
   const Scene s = one_light({0.2f, 0.1f, 2.1f}, 0.02f, 10);
   const SphereLights lights(s, 1.0f);
   const double all = received(lights, Probe{});
-  const float a_up = 2.1f / cascade::kClaimFrom;  // the light at the edge of the upper's claim
+  const float a_up = 2.1f / lights.claim_from();  // the light at the edge of the upper's claim
   for (float offset : {0.0f, 0.3f, 0.8f}) {
     cascade::Uppers up;
     up.n = 2;

@@ -229,6 +229,8 @@ struct GridCascade {
   // infinity: no surface met, or not known with the fix).
   const std::vector<float>* upper_reach;
   std::vector<float>* lower_reach;
+  // Cascade 0: its share of the sphere lights is met at the points that read it.
+  bool claims_at_points;
   // The fix traces from each interval's start to the upper probes': no ray needs to know whether
   // a surface lies before its interval.
   bool fix = o.fix && up;
@@ -342,8 +344,9 @@ struct GridCascade {
         out[k] = fix ? fixed_ray(p, around, upper_probe, du, dv) : ray(q, p, around, du, dv, r);
         if (spread) reach[k] = !fix ? r : holds_light(out[k]) ? kInfinity : 0.0f;
       }
-    // Its share of the sphere lights left out of the voxels, in the cells whose ray got past them.
-    if (!spread) return nd;
+    // Its share of the sphere lights left out of the voxels, in the cells whose ray got past them
+    // (cascade 0 leaves its share to the points that read it: RadianceField::lights_at).
+    if (!spread || claims_at_points) return nd;
     const cascade::Uppers ups = cascade::uppers_of(around, up ? up->t_start : 0,
                                                    [&](std::size_t j) { return upper_probe[j]; });
     const std::size_t up_cells = up ? std::size_t(up->side) * std::size_t(up->side) : 0;
@@ -390,13 +393,20 @@ Expected<RadianceField> solve(const Voxels& v, const Background& bg, const GridO
     if (spread) lower_reach.assign(std::size_t(c.probes()) * std::size_t(c.side) * c.side, -1.0f);
     const int doublings = extension_doublings(c, o, v.size, top);
     const Extended ext = doublings > 0 ? extend_cascade(v, c, dirs, doublings) : Extended{};
-    const GridCascade solver{v,           o,
-                             c,           top ? nullptr : &plan[std::size_t(i) + 1],
-                             dirs,        up_dirs,
-                             upper,       ext,
-                             doublings,   VoxelTracer{v, bg},
-                             lights,      &upper_reach,
-                             &lower_reach};
+    const GridCascade solver{v,
+                             o,
+                             c,
+                             top ? nullptr : &plan[std::size_t(i) + 1],
+                             dirs,
+                             up_dirs,
+                             upper,
+                             ext,
+                             doublings,
+                             VoxelTracer{v, bg},
+                             lights,
+                             &upper_reach,
+                             &lower_reach,
+                             i == 0};
     parallel_for(c.nz, [&](int z) {
       std::uint64_t local = 0;
       for (std::uint64_t q = std::uint64_t(z) * c.ny * c.nx, end = q + std::uint64_t(c.ny) * c.nx;
@@ -412,6 +422,10 @@ Expected<RadianceField> solve(const Voxels& v, const Background& bg, const GridO
   RadianceField f =
       RadianceField::make(v, plan, std::move(up_dirs), std::move(cascade0), std::move(ms));
   f.rays_ = traced.load();
+  if (spread) {
+    f.lights_ = *lights;
+    f.reach_ = std::move(upper_reach);  // cascade 0's, swapped up last
+  }
   return f;
 }
 

@@ -11,6 +11,7 @@
 // re-emit its scattering coefficient times that mean radiance.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <numbers>
 #include <string>
@@ -55,6 +56,7 @@ class RadianceField {
   // (irradiance / pi), from the cascade-0 probes around p that lie in front of its surface and
   // see it; false when none does. Whether a probe sees p: with `rays`, an exact shadow ray from
   // p; without, a march through the voxels from the free voxel nearest p in front of it.
+  // Cascade 0's share of the spread sphere lights is met here, at p (lights_at).
   bool mean_radiance(Vec3 p, Vec3 n, Rgb& out, const RayScene* rays = nullptr) const;
   // The mean radiance over the whole sphere at a point in free space or fog (what an isotropic
   // medium scatters, per unit scattering coefficient), from the cascade-0 probes around p that
@@ -67,8 +69,21 @@ class RadianceField {
   // The interval rays its cascades traced (a probe direction each; a march may take several
   // pieces: the stretch before the interval, extension, the fix's segments).
   std::uint64_t rays() const { return rays_; }
-  // What it holds: cascade 0's radiance, its probes' means and marks.
+  // What it holds: cascade 0's radiance, its probes' means and marks, where its rays stopped
+  // (with sphere lights).
   std::uint64_t bytes() const;
+
+  // Cascade 0's share of a spread sphere light (or cluster of them), met at the point that reads
+  // the field: its emission times its share, solid angle (and cosine) there, and the cells of
+  // cascade 0's maps around its direction from there, whose rays' reach says whether a probe
+  // sees it (weights summing to one).
+  struct PointLight {
+    Vec3 centre;
+    Rgb value;
+    int cells = 0;
+    std::array<std::uint16_t, 16> cell{};
+    std::array<float, 16> weight{};
+  };
 
  private:
   friend Expected<RadianceField> solve(const Voxels&, const Background&, const GridOptions&,
@@ -80,6 +95,12 @@ class RadianceField {
   template <class Serve>
   bool tent(Vec3 p, int max_radius, Serve&& serve, Rgb& out) const;
   Vec3 free_point_near(Vec3 p, Vec3 n) const;
+  // The lights cascade 0 claims for point p (in `out`, cleared first): with a normal n, each
+  // one's cosine-weighted share (irradiance / pi); with n zero, its mean over the sphere.
+  void lights_at(Vec3 p, Vec3 n, std::vector<PointLight>& out) const;
+  // What probe q, at `probe`, lets through of them: each one's value times the part of its
+  // cells whose rays got to it.
+  Rgb seen_by(std::uint64_t q, Vec3 probe, const std::vector<PointLight>& lights) const;
 
   const Voxels* voxels_ = nullptr;
   std::vector<CascadePlan> plan_;
@@ -89,6 +110,10 @@ class RadianceField {
   std::vector<std::uint8_t> valid_;  // cascade-0 probes outside opaque voxels
   std::vector<double> cascade_ms_;
   std::uint64_t rays_ = 0;
+  // The sphere lights cascade 0 leaves to the points that read it, and where each of its rays
+  // stopped, its merged continuation included (probe-major; empty without lights).
+  cascade::SphereLights lights_;
+  std::vector<float> reach_;
 };
 
 // The fields of a clipmap's levels (clipmap.hpp), finest first: a point reads the finest level

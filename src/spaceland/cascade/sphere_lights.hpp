@@ -20,6 +20,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <numbers>
 #include <vector>
@@ -231,6 +232,25 @@ inline float merged_reach(const Corners& c, int u, int v, int split, const float
   return stop[std::size_t(n - 1)];
 }
 
+// A light's share left by a cascade 0 to the point that reads its maps (SphereLights::at_point):
+// its irradiance there over pi (or, in free space, its mean radiance over the sphere) times that
+// share, and the cells of cascade 0's maps around its direction from the point, whose rays' reach
+// says whether a probe there sees it (weights summing to one).
+struct PointLight {
+  Vec3 centre;
+  Rgb value;
+  float half = 0;  // its footprint's half-width in cells
+  int cells = 0;
+  std::array<std::uint16_t, 16> cell{};
+  std::array<float, 16> weight{};
+};
+
+// At a point a cluster is one light when under half a cascade-0 cell wide, however deep (its
+// solid angle and cosine taken at its centre): on the 200-light patch at 320 x 180, the grid 11.2%
+// from the path tracer against 11.4% with the probes' quarter-distance bound, at half the
+// gather's time.
+inline constexpr double kPointClusterDepth = 1;
+
 // The scene's sphere lights (every sphere whose material emits) for a hierarchy of cascades.
 class SphereLights {
  public:
@@ -412,6 +432,68 @@ class SphereLights {
     return claimed;
   }
 
+  // The lights a cascade 0 leaves to the point p that reads its side x side maps (directions
+  // `dirs`): all of each light but what the cascade above claims, from `edge` on (0: there is
+  // none), by p's own distance (by the upper probes' around p, as a probe does, costs 8
+  // logarithms a light for no measured gain). Into `out`, cleared first: with a normal n, each
+  // one's irradiance over pi, a sphere's exact Le (r/d)^2 cos (its solid angle times the cosine
+  // is 2 / (1 + cos of its half-angle) more: 2.3% a radius-0.3 light 1 away); with n zero (free
+  // space), its mean radiance over the sphere. Its cells: those a probe's claim would spread it
+  // over, from p (the probes around p see it in about the same direction), less the cells that
+  // point into p's surface where others remain: their rays meet that surface, which hides no
+  // light above it (cascade 0's cells are 50 degrees wide in the grid; counted, they darkened a
+  // floor under a low light by 20%).
+  // The cells of a side x side map (directions `dirs`) around unit direction `to`, pl.half wide,
+  // less those pointing under the plane of normal n where others remain, into pl.
+  static void footprint(Vec3 to, Vec3 n, int side, const std::vector<Vec3>& dirs, PointLight& pl) {
+    const std::array<float, 2> uv = octahedral::encode(to);
+    const double x = (double(uv[0]) + 1) * 0.5 * side - 0.5;
+    const double y = (double(uv[1]) + 1) * 0.5 * side - 0.5;
+    std::array<double, 64> wu, wv;
+    int u0 = 0, v0 = 0;
+    const int nu = detail::axis_weights(x, pl.half, side, u0, wu);
+    const int nv = detail::axis_weights(y, pl.half, side, v0, wv);
+    const bool horizon = dot(n, n) > 0;
+    double kept = 0;
+    pl.cells = 0;
+    for (int pass = 0; pass < 2 && pl.cells == 0; ++pass)
+      for (int j = 0; j < nv; ++j)
+        for (int i = 0; i < nu && pl.cells < 16; ++i) {
+          const std::size_t k = std::size_t(v0 + j) * std::size_t(side) + std::size_t(u0 + i);
+          const double w = wu[std::size_t(i)] * wv[std::size_t(j)];
+          if (!(w > 0) || (pass == 0 && horizon && dot(dirs[k], n) <= 0)) continue;
+          pl.cell[std::size_t(pl.cells)] = std::uint16_t(k);
+          pl.weight[std::size_t(pl.cells++)] = float(w);
+          kept += w;
+        }
+    for (int k = 0; k < pl.cells; ++k) pl.weight[std::size_t(k)] /= float(kept);
+  }
+
+  void at_point(Vec3 p, Vec3 n, float edge, int side, const std::vector<Vec3>& dirs,
+                std::vector<PointLight>& out) const {
+    out.clear();
+    const double cell = 4 * std::numbers::pi / (double(side) * side);
+    const float far = edge > 0 ? edge * std::numbers::sqrt2_v<float> : kInfinity;
+    const bool cosine = dot(n, n) > 0;
+    walk(
+        p, n, 0, far, cell,
+        [&](const SphereLight& l, float d, double spread) {
+          const double in = edge > 0 ? 1 - detail::beyond(d, edge) : 1;
+          const double c = cosine ? double(dot(n, l.centre - p)) / d : 0.25;  // sphere: 1/4 pi
+          if (!(in > 1e-6) || !(c > 0)) return;
+          const double omega = solid_angle(l.radius, d);
+          PointLight pl;
+          pl.centre = l.centre;
+          const double r2 = double(l.radius) * l.radius / (double(d) * d);
+          pl.value = l.emission * float(in * (cosine ? r2 * c : omega * c / std::numbers::pi));
+          pl.half = float(std::min(
+              1.5, std::sqrt(0.25 * omega / cell + spread * spread / (double(d) * d * cell))));
+          footprint((l.centre - p) / d, n, side, dirs, pl);
+          if (pl.cells > 0) out.push_back(pl);
+        },
+        kPointClusterDepth);
+  }
+
  private:
   // A node of the lights' tree: one light (child < 0, `light` that light) or a cluster, children
   // `child` and `child + 1`, `light` its equivalent: the centre its lights' power weighs to, a
@@ -532,5 +614,35 @@ class SphereLights {
   std::vector<SphereLight> lights_;
   std::vector<Node> nodes_;  // the root first
 };
+
+// What a probe at `probe` lets through of the lights at_point left to a point near it: each one's
+// value times the part of its cells whose rays (`reach`: where each of the probe's rays stopped,
+// its continuation included) got to it.
+//
+// The cells are the point's, found from the point: from each probe they ask about a ray parallel
+// to the point's own towards the light, a better stand-in for the point's visibility than the
+// probe's own direction to it (found again from each probe where it is more than a quarter of the
+// light's distance from the point, the grid on the 200-light patch went from 8.7% to 22.9% and
+// night_1 from 60% to 75%).
+inline Rgb seen_from(const float* reach, Vec3 probe, const std::vector<PointLight>& lights) {
+  Rgb sum{};
+  for (const PointLight& pl : lights) {
+    const Vec3 to = pl.centre - probe;
+    const float d2 = dot(to, to);
+    float seen = 0;
+    for (int k = 0; k < pl.cells; ++k) {
+      const float r = reach[pl.cell[std::size_t(k)]];
+      if (r >= 0 && r * r >= d2) seen += pl.weight[std::size_t(k)];
+    }
+    sum += pl.value * seen;
+  }
+  return sum;
+}
+
+// Scratch for the lights met at a point, one per thread: no allocation per point once grown.
+inline std::vector<PointLight>& point_lights() {
+  thread_local std::vector<PointLight> lights;
+  return lights;
+}
 
 }  // namespace penumbra::spaceland::cascade

@@ -60,15 +60,9 @@ bool RadianceField::tent(Vec3 p, int max_radius, Serve&& serve, Rgb& out) const 
   return false;
 }
 
-// Scratch for the lights met at a point, one per thread: no allocation per point once grown.
-std::vector<RadianceField::PointLight>& point_lights() {
-  thread_local std::vector<RadianceField::PointLight> lights;
-  return lights;
-}
-
 bool RadianceField::sphere_radiance(Vec3 p, Rgb& out) const {
   const Voxels& v = *voxels_;
-  std::vector<PointLight>& lights = point_lights();
+  std::vector<cascade::PointLight>& lights = cascade::point_lights();
   lights_at(p, Vec3{}, lights);
   const int vdims[3] = {v.nx, v.ny, v.nz};
   int own[3];
@@ -88,7 +82,8 @@ bool RadianceField::sphere_radiance(Vec3 p, Rgb& out) const {
       }
     }
     value = sphere_[std::size_t(q)];
-    if (!lights.empty()) value += seen_by(q, probe, lights);
+    if (!lights.empty())
+      value += cascade::seen_from(reach_.data() + std::size_t(q) * dirs_.size(), probe, lights);
     return true;
   };
   return tent(p, 2, serve, out);
@@ -120,7 +115,7 @@ Vec3 RadianceField::free_point_near(Vec3 p, Vec3 n) const {
 
 bool RadianceField::mean_radiance(Vec3 p, Vec3 n, Rgb& out, const RayScene* rays) const {
   const Voxels& v = *voxels_;
-  std::vector<PointLight>& lights = point_lights();
+  std::vector<cascade::PointLight>& lights = cascade::point_lights();
   lights_at(p, n, lights);
   const Vec3 free_point = rays ? p + n * (2 * v.size) : free_point_near(p, n);
   auto serve = [&](std::uint64_t q, Vec3 probe, Rgb& value) {
@@ -137,7 +132,8 @@ bool RadianceField::mean_radiance(Vec3 p, Vec3 n, Rgb& out, const RayScene* rays
       if (dist > 0 && march(v, free_point, to * (1 / dist), 0, dist).blocked) return false;
     }
     if (!cascade::cosine_mean(dirs_, n, radiance_, q, value)) return false;
-    if (!lights.empty()) value += seen_by(q, probe, lights);
+    if (!lights.empty())
+      value += cascade::seen_from(reach_.data() + std::size_t(q) * dirs_.size(), probe, lights);
     return true;
   };
   // Where none of the 8 probes around p serves (they sit in the surface's own voxels, or behind
@@ -150,88 +146,18 @@ std::uint64_t RadianceField::bytes() const {
          valid_.size() + reach_.size() * sizeof(float);
 }
 
-// At a point a cluster is one light when under half a cascade-0 cell wide, however deep (its
-// solid angle and cosine taken at its centre): on the 200-light patch at 320 x 180, 11.2% from
-// the path tracer against 11.4% with the probes' quarter-distance bound, at half the gather's time.
-constexpr double kPointClusterDepth = 1;
-
 // Cascade 0 claims no light in its maps: a point that reads them claims cascade 0's share itself,
-// with the light's solid angle and cosine where the point is, and whether the probes around it
-// see the light from their rays' reach. Interpolated between probes up to a spacing nearer the
-// light, 1/d^2 and the 50-degree cells' cosines made a small light's pool too bright under it and
-// too dim around (a radius-0.3 light over a wide floor, 96 x 72, whole image against the path
-// tracer: 12.7% to 0.85% in view, 18.5% to 0.25% behind the camera; PERFORMANCE.md's 200 lights
-// at 320 x 180: 45% to 11%).
-void RadianceField::lights_at(Vec3 p, Vec3 n, std::vector<PointLight>& out) const {
+// with the light's irradiance where the point is, and whether the probes around it see the light
+// from their rays' reach. Interpolated between probes up to a spacing nearer the light, 1/d^2 and
+// the 50-degree cells' cosines made a small light's pool too bright under it and too dim around
+// (a radius-0.3 light over a wide floor, 96 x 72, whole image against the path tracer: 12.7% to
+// 0.01% in view, 18.5% to 0.00% behind the camera; PERFORMANCE.md's 200 lights at 320 x 180: 45%
+// to 8.7%).
+void RadianceField::lights_at(Vec3 p, Vec3 n, std::vector<cascade::PointLight>& out) const {
   out.clear();
   if (lights_.empty()) return;
-  const CascadePlan& c0 = plan_[0];
-  const int side = c0.side;
-  const double cell = 4 * std::numbers::pi / (double(side) * side);
-  // Cascade 1 claims from kGridClaimFrom times its interval start (SphereLights::add): the point
-  // claims the rest, by its own distance (by cascade 1's probes' around it, as a cascade-0 probe
-  // does, costs 8 logarithms a light for no measured gain).
   const float edge = plan_.size() > 1 ? lights_.claim_from() * plan_[1].t_start : 0;
-  const float far = edge > 0 ? edge * std::numbers::sqrt2_v<float> : kInfinity;
-  const bool cosine = dot(n, n) > 0;
-  lights_.walk(
-      p, n, 0, far, cell,
-      [&](const cascade::SphereLight& l, float d, double spread) {
-        const double in = edge > 0 ? 1 - cascade::detail::beyond(d, edge) : 1;
-        const double c = cosine ? double(dot(n, l.centre - p)) / d : 0.25;  // the sphere: 1/4 pi
-        if (!(in > 1e-6) || !(c > 0)) return;
-        const double omega = cascade::solid_angle(l.radius, d);
-        PointLight pl;
-        pl.centre = l.centre;
-        // A sphere's irradiance is pi Le (r/d)^2 cos exactly (above the horizon), its solid angle
-        // times the cosine 2 / (1 + cos of its half-angle) more (2.3% a radius-0.3 light 1 away).
-        const double r2 = double(l.radius) * l.radius / (double(d) * d);
-        pl.value = l.emission * float(in * (cosine ? r2 * c : omega * c / std::numbers::pi));
-        // The cells a probe's claim would spread it over (SphereLights::add), from p: the probes
-        // around p see it in about the same direction. A cell pointing into p's surface is left out
-        // where others remain: its ray meets that surface, which hides no light above it (cascade
-        // 0's cells are 50 degrees wide; counted, they darkened a floor under a low light by 20%).
-        const double h = std::sqrt(0.25 * omega / cell + spread * spread / (double(d) * d * cell));
-        const std::array<float, 2> uv = octahedral::encode((l.centre - p) / d);
-        const double x = (double(uv[0]) + 1) * 0.5 * side - 0.5;
-        const double y = (double(uv[1]) + 1) * 0.5 * side - 0.5;
-        std::array<double, 64> wu, wv;
-        int u0 = 0, v0 = 0;
-        const int nu = cascade::detail::axis_weights(x, std::min(h, 1.5), side, u0, wu);
-        const int nv = cascade::detail::axis_weights(y, std::min(h, 1.5), side, v0, wv);
-        double kept = 0;
-        for (int pass = 0; pass < 2 && pl.cells == 0; ++pass)
-          for (int j = 0; j < nv; ++j)
-            for (int i = 0; i < nu && pl.cells < 16; ++i) {
-              const std::size_t k = std::size_t(v0 + j) * std::size_t(side) + std::size_t(u0 + i);
-              const double w = wu[std::size_t(i)] * wv[std::size_t(j)];
-              if (!(w > 0) || (pass == 0 && cosine && dot(dirs_[k], n) <= 0)) continue;
-              pl.cell[std::size_t(pl.cells)] = std::uint16_t(k);
-              pl.weight[std::size_t(pl.cells++)] = float(w);
-              kept += w;
-            }
-        for (int k = 0; k < pl.cells; ++k) pl.weight[std::size_t(k)] /= float(kept);
-        if (pl.cells > 0) out.push_back(pl);
-      },
-      kPointClusterDepth);
-}
-
-Rgb RadianceField::seen_by(std::uint64_t q, Vec3 probe,
-                           const std::vector<PointLight>& lights) const {
-  const std::size_t nd = dirs_.size();
-  const float* reach = reach_.data() + std::size_t(q) * nd;
-  Rgb sum{};
-  for (const PointLight& pl : lights) {
-    const Vec3 to = pl.centre - probe;
-    const float d2 = dot(to, to);
-    float seen = 0;
-    for (int k = 0; k < pl.cells; ++k) {
-      const float r = reach[pl.cell[std::size_t(k)]];
-      if (r * r >= d2 && r >= 0) seen += pl.weight[std::size_t(k)];
-    }
-    sum += pl.value * seen;
-  }
-  return sum;
+  lights_.at_point(p, n, edge, plan_[0].side, dirs_, out);
 }
 
 namespace {

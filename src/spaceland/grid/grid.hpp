@@ -73,18 +73,6 @@ class RadianceField {
   // (with sphere lights).
   std::uint64_t bytes() const;
 
-  // Cascade 0's share of a spread sphere light (or cluster of them), met at the point that reads
-  // the field: its emission times its share, solid angle (and cosine) there, and the cells of
-  // cascade 0's maps around its direction from there, whose rays' reach says whether a probe
-  // sees it (weights summing to one).
-  struct PointLight {
-    Vec3 centre;
-    Rgb value;
-    int cells = 0;
-    std::array<std::uint16_t, 16> cell{};
-    std::array<float, 16> weight{};
-  };
-
  private:
   friend Expected<RadianceField> solve(const Voxels&, const Background&, const GridOptions&,
                                        std::uint64_t, const cascade::SphereLights*);
@@ -95,12 +83,8 @@ class RadianceField {
   template <class Serve>
   bool tent(Vec3 p, int max_radius, Serve&& serve, Rgb& out) const;
   Vec3 free_point_near(Vec3 p, Vec3 n) const;
-  // The lights cascade 0 claims for point p (in `out`, cleared first): with a normal n, each
-  // one's cosine-weighted share (irradiance / pi); with n zero, its mean over the sphere.
-  void lights_at(Vec3 p, Vec3 n, std::vector<PointLight>& out) const;
-  // What probe q, at `probe`, lets through of them: each one's value times the part of its
-  // cells whose rays got to it.
-  Rgb seen_by(std::uint64_t q, Vec3 probe, const std::vector<PointLight>& lights) const;
+  // The lights cascade 0 leaves to point p (SphereLights::at_point; n zero in free space).
+  void lights_at(Vec3 p, Vec3 n, std::vector<cascade::PointLight>& out) const;
 
   const Voxels* voxels_ = nullptr;
   std::vector<CascadePlan> plan_;

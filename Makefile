@@ -13,7 +13,7 @@ ASAN_FLAGS = -DCMAKE_BUILD_TYPE=Release -DPENUMBRA_WERROR=$(WERROR) -DPENUMBRA_S
 FUZZ_SECONDS ?= 60
 
 .PHONY: all deps configure build demo test bench quality quality-family install format clean \
-        build-sanitize test-sanitize fuzz test-shared scene-images reference-error
+        build-sanitize test-sanitize fuzz test-shared scene-images reference-error quality-family-speedup
 
 all: build
 
@@ -68,11 +68,17 @@ quality: build
 	  $(BUILD)/bin/penumbra bench-quality scenes/3d/cornell.json --bounces $$b -o docs/quality/3d/study/cornell-b$$b --doc docs/QUALITY.md --cache $(BUILD)/quality-cache || exit 1; \
 	done
 	@bash scripts/quality-family.sh $(BUILD) docs/quality/family 4 1024
+	@bash scripts/family-speedup.sh $(BUILD) docs/quality/family
 
 # The random scene family alone (docs/QUALITY.md, "The scene family": 12 scenes at 1 and 2
 # bounces; the path-traced references, 1024 spp, cached in $(BUILD)/quality-cache/family).
 quality-family: build
 	@bash scripts/quality-family.sh $(BUILD) docs/quality/family 4 1024
+
+# The family's equal-error speed-ups against the path tracer (bench-quality --quick on each scene
+# at 1 and 2 bounces, docs/quality/family/speedup.md; minutes).
+quality-family-speedup: quality-family
+	@bash scripts/family-speedup.sh $(BUILD) docs/quality/family
 
 # Every picture of scenes/README.md, from the command printed under it (minutes, mostly the 3D
 # path-traced ones); prints each command's time.

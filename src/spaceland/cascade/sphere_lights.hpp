@@ -238,8 +238,12 @@ inline float merged_reach(const Corners& c, int u, int v, int split, const float
 // says whether a probe there sees it (weights summing to one).
 struct PointLight {
   Vec3 centre;
+  float radius = 0;
   Rgb value;
   float half = 0;  // its footprint's half-width in cells
+  // Past `end` (where cascade 0's rays stop) the upper probes' rays towards it may say more: the
+  // part of them that find the way clear (the caller's), for the cells that got to the end.
+  float end = kInfinity, past = 0;
   int cells = 0;
   std::array<std::uint16_t, 16> cell{};
   std::array<float, 16> weight{};
@@ -484,6 +488,7 @@ class SphereLights {
           const double omega = solid_angle(l.radius, d);
           PointLight pl;
           pl.centre = l.centre;
+          pl.radius = l.radius;
           const double r2 = double(l.radius) * l.radius / (double(d) * d);
           pl.value = l.emission * float(in * (cosine ? r2 * c : omega * c / std::numbers::pi));
           pl.half = float(std::min(
@@ -629,12 +634,14 @@ inline Rgb seen_from(const float* reach, Vec3 probe, const std::vector<PointLigh
   for (const PointLight& pl : lights) {
     const Vec3 to = pl.centre - probe;
     const float d2 = dot(to, to);
-    float seen = 0;
+    const bool past = d2 > pl.end * pl.end && pl.past > 0;
+    float seen = 0, to_end = 0;
     for (int k = 0; k < pl.cells; ++k) {
       const float r = reach[pl.cell[std::size_t(k)]];
       if (r >= 0 && r * r >= d2) seen += pl.weight[std::size_t(k)];
+      if (past && r >= pl.end) to_end += pl.weight[std::size_t(k)];
     }
-    sum += pl.value * seen;
+    sum += pl.value * (past ? std::max(seen, to_end * pl.past) : seen);
   }
   return sum;
 }

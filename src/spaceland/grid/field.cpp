@@ -143,7 +143,7 @@ bool RadianceField::mean_radiance(Vec3 p, Vec3 n, Rgb& out, const RayScene* rays
 
 std::uint64_t RadianceField::bytes() const {
   return RadianceStore::bytes(plan_[0].probes(), plan_[0].side) + sphere_.size() * sizeof(Rgb) +
-         valid_.size() + reach_.size() * sizeof(float);
+         valid_.size() + (reach_.size() + reach1_.size()) * sizeof(float);
 }
 
 // Cascade 0 claims no light in its maps: a point that reads them claims cascade 0's share itself,
@@ -152,12 +152,43 @@ std::uint64_t RadianceField::bytes() const {
 // the 50-degree cells' cosines made a small light's pool too bright under it and too dim around
 // (a radius-0.3 light over a wide floor, 96 x 72, whole image against the path tracer: 12.7% to
 // 0.01% in view, 18.5% to 0.00% behind the camera; PERFORMANCE.md's 200 lights at 320 x 180: 45%
-// to 8.7%).
+// to 7.3%).
 void RadianceField::lights_at(Vec3 p, Vec3 n, std::vector<cascade::PointLight>& out) const {
   out.clear();
   if (lights_.empty()) return;
   const float edge = plan_.size() > 1 ? lights_.claim_from() * plan_[1].t_start : 0;
   lights_.at_point(p, n, edge, plan_[0].side, dirs_, out);
+  if (plan_.size() < 2 || out.empty()) return;
+  // Past cascade 0's rays, cascade 1's probes around p that p sees ask their own rays towards
+  // the light, as a probe's claim asks its upper probes (cascade 0's stop is the nearest of its
+  // continuation's children, 50 degrees apart: a light low over a floor was hidden past two floor
+  // heights); a cell sees the light if either says so.
+  const Voxels& v = *voxels_;
+  const CascadePlan& c1 = plan_[1];
+  const bool horizon = dot(n, n) > 0;
+  const Vec3 from = horizon ? free_point_near(p, n) : p;
+  const cascade::Corners around = corners(v, c1, p);
+  cascade::Uppers up = cascade::uppers_of(
+      around, c1.t_start, [&](std::size_t j) { return position_of(v, c1, around.index[j]); });
+  for (std::size_t j = 0; j < 8; ++j) {
+    if (!(up.w[j] > 0)) continue;
+    const Vec3 to = up.p[j] - from;
+    const float dist = length(to);
+    if (!probe_free(v, c1, around.index[j]) || (horizon && dot(up.p[j] - p, n) < 0) ||
+        (dist > 0 && march(v, from, to * (1 / dist), 0, dist).blocked))
+      up.w[j] = 0;
+  }
+  float kept = 0;
+  for (std::size_t j = 0; j < 8; ++j) kept += up.w[j];
+  if (!(kept > 0)) return;  // none to ask: the cells alone say
+  const std::size_t cells = std::size_t(c1.side) * std::size_t(c1.side);
+  for (cascade::PointLight& pl : out) {
+    pl.end = plan_[0].t_end;
+    pl.past = cascade::upper_clear(up, c1.side, {pl.centre, pl.radius, {}},
+                                   [&](std::size_t j, std::size_t k) {
+                                     return reach1_[std::size_t(around.index[j]) * cells + k];
+                                   });
+  }
 }
 
 namespace {

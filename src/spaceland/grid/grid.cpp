@@ -424,7 +424,8 @@ Expected<RadianceField> solve(const Voxels& v, const Background& bg, const GridO
   f.rays_ = traced.load();
   if (spread) {
     f.lights_ = *lights;
-    f.reach_ = std::move(upper_reach);  // cascade 0's, swapped up last
+    f.reach_ = std::move(upper_reach);                        // cascade 0's, swapped up last
+    if (plan.size() > 1) f.reach1_ = std::move(lower_reach);  // and cascade 1's before it
   }
   return f;
 }

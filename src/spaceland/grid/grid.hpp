@@ -98,6 +98,7 @@ class RadianceField {
   // stopped, its merged continuation included (probe-major; empty without lights).
   cascade::SphereLights lights_;
   std::vector<float> reach_;
+  std::vector<float> reach1_;  // cascade 1's, likewise (empty with one cascade)
 };
 
 // The fields of a clipmap's levels (clipmap.hpp), finest first: a point reads the finest level

@@ -64,6 +64,7 @@ bool RadianceField::sphere_radiance(Vec3 p, Rgb& out) const {
   const Voxels& v = *voxels_;
   std::vector<cascade::PointLight>& lights = cascade::point_lights();
   lights_at(p, Vec3{}, lights);
+  UpperView view{p, Vec3{}, p};
   const int vdims[3] = {v.nx, v.ny, v.nz};
   int own[3];
   for (int k = 0; k < 3; ++k) own[k] = std::clamp(v.cell(p, k), 0, vdims[k] - 1);
@@ -83,7 +84,9 @@ bool RadianceField::sphere_radiance(Vec3 p, Rgb& out) const {
     }
     value = sphere_[std::size_t(q)];
     if (!lights.empty())
-      value += cascade::seen_from(reach_.data() + std::size_t(q) * dirs_.size(), probe, lights);
+      value +=
+          cascade::seen_from(reach_.data() + std::size_t(q) * dirs_.size(), probe, lights,
+                             [&](const cascade::PointLight& pl) { return view.clear(*this, pl); });
     return true;
   };
   return tent(p, 2, serve, out);
@@ -115,9 +118,10 @@ Vec3 RadianceField::free_point_near(Vec3 p, Vec3 n) const {
 
 bool RadianceField::mean_radiance(Vec3 p, Vec3 n, Rgb& out, const RayScene* rays) const {
   const Voxels& v = *voxels_;
+  const Vec3 free_point = rays ? p + n * (2 * v.size) : free_point_near(p, n);
   std::vector<cascade::PointLight>& lights = cascade::point_lights();
   lights_at(p, n, lights);
-  const Vec3 free_point = rays ? p + n * (2 * v.size) : free_point_near(p, n);
+  UpperView view{p, n, free_point};
   auto serve = [&](std::uint64_t q, Vec3 probe, Rgb& value) {
     // In front of the surface, and seeing it (from the free point): no light from behind a
     // wall, however thin.
@@ -133,7 +137,9 @@ bool RadianceField::mean_radiance(Vec3 p, Vec3 n, Rgb& out, const RayScene* rays
     }
     if (!cascade::cosine_mean(dirs_, n, radiance_, q, value)) return false;
     if (!lights.empty())
-      value += cascade::seen_from(reach_.data() + std::size_t(q) * dirs_.size(), probe, lights);
+      value +=
+          cascade::seen_from(reach_.data() + std::size_t(q) * dirs_.size(), probe, lights,
+                             [&](const cascade::PointLight& pl) { return view.clear(*this, pl); });
     return true;
   };
   // Where none of the 8 probes around p serves (they sit in the surface's own voxels, or behind
@@ -158,37 +164,40 @@ void RadianceField::lights_at(Vec3 p, Vec3 n, std::vector<cascade::PointLight>& 
   if (lights_.empty()) return;
   const float edge = plan_.size() > 1 ? lights_.claim_from() * plan_[1].t_start : 0;
   lights_.at_point(p, n, edge, plan_[0].side, dirs_, out);
-  if (plan_.size() < 2 || out.empty()) return;
-  // Past cascade 0's rays, cascade 1's probes around p that p sees ask their own rays towards
-  // the light, as a probe's claim asks its upper probes (cascade 0's stop is the nearest of its
-  // continuation's children, 50 degrees apart: a light low over a floor was hidden past two floor
-  // heights); a cell sees the light if either says so.
-  const Voxels& v = *voxels_;
-  const CascadePlan& c1 = plan_[1];
-  const bool horizon = dot(n, n) > 0;
-  const Vec3 from = horizon ? free_point_near(p, n) : p;
-  const cascade::Corners around = corners(v, c1, p);
-  cascade::Uppers up = cascade::uppers_of(
-      around, c1.t_start, [&](std::size_t j) { return position_of(v, c1, around.index[j]); });
-  for (std::size_t j = 0; j < 8; ++j) {
-    if (!(up.w[j] > 0)) continue;
-    const Vec3 to = up.p[j] - from;
-    const float dist = length(to);
-    if (!probe_free(v, c1, around.index[j]) || (horizon && dot(up.p[j] - p, n) < 0) ||
-        (dist > 0 && march(v, from, to * (1 / dist), 0, dist).blocked))
-      up.w[j] = 0;
+  for (cascade::PointLight& pl : out) pl.end = plan_.size() > 1 ? plan_[0].t_end : kInfinity;
+}
+
+// Past cascade 0's rays, cascade 1's probes around p that `from` (a free point in front of p)
+// sees ask their own rays towards the light, as a probe's claim asks its upper probes (cascade
+// 0's stop is the nearest of its continuation's children, 50 degrees apart: a light low over a
+// floor was hidden past two floor heights). Found once per point, where first asked.
+float RadianceField::UpperView::clear(const RadianceField& f, const cascade::PointLight& pl) {
+  const Voxels& v = *f.voxels_;
+  const CascadePlan& c1 = f.plan_[1];
+  if (!ready) {
+    ready = true;
+    const bool horizon = dot(n, n) > 0;
+    around = corners(v, c1, p);
+    up = cascade::uppers_of(around, c1.t_start,
+                            [&](std::size_t j) { return position_of(v, c1, around.index[j]); });
+    float kept = 0;
+    for (std::size_t j = 0; j < 8; ++j) {
+      if (!(up.w[j] > 0)) continue;
+      const Vec3 to = up.p[j] - from;
+      const float dist = length(to);
+      if (!probe_free(v, c1, around.index[j]) || (horizon && dot(up.p[j] - p, n) < 0) ||
+          (dist > 0 && march(v, from, to * (1 / dist), 0, dist).blocked))
+        up.w[j] = 0;
+      kept += up.w[j];
+    }
+    none = !(kept > 0);
   }
-  float kept = 0;
-  for (std::size_t j = 0; j < 8; ++j) kept += up.w[j];
-  if (!(kept > 0)) return;  // none to ask: the cells alone say
+  if (none) return 0;  // none to ask: the cells alone say
   const std::size_t cells = std::size_t(c1.side) * std::size_t(c1.side);
-  for (cascade::PointLight& pl : out) {
-    pl.end = plan_[0].t_end;
-    pl.past = cascade::upper_clear(up, c1.side, {pl.centre, pl.radius, {}},
-                                   [&](std::size_t j, std::size_t k) {
-                                     return reach1_[std::size_t(around.index[j]) * cells + k];
-                                   });
-  }
+  return cascade::upper_clear(up, c1.side, {pl.centre, pl.radius, {}},
+                              [&](std::size_t j, std::size_t k) {
+                                return f.reach1_[std::size_t(around.index[j]) * cells + k];
+                              });
 }
 
 namespace {

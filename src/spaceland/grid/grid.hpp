@@ -85,6 +85,16 @@ class RadianceField {
   Vec3 free_point_near(Vec3 p, Vec3 n) const;
   // The lights cascade 0 leaves to point p (SphereLights::at_point; n zero in free space).
   void lights_at(Vec3 p, Vec3 n, std::vector<cascade::PointLight>& out) const;
+  // Cascade 1's probes around a point (p, normal n, `from` a free point in front of it) that it
+  // sees: the part of them whose rays towards a light find the way clear (field.cpp).
+  struct UpperView {
+    UpperView(Vec3 at, Vec3 normal, Vec3 free) : p(at), n(normal), from(free) {}
+    Vec3 p, n, from;
+    bool ready = false, none = false;
+    cascade::Corners around;
+    cascade::Uppers up;
+    float clear(const RadianceField& f, const cascade::PointLight& pl);
+  };
 
   const Voxels* voxels_ = nullptr;
   std::vector<CascadePlan> plan_;

@@ -74,6 +74,12 @@ inline int axis_weights(double x, double h, int side, int& first, std::array<dou
   return n;
 }
 
+// Where unit direction `to` falls on a side x side map, in cells (cell centres at integers).
+inline std::array<double, 2> map_position(Vec3 to, int side) {
+  const std::array<float, 2> uv = octahedral::encode(to);
+  return {(double(uv[0]) + 1) * 0.5 * side - 0.5, (double(uv[1]) + 1) * 0.5 * side - 0.5};
+}
+
 // The fraction of a light at distance d that lies beyond `edge`: 0 well before it, 1 well past,
 // a smoothstep in log distance over [edge / sqrt 2, edge sqrt 2] between. A light near an
 // interval's start is shared by the two cascades instead of jumping from one to the other (which
@@ -369,14 +375,11 @@ class SphereLights {
       // widened by a cluster's spread.
       const double omega = solid_angle(l.radius, d);
       const double h = std::sqrt(0.25 * omega / cell + spread * spread / (double(d) * d * cell));
-      const Vec3 to = l.centre - origin;
-      const std::array<float, 2> uv = octahedral::encode(to / d);
-      const double x = (double(uv[0]) + 1) * 0.5 * side - 0.5;
-      const double y = (double(uv[1]) + 1) * 0.5 * side - 0.5;
+      const std::array<double, 2> at = detail::map_position((l.centre - origin) / d, side);
       std::array<double, 64> wu, wv;
       int u0 = 0, v0 = 0;
-      const int nu = detail::axis_weights(x, h, side, u0, wu);
-      const int nv = detail::axis_weights(y, h, side, v0, wv);
+      const int nu = detail::axis_weights(at[0], h, side, u0, wu);
+      const int nv = detail::axis_weights(at[1], h, side, v0, wv);
       const Rgb share = l.emission * float(in * omega / cell);
       for (int j = 0; j < nv; ++j)
         for (int i = 0; i < nu; ++i) {
@@ -436,27 +439,14 @@ class SphereLights {
     return claimed;
   }
 
-  // The lights a cascade 0 leaves to the point p that reads its side x side maps (directions
-  // `dirs`): all of each light but what the cascade above claims, from `edge` on (0: there is
-  // none), by p's own distance (by the upper probes' around p, as a probe does, costs 8
-  // logarithms a light for no measured gain). Into `out`, cleared first: with a normal n, each
-  // one's irradiance over pi, a sphere's exact Le (r/d)^2 cos (its solid angle times the cosine
-  // is 2 / (1 + cos of its half-angle) more: 2.3% a radius-0.3 light 1 away); with n zero (free
-  // space), its mean radiance over the sphere. Its cells: those a probe's claim would spread it
-  // over, from p (the probes around p see it in about the same direction), less the cells that
-  // point into p's surface where others remain: their rays meet that surface, which hides no
-  // light above it (cascade 0's cells are 50 degrees wide in the grid; counted, they darkened a
-  // floor under a low light by 20%).
   // The cells of a side x side map (directions `dirs`) around unit direction `to`, pl.half wide,
   // less those pointing under the plane of normal n where others remain, into pl.
   static void footprint(Vec3 to, Vec3 n, int side, const std::vector<Vec3>& dirs, PointLight& pl) {
-    const std::array<float, 2> uv = octahedral::encode(to);
-    const double x = (double(uv[0]) + 1) * 0.5 * side - 0.5;
-    const double y = (double(uv[1]) + 1) * 0.5 * side - 0.5;
+    const std::array<double, 2> at = detail::map_position(to, side);
     std::array<double, 64> wu, wv;
     int u0 = 0, v0 = 0;
-    const int nu = detail::axis_weights(x, pl.half, side, u0, wu);
-    const int nv = detail::axis_weights(y, pl.half, side, v0, wv);
+    const int nu = detail::axis_weights(at[0], pl.half, side, u0, wu);
+    const int nv = detail::axis_weights(at[1], pl.half, side, v0, wv);
     const bool horizon = dot(n, n) > 0;
     double kept = 0;
     pl.cells = 0;
@@ -473,6 +463,17 @@ class SphereLights {
     for (int k = 0; k < pl.cells; ++k) pl.weight[std::size_t(k)] /= float(kept);
   }
 
+  // The lights a cascade 0 leaves to the point p that reads its side x side maps (directions
+  // `dirs`): all of each light but what the cascade above claims, from `edge` on (0: there is
+  // none), by p's own distance (by the upper probes' around p, as a probe does, costs 8
+  // logarithms a light for no measured gain). Into `out`, cleared first: with a normal n, each
+  // one's irradiance over pi, a sphere's exact Le (r/d)^2 cos (its solid angle times the cosine
+  // is 2 / (1 + cos of its half-angle) more: 2.3% a radius-0.3 light 1 away); with n zero (free
+  // space), its mean radiance over the sphere. Its cells: those a probe's claim would spread it
+  // over, from p (the probes around p see it in about the same direction), less the cells that
+  // point into p's surface where others remain: their rays meet that surface, which hides no
+  // light above it (cascade 0's cells are 50 degrees wide in the grid; counted, they darkened a
+  // floor under a low light by 20%).
   void at_point(Vec3 p, Vec3 n, float edge, int side, const std::vector<Vec3>& dirs,
                 std::vector<PointLight>& out) const {
     out.clear();
@@ -486,7 +487,7 @@ class SphereLights {
           const double c = cosine ? double(dot(n, l.centre - p)) / d : 0.25;  // sphere: 1/4 pi
           if (!(in > 1e-6) || !(c > 0)) return;
           const double omega = solid_angle(l.radius, d);
-          PointLight pl;
+          PointLight& pl = out.emplace_back();
           pl.centre = l.centre;
           pl.radius = l.radius;
           const double r2 = double(l.radius) * l.radius / (double(d) * d);
@@ -494,7 +495,7 @@ class SphereLights {
           pl.half = float(std::min(
               1.5, std::sqrt(0.25 * omega / cell + spread * spread / (double(d) * d * cell))));
           footprint((l.centre - p) / d, n, side, dirs, pl);
-          if (pl.cells > 0) out.push_back(pl);
+          if (pl.cells == 0) out.pop_back();
         },
         kPointClusterDepth);
   }
@@ -550,21 +551,26 @@ class SphereLights {
     build_node(0, order, 0, order.size());
   }
 
+  // What weighs a light in its cluster's centre: its mean Le times r^2 (never quite 0).
+  static double power(const SphereLight& l) {
+    const double r2 = double(l.radius) * l.radius;
+    return std::max(r2 * (double(l.emission.r) + l.emission.g + l.emission.b), 1e-30);
+  }
+
   void build_node(std::size_t at, std::vector<std::size_t>& order, std::size_t lo, std::size_t hi) {
     if (hi - lo == 1) {
       const SphereLight& l = lights_[order[lo]];
       nodes_[at] = Node{l, l.radius, 0, l.radius, -1, l.centre, Vec3{}};
       return;
     }
-    // The equivalent light: power (mean Le times r^2) weighs the centre.
+    // The equivalent light: power weighs the centre.
     double weight = 0, area = 0, centre[3] = {0, 0, 0}, le[3] = {0, 0, 0};
     double lo_box[3] = {kInfinity, kInfinity, kInfinity},
            hi_box[3] = {-kInfinity, -kInfinity, -kInfinity};
     float max_radius = 0;
     for (std::size_t i = lo; i < hi; ++i) {
       const SphereLight& l = lights_[order[i]];
-      const double r2 = double(l.radius) * l.radius;
-      const double w = std::max(r2 * (double(l.emission.r) + l.emission.g + l.emission.b), 1e-30);
+      const double r2 = double(l.radius) * l.radius, w = power(l);
       weight += w;
       area += r2;
       for (int k = 0; k < 3; ++k) {
@@ -582,10 +588,8 @@ class SphereLights {
     for (std::size_t i = lo; i < hi; ++i) {
       const SphereLight& l = lights_[order[i]];
       const Vec3 off = l.centre - c;
-      const double r2 = double(l.radius) * l.radius;
-      const double w = std::max(r2 * (double(l.emission.r) + l.emission.g + l.emission.b), 1e-30);
       bound = std::max(bound, double(length(off)) + l.radius);
-      spread += w * double(dot(off, off));
+      spread += power(l) * double(dot(off, off));
     }
     Node node;
     node.light = {c, float(std::sqrt(area)),
@@ -652,9 +656,6 @@ Rgb seen_from(const float* reach, Vec3 probe, std::vector<PointLight>& lights, P
     sum += pl.value * seen;
   }
   return sum;
-}
-inline Rgb seen_from(const float* reach, Vec3 probe, std::vector<PointLight>& lights) {
-  return seen_from(reach, probe, lights, [](const PointLight&) { return 0.0f; });
 }
 
 // Scratch for the lights met at a point, one per thread: no allocation per point once grown.

@@ -2,11 +2,9 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
-#include <numbers>
 #include <vector>
 
 #include "core/math.hpp"
-#include "core/octahedral.hpp"
 #include "core/parallel.hpp"
 #include "spaceland/cascade/radiance.hpp"
 #include "spaceland/cascade/sphere_lights.hpp"

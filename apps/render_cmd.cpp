@@ -417,6 +417,12 @@ std::unique_ptr<RenderCommand> add_render_command(CLI::App& app) {
                      "136 voxels wide, the last holding the scene (0: as many as that takes; 1: "
                      "one grid over the whole scene)")
         ->capture_default_str();
+    render
+        ->add_option("--cache-probe-spacing", a.cache_probe_spacing,
+                     "3D spwi's radiance cache (later bounces): voxels between its cascade-0 "
+                     "probes")
+        ->check(CLI::Range(1, 64))
+        ->capture_default_str();
     add_enum_option(render, "--gather", a.spwi.gather,
                     {sl::SpwiGather::pixel, sl::SpwiGather::probe},
                     "3D spwi: the final gather averages each probe's directions per pixel, over "

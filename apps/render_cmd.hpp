@@ -26,6 +26,7 @@ struct RenderArgs {
   // copied when given).
   penumbra::spaceland::SpwiOptions spwi;
   penumbra::spaceland::GridOptions grid;
+  int cache_probe_spacing = penumbra::spaceland::RenderOptions{}.cache_probe_spacing;
   bool disjoint = false;  // --disjoint: spwi's thesis intervals (SpwiOptions::overlap off)
   std::vector<std::string> outputs;
   std::string max_memory = "8G";

@@ -201,6 +201,7 @@ const std::pair<const char*, const char*> kFlags[] = {
     {"`spwi.gather_normal`", "--gather-normal"},
     {"`grid.voxel`", "--voxel"},
     {"`grid.levels`", "--levels"},
+    {"`cache_probe_spacing`", "--cache-probe-spacing"},
     {"`grid.probe_spacing`", "--probe-spacing"},
     {"`grid.directions`", "--directions"},
     {"`grid.interval`", "--interval"},

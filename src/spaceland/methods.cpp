@@ -61,12 +61,14 @@ Expected<ImageRgb> pt_solve(const SolveContext& ctx, const RenderOptions& o, Sol
 
 // ---- spwi: screen-space probes with world-space intervals (seed 000) ----
 
-// With the grid's voxel size and levels: those of the radiance cache its later bounces read.
+// With the grid's voxel size and levels and the cache's probe spacing: those of the radiance
+// cache its later bounces read.
 constexpr const char* kSpwiOptions[] = {
     "spwi.probe_spacing", "spwi.directions",    "spwi.interval",   "spwi.branching",
     "spwi.cascades",      "spwi.merge",         "spwi.sun",        "spwi.gather",
     "spwi.depth_bias",    "spwi.overlap",       "spwi.preaverage", "spwi.merge_edge",
-    "spwi.gather_edge",   "spwi.gather_normal", "grid.voxel",      "grid.levels"};
+    "spwi.gather_edge",   "spwi.gather_normal", "grid.voxel",      "grid.levels",
+    "cache_probe_spacing"};
 
 Status spwi_check(const RenderOptions& o) {
   return spwi::check_options(o.spwi);
@@ -97,6 +99,7 @@ void spwi_describe(const RenderResult& r, std::vector<Parameter>& p, std::string
     // The radiance cache of its later bounces.
     p.push_back({"cache_voxel", double(r.options.grid.voxel)});
     p.push_back({"cache_levels", std::int64_t(r.options.grid.levels)});
+    p.push_back({"cache_probe_spacing", std::int64_t(r.options.cache_probe_spacing)});
   }
   line = ", " + std::to_string(o.cascades) + " cascades, t0 " + io::format_rounded(o.interval) +
          ", merge " + to_string(o.merge) + ", sun " + to_string(o.sun);

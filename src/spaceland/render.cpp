@@ -31,6 +31,16 @@ bool needs_cache(const RenderOptions& o) {
   return known(o.method) && !entry(o.method).bounces_itself && o.bounces > 1;
 }
 
+// The radiance cache's grid: the grid's defaults but its voxels, levels and probe spacing (the
+// method's own cascade options, e.g. spwi's 64 directions, are not the cache's).
+GridOptions cache_grid(const RenderOptions& o) {
+  GridOptions g;
+  g.voxel = o.grid.voxel;
+  g.levels = o.grid.levels;
+  g.probe_spacing = o.cache_probe_spacing;
+  return g;
+}
+
 std::string mib(std::uint64_t bytes) {
   return io::format_rounded(double(bytes) / double(1 << 20)) + " MiB";
 }
@@ -136,8 +146,11 @@ Status check_options(const RenderOptions& o) {
   // radiance cache's where the method takes its later bounces from it.
   if (m.check_options)
     if (Status s = m.check_options(o); !s) return s;
-  if (needs_cache(o)) return RadianceCache::check_options(o.grid);
-  return {};
+  if (!needs_cache(o)) return {};
+  if (o.cache_probe_spacing < 1 || o.cache_probe_spacing > 64)
+    return Error{"`cache_probe_spacing`: expected 1..64 voxels, found " +
+                 std::to_string(o.cache_probe_spacing)};
+  return RadianceCache::check_options(cache_grid(o));
 }
 
 Expected<Plan> make_plan(const Scene& scene, const RenderOptions& options) {
@@ -161,7 +174,7 @@ std::uint64_t estimate_memory(const Scene& scene, const RenderOptions& options) 
   if (options.aov == Aov::radiance && known(options.method)) {
     method = entry(options.method).working_bytes(scene, options);
     if (needs_cache(options))
-      method += RadianceCache::estimate_bytes(scene, options.grid, options.max_memory);
+      method += RadianceCache::estimate_bytes(scene, cache_grid(options), options.max_memory);
   }
   return RayScene::estimate_bytes(scene) + pixels * per_pixel + method;
 }
@@ -190,8 +203,8 @@ Status solve(const Plan& plan, const Scene& scene, const RayScene& rays, const G
   std::optional<RadianceCache> cache;
   if (plan.radiance_cache) {
     Stopwatch watch;
-    Expected<RadianceCache> built =
-        RadianceCache::build(scene, rays, o.grid, o.max_memory, o.bounces - 1, focus_distance(g));
+    Expected<RadianceCache> built = RadianceCache::build(scene, rays, cache_grid(o), o.max_memory,
+                                                         o.bounces - 1, focus_distance(g));
     if (!built) return built.error();
     cache = std::move(*built);
     ctx.cache = &*cache;

@@ -199,6 +199,25 @@ TEST_F(Cli3d, GridReportsItsVoxelsAndIsRefusedItsOthersOptions) {
   const nlohmann::json cp = nlohmann::json::parse(cache.out)["parameters"];
   EXPECT_FLOAT_EQ(cp["cache_voxel"].get<float>(), 0.25f);
   EXPECT_EQ(cp["cache_levels"], 1);
+  EXPECT_EQ(cp["cache_probe_spacing"], 4);  // the cache's own default, not the grid's 2
+  // The cache's probe spacing is its own: spwi's --probe-spacing leaves it, and only spwi reads it.
+  const auto spaced = run({"render", scene_, "--method", "spwi", "--bounces", "2", "--voxel",
+                           "0.25", "--levels", "1", "--probe-spacing", "8",
+                           "--cache-probe-spacing", "2", "--json", "-o", out("s.pfm")});
+  ASSERT_EQ(spaced.status, 0) << spaced.err;
+  const nlohmann::json sp = nlohmann::json::parse(spaced.out)["parameters"];
+  EXPECT_EQ(sp["cache_probe_spacing"], 2);
+  EXPECT_EQ(sp["probe_spacing"], 8);
+  bad = run({"render", scene_, "--method", "spwi", "--bounces", "2", "--cache-probe-spacing", "0",
+             "-o", out("x.pfm")});
+  EXPECT_EQ(bad.status, 2);
+  EXPECT_NE(bad.err.find("--cache-probe-spacing"), std::string::npos) << bad.err;
+  bad = run({"render", scene_, "--method", "grid", "--cache-probe-spacing", "2", "-o",
+             out("x.pfm")});
+  EXPECT_EQ(bad.status, 2);
+  EXPECT_NE(bad.err.find("--cache-probe-spacing applies to --method spwi only, not grid"),
+            std::string::npos)
+      << bad.err;
   bad = run({"render", scene_, "--method", "pt", "--voxel", "0.25", "-o", out("x.pfm")});
   EXPECT_EQ(bad.status, 2);
   EXPECT_NE(bad.err.find("--voxel applies to --method spwi or grid only, not pt"),

@@ -489,11 +489,13 @@ TEST(Methods, TheTableRefusesWhatItDoesNotHold) {
           << s.error().message;
     }
     EXPECT_FALSE(m.options.empty()) << m.name;
-    // Its own fields; SPWI also the grid's voxel size and levels, those of its radiance cache.
+    // Its own fields; SPWI also the grid's voxel size and levels and the cache's probe spacing,
+    // those of its radiance cache.
     for (const std::string& field : m.options) {
       const bool own = field.rfind(std::string(m.name) + ".", 0) == 0;
-      const bool cache =
-          m.method == Method::spwi && (field == "grid.voxel" || field == "grid.levels");
+      const bool cache = m.method == Method::spwi && (field == "grid.voxel" ||
+                                                      field == "grid.levels" ||
+                                                      field == "cache_probe_spacing");
       EXPECT_TRUE(own || cache) << m.name << ": " << field;
     }
   }

@@ -82,21 +82,25 @@ TEST(Spwi, UniformSkyOverAnOpenPlaneIsExactInEveryMergeMode) {
     }
 }
 
-// Later bounces from the probe grid's radiance cache: the enclosure gives Le (1 + a + ... + a^N).
+// Later bounces from the probe grid's radiance cache: the enclosure gives Le (1 + a + ... + a^N),
+// at the cache's default probe spacing and others.
 TEST(Spwi, BouncesFromTheGridsRadianceCacheGiveTheEnclosure) {
   const Scene s = enclosure();
-  double want = 1.6, a_n = 0.6;
-  for (int bounces = 2; bounces <= 3; ++bounces) {
-    a_n *= 0.6;
-    want += a_n;
-    RenderOptions o = spwi(SpwiMerge::bilinear3d);
-    o.bounces = bounces;
-    o.grid.voxel = 0.05f;
-    const RenderResult r = render_ok(s, o);
-    EXPECT_LT(worst_red(r.radiance, want), 0.01) << bounces << " bounces";
-    bool cached = false;
-    for (const StageTime& st : r.stages) cached = cached || st.name == "radiance cache";
-    EXPECT_TRUE(cached);
+  for (int spacing : {1, RenderOptions{}.cache_probe_spacing, 8}) {
+    double want = 1.6, a_n = 0.6;
+    for (int bounces = 2; bounces <= 3; ++bounces) {
+      a_n *= 0.6;
+      want += a_n;
+      RenderOptions o = spwi(SpwiMerge::bilinear3d);
+      o.bounces = bounces;
+      o.grid.voxel = 0.05f;
+      o.cache_probe_spacing = spacing;
+      const RenderResult r = render_ok(s, o);
+      EXPECT_LT(worst_red(r.radiance, want), 0.01) << bounces << " bounces, spacing " << spacing;
+      bool cached = false;
+      for (const StageTime& st : r.stages) cached = cached || st.name == "radiance cache";
+      EXPECT_TRUE(cached);
+    }
   }
 }
 

@@ -145,7 +145,11 @@ struct RenderOptions {
   GridOptions grid;
   Aov aov = Aov::radiance;
   int bounces = 1;  // 1: direct light only; N: N-1 more diffuse bounces
-  int threads = 0;  // 0: all hardware threads
+  // The radiance cache that methods not bouncing themselves (spwi) read their later bounces from:
+  // the probe grid with grid.voxel and grid.levels, this many voxels between its cascade-0 probes
+  // and the grid's defaults otherwise (docs/METHODS.md, "The radiance cache").
+  int cache_probe_spacing = 4;
+  int threads = 0;                                    // 0: all hardware threads
   std::uint64_t max_memory = std::uint64_t(8) << 30;  // refuse work whose memory need is larger
   // Progressive methods call this from the calling thread between passes.
   std::function<void(const RenderProgress&)> progress;

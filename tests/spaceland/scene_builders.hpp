@@ -215,4 +215,25 @@ inline double sphere_light_floor_error(const Scene& s, const Sphere& light, doub
   return pixels > 0 ? std::sqrt(sum2 / pixels) / (sum_want / pixels) : 0;
 }
 
+// A floor 100 wide (a disk of radius 50, albedo 0.5).
+inline Scene wide_floor() {
+  Scene s;
+  add_floor(s, 50, {0.5f, 0.5f, 0.5f});
+  return s;
+}
+
+// A sphere light of radius 0.3 over wide_floor(), in view or behind the camera, 96 x 72: the
+// floor's relative RMSE against a Le (r/d)^2 cos(theta).
+inline double wide_floor_error(const RenderOptions& o, bool behind) {
+  Scene s = wide_floor();
+  s.camera = camera({0, 2, 4}, {0, 0, 0}, 96, 72, 60);
+  const float le = 30;
+  const Vec3 at = behind ? Vec3{0.5f, 1.5f, 5.5f} : Vec3{0.3f, 1, -0.5f};
+  const Sphere light = add_sphere(s, at, 0.3f, add_material(s, {0, 0, 0}, {le, le, le}));
+  int n = 0;
+  const double e = sphere_light_floor_error(s, light, 0.5, le, render_ok(s, o).radiance, n);
+  EXPECT_GT(n, 96 * 72 / 3);
+  return e;
+}
+
 }  // namespace penumbra::spaceland::testing

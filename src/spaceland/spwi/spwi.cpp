@@ -239,6 +239,9 @@ struct ScreenCascade {
   const std::vector<float>& upper_reach;
   std::vector<float>& lower_reach;
   std::vector<Vec3> dirs = cascade::direction_map(layout.levels, i);
+  // The final gather's cells, that the lights' shares are made exact for.
+  std::vector<Vec3> dirs0 = cascade::direction_map(layout.levels, 0);
+  cascade::GatherCells gather_cells{&dirs0, layout.map_side(0)};
   // The top cascade's interval runs to infinity: its misses see the sky, whatever the reach of
   // its nominal interval (the cascade count stops at the screen's diagonal).
   float a = layout.levels.interval_start(i), b = layout.levels.interval_end(i);
@@ -278,7 +281,8 @@ struct ScreenCascade {
         return upper_reach[std::size_t(row.c.index[j]) * up_cells + k];
       });
     };
-    lights.add(p.p, p.n, a, b, row.merge ? &up : nullptr, layout.map_side(i), out, seen, past);
+    lights.add(p.p, p.n, a, b, row.merge ? &up : nullptr, layout.map_side(i), out, seen, past,
+               &gather_cells);
   }
 
   EmbreeTracer tracer(Row& row) const { return {ctx.rays, surface, bg, o.sun, row.rays}; }

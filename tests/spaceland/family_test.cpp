@@ -30,15 +30,16 @@ double error_of(const ImageRgb& test, const ImageRgb& ref) {
 }
 
 // Measured 2026-11-27 (relative RMSE against the 256-spp reference): SPWI (s0 2 at this size;
-// 0.356, 0.591 and 0.274 at s0 4), the grid (night_0 0.261 before its cascade 0 was met at the
-// shaded point).
+// 0.356, 0.591 and 0.274 at s0 4; night_0 0.106 before its lights' shares were made exact for the
+// gather, behind_0 0.378 before its panel was claimed as a shaped light), the grid (night_0 0.261
+// before its cascade 0 was met at the shaded point).
 struct Slice {
   const char* name;
   double spwi, grid;
 };
 constexpr Slice kSlice[] = {
-    {"night_0", 0.106, 0.097},
-    {"behind_0", 0.378, 0.429},
+    {"night_0", 0.101, 0.097},
+    {"behind_0", 0.105, 0.429},
     {"window_0", 0.271, 0.263},
 };
 

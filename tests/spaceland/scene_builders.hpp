@@ -7,7 +7,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <numbers>
 #include <string>
+#include <vector>
 
 #include "core/math.hpp"
 #include "penumbra/spaceland/render.hpp"
@@ -53,6 +55,29 @@ inline void add_box(Scene& s, Vec3 lo, Vec3 hi, std::uint32_t material) {
   m.materials.assign(m.triangles.size(), material);
   m.object = add_object(s, "box");
   s.meshes.push_back(m);
+}
+
+// The quad corner, corner + u, corner + u + v, corner + v as 2 flat triangles.
+inline void add_quad(Scene& s, Vec3 corner, Vec3 u, Vec3 v, std::uint32_t material) {
+  TriangleMesh m;
+  m.positions = {corner, corner + u, corner + u + v, corner + v};
+  m.triangles = {{0, 1, 2}, {0, 2, 3}};
+  m.materials.assign(2, material);
+  m.object = add_object(s, "quad");
+  s.meshes.push_back(m);
+}
+
+// The irradiance at p (unit normal n) from a polygon of radiance 1 above p's plane, unoccluded:
+// Lambert's formula, half the sum over its edges of the angle each subtends at p times the
+// cosine between n and the normal of the plane through p and the edge.
+inline double polygon_irradiance(Vec3 p, Vec3 n, const std::vector<Vec3>& corners) {
+  double sum = 0;
+  for (std::size_t i = 0; i < corners.size(); ++i) {
+    const Vec3 a = normalize(corners[i] - p), b = normalize(corners[(i + 1) % corners.size()] - p);
+    const double angle = std::acos(std::clamp(double(dot(a, b)), -1.0, 1.0));
+    sum += angle * double(dot(n, normalize(cross(a, b))));
+  }
+  return 0.5 * std::abs(sum);
 }
 
 // A disk of `radius` at y = 0 facing up (a floor, or an open plane when large); returns its object.
@@ -234,6 +259,62 @@ inline double wide_floor_error(const RenderOptions& o, bool behind) {
   const double e = sphere_light_floor_error(s, light, 0.5, le, render_ok(s, o).radiance, n);
   EXPECT_GT(n, 96 * 72 / 3);
   return e;
+}
+
+// A shaped light emitting 30 over wide_floor(), in view or behind the camera, 96 x 72: a quad of
+// side 0.5 facing down (emitting both ways), or a box of side 0.4; the floor's relative RMSE
+// against a Le E / pi, E the sum of polygon_irradiance over the faces it sees (the quad's one,
+// the box's faces turned towards the point).
+inline double wide_floor_shape_error(const RenderOptions& o, bool behind, bool box) {
+  Scene s = wide_floor();
+  s.camera = camera({0, 2, 4}, {0, 0, 0}, 96, 72, 60);
+  const float le = 30;
+  const std::uint32_t lamp = add_material(s, {0, 0, 0}, {le, le, le});
+  const Vec3 at = behind ? Vec3{0.25f, 1.5f, 5.25f} : Vec3{0.05f, 1, -0.75f};
+  std::vector<std::vector<Vec3>> faces;
+  std::vector<Vec3> outwards;
+  if (box) {
+    const float h = 0.2f;
+    const Vec3 c = at + Vec3{0.25f, 0, 0.25f}, lo = c - Vec3{h, h, h}, hi = c + Vec3{h, h, h};
+    add_box(s, lo, hi, lamp);
+    for (int k = 0; k < 3; ++k)
+      for (int side = 0; side < 2; ++side) {
+        Vec3 n{};
+        n[k] = side ? 1.0f : -1.0f;
+        const int a = (k + 1) % 3, b = (k + 2) % 3;
+        std::vector<Vec3> f(4, c + n * h);
+        const float sa[4] = {-1, 1, 1, -1}, sb[4] = {-1, -1, 1, 1};
+        for (int m = 0; m < 4; ++m)
+          f[std::size_t(m)][a] += sa[m] * h, f[std::size_t(m)][b] += sb[m] * h;
+        faces.push_back(f);
+        outwards.push_back(n);
+      }
+  } else {
+    const Vec3 u{0.5f, 0, 0}, v{0, 0, 0.5f};
+    add_quad(s, at, u, v, lamp);
+    faces.push_back({at, at + u, at + u + v, at + v});
+    outwards.push_back({0, 0, 0});  // both sides
+  }
+  const ImageRgb img = render_ok(s, o).radiance;
+  const FirstHits hits = first_hits(s);
+  double sum2 = 0, sum_want = 0;
+  int n = 0;
+  for (int j = 0; j < img.height(); ++j)
+    for (int i = 0; i < img.width(); ++i) {
+      if (hits.object.at(i, j).r != 0) continue;
+      const Rgb q = hits.position.at(i, j);
+      const Vec3 p{q.r, q.g, q.b};
+      double e = 0;
+      for (std::size_t f = 0; f < faces.size(); ++f)
+        if (dot(outwards[f], outwards[f]) == 0 || dot(outwards[f], p - faces[f][0]) > 0)
+          e += polygon_irradiance(p, {0, 1, 0}, faces[f]);
+      const double want = 0.5 * le * e / std::numbers::pi;
+      sum2 += (img.at(i, j).g - want) * (img.at(i, j).g - want);
+      sum_want += want;
+      ++n;
+    }
+  EXPECT_GT(n, 96 * 72 / 3);
+  return n > 0 ? std::sqrt(sum2 / n) / (sum_want / n) : 0;
 }
 
 }  // namespace penumbra::spaceland::testing

@@ -296,9 +296,8 @@ struct ScreenCascade {
   // (add_lights spreads its light instead); false where it then hits nothing.
   bool pass_small_lights(Vec3 p, Ray r, bool found, Hit& h) const {
     if (lights.empty()) return found;
-    for (int n = 0; found && h.kind == ShapeKind::sphere && n < 8; ++n) {
-      const float exit =
-          lights.pass(ctx.scene, ctx.scene.spheres[h.shape], p, r.origin, r.direction);
+    for (int n = 0; found && n < 8; ++n) {
+      const float exit = lights.pass(ctx.scene, h, p, r.origin, r.direction);
       if (exit < 0) break;
       r.tmin = exit;
       found = ctx.rays.intersect(r, h);

@@ -200,18 +200,44 @@ Uppers uppers_of(const Corners& c, float a, Position&& position) {
   return up;
 }
 
+// Where a ray from `from` along unit u meets shaped light l: a flat one's plane, where it crosses
+// it within the light's bound of its centre; a box where it enters it; negative where it misses.
+inline float toward(const SphereLight& l, Vec3 from, Vec3 u) {
+  if (dot(l.faces[1], l.faces[1]) > 0) {  // a box: the slabs along its 3 axes
+    float enter = 0, leave = kInfinity;
+    for (std::size_t j = 0; j < 3; ++j) {
+      const Vec3 axis = normalize(l.faces[j]);
+      const float o = dot(from - l.centre, axis), v = dot(u, axis);
+      if (!(std::abs(v) > 1e-9f)) {
+        if (std::abs(o) > l.half[j]) return -1;
+        continue;
+      }
+      float t0 = (-l.half[j] - o) / v, t1 = (l.half[j] - o) / v;
+      if (t0 > t1) std::swap(t0, t1);
+      enter = std::max(enter, t0);
+      leave = std::min(leave, t1);
+    }
+    return enter <= leave ? enter : -1;
+  }
+  const Vec3 plane = normalize(l.faces[0]);
+  const float along = dot(u, plane);
+  if (!(std::abs(along) > 1e-6f)) return -1;
+  const float t = dot(l.centre - from, plane) / along;
+  return t > 0 && length(from + u * t - l.centre) <= l.extent ? t : -1;
+}
+
 // Where a probe's ray from `from` along unit u, standing for the direction to light l (d from it),
-// must get to for the light: a shaped light's rays pass it, and a flat one may lie a centimetre
-// before a wall (a panel), whose plane a ray steeper to the wall than the panel's centre meets
-// nearer than d: its plane along u, at most d; a box's d less half its shortest side; a
-// sphere's `sphere`.
+// must get to for the light: a sphere's `sphere`; a shaped light's rays pass it, and a flat one
+// may lie a centimetre before a wall (a panel): where the ray meets it (toward), else a flat
+// one's plane along u where the ray crosses it, else d; a box's d less half its shortest side.
 inline float reach_for(const SphereLight& l, Vec3 from, Vec3 u, float d, float sphere) {
   if (!l.shaped()) return sphere;
+  const float t = toward(l, from, u);
+  if (t >= 0) return t * (1 - 1e-3f);
   if (dot(l.faces[1], l.faces[1]) > 0) return d - l.inner;
   const Vec3 plane = normalize(l.faces[0]);
   const float along = dot(u, plane), to_plane = dot(l.centre - from, plane);
-  if (!(std::abs(along) > 1e-3f) || !(to_plane / along > 0)) return d * (1 - 1e-3f);
-  return std::min(d, to_plane / along) * (1 - 1e-3f);
+  return std::abs(along) > 1e-6f && to_plane / along > 0 ? to_plane / along * (1 - 1e-3f) : d;
 }
 
 // The fraction of the upper probes `up` (weighted) whose ray towards light l got to it, among those
@@ -517,17 +543,48 @@ class SphereLights {
               std::clamp(want * cell0 * gather_sum / (omega * got), 1 / kGatherScale, kGatherScale);
       }
       const Rgb share = l.emission * float(in * omega / cell * scale);
+      // A shaped light's visibility, one for its whole footprint: the mean over the cells whose
+      // rays meet it of whether they got there (else the heaviest cell's, where its ray would
+      // cross it); a cell beside it, whose ray runs along a wall the light is behind, would say
+      // nothing of it (light crossed a wall to a room beside a panel).
+      double shaped_seen = -1;
+      if (l.shaped() && !past) {
+        double toward_w = 0, toward_seen = 0, best_w = 0, clear_past = -1;
+        std::size_t best_k = 0;
+        float best_at = d;
+        for (int j = 0; j < nv; ++j)
+          for (int i = 0; i < nu; ++i) {
+            const std::size_t k = std::size_t(v0 + j) * std::size_t(side) + std::size_t(u0 + i);
+            const double w = wu[std::size_t(i)] * wv[std::size_t(j)];
+            if (w <= 0 || !holds_light(out[k])) continue;
+            const Vec3 u = octahedral::cell_direction(u0 + i, v0 + j, side);
+            const float t = toward(l, origin, u);
+            if (t >= 0) {
+              // Past where this probe's rays stop, through the upper probes' rays, as any light.
+              toward_w += w;
+              if (t * (1 - 1e-3f) <= end) {
+                toward_seen += w * double(seen(k, t * (1 - 1e-3f)));
+              } else {
+                if (clear_past < 0) clear_past = past_clear(l);
+                toward_seen += w * double(seen(k, end)) * clear_past;
+              }
+            }
+            if (w > best_w) best_w = w, best_k = k, best_at = reach_for(l, origin, u, d, d);
+          }
+        if (best_w > 0 && toward_w > 0) {
+          shaped_seen = toward_seen / toward_w;
+        } else if (best_w > 0) {
+          shaped_seen = best_at <= end ? double(seen(best_k, best_at))
+                                       : double(seen(best_k, end)) * double(past_clear(l));
+        }
+      }
       for (int j = 0; j < nv; ++j)
         for (int i = 0; i < nu; ++i) {
           const std::size_t k = std::size_t(v0 + j) * std::size_t(side) + std::size_t(u0 + i);
           const double w = wu[std::size_t(i)] * wv[std::size_t(j)];
           if (w <= 0 || !holds_light(out[k])) continue;
-          const float at =
-              past ? end
-                   : (l.shaped() ? reach_for(l, origin,
-                                             octahedral::cell_direction(u0 + i, v0 + j, side), d, d)
-                                 : d);
-          out[k] += share * float(w * double(seen(k, at)) * double(beyond_end));
+          const double sees = shaped_seen >= 0 ? shaped_seen : double(seen(k, past ? end : d));
+          out[k] += share * float(w * sees * double(beyond_end));
         }
     };
     return walk(origin, n, near, far, cell, claim);

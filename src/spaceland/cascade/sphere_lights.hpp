@@ -253,7 +253,9 @@ float upper_clear(const Uppers& up, int side, const SphereLight& l, Reach&& reac
     const double w = up.w[j];
     const Vec3 to = l.centre - up.p[j];
     const float d = length(to);
-    if (!(w > 0) || !(d > l.bound())) continue;
+    // A probe within a shaped light's bound but outside it still asks (a panel a few centimetres
+    // before a wall: skipping them all said "clear").
+    if (!(w > 0) || !(d > (l.shaped() ? l.inner : l.radius))) continue;
     const std::array<int, 2> cell = octahedral::cell_of(to / d, side);
     const float r = reach(j, std::size_t(cell[1]) * std::size_t(side) + std::size_t(cell[0]));
     if (r < 0) continue;
@@ -343,8 +345,12 @@ struct GatherCells {
   int side = 0;
 };
 inline constexpr double kGatherScale = 4;
-// The most triangles of a shaped light whose irradiance a claim takes by Lambert's formula.
+// The most triangles of a shaped light whose irradiance a claim takes by Lambert's formula, and
+// the distance (in its bounds) past which the far-field form (its area seen from its centre's
+// direction over d^2) is used instead: within 0.1% there, and Lambert's angles lose precision
+// in floats far off (a quad of side 0.1 100 away, 74%).
 inline constexpr std::size_t kShapeTriangles = 64;
+inline constexpr float kShapeFar = 20;
 
 // The scene's sphere lights (every sphere whose material emits; for SPWI also its shaped lights)
 // for a hierarchy of cascades.
@@ -400,6 +406,8 @@ class SphereLights {
   bool claims(const SphereLight& l, Vec3 probe, double d) const {
     if (!l.shaped()) return small(l.radius, d);
     if (!(d > double(l.inner))) return false;
+    // Without its triangles its irradiance is the far-field form's: traced nearer.
+    if (l.shape < 0 && !(d > double(kShapeFar * l.extent))) return false;
     if (!(cells(std::min(double(l.bound()), d), d) < kShapedSmallCells)) return false;
     if (!(dot(l.faces[1], l.faces[1]) > 0)) return true;
     // Outside the box along an axis, not on its faces (a probe on its inside, an emitting room
@@ -539,11 +547,11 @@ class SphereLights {
         // omega cos / pi, its area seen from its centre's direction.
         double want = l.shaped() ? omega / std::numbers::pi * cos_l
                                  : double(l.radius) * l.radius / (double(d) * d) * cos_l;
-        if (l.shape >= 0) {
+        if (l.shape >= 0 && d < kShapeFar * l.extent) {
           const double exact = shape_irradiance(shapes_[std::size_t(l.shape)], origin, n);
           if (exact >= 0) want = exact / std::numbers::pi;
         }
-        if (got > 0 && cos_l > 0)
+        if (got > 0 && cos_l > 0 && omega > 0)
           scale =
               std::clamp(want * cell0 * gather_sum / (omega * got), 1 / kGatherScale, kGatherScale);
       }
@@ -630,8 +638,8 @@ class SphereLights {
       const float above = dot(node.middle - origin, n);
       const float tilt = dot(node.half, Vec3{std::abs(n.x), std::abs(n.y), std::abs(n.z)});
       if (horizon && above + tilt < 0) continue;
-      if (d - b >= near && d + b <= far && double(b) <= wide * d && (!horizon || above >= tilt) &&
-          all_small(node.max_radius, d - b, d + b)) {
+      if (!node.shaped && d - b >= near && d + b <= far && double(b) <= wide * d &&
+          (!horizon || above >= tilt) && all_small(node.max_radius, d - b, d + b)) {
         f(node.light, d, double(node.spread));
         ++claimed;
         continue;
@@ -714,6 +722,10 @@ class SphereLights {
     float max_radius = 0;  // of its largest light
     int child = -1;
     Vec3 middle, half;  // the box of its lights' centres: its middle and half its size
+    // It holds a shaped light: never claimed as one sphere-like light (a panel's light falls
+    // with the cosine to its face, which a cluster's sphere loses: half the light under a grid of
+    // panels facing down).
+    bool shaped = false;
   };
 
   // SPWI's shaped lights: emitting disks, and meshes of one emitting material whose triangles face
@@ -733,6 +745,8 @@ class SphereLights {
       l.faces[0] = d.normal * area;
       l.extent = d.radius;
       l.radius = std::sqrt(area / (2 * std::numbers::pi_v<float>));
+      // No triangles kept: claimed only kShapeFar radii off (claims), where the far-field form
+      // holds.
       disk_light_[i] = int(lights_.size());
       lights_.push_back(l);
     }
@@ -848,6 +862,20 @@ class SphereLights {
       shape.triangles.push_back(tri);
     }
     for (const Vec3& p : m.positions) l.extent = std::max(l.extent, length(p - l.centre));
+    // One quad in one plane, or one box whose faces fill it: several panels or cubes in one mesh
+    // (a mesh file with one material) are traced, their centre no light's.
+    const float tolerance = 1e-3f * l.extent;
+    if (axes == 1) {
+      for (const Vec3& p : m.positions)
+        if (std::abs(dot(p - l.centre, axis[0])) > tolerance) return false;
+    } else {
+      for (const Vec3& p : m.positions)
+        for (std::size_t j = 0; j < 3; ++j)
+          if (std::abs(dot(p - l.centre, axis[j])) > l.half[j] + tolerance) return false;
+      const double surface = 8 * (double(l.half[0]) * l.half[1] + double(l.half[1]) * l.half[2] +
+                                  double(l.half[0]) * l.half[2]);
+      if (std::abs(total - surface) > 1e-2 * surface) return false;
+    }
     double faces = 0;
     for (const Vec3& f : l.faces) faces += length(f);
     l.radius = float(std::sqrt(faces / (2 * std::numbers::pi)));  // mean projected area / pi
@@ -902,7 +930,7 @@ class SphereLights {
   void build_node(std::size_t at, std::vector<std::size_t>& order, std::size_t lo, std::size_t hi) {
     if (hi - lo == 1) {
       const SphereLight& l = lights_[order[lo]];
-      nodes_[at] = Node{l, l.bound(), 0, l.bound(), -1, l.centre, Vec3{}};
+      nodes_[at] = Node{l, l.bound(), 0, l.bound(), -1, l.centre, Vec3{}, l.shaped()};
       return;
     }
     // The equivalent light: power weighs the centre.
@@ -910,6 +938,7 @@ class SphereLights {
     double lo_box[3] = {kInfinity, kInfinity, kInfinity},
            hi_box[3] = {-kInfinity, -kInfinity, -kInfinity};
     float max_radius = 0;
+    bool shaped = false;
     for (std::size_t i = lo; i < hi; ++i) {
       const SphereLight& l = lights_[order[i]];
       const double r2 = double(l.radius) * l.radius, w = power(l);
@@ -924,6 +953,7 @@ class SphereLights {
       le[1] += r2 * double(l.emission.g);
       le[2] += r2 * double(l.emission.b);
       max_radius = std::max(max_radius, l.bound());
+      shaped = shaped || l.shaped();
     }
     const Vec3 c{float(centre[0] / weight), float(centre[1] / weight), float(centre[2] / weight)};
     double bound = 0, spread = 0;
@@ -939,6 +969,7 @@ class SphereLights {
     node.bound = float(bound);
     node.spread = float(std::sqrt(spread / weight));
     node.max_radius = max_radius;
+    node.shaped = shaped;
     for (int k = 0; k < 3; ++k) {
       node.middle[k] = float(0.5 * (lo_box[k] + hi_box[k]));
       node.half[k] = float(0.5 * (hi_box[k] - lo_box[k]));

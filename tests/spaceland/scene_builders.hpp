@@ -217,27 +217,38 @@ inline FirstHits first_hits(const Scene& s) {
   return f;
 }
 
-// The relative RMSE of img's green over the pixels of object 0 (a floor of albedo `a`) against a
-// sphere light's closed form a Le (r/d)^2 cos(theta) (`le`: the light's green emission); `pixels`
-// receives how many were counted.
-inline double sphere_light_floor_error(const Scene& s, const Sphere& light, double a, double le,
-                                       const ImageRgb& img, int& pixels) {
+// The relative RMSE of img's green over the pixels of object 0 (a floor) against want(p) at each
+// pixel's floor point p; `pixels` receives how many were counted.
+template <class Want>
+double floor_error(const Scene& s, const ImageRgb& img, Want&& want, int& pixels) {
   const FirstHits hits = first_hits(s);
   double sum2 = 0, sum_want = 0;
   pixels = 0;
   for (int j = 0; j < img.height(); ++j)
     for (int i = 0; i < img.width(); ++i) {
       if (hits.object.at(i, j).r != 0) continue;
-      const Rgb p = hits.position.at(i, j);
-      const double dx = light.center.x - p.r, dy = light.center.y - p.g, dz = light.center.z - p.b;
-      const double d2 = dx * dx + dy * dy + dz * dz;
-      const double r2 = double(light.radius) * light.radius;
-      const double want = a * le * r2 / d2 * (dy / std::sqrt(d2));
-      sum2 += (img.at(i, j).g - want) * (img.at(i, j).g - want);
-      sum_want += want;
+      const Rgb q = hits.position.at(i, j);
+      const double w = want(Vec3{q.r, q.g, q.b});
+      sum2 += (img.at(i, j).g - w) * (img.at(i, j).g - w);
+      sum_want += w;
       ++pixels;
     }
   return pixels > 0 ? std::sqrt(sum2 / pixels) / (sum_want / pixels) : 0;
+}
+
+// The same against a sphere light's closed form a Le (r/d)^2 cos(theta) over a floor of albedo
+// `a` (`le`: the light's green emission).
+inline double sphere_light_floor_error(const Scene& s, const Sphere& light, double a, double le,
+                                       const ImageRgb& img, int& pixels) {
+  return floor_error(
+      s, img,
+      [&](Vec3 p) {
+        const double dx = double(light.center.x) - p.x, dy = double(light.center.y) - p.y,
+                     dz = double(light.center.z) - p.z;
+        const double d2 = dx * dx + dy * dy + dz * dz, r2 = double(light.radius) * light.radius;
+        return a * le * r2 / d2 * (dy / std::sqrt(d2));
+      },
+      pixels);
 }
 
 // A floor 100 wide (a disk of radius 50, albedo 0.5).
@@ -295,26 +306,19 @@ inline double wide_floor_shape_error(const RenderOptions& o, bool behind, bool b
     faces.push_back({at, at + u, at + u + v, at + v});
     outwards.push_back({0, 0, 0});  // both sides
   }
-  const ImageRgb img = render_ok(s, o).radiance;
-  const FirstHits hits = first_hits(s);
-  double sum2 = 0, sum_want = 0;
   int n = 0;
-  for (int j = 0; j < img.height(); ++j)
-    for (int i = 0; i < img.width(); ++i) {
-      if (hits.object.at(i, j).r != 0) continue;
-      const Rgb q = hits.position.at(i, j);
-      const Vec3 p{q.r, q.g, q.b};
-      double e = 0;
-      for (std::size_t f = 0; f < faces.size(); ++f)
-        if (dot(outwards[f], outwards[f]) == 0 || dot(outwards[f], p - faces[f][0]) > 0)
-          e += polygon_irradiance(p, {0, 1, 0}, faces[f]);
-      const double want = 0.5 * le * e / std::numbers::pi;
-      sum2 += (img.at(i, j).g - want) * (img.at(i, j).g - want);
-      sum_want += want;
-      ++n;
-    }
+  const double e = floor_error(
+      s, render_ok(s, o).radiance,
+      [&](Vec3 p) {
+        double sum = 0;
+        for (std::size_t f = 0; f < faces.size(); ++f)
+          if (dot(outwards[f], outwards[f]) == 0 || dot(outwards[f], p - faces[f][0]) > 0)
+            sum += polygon_irradiance(p, {0, 1, 0}, faces[f]);
+        return 0.5 * le * sum / std::numbers::pi;
+      },
+      n);
   EXPECT_GT(n, 96 * 72 / 3);
-  return n > 0 ? std::sqrt(sum2 / n) / (sum_want / n) : 0;
+  return e;
 }
 
 }  // namespace penumbra::spaceland::testing

@@ -47,6 +47,7 @@ struct SphereLight {
   std::array<float, 3> half{};  // a box light: half its sides, along its faces' normals
   int shape = -1;  // a shaped mesh light: its triangles in SphereLights (-1: none kept)
   bool shaped() const { return extent > 0; }
+  bool box() const { return dot(faces[1], faces[1]) > 0; }  // a shaped light with 3 axes
   // The radius of a sphere about its centre that holds it.
   float bound() const { return std::max(radius, extent); }
 };
@@ -205,7 +206,7 @@ Uppers uppers_of(const Corners& c, float a, Position&& position) {
 // Where a ray from `from` along unit u meets shaped light l: a flat one's plane, where it crosses
 // it within the light's bound of its centre; a box where it enters it; negative where it misses.
 inline float toward(const SphereLight& l, Vec3 from, Vec3 u) {
-  if (dot(l.faces[1], l.faces[1]) > 0) {  // a box: the slabs along its 3 axes
+  if (l.box()) {  // the slabs along its 3 axes
     float enter = 0, leave = kInfinity;
     for (std::size_t j = 0; j < 3; ++j) {
       const Vec3 axis = normalize(l.faces[j]);
@@ -236,7 +237,7 @@ inline float reach_for(const SphereLight& l, Vec3 from, Vec3 u, float d, float s
   if (!l.shaped()) return sphere;
   const float t = toward(l, from, u);
   if (t >= 0) return t * (1 - 1e-3f);
-  if (dot(l.faces[1], l.faces[1]) > 0) return d - l.inner;
+  if (l.box()) return d - l.inner;
   const Vec3 plane = normalize(l.faces[0]);
   const float along = dot(u, plane), to_plane = dot(l.centre - from, plane);
   return std::abs(along) > 1e-6f && to_plane / along > 0 ? to_plane / along * (1 - 1e-3f) : d;
@@ -409,7 +410,7 @@ class SphereLights {
     // Without its triangles its irradiance is the far-field form's: traced nearer.
     if (l.shape < 0 && !(d > double(kShapeFar * l.extent))) return false;
     if (!(cells(std::min(double(l.bound()), d), d) < kShapedSmallCells)) return false;
-    if (!(dot(l.faces[1], l.faces[1]) > 0)) return true;
+    if (!l.box()) return true;
     // Outside the box along an axis, not on its faces (a probe on its inside, an emitting room
     // around the camera, or on its outside, whose own light lies behind it).
     for (std::size_t j = 0; j < 3; ++j)
@@ -564,7 +565,7 @@ class SphereLights {
       if (l.shaped() && !past) {
         double toward_w = 0, toward_seen = 0, best_w = 0, clear_past = -1;
         std::size_t best_k = 0;
-        float best_at = d;
+        Vec3 best_u;
         for (int j = 0; j < nv; ++j)
           for (int i = 0; i < nu; ++i) {
             const std::size_t k = std::size_t(v0 + j) * std::size_t(side) + std::size_t(u0 + i);
@@ -582,11 +583,12 @@ class SphereLights {
                 toward_seen += w * double(seen(k, end)) * clear_past;
               }
             }
-            if (w > best_w) best_w = w, best_k = k, best_at = reach_for(l, origin, u, d, d);
+            if (w > best_w) best_w = w, best_k = k, best_u = u;
           }
         if (best_w > 0 && toward_w > 0) {
           shaped_seen = toward_seen / toward_w;
         } else if (best_w > 0) {
+          const float best_at = reach_for(l, origin, best_u, d, d);
           shaped_seen = best_at <= end ? double(seen(best_k, best_at))
                                        : double(seen(best_k, end)) * double(past_clear(l));
         }

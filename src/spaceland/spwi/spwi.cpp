@@ -241,7 +241,6 @@ struct ScreenCascade {
   std::vector<Vec3> dirs = cascade::direction_map(layout.levels, i);
   // The final gather's cells, that the lights' shares are made exact for.
   std::vector<Vec3> dirs0 = cascade::direction_map(layout.levels, 0);
-  cascade::GatherCells gather_cells{&dirs0, layout.map_side(0)};
   // The top cascade's interval runs to infinity: its misses see the sky, whatever the reach of
   // its nominal interval (the cascade count stops at the screen's diagonal).
   float a = layout.levels.interval_start(i), b = layout.levels.interval_end(i);
@@ -281,8 +280,9 @@ struct ScreenCascade {
         return upper_reach[std::size_t(row.c.index[j]) * up_cells + k];
       });
     };
+    const cascade::GatherCells gather{&dirs0, layout.map_side(0)};
     lights.add(p.p, p.n, a, b, row.merge ? &up : nullptr, layout.map_side(i), out, seen, past,
-               &gather_cells);
+               &gather);
   }
 
   EmbreeTracer tracer(Row& row) const { return {ctx.rays, surface, bg, o.sun, row.rays}; }

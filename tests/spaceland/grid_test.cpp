@@ -71,6 +71,37 @@ TEST(Grid, EmittingEnclosureGivesLeAtEveryWallPoint) {
   EXPECT_LT(worst, 1e-5);
 }
 
+// An enclosure lined, 1 cm inside its walls, with an emitting box (Le, albedo 0.6) whose walls
+// share the dark walls' voxels: the voxels glow Le, not the area-weighted mean of the two surfaces
+// (0.5 Le, measured 2026-11-27: it halved the panels of SPWI's rooms in the radiance cache).
+TEST(Grid, PanelsOffTheirWallsGlowAsBrightAsThemselves) {
+  Scene s;
+  const Rgb le{1, 0.5f, 0.25f};
+  const Vec3 h{1, 1.25f, 1.5f}, in{0.01f, 0.01f, 0.01f};
+  add_box(s, Vec3{} - h, h, add_material(s, {0.6f, 0.6f, 0.6f}));
+  add_box(s, in - h, h - in, add_material(s, {0.6f, 0.6f, 0.6f}, le));
+  const Voxels v = voxels_of(s, 0.1f);
+  const RadianceField sol = solved(s, v);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(-0.8f, 0.8f);
+  int found = 0;
+  double worst = 0;
+  for (int i = 0; i < 120; ++i) {
+    const int face = i % 6, axis = face / 2;
+    const float side = (face % 2) ? 1.0f : -1.0f;
+    Vec3 p{u(rng) * h.x, u(rng) * h.y, u(rng) * h.z};
+    p[axis] = side * (h[axis] - in[axis]);
+    Vec3 n{};
+    n[axis] = -side;
+    Rgb got;
+    if (!sol.mean_radiance(p, n, got)) continue;
+    ++found;
+    worst = std::max({worst, std::abs(got.r / le.r - 1.0), std::abs(got.b / le.b - 1.0)});
+  }
+  EXPECT_EQ(found, 120);
+  EXPECT_LT(worst, 1e-5);
+}
+
 // A floor under a uniform sky: from above it, every upward direction sees the sky, and upper
 // probes below the floor take no part.
 TEST(Grid, UniformSkyOverAFloorGivesL) {

@@ -105,6 +105,21 @@ TEST(Spwi, BouncesFromTheGridsRadianceCacheGiveTheEnclosure) {
   }
 }
 
+// The same with the light on panels 1 cm off dark walls (an emitting box lining a closed one):
+// the cache's voxels, which hold both, glow as the panels do, so its bounce is the enclosure's
+// too (as the mean of the two surfaces they glowed half as bright: 1.78 at two bounces, not 1.96).
+TEST(Spwi, BouncesFromTheCacheKeepPanelsOffTheirWallsBright) {
+  Scene s = enclosure();
+  const Vec3 h{1, 1.25f, 1.5f}, in{0.01f, 0.01f, 0.01f};
+  s.meshes.clear();
+  add_box(s, Vec3{} - h, h, add_material(s, {0.6f, 0.6f, 0.6f}));
+  add_box(s, in - h, h - in, add_material(s, {0.6f, 0.6f, 0.6f}, {1, 0.5f, 0.25f}));
+  RenderOptions o = spwi(SpwiMerge::bilinear3d);
+  o.bounces = 2;
+  o.grid.voxel = 0.1f;
+  EXPECT_LT(worst_red(render_ok(s, o).radiance, 1.96), 0.01);
+}
+
 // A small light over a wide floor, in view and behind the camera (where its upper cascades carry
 // it): each light's share is made exact for the final gather's cosines (SphereLights::add), so
 // the floor's pool is the closed form but for the probes' interpolation between them. Measured

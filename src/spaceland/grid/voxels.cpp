@@ -59,6 +59,47 @@ bool triangle_overlaps_box(const std::array<Vec3, 3>& tri, Vec3 centre, double h
   return true;
 }
 
+// The area of the triangle's part inside the same box (grown by the same hair, so a triangle on a
+// voxel face counts whole on both sides): the triangle clipped by the box's six planes in turn
+// (Sutherland-Hodgman), then the polygon's area.
+double clipped_area(const std::array<Vec3, 3>& tri, Vec3 centre, double half) {
+  half *= 1 + 1e-5;
+  std::array<std::array<double, 3>, 9> poly{}, next{};
+  int count = 3;
+  for (int i = 0; i < 3; ++i)
+    for (int k = 0; k < 3; ++k)
+      poly[std::size_t(i)][std::size_t(k)] = double(tri[std::size_t(i)][k]) - centre[k];
+  for (int plane = 0; plane < 6 && count > 0; ++plane) {
+    const std::size_t axis = std::size_t(plane / 2);
+    const double sign = (plane % 2) ? -1.0 : 1.0;  // keeps sign * p[axis] <= half
+    int out = 0;
+    for (int i = 0; i < count; ++i) {
+      const std::array<double, 3>& a = poly[std::size_t(i)];
+      const std::array<double, 3>& b = poly[std::size_t((i + 1) % count)];
+      const double da = half - sign * a[axis], db = half - sign * b[axis];
+      if (da >= 0) next[std::size_t(out++)] = a;
+      if ((da >= 0) != (db >= 0)) {
+        const double t = da / (da - db);
+        for (std::size_t k = 0; k < 3; ++k) next[std::size_t(out)][k] = a[k] + t * (b[k] - a[k]);
+        ++out;
+      }
+    }
+    count = out;
+    poly = next;
+  }
+  double n[3] = {0, 0, 0};
+  for (int i = 1; i + 1 < count; ++i) {
+    const std::array<double, 3>&a = poly[0], &b = poly[std::size_t(i)],
+                             &c = poly[std::size_t(i + 1)];
+    const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    const double w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    n[0] += u[1] * w[2] - u[2] * w[1];
+    n[1] += u[2] * w[0] - u[0] * w[2];
+    n[2] += u[0] * w[1] - u[1] * w[0];
+  }
+  return 0.5 * std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+}
+
 // Distances from p to the nearest and the farthest point of the box [lo, hi].
 double nearest_distance(Vec3 p, Vec3 lo, Vec3 hi) {
   double s = 0;
@@ -77,9 +118,9 @@ double farthest_distance(Vec3 p, Vec3 lo, Vec3 hi) {
   return std::sqrt(s);
 }
 
-// Accumulates, per voxel, the surfaces' area-weighted emission and albedo.
+// Accumulates, per voxel, the surfaces' area-weighted emission and albedo, and the emitters' area.
 struct SurfaceSums {
-  std::vector<float> weight;
+  std::vector<float> weight, emitting;
   std::vector<Rgb> emission, albedo;
 };
 
@@ -215,6 +256,7 @@ class SurfaceRaster {
   SurfaceRaster(const Scene& scene, const Voxels& v) : scene_(scene), v_(v) {
     const std::size_t count = std::size_t(v.count());
     sums_.weight.assign(count, 0);
+    sums_.emitting.assign(count, 0);
     sums_.emission.assign(count, Rgb{});
     sums_.albedo.assign(count, Rgb{});
     albedos_ = mean_albedos(scene);
@@ -224,16 +266,15 @@ class SurfaceRaster {
     const double half = 0.5 * double(v_.size);
     std::array<int, 3> lo, hi;
     voxel_range(v_, min(tri[0], min(tri[1], tri[2])), max(tri[0], max(tri[1], tri[2])), lo, hi);
-    touched_.clear();
+    // Each voxel it touches takes its area there (at least a sliver's: a voxel the triangle
+    // only grazes is opaque all the same, so no light slips past a wall along a voxel face).
+    const float sliver = 1e-6f * v_.size * v_.size;
     for (int z = lo[2]; z <= hi[2]; ++z)
       for (int y = lo[1]; y <= hi[1]; ++y)
         for (int x = lo[0]; x <= hi[0]; ++x)
           if (triangle_overlaps_box(tri, v_.centre(x, y, z), half))
-            touched_.push_back(v_.index(x, y, z));
-    const Vec3 n = cross(tri[1] - tri[0], tri[2] - tri[0]);
-    add(0.5 * std::sqrt(double(dot(n, n))) *
-            inside(min(tri[0], min(tri[1], tri[2])), max(tri[0], max(tri[1], tri[2]))),
-        material);
+            add_at(v_.index(x, y, z),
+                   std::max(sliver, float(clipped_area(tri, v_.centre(x, y, z), half))), material);
   }
 
   // A sphere: the voxels its surface passes through (nearest point inside, farthest outside).
@@ -275,12 +316,17 @@ class SurfaceRaster {
     add(kPi * double(d.radius) * d.radius * inside(d.center - r, d.center + r), d.material);
   }
 
-  // Every voxel a surface touched becomes opaque, with the area-weighted mean emission and albedo.
+  // Every voxel a surface touched becomes opaque, with the area-weighted mean albedo. Its emission
+  // is the emitters' area-weighted mean diluted by the other surfaces only up to a voxel face's
+  // area: a panel a centimetre off its wall shares voxels with it, and as a mean it glowed half
+  // as bright, while a light small beside a wall still spreads its power over the voxel's face.
   void finish(Voxels& v) const {
+    const float face = v.size * v.size;
     for (std::size_t k = 0; k < sums_.weight.size(); ++k) {
       if (!(sums_.weight[k] > 0)) continue;
       v.extinction[k] = {kOpaque, kOpaque, kOpaque};
-      v.emission[k] = sums_.emission[k] * (1 / sums_.weight[k]);
+      v.emission[k] =
+          sums_.emission[k] * (1 / std::max(sums_.emitting[k], std::min(sums_.weight[k], face)));
       v.albedo[k] = sums_.albedo[k] * (1 / sums_.weight[k]);
     }
   }
@@ -303,16 +349,18 @@ class SurfaceRaster {
     return f;
   }
 
-  // The surface's area shared among the voxels it touched.
+  // The surface's area shared among the voxels it touched (spheres and disks: evenly).
   void add(double area, std::uint32_t material) {
     if (touched_.empty()) return;
     const float w = float(area / double(touched_.size()));
+    for (std::size_t k : touched_) add_at(k, w, material);
+  }
+  void add_at(std::size_t k, float w, std::uint32_t material) {
     const Material& m = scene_.materials[material];
-    for (std::size_t k : touched_) {
-      sums_.weight[k] += w;
-      sums_.emission[k] += m.emission * w;
-      sums_.albedo[k] += albedos_[material] * w;
-    }
+    sums_.weight[k] += w;
+    if (!is_black(m.emission)) sums_.emitting[k] += w;
+    sums_.emission[k] += m.emission * w;
+    sums_.albedo[k] += albedos_[material] * w;
   }
 
   const Scene& scene_;

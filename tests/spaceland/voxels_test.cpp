@@ -144,6 +144,23 @@ TEST(Voxels, SpheresAndDisksBlockWhatCrossesThem) {
   EXPECT_NEAR(v->albedo[k].g, 0.4f, 1e-6f);
 }
 
+// A mesh's zero-area triangle (collinear corners, as meshes from files hold) covers nothing: its
+// voxels stay free, while a real triangle beside it blocks.
+TEST(Voxels, AZeroAreaTriangleStopsNoLight) {
+  Scene s = thin_wall({0, 0, 1}, {});
+  TriangleMesh& mesh = s.meshes[0];
+  const std::uint32_t first = std::uint32_t(mesh.positions.size());
+  mesh.positions.push_back({-0.8f, 0.5f, 0.5f});
+  mesh.positions.push_back({0.0f, 0.5f, 0.5f});
+  mesh.positions.push_back({0.8f, 0.5f, 0.5f});
+  mesh.triangles.push_back({first, first + 1, first + 2});
+  mesh.materials.push_back(mesh.materials[0]);
+  const Expected<Voxels> v = voxelise(s, 0.05f, kGiB);
+  ASSERT_TRUE(v.ok()) << v.error().message;
+  EXPECT_FALSE(march(*v, {0.01f, 0.51f, 1}, {0, 0, -1}, 0, 0.9f).blocked);
+  EXPECT_TRUE(march(*v, {0.01f, 0.51f, 1}, {0, 0, -1}, 0, 2).blocked);
+}
+
 TEST(Voxels, SizesAndTheMemoryLimit) {
   const Scene s = thin_wall({0, 0, 1}, {1, 1, 1});
   const Expected<Voxels> v = voxelise(s, 0.25f, kGiB);

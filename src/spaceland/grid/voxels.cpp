@@ -266,6 +266,9 @@ class SurfaceRaster {
     const double half = 0.5 * double(v_.size);
     std::array<int, 3> lo, hi;
     voxel_range(v_, min(tri[0], min(tri[1], tri[2])), max(tri[0], max(tri[1], tri[2])), lo, hi);
+    // A degenerate triangle (a mesh's zero-area sliver) covers nothing and stops no light.
+    const Vec3 n = cross(tri[1] - tri[0], tri[2] - tri[0]);
+    if (!(dot(n, n) > 0)) return;
     // Each voxel it touches takes its area there (at least a sliver's: a voxel the triangle
     // only grazes is opaque all the same, so no light slips past a wall along a voxel face).
     const float sliver = 1e-6f * v_.size * v_.size;

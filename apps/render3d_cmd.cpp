@@ -114,6 +114,7 @@ int render_scene_3d(const RenderArgs& a) {
   options.grid = a.grid;
   cascade_options(options.grid);
   options.cache_probe_spacing = a.cache_probe_spacing;
+  options.sun_rays = a.sun_rays;
   // Extension on with --extend, tracing --extend-length voxels (cells in 2D); the fix off unless
   // --fix bilinear (2D's default is on: there every merge takes it).
   if (given("--extend") || given("--extend-length"))

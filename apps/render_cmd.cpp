@@ -423,6 +423,12 @@ std::unique_ptr<RenderCommand> add_render_command(CLI::App& app) {
                      "probes")
         ->check(CLI::Range(1, 64))
         ->capture_default_str();
+    render
+        ->add_option("--sun-rays", a.sun_rays,
+                     "3D spwi and grid: shadow rays over the sun's disk at each visible surface, "
+                     "for soft shadows (1: one towards its centre, hard shadows)")
+        ->check(CLI::Range(1, 1024))
+        ->capture_default_str();
     add_enum_option(render, "--gather", a.spwi.gather,
                     {sl::SpwiGather::pixel, sl::SpwiGather::probe},
                     "3D spwi: the final gather averages each probe's directions per pixel, over "

@@ -27,6 +27,7 @@ struct RenderArgs {
   penumbra::spaceland::SpwiOptions spwi;
   penumbra::spaceland::GridOptions grid;
   int cache_probe_spacing = penumbra::spaceland::RenderOptions{}.cache_probe_spacing;
+  int sun_rays = penumbra::spaceland::RenderOptions{}.sun_rays;
   bool disjoint = false;  // --disjoint: spwi's thesis intervals (SpwiOptions::overlap off)
   std::vector<std::string> outputs;
   std::string max_memory = "8G";

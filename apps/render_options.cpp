@@ -202,6 +202,7 @@ const std::pair<const char*, const char*> kFlags[] = {
     {"`grid.voxel`", "--voxel"},
     {"`grid.levels`", "--levels"},
     {"`cache_probe_spacing`", "--cache-probe-spacing"},
+    {"`sun_rays`", "--sun-rays"},
     {"`grid.probe_spacing`", "--probe-spacing"},
     {"`grid.directions`", "--directions"},
     {"`grid.interval`", "--interval"},

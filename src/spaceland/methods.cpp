@@ -64,11 +64,12 @@ Expected<ImageRgb> pt_solve(const SolveContext& ctx, const RenderOptions& o, Sol
 // With the grid's voxel size and levels and the cache's probe spacing: those of the radiance
 // cache its later bounces read.
 constexpr const char* kSpwiOptions[] = {
-    "spwi.probe_spacing", "spwi.directions",    "spwi.interval",   "spwi.branching",
-    "spwi.cascades",      "spwi.merge",         "spwi.sun",        "spwi.gather",
-    "spwi.depth_bias",    "spwi.overlap",       "spwi.preaverage", "spwi.merge_edge",
-    "spwi.gather_edge",   "spwi.gather_normal", "grid.voxel",      "grid.levels",
-    "cache_probe_spacing"};
+    "spwi.probe_spacing", "spwi.directions",     "spwi.interval",
+    "spwi.branching",     "spwi.cascades",       "spwi.merge",
+    "spwi.sun",           "spwi.gather",         "spwi.depth_bias",
+    "spwi.overlap",       "spwi.preaverage",     "spwi.merge_edge",
+    "spwi.gather_edge",   "spwi.gather_normal",  "grid.voxel",
+    "grid.levels",        "cache_probe_spacing", "sun_rays"};
 
 Status spwi_check(const RenderOptions& o) {
   return spwi::check_options(o.spwi);
@@ -95,6 +96,7 @@ void spwi_describe(const RenderResult& r, std::vector<Parameter>& p, std::string
   p.push_back({"merge_edge", double(o.merge_edge)});
   p.push_back({"gather_edge", double(o.gather_edge)});
   p.push_back({"gather_normal", double(o.gather_normal)});
+  p.push_back({"sun_rays", std::int64_t(r.options.sun_rays)});
   if (r.options.bounces > 1 && r.options.aov == Aov::radiance) {
     // The radiance cache of its later bounces.
     p.push_back({"cache_voxel", double(r.options.grid.voxel)});
@@ -122,7 +124,7 @@ Expected<ImageRgb> spwi_solve(const SolveContext& ctx, const RenderOptions& o, S
 
 constexpr const char* kGridOptions[] = {"grid.voxel",         "grid.levels",   "grid.probe_spacing",
                                         "grid.directions",    "grid.interval", "grid.cascades",
-                                        "grid.extend_length", "grid.fix"};
+                                        "grid.extend_length", "grid.fix",      "sun_rays"};
 
 Status grid_check(const RenderOptions& o) {
   return grid::check_options(o.grid);
@@ -142,6 +144,7 @@ void grid_describe(const RenderResult& r, std::vector<Parameter>& p, std::string
   p.push_back({"voxel_memory_bytes", r.voxel_bytes});
   p.push_back({"extend_length", double(o.extend_length)});
   p.push_back({"fix", std::string(o.fix ? "bilinear" : "none")});
+  p.push_back({"sun_rays", std::int64_t(r.options.sun_rays)});
   char mib[32];
   std::snprintf(mib, sizeof mib, "%.1f", double(r.voxel_bytes) / (1 << 20));
   line = ", voxel " + io::format_rounded(o.voxel) +

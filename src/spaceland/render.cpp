@@ -146,6 +146,8 @@ Status check_options(const RenderOptions& o) {
   // radiance cache's where the method takes its later bounces from it.
   if (m.check_options)
     if (Status s = m.check_options(o); !s) return s;
+  if (o.sun_rays < 1 || o.sun_rays > 1024)
+    return Error{"`sun_rays`: expected 1..1024 shadow rays, found " + std::to_string(o.sun_rays)};
   if (!needs_cache(o)) return {};
   if (o.cache_probe_spacing < 1 || o.cache_probe_spacing > 64)
     return Error{"`cache_probe_spacing`: expected 1..64 voxels, found " +
@@ -197,7 +199,7 @@ Status solve(const Plan& plan, const Scene& scene, const RayScene& rays, const G
              RenderResult& result) {
   const RenderOptions& o = plan.options;
   const MethodEntry& m = entry(o.method);
-  SolveContext ctx{scene, rays, g, o.bounces, o.max_memory};
+  SolveContext ctx{scene, rays, g, o.bounces, o.max_memory, o.sun_rays};
   ctx.progress = &o.progress;
   ctx.cancel = o.cancel;
   std::optional<RadianceCache> cache;

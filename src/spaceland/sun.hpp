@@ -1,7 +1,9 @@
-// The sun as the cascades' renderers take it: one exact shadow ray per point (hard shadows).
+// The sun as the cascades' renderers take it: exact shadow rays, at a visible hit spread over
+// its disk (soft shadows), elsewhere one towards its centre (hard shadows).
 #pragma once
 
 #include <cstdint>
+#include <vector>
 
 #include "penumbra/spaceland/scene.hpp"
 #include "spaceland/embree/ray_scene.hpp"
@@ -14,13 +16,14 @@ namespace penumbra::spaceland {
 // shadow ray traced is counted in `rays`.
 class SunLight {
  public:
-  SunLight(const Scene& scene, const RayScene& rays);
+  // `disk_rays`: the shadow rays of reflected(Hit) over the sun's disk (1: towards its centre).
+  SunLight(const Scene& scene, const RayScene& rays, int disk_rays = 1);
   bool on() const { return on_; }
   Vec3 direction() const { return dir_; }
   // The irradiance normal to the sun reaching free point p.
   Rgb at(Vec3 p, std::uint64_t& rays) const;
-  // Reflected at a visible hit (normals faced to the camera): albedo E cos / pi, 0 where the
-  // surface faces away or the shadow ray is blocked.
+  // Reflected at a visible hit (normals faced to the camera): albedo E cos / pi times the part
+  // of the disk_rays shadow rays that pass, 0 where the surface faces away.
   Rgb reflected(const Hit& hit, Rgb albedo, std::uint64_t& rays) const;
   // The same at a point with normal n, the shadow ray starting from `from` (already clear of
   // the surface).
@@ -32,6 +35,10 @@ class SunLight {
   bool on_ = false;
   Vec3 dir_{};
   Rgb irradiance_{};
+  std::vector<Vec3> disk_;  // reflected(Hit)'s shadow rays; empty: one towards the centre
+
+  // The irradiance normal to the sun reaching free point p through the disk's rays.
+  Rgb through_disk(Vec3 p, std::uint64_t& rays) const;
 };
 
 }  // namespace penumbra::spaceland

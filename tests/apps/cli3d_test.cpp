@@ -202,8 +202,8 @@ TEST_F(Cli3d, GridReportsItsVoxelsAndIsRefusedItsOthersOptions) {
   EXPECT_EQ(cp["cache_probe_spacing"], 4);  // the cache's own default, not the grid's 2
   // The cache's probe spacing is its own: spwi's --probe-spacing leaves it, and only spwi reads it.
   const auto spaced = run({"render", scene_, "--method", "spwi", "--bounces", "2", "--voxel",
-                           "0.25", "--levels", "1", "--probe-spacing", "8",
-                           "--cache-probe-spacing", "2", "--json", "-o", out("s.pfm")});
+                           "0.25", "--levels", "1", "--probe-spacing", "8", "--cache-probe-spacing",
+                           "2", "--json", "-o", out("s.pfm")});
   ASSERT_EQ(spaced.status, 0) << spaced.err;
   const nlohmann::json sp = nlohmann::json::parse(spaced.out)["parameters"];
   EXPECT_EQ(sp["cache_probe_spacing"], 2);
@@ -212,8 +212,8 @@ TEST_F(Cli3d, GridReportsItsVoxelsAndIsRefusedItsOthersOptions) {
              "-o", out("x.pfm")});
   EXPECT_EQ(bad.status, 2);
   EXPECT_NE(bad.err.find("--cache-probe-spacing"), std::string::npos) << bad.err;
-  bad = run({"render", scene_, "--method", "grid", "--cache-probe-spacing", "2", "-o",
-             out("x.pfm")});
+  bad =
+      run({"render", scene_, "--method", "grid", "--cache-probe-spacing", "2", "-o", out("x.pfm")});
   EXPECT_EQ(bad.status, 2);
   EXPECT_NE(bad.err.find("--cache-probe-spacing applies to --method spwi only, not grid"),
             std::string::npos)
@@ -223,6 +223,23 @@ TEST_F(Cli3d, GridReportsItsVoxelsAndIsRefusedItsOthersOptions) {
   EXPECT_NE(bad.err.find("--voxel applies to --method spwi or grid only, not pt"),
             std::string::npos)
       << bad.err;
+  // The sun's shadow rays over its disk: the cascades' methods report them (16 by default); the
+  // path tracer samples the disk itself; 0 and 1025 are refused.
+  EXPECT_EQ(cp["sun_rays"], 16);
+  const auto rays =
+      run({"render", scene_, "--method", "grid", "--sun-rays", "4", "--json", "-o", out("r.pfm")});
+  ASSERT_EQ(rays.status, 0) << rays.err;
+  EXPECT_EQ(nlohmann::json::parse(rays.out)["parameters"]["sun_rays"], 4);
+  bad = run({"render", scene_, "--method", "pt", "--sun-rays", "4", "-o", out("x.pfm")});
+  EXPECT_EQ(bad.status, 2);
+  EXPECT_NE(bad.err.find("--sun-rays applies to --method spwi or grid only, not pt"),
+            std::string::npos)
+      << bad.err;
+  for (const char* n : {"0", "1025"}) {
+    bad = run({"render", scene_, "--method", "spwi", "--sun-rays", n, "-o", out("x.pfm")});
+    EXPECT_EQ(bad.status, 2);
+    EXPECT_NE(bad.err.find("--sun-rays"), std::string::npos) << bad.err;
+  }
   // --merge belongs to spwi.
   bad = run({"render", scene_, "--method", "grid", "--merge", "fix", "-o", out("x.pfm")});
   EXPECT_EQ(bad.status, 2);

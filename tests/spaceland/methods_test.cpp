@@ -495,13 +495,15 @@ TEST(Methods, TheTableRefusesWhatItDoesNotHold) {
     }
     EXPECT_FALSE(m.options.empty()) << m.name;
     // Its own fields; SPWI also the grid's voxel size and levels and the cache's probe spacing,
-    // those of its radiance cache.
+    // those of its radiance cache; the cascades' methods the sun's shadow rays on what they see.
     for (const std::string& field : m.options) {
       const bool own = field.rfind(std::string(m.name) + ".", 0) == 0;
       const bool cache =
           m.method == Method::spwi &&
           (field == "grid.voxel" || field == "grid.levels" || field == "cache_probe_spacing");
-      EXPECT_TRUE(own || cache) << m.name << ": " << field;
+      const bool sun =
+          field == "sun_rays" && (m.method == Method::spwi || m.method == Method::grid);
+      EXPECT_TRUE(own || cache || sun) << m.name << ": " << field;
     }
   }
 }

@@ -116,7 +116,7 @@ Expected<ImageRgb> render(const SolveContext& ctx, const GridOptions& o, SolveRe
   used.levels = int(map->size());
   watch.restart();
   const Background bg(ctx.scene);
-  const SunLight sun(ctx.scene, ctx.rays);
+  const SunLight sun(ctx.scene, ctx.rays, ctx.sun_rays);
   const std::uint64_t voxel_memory = voxel_bytes(map->voxels(), bounces);
   const std::uint64_t left = ctx.max_memory - std::min(ctx.max_memory, voxel_memory);
   const std::vector<cascade::SphereLights> lights = map->lights(ctx.scene);

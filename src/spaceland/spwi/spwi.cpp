@@ -496,7 +496,7 @@ ImageRgb gather(const SolveContext& ctx, const SpwiOptions& o, const Layout& lay
                 std::uint64_t& rays) {
   const std::vector<Vec3> dirs = cascade::direction_map(layout.levels, 0);
   const std::uint64_t count = layout.probes(0);
-  const SunLight sun(ctx.scene, ctx.rays);
+  const SunLight sun(ctx.scene, ctx.rays, ctx.sun_rays);
   const bool sun_direct = o.sun == SpwiSun::direct;
   // --gather probe: each probe's cosine-weighted mean radiance about its own normal, once, so
   // that a pixel reads 4 values instead of 4 x Q0 (exact where the pixel's normal is its

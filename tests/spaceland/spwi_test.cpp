@@ -120,6 +120,40 @@ TEST(Spwi, BouncesFromTheCacheKeepPanelsOffTheirWallsBright) {
   EXPECT_LT(worst_red(render_ok(s, o).radiance, 1.96), 0.01);
 }
 
+// A closed room lit only by a panel high on the wall behind the camera, a centimetre off it (the
+// scene family's behind_2 without its bunnies): the floor is the panel's closed form (Lambert's
+// formula). The rays of upper probes' cells that hold the panel's centre but pass over its edge
+// run on into the ceiling's corner: taken as "blocked", one such probe drew a dark disc on the
+// floor at its spacing (44% of the truth at its middle); now the cells around it that meet the
+// panel say. Measured 2026-11-27, the floor's relative RMSE: 0.091 before, 0.036 now.
+TEST(Spwi, APanelBehindTheCameraLightsTheFloorWithoutBlotches) {
+  Scene s;
+  const Vec3 lo{-3.781f, 0, -3.377f}, hi{3.781f, 2.979f, 3.377f};
+  const float a = 0.5f, le = 6;
+  const std::uint32_t matte = add_material(s, {0.75f, 0.72f, 0.68f});
+  add_quad(s, lo, {0, 0, hi.z - lo.z}, {hi.x - lo.x, 0, 0}, add_material(s, {a, a, a}));
+  add_quad(s, {lo.x, hi.y, lo.z}, {hi.x - lo.x, 0, 0}, {0, 0, hi.z - lo.z}, matte);
+  add_quad(s, {lo.x, lo.y, lo.z + 0.05f}, {hi.x - lo.x, 0, 0}, {0, hi.y, 0}, matte);
+  add_quad(s, {lo.x, lo.y, hi.z - 0.05f}, {0, hi.y, 0}, {hi.x - lo.x, 0, 0}, matte);
+  add_quad(s, {lo.x + 0.05f, lo.y, lo.z}, {0, hi.y, 0}, {0, 0, hi.z - lo.z}, matte);
+  add_quad(s, {hi.x - 0.05f, lo.y, lo.z}, {0, 0, hi.z - lo.z}, {0, hi.y, 0}, matte);
+  const Vec3 corner{-0.676f, 2.308f, 3.317f}, u{0, 0.472f, 0}, v{1.352f, 0, 0};
+  add_quad(s, corner, u, v, add_material(s, {0, 0, 0}, {le, le, le}));
+  const std::vector<Vec3> panel{corner, corner + u, corner + u + v, corner + v};
+  s.camera = camera({0.077f, 1.272f, 2.727f}, {0, 0.8f, -3.327f}, 160, 120, 60);
+  RenderOptions o;
+  o.method = Method::spwi;
+  int n = 0;
+  const double e = floor_error(
+      s, render_ok(s, o).radiance,
+      [&](Vec3 p) {
+        return a * le * polygon_irradiance(p, {0, 1, 0}, panel) / std::numbers::pi;
+      },
+      n);
+  EXPECT_GT(n, 160 * 120 / 4);
+  EXPECT_LT(e, 0.05);
+}
+
 // A small light over a wide floor, in view and behind the camera (where its upper cascades carry
 // it): each light's share is made exact for the final gather's cosines (SphereLights::add), so
 // the floor's pool is the closed form but for the probes' interpolation between them. Measured

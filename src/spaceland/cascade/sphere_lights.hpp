@@ -45,6 +45,9 @@ struct SphereLight {
   float extent = 0;
   float inner = 0;  // a box light: the radius of the sphere about its centre that it holds
   std::array<float, 3> half{};  // a box light: half its sides, along its faces' normals
+  // A flat light that is a parallelogram (a quad): its half-edges from its centre (zero: a disk,
+  // or a flat mesh of another outline, whose disk of radius `extent` stands for it).
+  std::array<Vec3, 2> edges{};
   int shape = -1;  // a shaped mesh light: its triangles in SphereLights (-1: none kept)
   bool shaped() const { return extent > 0; }
   bool box() const { return dot(faces[1], faces[1]) > 0; }  // a shaped light with 3 axes
@@ -226,7 +229,18 @@ inline float toward(const SphereLight& l, Vec3 from, Vec3 u) {
   const float along = dot(u, plane);
   if (!(std::abs(along) > 1e-6f)) return -1;
   const float t = dot(l.centre - from, plane) / along;
-  return t > 0 && length(from + u * t - l.centre) <= l.extent ? t : -1;
+  if (!(t > 0)) return -1;
+  const Vec3 r = from + u * t - l.centre;
+  if (dot(l.edges[0], l.edges[0]) > 0) {
+    // Within the parallelogram: r = a e0 + b e1 with |a|, |b| <= 1 (the dual basis).
+    const Vec3 &e0 = l.edges[0], &e1 = l.edges[1];
+    const float g00 = dot(e0, e0), g01 = dot(e0, e1), g11 = dot(e1, e1);
+    const float det = g00 * g11 - g01 * g01, r0 = dot(r, e0), r1 = dot(r, e1);
+    const float a = (g11 * r0 - g01 * r1) / det, b = (g00 * r1 - g01 * r0) / det;
+    constexpr float kEdge = 1 + 1e-4f;
+    return std::abs(a) <= kEdge && std::abs(b) <= kEdge ? t : -1;
+  }
+  return length(r) <= l.extent ? t : -1;
 }
 
 // Where a probe's ray from `from` along unit u, standing for the direction to light l (d from it),
@@ -262,7 +276,25 @@ float upper_clear(const Uppers& up, int side, const SphereLight& l, Reach&& reac
     if (r < 0) continue;
     weight += w;
     const Vec3 u = octahedral::cell_direction(cell[0], cell[1], side);
-    if (r >= reach_for(l, up.p[j], u, d, d - l.radius)) clear += w;
+    if (r >= reach_for(l, up.p[j], u, d, d - l.radius)) {
+      clear += w;
+    } else if (l.shaped() && toward(l, up.p[j], u) < 0) {
+      // The ray of the cell that holds the light's centre passes beside it (a panel narrower than
+      // the cell: its ray went on over the panel's edge into the ceiling's corner, and said
+      // "blocked"): the cells around it whose rays meet the light say instead.
+      int met = 0, passed = 0;
+      for (int dv = -1; dv <= 1; ++dv)
+        for (int du = -1; du <= 1; ++du) {
+          const int cu = cell[0] + du, cv = cell[1] + dv;
+          if ((du == 0 && dv == 0) || cu < 0 || cv < 0 || cu >= side || cv >= side) continue;
+          const float t = toward(l, up.p[j], octahedral::cell_direction(cu, cv, side));
+          const float rk = reach(j, std::size_t(cv) * std::size_t(side) + std::size_t(cu));
+          if (t < 0 || rk < 0) continue;
+          ++met;
+          passed += rk >= t * (1 - 1e-3f);
+        }
+      if (met > 0) clear += w * double(passed) / met;
+    }
   }
   return weight > 0 ? float(clear / weight) : 1.0f;
 }
@@ -802,6 +834,27 @@ class SphereLights {
     return sum;
   }
 
+  // The half-edges of the parallelogram whose corners are `points` (4 distinct ones, repeats
+  // within `tolerance` merged: a quad of two triangles, or two layers back to back); zero when
+  // they are not one.
+  static std::array<Vec3, 2> parallelogram(const std::vector<Vec3>& points, float tolerance) {
+    std::vector<Vec3> c;
+    for (const Vec3& p : points) {
+      bool seen = false;
+      for (const Vec3& q : c) seen = seen || length(p - q) <= tolerance;
+      if (!seen) c.push_back(p);
+      if (c.size() > 4) return {};
+    }
+    if (c.size() != 4) return {};
+    // The diagonals bisect each other: corners a and b opposite, the other two the neighbours.
+    for (int k = 1; k < 4; ++k) {
+      const int o1 = k == 1 ? 2 : 1, o2 = 6 - k - o1;
+      const Vec3 a = c[0], b = c[std::size_t(k)], p = c[std::size_t(o1)], q = c[std::size_t(o2)];
+      if (length((a + b) - (p + q)) <= 2 * tolerance) return {(p - a) * 0.5f, (q - a) * 0.5f};
+    }
+    return {};
+  }
+
   // Whether mesh m is a shaped light (collect_shapes), and its light and triangles.
   static bool shaped_light(const Scene& scene, const TriangleMesh& m, SphereLight& l,
                            Shape& shape) {
@@ -870,6 +923,7 @@ class SphereLights {
     if (axes == 1) {
       for (const Vec3& p : m.positions)
         if (std::abs(dot(p - l.centre, axis[0])) > tolerance) return false;
+      l.edges = parallelogram(m.positions, tolerance);
     } else {
       for (const Vec3& p : m.positions)
         for (std::size_t j = 0; j < 3; ++j)

@@ -23,7 +23,7 @@ struct SolveContext {
   const GBuffer& g;
   int bounces = 1;  // 1: direct light only
   std::uint64_t max_memory = 0;
-  int sun_rays = 1;  // RenderOptions::sun_rays
+  int sun_rays = 16;  // RenderOptions::sun_rays
   // Later bounces' light at the surfaces, for a method that does not follow them itself (the
   // dispatcher builds it when bounces > 1); null otherwise.
   const RadianceCache* cache = nullptr;

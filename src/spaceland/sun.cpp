@@ -21,27 +21,16 @@ SunLight::SunLight(const Scene& scene, const RayScene& rays, int disk_rays)
   // same directions at every point, so the penumbra is as smooth as their count, never noisy.
   const Vec3 t = normalize(cross(dir_, std::abs(dir_.x) < 0.9f ? Vec3{1, 0, 0} : Vec3{0, 1, 0}));
   const Vec3 b = cross(dir_, t);
-  const double cos_a = std::cos(double(scene.sun.angular_radius) * kPi / 180);
+  const double a = double(scene.sun.angular_radius) * kPi / 180;
+  cos_a_ = float(std::cos(a));
+  sin_a_ = float(std::sin(a));
   const double golden = kPi * (3 - std::sqrt(5.0));
   for (int i = 0; i < disk_rays; ++i) {
-    const double z = 1 - (1 - cos_a) * (i + 0.5) / disk_rays;
+    const double z = 1 - (1 - double(cos_a_)) * (i + 0.5) / disk_rays;
     const double r = std::sqrt(std::max(0.0, 1 - z * z)), phi = golden * i;
     disk_.push_back(
         normalize(dir_ * float(z) + t * float(r * std::cos(phi)) + b * float(r * std::sin(phi))));
   }
-}
-
-Rgb SunLight::through_disk(Vec3 p, std::uint64_t& rays) const {
-  if (disk_.empty()) return at(p, rays);
-  int passed = 0;
-  for (const Vec3& d : disk_) {
-    ++rays;
-    passed += !rays_->occluded(Ray{p, d, 0, std::numeric_limits<float>::infinity()});
-  }
-  if (passed == 0) return {};
-  const Rgb e = irradiance_ * (float(passed) / float(disk_.size()));
-  const Ray r{p, dir_, 0, std::numeric_limits<float>::infinity()};
-  return media_.empty() ? e : e * media_.transmittance(r, r.tmax);
 }
 
 Rgb SunLight::at(Vec3 p, std::uint64_t& rays) const {
@@ -52,11 +41,41 @@ Rgb SunLight::at(Vec3 p, std::uint64_t& rays) const {
 }
 
 Rgb SunLight::reflected(const Hit& hit, Rgb albedo, std::uint64_t& rays) const {
-  if (!on_ || !(dot(hit.geometric_normal, dir_) > 0)) return {};
-  const float cos_s = dot(hit.shading_normal, dir_);
-  if (!(cos_s > 0)) return {};
-  return albedo * through_disk(rays_->spawn(hit.position, hit.geometric_normal, dir_), rays) *
-         float(cos_s / kPi);
+  if (!on_) return {};
+  if (disk_.empty()) {
+    if (!(dot(hit.geometric_normal, dir_) > 0)) return {};
+    return reflected(rays_->spawn(hit.position, hit.geometric_normal, dir_), hit.shading_normal,
+                     albedo, rays);
+  }
+  // Each ray by its own cosine, none below the surface's horizon. A surface above which the whole
+  // disk lies gets E cos (exact) times the clear rays' part of their cosines; one whose horizon
+  // cuts the disk E 2 / (1 + cos a) times the clear rays' mean cosine (the rays' mean cosine to
+  // the disk's centre is (1 + cos a) / 2).
+  if (!(dot(hit.geometric_normal, dir_) > -sin_a_)) return {};
+  const float inf = std::numeric_limits<float>::infinity();
+  double clear = 0, all = 0;
+  bool whole = true;
+  for (const Vec3& d : disk_) {
+    const float c = dot(hit.shading_normal, d);
+    if (!(c > 0) || !(dot(hit.geometric_normal, d) > 0)) {
+      whole = false;
+      continue;
+    }
+    ++rays;
+    all += double(c);
+    if (!rays_->occluded(Ray{rays_->spawn(hit.position, hit.geometric_normal, d), d, 0, inf}))
+      clear += double(c);
+  }
+  if (!(clear > 0)) return {};
+  const double cos_s = double(dot(hit.shading_normal, dir_));
+  const double part =
+      whole ? cos_s * clear / all : 2 / (1 + double(cos_a_)) * clear / double(disk_.size());
+  Rgb e = irradiance_ * float(part / kPi);
+  if (!media_.empty()) {
+    const Ray r{rays_->spawn(hit.position, hit.geometric_normal, dir_), dir_, 0, inf};
+    e = e * media_.transmittance(r, r.tmax);
+  }
+  return albedo * e;
 }
 
 Rgb SunLight::reflected(Vec3 from, Vec3 n, Rgb albedo, std::uint64_t& rays) const {

@@ -22,8 +22,8 @@ class SunLight {
   Vec3 direction() const { return dir_; }
   // The irradiance normal to the sun reaching free point p.
   Rgb at(Vec3 p, std::uint64_t& rays) const;
-  // Reflected at a visible hit (normals faced to the camera): albedo E cos / pi times the part
-  // of the disk_rays shadow rays that pass, 0 where the surface faces away.
+  // Reflected at a visible hit (normals faced to the camera): albedo / pi times the irradiance
+  // of the part of the disk its disk_rays shadow rays find clear, each by its cosine.
   Rgb reflected(const Hit& hit, Rgb albedo, std::uint64_t& rays) const;
   // The same at a point with normal n, the shadow ray starting from `from` (already clear of
   // the surface).
@@ -35,10 +35,8 @@ class SunLight {
   bool on_ = false;
   Vec3 dir_{};
   Rgb irradiance_{};
-  std::vector<Vec3> disk_;  // reflected(Hit)'s shadow rays; empty: one towards the centre
-
-  // The irradiance normal to the sun reaching free point p through the disk's rays.
-  Rgb through_disk(Vec3 p, std::uint64_t& rays) const;
+  std::vector<Vec3> disk_;       // reflected(Hit)'s shadow rays; empty: one towards the centre
+  float cos_a_ = 1, sin_a_ = 0;  // of the disk's angular radius
 };
 
 }  // namespace penumbra::spaceland

@@ -207,5 +207,45 @@ TEST(SphereLights, ASmallLightOverAFloorGivesItsClosedFormInSpwiAndTheGrid) {
   }
 }
 
+// A quad's outline from its corners in any order (two triangles, or two layers back to back):
+// the parallelogram's half-edges, so a ray meets it within its edges, not within the disk that
+// holds it; a trapezoid, or five corners, is no parallelogram.
+TEST(SphereLights, AQuadsOutlineIsFoundFromItsCornersInAnyOrder) {
+  const Vec3 a{1, 2, 3}, u{0.6f, 0, 0.2f}, v{0, 0.4f, 0};
+  const std::vector<Vec3> corners{a, a + u, a + u + v, a + v};
+  const int orders[3][4] = {{0, 1, 2, 3}, {0, 2, 1, 3}, {0, 1, 3, 2}};
+  for (const auto& order : orders) {
+    std::vector<Vec3> p;
+    for (int k : order) p.push_back(corners[std::size_t(k)]);
+    p.push_back(p[0]);  // a repeat, as two triangles share corners
+    const std::array<Vec3, 2> e = cascade::detail::parallelogram(p, 1e-5f);
+    // Half-edges along u and v (or their negatives, in either slot).
+    const Vec3 n = cross(e[0], e[1]);
+    EXPECT_NEAR(length(n), 0.25f * length(cross(u, v)), 1e-6f);
+    for (const Vec3& h : e) EXPECT_TRUE(length(cross(h, u)) < 1e-6f || length(cross(h, v)) < 1e-6f);
+  }
+  EXPECT_EQ(length(cascade::detail::parallelogram({a, a + u, a + u * 0.5f + v, a + v}, 1e-5f)[0]),
+            0.0f);
+  EXPECT_EQ(
+      length(cascade::detail::parallelogram({a, a + u, a + u + v, a + v, a + v * 2}, 1e-5f)[0]),
+      0.0f);
+
+  // Met within its edges: a ray past its corner but within the disk that holds it misses.
+  cascade::SphereLight l;
+  l.centre = a + (u + v) * 0.5f;
+  l.faces[0] = normalize(cross(u, v)) * length(cross(u, v));
+  l.extent = 0.5f * length(u + v);
+  l.edges = {u * 0.5f, v * 0.5f};
+  const Vec3 n0 = normalize(cross(u, v)), from = l.centre + n0 * 2;
+  EXPECT_GT(cascade::toward(l, from, normalize(l.centre - from)), 0.0f);
+  const Vec3 inside = l.centre + u * 0.45f + v * 0.45f;  // near a corner, within the edges
+  EXPECT_GT(cascade::toward(l, from, normalize(inside - from)), 0.0f);
+  const Vec3 past = l.centre + u * 0.55f + v * 0.1f;  // past an edge, within the disk
+  ASSERT_LT(length(past - l.centre), l.extent);
+  EXPECT_LT(cascade::toward(l, from, normalize(past - from)), 0.0f);
+  l.edges = {};
+  EXPECT_GT(cascade::toward(l, from, normalize(past - from)), 0.0f);  // the disk took it
+}
+
 }  // namespace
 }  // namespace penumbra::spaceland

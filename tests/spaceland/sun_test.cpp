@@ -79,6 +79,37 @@ TEST(SunLight, ItsDisksRaysGiveAStraightEdgesPenumbra) {
   EXPECT_EQ(traced, 2u * 256u);
 }
 
+// Each ray counts by its own cosine: a surface tilted 60 degrees off a sun of radius 4 degrees,
+// seeing all of it, gets E cos 60 (the disk's irradiance: its radiance times pi sin^2 a, along
+// its axis); one whose horizon cuts the disk through its middle gets the half above, by its
+// cosines, where one ray to the centre gave nothing.
+TEST(SunLight, ItsDisksRaysCountByTheirCosines) {
+  Scene s = edge_scene();
+  s.meshes.pop_back();  // no plate: the sun is clear everywhere
+  Expected<RayScene> rays = RayScene::build(s);
+  ASSERT_TRUE(rays.ok()) << rays.error().message;
+  const SunLight sun(s, *rays, 64);
+  const Rgb a{1, 1, 1};
+  std::uint64_t traced = 0;
+  for (double deg : {0.0, 30.0, 60.0, 85.0}) {
+    Hit h = floor_hit(0.5f);
+    h.position.y = 0.5f;
+    const double t = deg * kPi / 180;
+    h.shading_normal = h.geometric_normal = {float(std::sin(t)), float(std::cos(t)), 0};
+    EXPECT_NEAR(sun.reflected(h, a, traced).r / (2 * std::cos(t) / kPi), 1.0, 1e-5) << deg;
+  }
+  // The horizon through the disk's centre: the half above it, each ray by its cosine
+  Hit h = floor_hit(0.5f);
+  h.position.y = 0.5f;  // in the air, off the floor's plane
+  h.shading_normal = h.geometric_normal = {1, 0, 0};
+  const double alpha = kRadiusDeg * kPi / 180;
+  // The disk's half above the plane x = 0, each direction by its angle b off the plane: the
+  // radiance E / (pi a^2) times the half disk's area pi a^2 / 2 times its centroid's 4 a / (3 pi),
+  // so E 2 a / (3 pi) (small angles), reflected albedo / pi of it.
+  const double want = 2 * 2 * alpha / (3 * kPi) / kPi;
+  EXPECT_NEAR(sun.reflected(h, a, traced).r / want, 1.0, 0.02);
+}
+
 // SPWI and the grid at their defaults (16 rays over the disk) against the same closed form, over
 // the floor's pixels in the penumbra's band where the plate does not hide them. Measured
 // 2026-11-27 (both methods alike): 0.057 at 16 rays (the fraction steps by 1/16), 0.195 at 4,

@@ -155,10 +155,21 @@ TEST(Voxels, AZeroAreaTriangleStopsNoLight) {
   mesh.positions.push_back({0.8f, 0.5f, 0.5f});
   mesh.triangles.push_back({first, first + 1, first + 2});
   mesh.materials.push_back(mesh.materials[0]);
+  // And one along a diagonal, its corners on one line but for the floats' rounding.
+  const Vec3 a{-0.8f, 0.1f, 0.3f}, d{0.1f, 0.03f, 0.07f};
+  mesh.positions.push_back(a);
+  mesh.positions.push_back(a + d * 3);
+  mesh.positions.push_back(a + d * 7);
+  mesh.triangles.push_back({first + 3, first + 4, first + 5});
+  mesh.materials.push_back(mesh.materials[0]);
   const Expected<Voxels> v = voxelise(s, 0.05f, kGiB);
   ASSERT_TRUE(v.ok()) << v.error().message;
   EXPECT_FALSE(march(*v, {0.01f, 0.51f, 1}, {0, 0, -1}, 0, 0.9f).blocked);
   EXPECT_TRUE(march(*v, {0.01f, 0.51f, 1}, {0, 0, -1}, 0, 2).blocked);
+  for (float t : {3.5f, 5.0f, 6.5f}) {
+    const Vec3 p = a + d * t;
+    EXPECT_FALSE(march(*v, p + Vec3{0, 0, 0.3f}, {0, 0, -1}, 0, 0.6f).blocked) << t;
+  }
 }
 
 TEST(Voxels, SizesAndTheMemoryLimit) {

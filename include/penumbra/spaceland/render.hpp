@@ -149,9 +149,9 @@ struct RenderOptions {
   // the probe grid with grid.voxel and grid.levels, this many voxels between its cascade-0 probes
   // and the grid's defaults otherwise (docs/METHODS.md, "The radiance cache").
   int cache_probe_spacing = 4;
-  // The sun on the surfaces the camera sees, for the cascades' methods (spwi with --sun direct,
+  // The sun on the surfaces the camera sees, for the cascades' methods (spwi with SpwiSun::direct,
   // grid): this many exact shadow rays spread over its disk, equal solid angle each, so its
-  // penumbrae are soft as the path tracer's (1: one towards its centre, hard shadows).
+  // penumbrae are soft, in steps of 1 / sun_rays (1: one towards its centre, hard shadows).
   int sun_rays = 16;
   int threads = 0;                                    // 0: all hardware threads
   std::uint64_t max_memory = std::uint64_t(8) << 30;  // refuse work whose memory need is larger

@@ -206,8 +206,37 @@ Uppers uppers_of(const Corners& c, float a, Position&& position) {
   return up;
 }
 
-// Where a ray from `from` along unit u meets shaped light l: a flat one's plane, where it crosses
-// it within the light's bound of its centre; a box where it enters it; negative where it misses.
+namespace detail {
+
+// The half-edges of the parallelogram whose corners are `points` (4 distinct ones, repeats within
+// `tolerance` merged: a quad of two triangles, or two layers back to back), from its centre; zero
+// when they are not one.
+inline std::array<Vec3, 2> parallelogram(const std::vector<Vec3>& points, float tolerance) {
+  std::vector<Vec3> c;
+  for (const Vec3& p : points) {
+    bool seen = false;
+    for (const Vec3& q : c) seen = seen || length(p - q) <= tolerance;
+    if (!seen) c.push_back(p);
+    if (c.size() > 4) return {};
+  }
+  if (c.size() != 4) return {};
+  // The diagonals bisect each other: corners a and b opposite, the other two the neighbours.
+  for (std::size_t k = 1; k < 4; ++k) {
+    const std::size_t o1 = k == 1 ? 2 : 1, o2 = 6 - k - o1;
+    const Vec3 a = c[0], b = c[k], p = c[o1], q = c[o2];
+    if (length((a + b) - (p + q)) > 2 * tolerance) continue;
+    const std::array<Vec3, 2> e{(p - a) * 0.5f, (q - a) * 0.5f};
+    const float area = length(cross(e[0], e[1]));
+    return area > 1e-6f * length(e[0]) * length(e[1]) ? e : std::array<Vec3, 2>{};
+  }
+  return {};
+}
+
+}  // namespace detail
+
+// Where a ray from `from` along unit u meets shaped light l: a quad's plane where it crosses it
+// within its edges, another flat one's within its bound of its centre; a box where it enters it;
+// negative where it misses.
 inline float toward(const SphereLight& l, Vec3 from, Vec3 u) {
   if (l.box()) {  // the slabs along its 3 axes
     float enter = 0, leave = kInfinity;
@@ -232,11 +261,10 @@ inline float toward(const SphereLight& l, Vec3 from, Vec3 u) {
   if (!(t > 0)) return -1;
   const Vec3 r = from + u * t - l.centre;
   if (dot(l.edges[0], l.edges[0]) > 0) {
-    // Within the parallelogram: r = a e0 + b e1 with |a|, |b| <= 1 (the dual basis).
-    const Vec3 &e0 = l.edges[0], &e1 = l.edges[1];
-    const float g00 = dot(e0, e0), g01 = dot(e0, e1), g11 = dot(e1, e1);
-    const float det = g00 * g11 - g01 * g01, r0 = dot(r, e0), r1 = dot(r, e1);
-    const float a = (g11 * r0 - g01 * r1) / det, b = (g00 * r1 - g01 * r0) / det;
+    // Within the parallelogram: r = a e0 + b e1 with |a|, |b| <= 1.
+    const Vec3 &e0 = l.edges[0], &e1 = l.edges[1], n = cross(e0, e1);
+    const float nn = dot(n, n);
+    const float a = dot(cross(r, e1), n) / nn, b = dot(cross(e0, r), n) / nn;
     constexpr float kEdge = 1 + 1e-4f;
     return std::abs(a) <= kEdge && std::abs(b) <= kEdge ? t : -1;
   }
@@ -260,7 +288,8 @@ inline float reach_for(const SphereLight& l, Vec3 from, Vec3 u, float d, float s
 // The fraction of the upper probes `up` (weighted) whose ray towards light l got to it, among those
 // that traced one: reach(j, k) is where upper probe j's ray of cell k (its side x side map)
 // stopped, infinity where no surface stopped it, negative where it traced none (into its own
-// surface). 1 where none did.
+// surface); the ray of the cell that holds the light's centre, or where it passes beside a shaped
+// light, those of the 8 cells around it that meet it. 1 where none did.
 template <class Reach>
 float upper_clear(const Uppers& up, int side, const SphereLight& l, Reach&& reach) {
   double clear = 0, weight = 0;
@@ -279,9 +308,8 @@ float upper_clear(const Uppers& up, int side, const SphereLight& l, Reach&& reac
     if (r >= reach_for(l, up.p[j], u, d, d - l.radius)) {
       clear += w;
     } else if (l.shaped() && toward(l, up.p[j], u) < 0) {
-      // The ray of the cell that holds the light's centre passes beside it (a panel narrower than
-      // the cell: its ray went on over the panel's edge into the ceiling's corner, and said
-      // "blocked"): the cells around it whose rays meet the light say instead.
+      // That ray passed beside the light (smaller than the cell, a panel's edge): the cells
+      // around it whose rays meet the light say, not where it ran on to (the ceiling's corner).
       int met = 0, passed = 0;
       for (int dv = -1; dv <= 1; ++dv)
         for (int du = -1; du <= 1; ++du) {
@@ -834,27 +862,6 @@ class SphereLights {
     return sum;
   }
 
-  // The half-edges of the parallelogram whose corners are `points` (4 distinct ones, repeats
-  // within `tolerance` merged: a quad of two triangles, or two layers back to back); zero when
-  // they are not one.
-  static std::array<Vec3, 2> parallelogram(const std::vector<Vec3>& points, float tolerance) {
-    std::vector<Vec3> c;
-    for (const Vec3& p : points) {
-      bool seen = false;
-      for (const Vec3& q : c) seen = seen || length(p - q) <= tolerance;
-      if (!seen) c.push_back(p);
-      if (c.size() > 4) return {};
-    }
-    if (c.size() != 4) return {};
-    // The diagonals bisect each other: corners a and b opposite, the other two the neighbours.
-    for (int k = 1; k < 4; ++k) {
-      const int o1 = k == 1 ? 2 : 1, o2 = 6 - k - o1;
-      const Vec3 a = c[0], b = c[std::size_t(k)], p = c[std::size_t(o1)], q = c[std::size_t(o2)];
-      if (length((a + b) - (p + q)) <= 2 * tolerance) return {(p - a) * 0.5f, (q - a) * 0.5f};
-    }
-    return {};
-  }
-
   // Whether mesh m is a shaped light (collect_shapes), and its light and triangles.
   static bool shaped_light(const Scene& scene, const TriangleMesh& m, SphereLight& l,
                            Shape& shape) {
@@ -923,7 +930,13 @@ class SphereLights {
     if (axes == 1) {
       for (const Vec3& p : m.positions)
         if (std::abs(dot(p - l.centre, axis[0])) > tolerance) return false;
-      l.edges = parallelogram(m.positions, tolerance);
+      // The exact outline where it is a parallelogram that the triangles fill (one layer, or
+      // two back to back) about the same centre.
+      const std::array<Vec3, 2> e = detail::parallelogram(m.positions, tolerance);
+      const double quad = 4 * double(length(cross(e[0], e[1])));
+      if (quad > 0 &&
+          (std::abs(total - quad) <= 1e-3 * quad || std::abs(total - 2 * quad) <= 1e-3 * quad))
+        l.edges = e;
     } else {
       for (const Vec3& p : m.positions)
         for (std::size_t j = 0; j < 3; ++j)

@@ -64,7 +64,8 @@ bool triangle_overlaps_box(const std::array<Vec3, 3>& tri, Vec3 centre, double h
 // (Sutherland-Hodgman), then the polygon's area.
 double clipped_area(const std::array<Vec3, 3>& tri, Vec3 centre, double half) {
   half *= 1 + 1e-5;
-  std::array<std::array<double, 3>, 9> poly{}, next{};
+  // At most 3 + 6 corners in exact arithmetic; room to spare for rounding.
+  std::array<std::array<double, 3>, 16> poly{}, next{};
   int count = 3;
   for (int i = 0; i < 3; ++i)
     for (int k = 0; k < 3; ++k)
@@ -77,6 +78,7 @@ double clipped_area(const std::array<Vec3, 3>& tri, Vec3 centre, double half) {
       const std::array<double, 3>& a = poly[std::size_t(i)];
       const std::array<double, 3>& b = poly[std::size_t((i + 1) % count)];
       const double da = half - sign * a[axis], db = half - sign * b[axis];
+      if (out + 2 > int(next.size())) break;
       if (da >= 0) next[std::size_t(out++)] = a;
       if ((da >= 0) != (db >= 0)) {
         const double t = da / (da - db);
@@ -263,12 +265,21 @@ class SurfaceRaster {
   }
 
   void triangle(const std::array<Vec3, 3>& tri, std::uint32_t material) {
+    // A degenerate triangle (a mesh's sliver, its corners on one line but for rounding) covers
+    // nothing and stops no light: twice its area under 1e-6 of its longest edge squared.
+    double e[3][3], longest = 0;
+    for (int k = 0; k < 3; ++k) {
+      for (int c = 0; c < 3; ++c)
+        e[k][c] = double(tri[std::size_t((k + 1) % 3)][c]) - double(tri[std::size_t(k)][c]);
+      longest = std::max(longest, e[k][0] * e[k][0] + e[k][1] * e[k][1] + e[k][2] * e[k][2]);
+    }
+    const double n[3] = {e[0][1] * e[1][2] - e[0][2] * e[1][1],
+                         e[0][2] * e[1][0] - e[0][0] * e[1][2],
+                         e[0][0] * e[1][1] - e[0][1] * e[1][0]};
+    if (!(std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]) > 1e-6 * longest)) return;
     const double half = 0.5 * double(v_.size);
     std::array<int, 3> lo, hi;
     voxel_range(v_, min(tri[0], min(tri[1], tri[2])), max(tri[0], max(tri[1], tri[2])), lo, hi);
-    // A degenerate triangle (a mesh's zero-area sliver) covers nothing and stops no light.
-    const Vec3 n = cross(tri[1] - tri[0], tri[2] - tri[0]);
-    if (!(dot(n, n) > 0)) return;
     // Each voxel it touches takes its area there (at least a sliver's: a voxel the triangle
     // only grazes is opaque all the same, so no light slips past a wall along a voxel face).
     const float sliver = 1e-6f * v_.size * v_.size;
@@ -323,6 +334,7 @@ class SurfaceRaster {
   // is the emitters' area-weighted mean diluted by the other surfaces only up to a voxel face's
   // area: a panel a centimetre off its wall shares voxels with it, and as a mean it glowed half
   // as bright, while a light small beside a wall still spreads its power over the voxel's face.
+  // Such a voxel glows on both sides: a wall one voxel thick shows the panel to the next room.
   void finish(Voxels& v) const {
     const float face = v.size * v.size;
     for (std::size_t k = 0; k < sums_.weight.size(); ++k) {

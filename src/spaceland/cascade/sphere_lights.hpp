@@ -234,6 +234,15 @@ inline std::array<Vec3, 2> parallelogram(const std::vector<Vec3>& points, float 
 
 }  // namespace detail
 
+// Where a ray from `from` along unit u crosses flat light l's plane ahead (negative: it does not).
+inline float plane_crossing(const SphereLight& l, Vec3 from, Vec3 u) {
+  const Vec3 plane = normalize(l.faces[0]);
+  const float along = dot(u, plane);
+  if (!(std::abs(along) > 1e-6f)) return -1;
+  const float t = dot(l.centre - from, plane) / along;
+  return t > 0 ? t : -1;
+}
+
 // Where a ray from `from` along unit u meets shaped light l: a quad's plane where it crosses it
 // within its edges, another flat one's within its bound of its centre; a box where it enters it;
 // negative where it misses.
@@ -254,11 +263,8 @@ inline float toward(const SphereLight& l, Vec3 from, Vec3 u) {
     }
     return enter <= leave ? enter : -1;
   }
-  const Vec3 plane = normalize(l.faces[0]);
-  const float along = dot(u, plane);
-  if (!(std::abs(along) > 1e-6f)) return -1;
-  const float t = dot(l.centre - from, plane) / along;
-  if (!(t > 0)) return -1;
+  const float t = plane_crossing(l, from, u);
+  if (t < 0) return -1;
   const Vec3 r = from + u * t - l.centre;
   if (dot(l.edges[0], l.edges[0]) > 0) {
     // Within the parallelogram: r = a e0 + b e1 with |a|, |b| <= 1.
@@ -280,9 +286,8 @@ inline float reach_for(const SphereLight& l, Vec3 from, Vec3 u, float d, float s
   const float t = toward(l, from, u);
   if (t >= 0) return t * (1 - 1e-3f);
   if (l.box()) return d - l.inner;
-  const Vec3 plane = normalize(l.faces[0]);
-  const float along = dot(u, plane), to_plane = dot(l.centre - from, plane);
-  return std::abs(along) > 1e-6f && to_plane / along > 0 ? to_plane / along * (1 - 1e-3f) : d;
+  const float crossing = plane_crossing(l, from, u);
+  return crossing > 0 ? crossing * (1 - 1e-3f) : d;
 }
 
 // The fraction of the upper probes `up` (weighted) whose ray towards light l got to it, among those

@@ -309,10 +309,14 @@ float upper_clear(const Uppers& up, int side, const SphereLight& l, Reach&& reac
     const float r = reach(j, std::size_t(cell[1]) * std::size_t(side) + std::size_t(cell[0]));
     if (r < 0) continue;
     weight += w;
+    if (!l.shaped()) {  // a sphere: its near side, whatever the cell's direction
+      if (r >= d - l.radius) clear += w;
+      continue;
+    }
     const Vec3 u = octahedral::cell_direction(cell[0], cell[1], side);
     if (r >= reach_for(l, up.p[j], u, d, d - l.radius)) {
       clear += w;
-    } else if (l.shaped() && toward(l, up.p[j], u) < 0) {
+    } else if (toward(l, up.p[j], u) < 0) {
       // That ray passed beside the light (smaller than the cell, a panel's edge): the cells
       // around it whose rays meet the light say, not where it ran on to (the ceiling's corner).
       int met = 0, passed = 0;

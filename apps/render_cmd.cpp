@@ -55,6 +55,7 @@ nlohmann::json parameters_json(const penumbra::flatland::RenderOptions& o) {
               {"corners", penumbra::flatland::to_string(o.hrc.corners)},
               {"wall_fan", o.hrc.wall_fan},
               {"near_fan", o.hrc.near_fan},
+              {"fan_share", o.hrc.fan_share},
               {"even_weight", o.hrc.even_weight}});
     return p;
   }
@@ -275,7 +276,12 @@ int render_scene(const RenderArgs& a) {
 
   if (a.json) {
     nlohmann::ordered_json stages = nlohmann::ordered_json::object();  // in pipeline order
-    for (const penumbra::flatland::StageTime& s : result->stages) stages[s.name] = s.ms;
+    // What the stages that count their work computed (StageTime::work).
+    nlohmann::ordered_json work = nlohmann::ordered_json::object();
+    for (const penumbra::flatland::StageTime& s : result->stages) {
+      stages[s.name] = s.ms;
+      if (s.work > 0) work[s.name] = s.work;
+    }
     nlohmann::ordered_json j = {
         {"method", penumbra::flatland::to_string(options.method)},
         {"device", result->device},
@@ -284,6 +290,7 @@ int render_scene(const RenderArgs& a) {
         {"height", scene->height},
         {"time_ms", result->time_ms},
         {"stages", stages},
+        {"stage_work", work},
         {"rasterize_ms", raster_ms},
         {"load_ms", load_ms},
         {"write_ms", write_ms},

@@ -112,19 +112,36 @@ void add_render_options(CLI::App* app, RenderOptions& options, RenderOptionFlags
     app->add_flag("--no-near-segment", flags.no_near_segment,
                   "hrc: read R_0([x+1, y]) alone, as the paper (a cell's own medium left out)");
     app->add_option("--wall-fan", options.hrc.wall_fan,
-                    "hrc: lit wall cells, and the cells --near-fan names, gather through 2 rays "
-                    "per cone of this cascade (0: no fan, every cell reads its quadrants)")
+                    "hrc: the fan's cells gather through 2 rays per cone of this cascade (0: no "
+                    "fan, every cell reads its quadrants)")
         ->check(CLI::Range(0, penumbra::flatland::kMaxWallFan))
         ->capture_default_str();
+    app->add_option("--fan-share", options.hrc.fan_share,
+                    "hrc: the share of the cells the fan gathers, the same on every scene: lit "
+                    "wall cells and lights' rims first, then the nearest to a rim (0 < share <= 1)")
+        ->check(CLI::Validator(
+            [](std::string& text) {
+              float v = 0;
+              const bool ok = CLI::detail::lexical_cast(text, v) && v > 0.0f && v <= 1.0f;
+              return ok ? std::string() : "a share of the cells in (0, 1], found " + text;
+            },
+            "SHARE in (0, 1]"))
+        ->capture_default_str();
     app->add_option("--near-fan", options.hrc.near_fan,
-                    "hrc: cells within this many cells of a light's rim gather through the wall "
-                    "fan too (0: wall cells only; no effect with --wall-fan 0)")
+                    "hrc: the farthest from a light's rim (cells along x and y) the fan ranks "
+                    "cells by their distance; farther ones rank alike, after them")
         ->check(CLI::Range(0, penumbra::flatland::kMaxNearFan))
         ->capture_default_str();
     app->add_option("--even-weight", options.hrc.even_weight,
                     "hrc: eqs. 15-17 at an even probe column, the weight of the cones at its own "
                     "probe against the merges along the edges (the paper: 0.5); in [0, 1]")
-        ->check(CLI::Range(0.0f, 1.0f))
+        ->check(CLI::Validator(
+            [](std::string& text) {
+              float v = 0;
+              const bool ok = CLI::detail::lexical_cast(text, v) && v > 0.0f && v <= 1.0f;
+              return ok ? std::string() : "a share of the cells in (0, 1], found " + text;
+            },
+            "SHARE in (0, 1]"))
         ->capture_default_str();
   }
   if (which.bounces)
@@ -182,6 +199,7 @@ const std::pair<const char*, const char*> kFlags[] = {
     {"`hrc.corners`", "--corners"},
     {"`hrc.wall_fan`", "--wall-fan"},
     {"`hrc.near_fan`", "--near-fan"},
+    {"`hrc.fan_share`", "--fan-share"},
     {"`hrc.even_weight`", "--even-weight"},
     {"`pt.spp`", "--spp"},
     {"`pt.seconds`", "--time"},

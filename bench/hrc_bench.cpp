@@ -23,11 +23,12 @@ void run_warm(benchmark::State& state, const Scene& scene, const HrcOptions& o) 
   std::vector<float> fluence;
   std::vector<StageTime> stages;
   hrc::solve(medium, scene.environment, o, workspace, fluence, stages);
-  double up = 0, down = 0, other = 0, gather = 0, fan = 0;
+  double up = 0, down = 0, other = 0, gather = 0, fan = 0, work = 0;
   for (auto _ : state) {
     stages.clear();
     hrc::solve(medium, scene.environment, o, workspace, fluence, stages);
     for (const StageTime& s : stages) {
+      work += double(s.work);
       if (s.name == "trace T0-T2" || s.name == "merge up T3-TN")
         up += s.ms;
       else if (s.name == "gather")
@@ -46,7 +47,9 @@ void run_warm(benchmark::State& state, const Scene& scene, const HrcOptions& o) 
   state.counters["merge_down_ms"] = down / n;
   state.counters["views_ms"] = other / n;  // the world, the views, a whole-fluence blur
   state.counters["gather_ms"] = gather / n;
-  state.counters["fan_ms"] = fan / n;  // HrcOptions::wall_fan and near_fan
+  state.counters["fan_ms"] = fan / n;  // HrcOptions::wall_fan, fan_share and near_fan
+  // The values the stages computed (StageTime::work), the same on every scene of a grid size.
+  state.counters["work_M"] = work / n / 1e6;
   state.counters["memory_MiB"] =
       double(hrc::working_bytes(scene.width, scene.height, o)) / (1 << 20);
   // T and two layers of R alone, and the seed's formula for them at the next power of two.
@@ -70,29 +73,36 @@ BENCHMARK(BM_HrcGrid)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
-// Same grid and walls, 2 to 1002 lights: HRC does not branch on the scene.
-void BM_HrcLights512(benchmark::State& state) {
-  const Scene scene = *build_scene(bench::lights_scene(512, int(state.range(0))));
-  run_warm(state, scene, {});
+// Same grid, 2 to 1002 lights among the same walls, fog everywhere, or nothing but the
+// environment: HRC's work does not depend on the scene (the fan gathers the same number of
+// cells on each).
+void BM_HrcScenes512(benchmark::State& state) {
+  const int which = int(state.range(0));
+  SceneDesc d = bench::lights_scene(512, which == 0 ? 2 : which == 1 ? 102 : 1002);
+  if (which == 3) {  // the 102 lights in a glowing fog over the whole grid
+    d = bench::lights_scene(512, 102);
+    d.shapes.insert(d.shapes.begin(),
+                    {Box{{256, 256}, {512, 512}, 0}, Material{{0.02f, 0.02f, 0.03f}, 0.05f, {}}});
+  } else if (which == 4) {
+    d.shapes.clear();
+  }
+  const char* names[] = {"2 lights", "102 lights", "1002 lights", "fog, 102 lights", "nothing"};
+  state.SetLabel(names[which]);
+  run_warm(state, *build_scene(d), {});
 }
-BENCHMARK(BM_HrcLights512)
-    ->Arg(2)
-    ->Arg(102)
-    ->Arg(1002)
-    ->Unit(benchmark::kMillisecond)
-    ->UseRealTime();
+BENCHMARK(BM_HrcScenes512)->DenseRange(0, 4)->Unit(benchmark::kMillisecond)->UseRealTime();
 
-// The fan's cost against its reach: 102 and 1002 lights at 512^2, wall_fan M and near_fan K
-// (docs/PERFORMANCE.md: why `--wall-fan 4 --near-fan 8` is not the default).
+// The fan's cost against its reach: 102 and 1002 lights at 512^2, wall_fan M and fan_share
+// S / 1024 (docs/PERFORMANCE.md).
 void BM_HrcFan512(benchmark::State& state) {
   const Scene scene = *build_scene(bench::lights_scene(512, int(state.range(0))));
   HrcOptions o;
   o.wall_fan = int(state.range(1));
-  o.near_fan = int(state.range(2));
+  o.fan_share = float(state.range(2)) / 1024;
   run_warm(state, scene, o);
 }
 BENCHMARK(BM_HrcFan512)
-    ->ArgsProduct({{102, 1002}, {3, 4}, {2, 8}})
+    ->ArgsProduct({{102, 1002}, {3, 4}, {16, 64}})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

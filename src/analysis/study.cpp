@@ -73,8 +73,10 @@ std::vector<Run> default_runs(int bounces, int max_spp, bool quick) {
   hrc("hrc --corners walls", [](HrcOptions& h) { h.corners = Corners::walls; });
   hrc("hrc --no-near-segment", [](HrcOptions& h) { h.near_segment = false; });
   hrc("hrc --storage f16", [](HrcOptions& h) { h.storage = Storage::f16; });
-  hrc("hrc --near-fan 0", [](HrcOptions& h) { h.near_fan = 0; });
   hrc("hrc --wall-fan 0", [](HrcOptions& h) { h.wall_fan = 0; });
+  hrc("hrc --fan-share 0.00390625", [](HrcOptions& h) { h.fan_share = 1.0f / 256; });
+  hrc("hrc --fan-share 0.0625", [](HrcOptions& h) { h.fan_share = 1.0f / 16; });
+  hrc("hrc --near-fan 0", [](HrcOptions& h) { h.near_fan = 0; });
   hrc("hrc --wall-fan 4 --near-fan 8", [](HrcOptions& h) { h.wall_fan = 4, h.near_fan = 8; });
   hrc("hrc --even-weight 0.5", [](HrcOptions& h) { h.even_weight = 0.5f; });
   rc("rc --fix nearest", [](RcOptions& r) { r.fix = MergeFix::nearest; });

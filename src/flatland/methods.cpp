@@ -92,8 +92,12 @@ Status hrc_check(Plan& p) {
                ", found " + std::to_string(fan));
   const int near = p.options.hrc.near_fan;
   if (near < 0 || near > kMaxNearFan)
-    return bad("`hrc.near_fan`: expected 0 (off) to " + std::to_string(kMaxNearFan) +
-               " cells, found " + std::to_string(near));
+    return bad("`hrc.near_fan`: expected 0 to " + std::to_string(kMaxNearFan) + " cells, found " +
+               std::to_string(near));
+  const float share = p.options.hrc.fan_share;
+  if (!(share > 0.0f && share <= 1.0f))
+    return bad("`hrc.fan_share`: expected a share of the cells in (0, 1], found " +
+               io::format_number(share));
   const float w = p.options.hrc.even_weight;
   if (!(w >= 0.0f && w <= 1.0f))
     return bad("`hrc.even_weight`: expected a weight in [0, 1], found " + io::format_number(w));

@@ -313,7 +313,7 @@ Expected<RenderResult> render_unchecked(const Scene& scene, const RenderOptions&
       std::vector<StageTime> inner;
       f = method.solve(solve, inner);
       for (StageTime& s : inner)
-        result.stages.push_back({"bounce " + std::to_string(bounce) + " " + s.name, s.ms});
+        result.stages.push_back({"bounce " + std::to_string(bounce) + " " + s.name, s.ms, s.work});
     }
     result.fluence = ImageRgb(scene.width, scene.height, std::move(f));
   });

@@ -220,16 +220,28 @@ TEST_F(Cli, HolographicCascadesReportStagesAndParameters) {
   EXPECT_FALSE(jd.at("stages").contains("cross blur"));
   EXPECT_EQ(jd.at("parameters").at("wall_fan"), 3);
   EXPECT_EQ(jd.at("parameters").at("near_fan"), 2);
+  EXPECT_FLOAT_EQ(jd.at("parameters").at("fan_share").get<float>(), 1.0f / 64);
+  // The stages count their work: the fan's rays, ceil(cells / 64) cells each 2 rays per cone
+  // of cascade 3 in each quadrant.
+  {
+    const nlohmann::json& work = jd.at("stage_work");
+    const std::uint64_t cells =
+        jd.at("width").get<std::uint64_t>() * jd.at("height").get<std::uint64_t>();
+    EXPECT_EQ(work.at("fan").get<std::uint64_t>(), (cells + 63) / 64 * 4 * 16);
+    EXPECT_EQ(work.at("gather").get<std::uint64_t>(), 4 * cells);
+  }
   EXPECT_FLOAT_EQ(jd.at("parameters").at("even_weight").get<float>(), 0.575f);
   EXPECT_TRUE(jd.at("stages").contains("fan"));
-  const Result w =
-      render_ok({"--json", "--method", "hrc", "--corners", "walls", "--blur-near-segment",
-                 "--wall-fan", "0", "--near-fan", "5", "--even-weight", "0.5", "-o", out("w.pfm")});
+  const Result w = render_ok({"--json", "--method", "hrc", "--corners", "walls",
+                              "--blur-near-segment", "--wall-fan", "0", "--near-fan", "5",
+                              "--fan-share", "0.25", "--even-weight", "0.5", "-o", out("w.pfm")});
   const nlohmann::json jw = nlohmann::json::parse(w.out);
   EXPECT_FLOAT_EQ(jw.at("parameters").at("even_weight").get<float>(), 0.5f);
   EXPECT_EQ(jw.at("parameters").at("corners"), "walls");
   EXPECT_EQ(jw.at("parameters").at("wall_fan"), 0);
   EXPECT_EQ(jw.at("parameters").at("near_fan"), 5);
+  EXPECT_FLOAT_EQ(jw.at("parameters").at("fan_share").get<float>(), 0.25f);
+  EXPECT_FALSE(jw.at("stage_work").contains("fan"));
   EXPECT_FALSE(jw.at("stages").contains("fan"));
   EXPECT_EQ(jw.at("parameters").at("blur_near_segment"), true);
   EXPECT_TRUE(jw.at("stages").contains("cross blur"));
@@ -241,6 +253,9 @@ TEST_F(Cli, HolographicCascadesReportStagesAndParameters) {
                  2);
   expect_failure(run({"render", scene_, "--method", "hrc", "--near-fan", "17", "-o", out("x.pfm")}),
                  2);
+  for (const char* share : {"0", "1.5", "nan"})
+    expect_failure(
+        run({"render", scene_, "--method", "hrc", "--fan-share", share, "-o", out("x.pfm")}), 2);
   expect_failure(
       run({"render", scene_, "--method", "hrc", "--even-weight", "1.5", "-o", out("x.pfm")}), 2);
 }

@@ -232,19 +232,43 @@ TEST(FlatlandHrc, RotatingTheSceneRotatesTheResult) {
         t.albedo[3 * to + c] = s.albedo[3 * from + c];
       }
     }
-  for (int bounces : {1, 2}) {
-    RenderOptions o = hrc();
-    o.bounces = bounces;
-    const ImageRgb a = fluence_of(s, o), b = fluence_of(t, o);
-    ASSERT_EQ(b.width(), h);
-    double worst = 0;
-    for (int y = 0; y < h; ++y)
-      for (int x = 0; x < w; ++x) {
-        const double u = a.at(x, y).b, v = b.at(h - 1 - y, x).b;
-        worst = std::max(worst, std::abs(u - v) / std::max(1e-3, std::abs(u)));
+  // The fan takes the last rank its budget reaches in row order, which turns with the grid: the
+  // cells it takes in one and not the other differ (one bounce; with two, their light spreads).
+  // With every cell in the fan, or none, nothing differs.
+  HrcOptions all, none;
+  all.fan_share = 1;
+  none.wall_fan = 0;
+  for (const HrcOptions& fan : {HrcOptions{}, all, none})
+    for (int bounces : {1, 2}) {
+      RenderOptions o = hrc();
+      o.hrc = fan;
+      o.bounces = bounces;
+      std::vector<std::uint8_t> taken(s.cells(), 0);  // by one of the two only
+      if (fan.fan_share < 1 && fan.wall_fan > 0) {
+        if (bounces > 1) continue;
+        std::vector<std::uint32_t> in_s, in_t;
+        hrc::fan_cells(s, fan, in_s);
+        hrc::fan_cells(t, fan, in_t);
+        for (std::uint32_t c : in_s) taken[c] ^= 1;
+        for (std::uint32_t c : in_t) {
+          const int tx = int(c % unsigned(h)), ty = int(c / unsigned(h));
+          taken[s.index(ty, h - 1 - tx)] ^= 1;
+        }
       }
-    EXPECT_LT(worst, 1e-5) << "bounces " << bounces;
-  }
+      const ImageRgb a = fluence_of(s, o), b = fluence_of(t, o);
+      ASSERT_EQ(b.width(), h);
+      double worst = 0;
+      int differ = 0;
+      for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+          differ += taken[s.index(x, y)];
+          if (taken[s.index(x, y)]) continue;
+          const double u = a.at(x, y).b, v = b.at(h - 1 - y, x).b;
+          worst = std::max(worst, std::abs(u - v) / std::max(1e-3, std::abs(u)));
+        }
+      EXPECT_LT(worst, 1e-5) << "bounces " << bounces << ", share " << fan.fan_share
+                             << ", cells in one fan only " << differ;
+    }
 }
 
 TEST(FlatlandHrc, SameBitsWithOneAndTwoThreads) {
@@ -300,21 +324,21 @@ TEST(FlatlandHrc, MemoryFollowsThePapersCount) {
 }
 
 // The N-th bounce re-emits albedo * F / 2pi of the previous pass, as for the other methods. The
-// near fan follows the rims of the scene's own lights in every bounce, not of the walls a bounce
-// lights (around them it cost 4x as much on the Cornell box for 1.448% against 1.455%): a scene
-// with the bounce's light as its own differs there, so the check by hand runs without it, and
-// the solve with the scene's lights given gives the bounce.
+// fan ranks cells by the rims of the scene's own lights in every bounce, not of the walls a
+// bounce lights: a scene with the bounce's light as its own differs there, so the check by
+// hand is the solve with the scene's lights given.
 TEST(FlatlandHrc, SecondBounceReemitsAlbedoTimesMeanRadiance) {
   SceneDesc d;
   d.width = d.height = 64;
   d.shapes.push_back({Circle{{20, 32}, 4}, Material{{5, 5, 5}, 1, {}}});
   d.shapes.push_back({Box{{45, 32}, {6, 40}, 0}, Material{{}, 1, {0.8f, 0.5f, 0.2f}}});
   const Scene s = build(d);
-  for (int near_fan : {0, 2})
+  for (int near_fan : {0, HrcOptions{}.near_fan})
     for (Device device : {Device::cpu, Device::gpu}) {
       RenderOptions one = hrc();
       one.device = device;
       one.hrc.near_fan = near_fan;
+      one.hrc.fan_share = 0.25f;  // past the walls, so that the rims the fan follows matter
       const ImageRgb first = fluence_of(s, one);
       Scene lit = s;
       for (std::size_t i = 0; i < s.emission.size(); ++i)
@@ -326,15 +350,11 @@ TEST(FlatlandHrc, SecondBounceReemitsAlbedoTimesMeanRadiance) {
         return std::vector<float>(im.data(), im.data() + im.size());
       };
       std::vector<float> by_hand;
-      if (near_fan == 0) {
-        by_hand = values(fluence_of(lit, one));
-      } else {
-        std::vector<StageTime> stages;
-        hrc::Workspace w;
-        hrc::solve(make_medium(lit), s.environment, one.hrc, w, by_hand, stages, s.emission.data());
-        if (device == Device::cpu) {  // the lit walls' rims differ
-          ASSERT_NE(by_hand, values(fluence_of(lit, one)));
-        }
+      std::vector<StageTime> stages;
+      hrc::Workspace w;
+      hrc::solve(make_medium(lit), s.environment, one.hrc, w, by_hand, stages, s.emission.data());
+      if (device == Device::cpu && near_fan > 0) {  // the open cells near lit walls differ
+        ASSERT_NE(by_hand, values(fluence_of(lit, one)));
       }
       for (std::size_t i = 0; i < second.size(); ++i)
         ASSERT_NEAR(second.data()[i], by_hand[i], 1e-4) << to_string(device) << " " << near_fan;
@@ -434,7 +454,7 @@ TEST(FlatlandHrc, RimOfALightStaysSharp) {
         f, ref, [&](int x, int y) { return std::hypot(x + 0.5 - cx, y + 0.5 - cy) < r + 3; });
   };
   RenderOptions no_near = hrc();
-  no_near.hrc.near_fan = 0;
+  no_near.hrc.wall_fan = 0;
   const double e_whole = rim_error(fluence_of(s, whole)), e = rim_error(fluence_of(s, hrc()));
   const double e_no_near = rim_error(fluence_of(s, no_near));
   std::printf("rim: whole-fluence blur %.4f, default %.4f, no near fan %.4f\n", e_whole, e,
@@ -584,10 +604,13 @@ TEST(FlatlandHrc, WorldPointsFollowTheRotation) {
       }
 }
 
-// The fan's cells, against a brute-force reading of their definition: lit walls (opaque, with an
-// open cell among the 8 around), and open cells within K cells along x and y of a light's rim (a
-// cell of the lights with one among its 8 neighbours that emits nothing), in row-major order.
-TEST(FlatlandHrc, FanCellsAreLitWallsAndCellsNearALightsRim) {
+// The fan's cells, against a brute-force reading of their definition: exactly fan_budget of
+// them, ranked lit walls (opaque, with an open cell among the 8 around) and lights' rims (a cell
+// of the lights with one among its 8 neighbours that emits nothing) first, then the open cells
+// by their distance along x and y to the nearest rim up to K, then the opaque cells inside
+// walls, then the other open cells, within a rank in row-major order; the list in row-major
+// order.
+TEST(FlatlandHrc, FanCellsAreTheBudgetNearestToWallsAndRims) {
   SceneDesc d;
   d.width = 41;
   d.height = 29;
@@ -610,31 +633,100 @@ TEST(FlatlandHrc, FanCellsAreLitWallsAndCellsNearALightsRim) {
     return false;
   };
   const std::vector<float> none(s.emission.size(), 0.0f);
-  std::size_t walls = 0;  // cells at K = 0
   for (const std::vector<float>* lights : {&s.emission, &none})
-    for (int K : {0, 1, 3}) {
-      auto rim = [&](int x, int y) {
-        return emits(*lights, x, y) &&
-               any_around(x, y, 1, [&](int a, int b) { return !emits(*lights, a, b); });
-      };
-      std::vector<std::uint32_t> want, got;
-      for (int y = 0; y < H; ++y)
-        for (int x = 0; x < W; ++x)
-          if (opaque(x, y) ? any_around(x, y, 1, [&](int a, int b) { return !opaque(a, b); })
-                           : K > 0 && any_around(x, y, K, rim))
-            want.push_back(std::uint32_t(s.index(x, y)));
-      hrc::fan_cells(m, lights->data(), K, got);
-      EXPECT_EQ(got, want) << "K = " << K;
-      if (K == 0) {
-        walls = want.size();
-      } else if (lights == &s.emission) {
-        EXPECT_GT(want.size(), walls + 50 * std::size_t(K));
+    for (int K : {0, 1, 3, 16})
+      for (float share : {0.01f, 1.0f / 16, 0.2f, 1.0f}) {
+        HrcOptions o;
+        o.near_fan = K;
+        o.fan_share = share;
+        auto rim = [&](int x, int y) {
+          return emits(*lights, x, y) &&
+                 any_around(x, y, 1, [&](int a, int b) { return !emits(*lights, a, b); });
+        };
+        std::vector<std::pair<int, std::uint32_t>> ranked;  // (rank, index)
+        for (int y = 0; y < H; ++y)
+          for (int x = 0; x < W; ++x) {
+            int r = K + 2;
+            if (opaque(x, y)) {
+              r = any_around(x, y, 1, [&](int a, int b) { return !opaque(a, b); }) ? 0 : K + 1;
+            } else {
+              for (int k = 0; k <= K && r > K; ++k)
+                if (any_around(x, y, k, rim)) r = k;
+            }
+            ranked.push_back({r, std::uint32_t(s.index(x, y))});
+          }
+        std::sort(ranked.begin(), ranked.end());
+        const std::size_t budget = hrc::fan_budget(W, H, o);
+        ASSERT_EQ(budget, std::size_t(std::ceil(double(share) * W * H)));
+        std::vector<std::uint32_t> want, got;
+        for (std::size_t i = 0; i < budget; ++i) want.push_back(ranked[i].second);
+        std::sort(want.begin(), want.end());
+        hrc::fan_cells(m, lights->data(), o, got);
+        EXPECT_EQ(got, want) << "K = " << K << ", share " << share;
+        if (lights == &s.emission) {  // the medium's own emission is the scene's here
+          hrc::fan_cells(m, nullptr, o, got);
+          EXPECT_EQ(got, want) << "K = " << K << ", share " << share;
+          hrc::fan_cells(s, o, got);  // the GPU backend's
+          EXPECT_EQ(got, want) << "K = " << K << ", share " << share;
+        }
       }
-      if (lights == &s.emission) {  // the medium's own emission is the scene's here
-        hrc::fan_cells(m, nullptr, K, got);
-        EXPECT_EQ(got, want) << "K = " << K;
+}
+
+// HRC's cost does not depend on the scene (seed 001: 2, 102 and 1002 lights in the same time):
+// every stage computes as many values on a grid of 2, 102 or 1002 small lights among the same
+// walls, fog everywhere, or nothing but the environment, the fan's rays included (its budget of
+// cells, each 2 rays per cone of cascade 3 in each quadrant). Counted, not timed. The fan once
+// gathered every lit wall cell and every cell within 2 of a light's rim: 3.4x the time with
+// 1002 lights. Two bounces count the second solve's stages alike.
+TEST(FlatlandHrc, WorkPerStageIsTheSameOnEveryScene) {
+  auto scene = [](int lights, bool fog, bool walls) {
+    SceneDesc d;
+    d.width = d.height = 256;
+    d.environment = {0.01f, 0.01f, 0.015f};
+    if (fog)
+      d.shapes.push_back({Box{{128, 128}, {256, 256}, 0}, Material{{0.1f, 0, 0}, 0.05f, {}}});
+    if (walls) {
+      d.shapes.push_back({Box{{90, 128}, {6, 110}, 0}, Material{{}, 1, {0.5f, 0.5f, 0.5f}}});
+      d.shapes.push_back({Segment{{150, 210}, {235, 190}, 3}, Material{{}, 1, {0.5f, 0.5f, 0.5f}}});
+    }
+    std::uint32_t seed = 7;
+    auto u = [&seed] { return float((seed = seed * 1664525u + 1013904223u) >> 8) * 0x1p-24f; };
+    for (int i = 0; i < lights; ++i)
+      d.shapes.push_back(
+          {Circle{{4 + 248 * u(), 4 + 248 * u()}, 1.5f}, Material{{2, 1, 1}, 1, {}}});
+    return build(d);
+  };
+  const std::size_t budget = hrc::fan_budget(256, 256, HrcOptions{});
+  ASSERT_EQ(budget, 1024u);
+  for (int bounces : {1, 2}) {
+    RenderOptions o = hrc();
+    o.bounces = bounces;
+    std::vector<StageTime> first;
+    for (const Scene& s : {scene(2, false, true), scene(102, false, true), scene(1002, false, true),
+                           scene(102, true, true), scene(0, false, false)}) {
+      const std::vector<StageTime> stages = testing::render_valid(s, o).stages;
+      std::vector<StageTime> counted;
+      for (const StageTime& t : stages)
+        if (t.work > 0) counted.push_back(t);
+      ASSERT_FALSE(counted.empty());
+      if (first.empty()) {
+        first = counted;
+        int fans = 0;
+        for (const StageTime& t : counted)
+          if (t.name.ends_with("fan")) {
+            EXPECT_EQ(t.work, budget * 4 * 2 * 8);
+            ++fans;
+          }
+        EXPECT_EQ(fans, bounces);
+        continue;
+      }
+      ASSERT_EQ(counted.size(), first.size());
+      for (std::size_t i = 0; i < counted.size(); ++i) {
+        EXPECT_EQ(counted[i].name, first[i].name);
+        EXPECT_EQ(counted[i].work, first[i].work) << counted[i].name << ", bounces " << bounces;
       }
     }
+  }
 }
 
 // A workspace that solved with the wall fan and then without it keeps none of the fan's light:

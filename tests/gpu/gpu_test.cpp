@@ -230,8 +230,9 @@ TEST(Gpu, HrcSolveMatchesTheCpu) {
     Storage storage = Storage::f32;
     bool blur_near = false;  // eq. 21 on the whole fluence (its own pass) instead of in the gather
     Corners corners = Corners::half;
-    int near_fan = 2;
+    int near_fan = HrcOptions{}.near_fan;
     float even_weight = HrcOptions{}.even_weight;
+    float fan_share = HrcOptions{}.fan_share;
   };
   for (const Case& k :
        {Case{64, 64, true, true}, Case{100, 37, true, true}, Case{45, 80, false, false},
@@ -241,7 +242,9 @@ TEST(Gpu, HrcSolveMatchesTheCpu) {
         Case{100, 37, true, true, Storage::f32, false, Corners::half, 0},
         Case{45, 80, true, true, Storage::f32, false, Corners::half, 5},
         Case{64, 64, true, true, Storage::f32, false, Corners::half, 2, 0.9f},
-        Case{100, 37, true, true, Storage::f16, false, Corners::half, 2, 0.5f}}) {
+        Case{100, 37, true, true, Storage::f16, false, Corners::half, 2, 0.5f},
+        Case{64, 64, true, true, Storage::f32, false, Corners::half, 3, 0.575f, 0.3f},
+        Case{45, 80, true, true, Storage::f16, false, Corners::half, 16, 0.575f, 1.0f}}) {
     SceneDesc d;
     d.width = k.w;
     d.height = k.h;
@@ -260,6 +263,7 @@ TEST(Gpu, HrcSolveMatchesTheCpu) {
     o.corners = k.corners;
     o.near_fan = k.near_fan;
     o.even_weight = k.even_weight;
+    o.fan_share = k.fan_share;
     hrc::Workspace workspace;
     std::vector<float> cpu;
     std::vector<StageTime> stages;
@@ -278,7 +282,8 @@ TEST(Gpu, HrcSolveMatchesTheCpu) {
       ref += double(cpu[i]) * cpu[i];
     }
     const double rel = std::sqrt(err / ref);
-    EXPECT_LT(rel, 1e-3) << k.w << "x" << k.h << " near fan " << k.near_fan;
+    EXPECT_LT(rel, 1e-3) << k.w << "x" << k.h << " near fan " << k.near_fan << " fan share "
+                         << k.fan_share;
     std::printf("%dx%d: relative RMSE GPU against CPU %.2e\n", k.w, k.h, rel);
   }
 }

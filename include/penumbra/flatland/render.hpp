@@ -67,19 +67,26 @@ struct HrcOptions {
   // front of it (off: the paper's formula, which leaves a cell's own medium out of its fluence).
   bool near_segment = true;
   Corners corners = Corners::half;
-  // Lit wall cells gather through a fan of rays: from the cell's centre, 2 rays per cone of
-  // cascade `wall_fan` (2^wall_fan cones per quadrant) to the first of that cascade's probe
-  // columns more than half its spacing ahead, each merged with its cone of R there (and so do
-  // the cells `near_fan` names). 0: no fan; a wall cell reads its quadrants like any cell,
-  // through the cell beside it (the paper's formula), which leaves edges lit at a grazing angle
-  // through anti-aliased cells dark (docs/QUALITY.md). 1..8; a grid with fewer cascades uses its
+  // The fan: some cells gather through rays instead of their quadrants' R_0 reads, from the
+  // cell's centre, 2 rays per cone of cascade `wall_fan` (2^wall_fan cones per quadrant) to the
+  // first of that cascade's probe columns more than half its spacing ahead, each merged with its
+  // cone of R there. A wall cell reads its quadrants through the cell beside it, which leaves
+  // edges lit at a grazing angle through anti-aliased cells dark, and near a light's rim the
+  // cones of cascades 0..2 are coarse for its edge (docs/QUALITY.md). 0: no fan, every cell
+  // reads its quadrants (the paper's formula). 1..8; a grid with fewer cascades uses its
   // highest below the environment.
   int wall_fan = 3;
-  // Cells that are not opaque within `near_fan` cells (along x and y) of a light's rim gather
-  // through the same fan: there a quadrant's cones of cascades 0..2 are too coarse for the
-  // light's edge (docs/QUALITY.md). A rim is a cell of the scene's own emission with a cell
-  // that emits nothing among its 8 neighbours. 0: only wall cells; 0..16; no effect without
-  // the wall fan.
+  // How many cells the fan gathers: ceil(fan_share * cells), whatever the scene holds, so the
+  // fan costs the same on every scene of a grid size. The cells taken are, in this order: lit
+  // wall cells (opaque, with a cell that is not among their 8 neighbours) and lights' rims (a
+  // cell of the scene's own emission with a cell that emits nothing among its 8 neighbours);
+  // the cells that are not opaque within `near_fan` cells of a rim (along x and y), nearest
+  // first; the cells inside walls, where the fan gives what the quadrants give; the other
+  // cells. Within one rank in row order, so where the budget ends inside a rank (a scene of
+  // many small lights) the first rows have the fan and the last do not. In (0, 1].
+  float fan_share = 1.0f / 64.0f;
+  // How far from a light's rim (in cells, along x and y) the fan ranks open cells by their
+  // distance; 0..16. Farther, its rays do no better than the cascades (docs/QUALITY.md).
   int near_fan = 2;
   // Eqs. 15-17 at an even probe column: the weight of the cones of R_{n+1} at the column's own
   // probe, the rest going to the merges along the doubled edges; in [0, 1]. The seed's mean is

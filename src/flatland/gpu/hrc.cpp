@@ -62,11 +62,11 @@ std::uint64_t hrc_device_bytes(int W, int H, const HrcOptions& o) {
   const hrc::Sizes sz = hrc::plan(W, H);
   const int levels = int(sz.t.size()) - 1;
   const std::uint64_t value = o.storage == Storage::f16 ? 2 : 4;  // a stored T or R value
-  // The world planes, the gather's own fluence when the blur writes the result, the fan's cells
-  // and light.
+  // The world planes, the gather's own fluence when the blur writes the result, the fan's light
+  // (its cells' indices are in host memory).
   std::uint64_t bytes =
       std::uint64_t(W) * H *
-      (6 + (hrc::blurs_whole_fluence(o) ? 3 : 0) + (hrc::runs_fan(W, H, o) ? 4 : 0)) *
+      (6 + (hrc::blurs_whole_fluence(o) ? 3 : 0) + (hrc::runs_fan(W, H, o) ? 3 : 0)) *
       sizeof(float);
   bytes += 6 * std::uint64_t(sz.pad) * sizeof(float);  // view
   bytes += 2 * 3 * std::uint64_t(std::max<std::size_t>(sz.r, 1)) * value;
@@ -89,7 +89,8 @@ std::uint64_t hrc_largest_buffer(int W, int H, Storage storage) {
 }
 
 Status record_hrc(Cache& cache, Batch& batch, int W, int H, Buffer& step, Buffer& emission,
-                  Buffer& lights, const Rgb& env, const HrcOptions& o, Buffer& fluence_out) {
+                  const std::vector<std::uint32_t>& fan, const Rgb& env, const HrcOptions& o,
+                  Buffer& fluence_out) {
   const bool f16 = o.storage == Storage::f16;
   if (f16 && !cache.context().info().storage_f16)
     return Error{"`device` gpu: " + cache.context().info().name +
@@ -117,8 +118,8 @@ Status record_hrc(Cache& cache, Batch& batch, int W, int H, Buffer& step, Buffer
       {f16 ? "hrc_merge_up f16" : "hrc_merge_up", shaders::hrc_merge_up(f16), 2, 20},
       {f16 ? "hrc_merge_down f16" : "hrc_merge_down", shaders::hrc_merge_down(f16), 5, 40},
       {f16 ? "hrc_gather f16" : "hrc_gather", shaders::hrc_gather(f16), 4, 68},
-      {f16 ? "hrc_fan f16" : "hrc_fan", shaders::hrc_fan(f16), 6, 36},
-      {"hrc_fan_cells", shaders::hrc_fan_cells(), 4, 16}};
+      {f16 ? "hrc_fan f16" : "hrc_fan", shaders::hrc_fan(f16), 6, 40},
+      {"hrc_fan_clear", shaders::hrc_fan_clear(), 1, 4}};
   const Kernel* k[std::size(specs)];
   for (std::size_t i = 0; i < std::size(specs); ++i) {
     Expected<const Kernel*> kernel =
@@ -134,13 +135,18 @@ Status record_hrc(Cache& cache, Batch& batch, int W, int H, Buffer& step, Buffer
                     r1 = make("r1", 3 * r_size, value);
   for (const Expected<Buffer*>* b : {&world, &view, &r0, &r1})
     if (!*b) return b->error();
-  // HrcOptions::wall_fan: which cells the fan gathers, and their light.
+  // HrcOptions::wall_fan: the cells the fan gathers (hrc::fan_cells, written here from the
+  // host), and their light, -1 at the other cells.
   Buffer *fan_cells = nullptr, *fan_light = nullptr;
   if (hrc::runs_fan(W, H, o)) {
-    Expected<Buffer*> c = make("fan cells", cells), l = make("fan light", 3 * std::size_t(cells));
+    if (fan.size() != hrc::fan_budget(W, H, o))
+      return Error{"hrc: the fan's cells do not match the grid and options"};
+    Expected<Buffer*> c = cache.buffer(kHrc, "hrc fan cells", fan.size() * 4, Memory::host);
+    Expected<Buffer*> l = make("fan light", 3 * std::size_t(cells));
     if (!c) return c.error();
     if (!l) return l.error();
     fan_cells = *c, fan_light = *l;
+    std::copy(fan.begin(), fan.end(), fan_cells->as<std::uint32_t>());
   }
   Buffer* fluence = &fluence_out;
   if (hrc::blurs_whole_fluence(o)) {  // the gather writes a buffer of its own, the blur the output
@@ -205,11 +211,10 @@ Status record_hrc(Cache& cache, Batch& batch, int W, int H, Buffer& step, Buffer
   }
   if (fan_cells) {
     batch.mark("fan");
-    Buffer* b[] = {&step, &lights, fan_light, fan_cells};
-    for (std::int32_t pass : {0, 1}) {  // the rims (in the light buffer), then the cells
-      const std::int32_t push[4] = {W, H, o.near_fan, pass};
-      batch.dispatch(*k[7], b, push, groups(std::size_t(W), 64), groups(std::size_t(H), 4));
-    }
+    Buffer* b[] = {fan_light};
+    const std::uint32_t values = 3 * cells;
+    const Groups g = groups_1d(values, 256, cache.context().info());
+    batch.dispatch(*k[7], b, &values, g.x, g.y);
   }
   for (int d = 0; d < 4; ++d) {
     const hrc::View& v = views[d & 1];
@@ -264,9 +269,11 @@ Status record_hrc(Cache& cache, Batch& batch, int W, int H, Buffer& step, Buffer
       struct {
         std::int32_t W, H, d, n, P, h;
         float er, eg, eb;
-      } wp{W, H, d, n, v.probes(n), v.h, env.r, env.g, env.b};
+        std::uint32_t count;
+      } wp{W, H, d, n, v.probes(n), v.h, env.r, env.g, env.b, std::uint32_t(fan.size())};
       Buffer* wb[] = {&step, &emission, out, *angles, fan_light, fan_cells};
-      batch.dispatch(*k[6], wb, &wp, groups(std::size_t(W), 64), groups(std::size_t(H), 4));
+      const Groups g = groups_1d(fan.size(), 64, cache.context().info());
+      batch.dispatch(*k[6], wb, &wp, g.x, g.y);
       batch.mark("merge down R");
     }
     batch.mark("views");

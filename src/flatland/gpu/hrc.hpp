@@ -21,13 +21,14 @@ Expected<std::vector<float>> cross_blur(const Context& context, int width, int h
 
 // Records an HRC solve into `batch`, as hrc::solve (f32 or f16 storage of T and R): the world
 // planes, per quadrant the rotated view, T_0..T_2, merge up, merge down and the gather, then the
-// cross blur. Reads the medium (`step`, `emission`: 3 floats per cell) and the scene's own
-// emission (`lights`, whose rims the near fan follows), writes the fluence (3 floats per cell).
-// Timed passes, each recorded once per quadrant: "views", "trace T0-T2", "merge up T3-TN",
-// "merge down R", "fan" (with the wall fan), then "cross blur".
+// cross blur. Reads the medium (`step`, `emission`: 3 floats per cell) and the cells the fan
+// gathers (hrc::fan_cells of the scene: hrc::fan_budget of them when the solve runs the fan),
+// writes the fluence (3 floats per cell). Timed passes, each recorded once per quadrant:
+// "views", "trace T0-T2", "merge up T3-TN", "merge down R", "fan" (with the wall fan), then
+// "cross blur".
 Status record_hrc(Cache& cache, Batch& batch, int width, int height, Buffer& step, Buffer& emission,
-                  Buffer& lights, const Rgb& environment, const HrcOptions& options,
-                  Buffer& fluence);
+                  const std::vector<std::uint32_t>& fan, const Rgb& environment,
+                  const HrcOptions& options, Buffer& fluence);
 
 // Device bytes record_hrc keeps, and the largest single buffer among them.
 std::uint64_t hrc_device_bytes(int width, int height, const HrcOptions& options);

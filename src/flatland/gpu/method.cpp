@@ -65,8 +65,12 @@ void hrc_owners(const RenderOptions& o, std::vector<Owner>& keep) {
 }
 
 Status hrc_record(GpuSolve& s, Batch& batch, Buffer& emission) {
-  return record_hrc(s.cache, batch, s.plan.width, s.plan.height, s.step, emission, s.lights,
-                    s.environment, s.plan.options.hrc, s.fluence);
+  const HrcOptions& o = s.plan.options.hrc;
+  // The cells follow the scene's own lights and walls, the same for every bounce.
+  if (s.hrc_fan.empty() && hrc::runs_fan(s.plan.width, s.plan.height, o))
+    hrc::fan_cells(s.scene, o, s.hrc_fan);
+  return record_hrc(s.cache, batch, s.plan.width, s.plan.height, s.step, emission, s.hrc_fan,
+                    s.environment, o, s.fluence);
 }
 
 }  // namespace

@@ -27,11 +27,12 @@ struct GpuSolve {
   Cache& cache;
   const Plan& plan;
   Buffer& step;
-  Buffer& lights;  // the scene's own emission (a bounce's solve reads another)
+  const Scene& scene;  // on the host, as uploaded (a bounce's solve reads another emission)
   const Rgb& environment;
   Buffer& fluence;
   std::uint64_t binding_limit;  // bytes bound at once at most
   std::uint64_t alignment;      // of bound offsets, when more than the device's (0: the device's)
+  std::vector<std::uint32_t> hrc_fan;  // HRC's fan cells, found on the host once per render
 };
 
 struct MethodPasses {

@@ -28,8 +28,8 @@ const std::uint32_t k_hrc_world[] = {
 const std::uint32_t k_hrc_view[] = {
 #include "hrc_view.comp.inc"
 };
-const std::uint32_t k_hrc_fan_cells[] = {
-#include "hrc_fan_cells.comp.inc"
+const std::uint32_t k_hrc_fan_clear[] = {
+#include "hrc_fan_clear.comp.inc"
 };
 const std::uint32_t k_rc_merge[] = {
 #include "rc_merge.comp.inc"
@@ -91,7 +91,7 @@ PENUMBRA_SHADER(jfa_jump)
 PENUMBRA_SHADER(cross_blur)
 PENUMBRA_SHADER(hrc_world)
 PENUMBRA_SHADER(hrc_view)
-PENUMBRA_SHADER(hrc_fan_cells)
+PENUMBRA_SHADER(hrc_fan_clear)
 PENUMBRA_SHADER(rc_merge)
 PENUMBRA_SHADER(rc_fluence)
 PENUMBRA_SHADER(bounce)

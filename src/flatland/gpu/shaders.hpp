@@ -20,7 +20,7 @@ std::span<const std::uint32_t> hrc_merge_up(bool f16 = false);    // HRC: eqs. 1
 std::span<const std::uint32_t> hrc_merge_down(bool f16 = false);  // HRC: eqs. 14-17
 std::span<const std::uint32_t> hrc_gather(bool f16 = false);      // HRC: a quadrant's fluence
 std::span<const std::uint32_t> hrc_fan(bool f16 = false);         // HRC: the fan's light
-std::span<const std::uint32_t> hrc_fan_cells();                   // HRC: the fan's cells
+std::span<const std::uint32_t> hrc_fan_clear();                   // HRC: the fan's light cleared
 std::span<const std::uint32_t> jfa_jump();    // jump flooding: jumps into the step values
 std::span<const std::uint32_t> rc_merge();    // RC: one cascade, traced and merged
 std::span<const std::uint32_t> rc_fluence();  // RC: fluence from cascade 0

@@ -227,11 +227,12 @@ Expected<std::vector<float>> Solver::render(const Scene& scene, const Plan& plan
   GpuSolve solve{cache,
                  plan,
                  **step,
-                 *device[1],
+                 scene,
                  scene.environment,
                  **fluence,
                  s.binding_limit ? s.binding_limit : info.max_buffer_bytes,
-                 s.alignment};
+                 s.alignment,
+                 {}};
   if (Status st = method->record(solve, *batch, *device[1]); !st) return st.error();
   std::string prefix;  // of the batch being recorded
   for (int bounce = 2; bounce <= o.bounces; ++bounce) {

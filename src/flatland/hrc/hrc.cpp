@@ -825,12 +825,15 @@ void solve_with(const Medium& m, const Rgb& env, const HrcOptions& o, Buffers<S>
   const bool runs = runs_fan(W, H, o);
   if (runs) {
     watch.restart();
-    fan_cells(m, lights, o.near_fan, fan.cells);
+    fan_cells(m, lights, o, fan.cells);
     ms_fan += watch.ms();
   } else {
     fan.cells.clear();  // none from an earlier solve on this workspace
   }
   fan.light.assign(fan.cells.size() * 3, 0.0f);
+  struct {
+    std::uint64_t views = 0, trace = 0, up = 0, down = 0, gather = 0, fan = 0;
+  } work;                                // StageTime::work: the values each stage computes
   const float quarter = float(kPi / 2);  // A_0: a quadrant
   for (int d = 0; d < 4; ++d) {
     const View& view = sz.views[d & 1];
@@ -843,6 +846,10 @@ void solve_with(const Medium& m, const Rgb& env, const HrcOptions& o, Buffers<S>
     watch.restart();
     const int fused = fused_levels(view);
     lower_levels(view, fused, vp, o.corners, patterns, t, empty.data());
+    work.views += std::uint64_t(view.w) * view.h;
+    work.gather += std::uint64_t(view.w) * view.h;
+    for (int n = 0; n <= view.levels; ++n) (n <= fused ? work.trace : work.up) += view.t_size(n);
+    for (int n = 0; n < view.levels; ++n) work.down += view.r_size(n);
     ms_trace += watch.ms();
     watch.restart();
     for (int n = fused + 1; n <= view.levels; ++n)
@@ -872,6 +879,7 @@ void solve_with(const Medium& m, const Rgb& env, const HrcOptions& o, Buffers<S>
           },
           16);
       ms_fan += watch.ms();
+      work.fan += std::uint64_t(fan.cells.size()) * (std::uint64_t(kWallFanRays) << n);
       watch.restart();
     }
     ms_down += watch.ms();
@@ -955,19 +963,19 @@ void solve_with(const Medium& m, const Rgb& env, const HrcOptions& o, Buffers<S>
     add_own_medium(w[kTau0 * world_cells], w[kR * world_cells], w[kG * world_cells],
                    w[kB * world_cells], out);
   }
-  stages.push_back({"views", ms_view});
-  stages.push_back({"gather", ms_gather});
-  if (runs) stages.push_back({"fan", ms_fan});
-  stages.push_back({"trace T0-T2", ms_trace});
-  stages.push_back({"merge up T3-TN", ms_up});
-  stages.push_back({"merge down R", ms_down});
+  stages.push_back({"views", ms_view, work.views});
+  stages.push_back({"gather", ms_gather, work.gather});
+  if (runs) stages.push_back({"fan", ms_fan, work.fan});
+  stages.push_back({"trace T0-T2", ms_trace, work.trace});
+  stages.push_back({"merge up T3-TN", ms_up, work.up});
+  stages.push_back({"merge down R", ms_down, work.down});
   if (blurs_whole_fluence(o)) {
     watch.restart();
     reserve_huge(blurred, cells * 3);
     blurred.resize(cells * 3);
     cross_blur(W, H, world + kTau0 * world_cells, stride, f.data(), blurred.data());
     std::swap(f, blurred);
-    stages.push_back({"cross blur", watch.ms()});
+    stages.push_back({"cross blur", watch.ms(), cells});
   }
 }
 
@@ -986,69 +994,124 @@ float own_transmittance(float t) {
   return m;
 }
 
-void fan_cells(const Medium& m, const float* lights, int near_fan,
-               std::vector<std::uint32_t>& cells) {
-  const int W = m.width, H = m.height, K = near_fan;
+std::size_t fan_budget(int width, int height, const HrcOptions& o) {
+  if (!runs_fan(width, height, o)) return 0;
+  const double cells = double(width) * double(height);
+  return std::size_t(std::clamp(std::ceil(double(o.fan_share) * cells), 1.0, cells));
+}
+
+namespace {
+
+// fan_cells on a grid whose cell i is opaque when opaque(i), and emits when emits(i).
+template <class Opaque, class Emits>
+void rank_fan_cells(int W, int H, const HrcOptions& o, Opaque opaque, Emits emits,
+                    std::vector<std::uint32_t>& cells) {
+  const std::size_t budget = fan_budget(W, H, o);
+  cells.clear();
+  if (budget == 0) return;
+  const int K = std::clamp(o.near_fan, 0, kMaxNearFan);
+  const std::size_t N = std::size_t(W) * H;
   auto at = [W](int x, int y) { return std::size_t(y) * W + x; };
-  auto opaque = [&](int x, int y) { return m.step[at(x, y)] == kOpaque; };
-  auto emits = [&](int x, int y) {
-    const std::size_t i = at(x, y);
-    if (lights) return lights[3 * i] + lights[3 * i + 1] + lights[3 * i + 2] > 0.0f;
-    const Cell& c = m.cells[i];
-    return c.r + c.g + c.b > 0.0f;
-  };
   // Whether any cell of the 3x3 around (x, y), within the grid, passes `test`.
   auto around = [&](int x, int y, auto test) {
     for (int b = std::max(y - 1, 0); b <= std::min(y + 1, H - 1); ++b)
       for (int a = std::max(x - 1, 0); a <= std::min(x + 1, W - 1); ++a)
-        if (test(a, b)) return true;
+        if (test(at(a, b))) return true;
     return false;
   };
-  // Near a rim: a rim within K columns (near_row, per row), then within K rows of that.
-  std::vector<std::uint8_t> rim(std::size_t(W) * H), near_row;
+  // A cell's rank: 0 a lit wall cell or a rim, d the distance along x and y to the nearest rim
+  // up to K, then K + 1 the cells inside walls (where the fan gives what the quadrants give:
+  // the light of the next cell inside) and K + 2 the other open cells (farther from a rim, where
+  // the fan's rays do no better than the cascades: docs/QUALITY.md).
+  const std::uint8_t inside = std::uint8_t(K + 1), far = std::uint8_t(K + 2);
+  std::vector<std::uint8_t> rank(N);
+  parallel_for(H, [&](int y) {
+    for (int x = 0; x < W; ++x) {
+      const std::size_t i = at(x, y);
+      const bool rim = emits(i) && around(x, y, [&](std::size_t j) { return !emits(j); });
+      rank[i] = rim ? 0 : far;
+    }
+  });
+  // The distance along x and y (chessboard) by the two passes of a 3x3 mask, which is exact
+  // for it (Rosenfeld and Pfaltz), up to K (farther: `far`).
+  auto relax = [&](std::size_t i, int x, int y) {
+    if (x < 0 || x >= W || y < 0 || y >= H) return;
+    const int d = rank[at(x, y)] + 1;
+    if (d <= K && d < rank[i]) rank[i] = std::uint8_t(d);
+  };
   if (K > 0) {
-    near_row.resize(rim.size());
-    parallel_for(H, [&](int y) {
-      for (int x = 0; x < W; ++x)
-        rim[at(x, y)] = emits(x, y) && around(x, y, [&](int a, int b) { return !emits(a, b); });
-    });
-    parallel_for(H, [&](int y) {
-      int last = -K - 1;  // the last rim at or left of x, then the next right of it
-      for (int x = 0; x < W; ++x)
-        if (rim[at(x, y)])
-          last = x;
-        else
-          near_row[at(x, y)] = x - last <= K;
-      for (int x = W - 1, next = W + K + 1; x >= 0; --x)
-        if (rim[at(x, y)])
-          next = x, near_row[at(x, y)] = 1;
-        else
-          near_row[at(x, y)] |= next - x <= K;
-    });
+    for (int y = 0; y < H; ++y)
+      for (int x = 0; x < W; ++x) {
+        const std::size_t i = at(x, y);
+        relax(i, x - 1, y), relax(i, x - 1, y - 1), relax(i, x, y - 1), relax(i, x + 1, y - 1);
+      }
+    for (int y = H - 1; y >= 0; --y)
+      for (int x = W - 1; x >= 0; --x) {
+        const std::size_t i = at(x, y);
+        relax(i, x + 1, y), relax(i, x + 1, y + 1), relax(i, x, y + 1), relax(i, x - 1, y + 1);
+      }
   }
-  auto in_fan = [&](int x, int y) {
-    if (opaque(x, y)) return around(x, y, [&](int a, int b) { return !opaque(a, b); });
-    if (K == 0) return false;
-    for (int b = std::max(y - K, 0); b <= std::min(y + K, H - 1); ++b)
-      if (near_row[at(x, b)]) return true;
-    return false;
-  };
-  // Found once (into the rim flags, no longer needed) and counted row by row, then written at
-  // each row's offset: the same order on any thread count.
-  std::vector<std::uint8_t>& in = rim;
-  std::vector<std::uint32_t> first(std::size_t(H) + 1, 0);
   parallel_for(H, [&](int y) {
-    std::uint32_t n = 0;
-    for (int x = 0; x < W; ++x) n += in[at(x, y)] = in_fan(x, y);
-    first[std::size_t(y) + 1] = n;
+    for (int x = 0; x < W; ++x) {
+      const std::size_t i = at(x, y);
+      if (!opaque(i)) continue;  // a rim within K, or far
+      rank[i] = around(x, y, [&](std::size_t j) { return !opaque(j); }) ? 0 : inside;
+    }
   });
-  for (int y = 0; y < H; ++y) first[std::size_t(y) + 1] += first[std::size_t(y)];
-  cells.resize(first[std::size_t(H)]);
+  // The rank the budget ends in, and how many of its cells it takes (in row order): counted
+  // row by row, so the cells come out in the same order on any thread count.
+  const int ranks = K + 3;
+  std::vector<std::uint32_t> count(std::size_t(H) * ranks, 0);
   parallel_for(H, [&](int y) {
-    std::uint32_t i = first[std::size_t(y)];
-    for (int x = 0; x < W; ++x)
-      if (in[at(x, y)]) cells[i++] = std::uint32_t(at(x, y));
+    std::uint32_t* c = &count[std::size_t(y) * ranks];
+    for (int x = 0; x < W; ++x) ++c[rank[at(x, y)]];
   });
+  std::vector<std::size_t> total(ranks, 0);
+  for (int y = 0; y < H; ++y)
+    for (int r = 0; r < ranks; ++r) total[r] += count[std::size_t(y) * ranks + r];
+  int last = 0;
+  std::size_t before = 0;  // cells of the ranks below `last`
+  while (before + total[last] < budget) before += total[last++];
+  // Per row: its first index in the list, and how many of its cells of rank `last` go in.
+  std::vector<std::size_t> first(std::size_t(H) + 1, 0), ties(std::size_t(H), 0);
+  std::size_t left = budget - before;
+  for (int y = 0; y < H; ++y) {
+    const std::uint32_t* c = &count[std::size_t(y) * ranks];
+    std::size_t below = 0;
+    for (int r = 0; r < last; ++r) below += c[r];
+    ties[y] = std::min<std::size_t>(c[last], left);
+    left -= ties[y];
+    first[std::size_t(y) + 1] = first[std::size_t(y)] + below + ties[y];
+  }
+  cells.resize(budget);
+  parallel_for(H, [&](int y) {
+    std::size_t i = first[std::size_t(y)], tie = ties[std::size_t(y)];
+    for (int x = 0; x < W; ++x) {
+      const int r = rank[at(x, y)];
+      if (r < last || (r == last && tie > 0 && tie--)) cells[i++] = std::uint32_t(at(x, y));
+    }
+  });
+}
+
+}  // namespace
+
+void fan_cells(const Medium& m, const float* lights, const HrcOptions& o,
+               std::vector<std::uint32_t>& cells) {
+  rank_fan_cells(
+      m.width, m.height, o, [&](std::size_t i) { return m.step[i] == kOpaque; },
+      [&](std::size_t i) {
+        if (lights) return lights[3 * i] + lights[3 * i + 1] + lights[3 * i + 2] > 0.0f;
+        const Cell& c = m.cells[i];
+        return c.r + c.g + c.b > 0.0f;
+      },
+      cells);
+}
+
+void fan_cells(const Scene& s, const HrcOptions& o, std::vector<std::uint32_t>& cells) {
+  const float* e = s.emission.data();
+  rank_fan_cells(
+      s.width, s.height, o, [&](std::size_t i) { return s.opacity[i] >= 1.0f; },
+      [&](std::size_t i) { return e[3 * i] + e[3 * i + 1] + e[3 * i + 2] > 0.0f; }, cells);
 }
 
 float cone_angle(int n, int a) {
@@ -1130,9 +1193,11 @@ std::uint64_t working_bytes(int width, int height, const HrcOptions& o) {
   std::uint64_t b = o.storage == Storage::f16
                         ? bytes_of<Half>(s, width, height, blurs_whole_fluence(o))
                         : bytes_of<float>(s, width, height, blurs_whole_fluence(o));
-  // The fan: an index and a light per cell it gathers, as if every cell were one (the count
-  // depends on the scene), and the two bytes of flags per cell it finds them with.
-  if (runs_fan(width, height, o)) b += std::uint64_t(width) * height * (4 + 3 * sizeof(float) + 2);
+  // The fan: an index and a light per cell it gathers, and the byte of rank per cell and the
+  // counts per row and rank it chooses them with.
+  if (runs_fan(width, height, o))
+    b += fan_budget(width, height, o) * (4 + 3 * sizeof(float)) + std::uint64_t(width) * height +
+         std::uint64_t(height) * ((kMaxNearFan + 3) * 4 + 2 * sizeof(std::size_t));
   return b;
 }
 

@@ -98,13 +98,19 @@ float own_transmittance(float t);
 
 // ---- The geometry of the solve, shared with the GPU backend (src/gpu/hrc.cpp) ----
 
-// HrcOptions::wall_fan and near_fan: the cells the fan gathers, as row-major world indices in
-// order. Lit wall cells: opaque, with a cell that is not opaque among their 8 neighbours. With
-// near_fan K > 0, also the cells that are not opaque within K cells along x and y of a light's
-// rim: a cell whose `lights` (3 per cell; null: the medium's emission) are not all 0, with one
-// among its 8 neighbours whose are.
-void fan_cells(const Medium& medium, const float* lights, int near_fan,
+// HrcOptions::fan_share: how many cells the fan gathers on a grid, the same on every scene
+// (0 when the solve runs no fan).
+std::size_t fan_budget(int width, int height, const HrcOptions& options);
+// The cells the fan gathers, fan_budget of them, as row-major world indices in order, ranked as
+// HrcOptions::fan_share says: lit wall cells and lights' rims, then the cells that are not
+// opaque by their distance along x and y to a rim (up to near_fan), then the cells inside
+// walls, then the other open cells, within a rank in row order. A rim is a cell whose `lights` (3
+// per cell; null: the medium's emission) are not all 0 with one among its 8 neighbours whose are.
+// The scene overload reads its opacity (1: opaque) and its own emission: the GPU backend's cells,
+// the same as the CPU's.
+void fan_cells(const Medium& medium, const float* lights, const HrcOptions& options,
                std::vector<std::uint32_t>& cells);
+void fan_cells(const Scene& scene, const HrcOptions& options, std::vector<std::uint32_t>& cells);
 inline constexpr int kWallFanRays = 2;  // per cone
 
 // Eq. 13: the angle of cone a (the paper's i = a + 1/2) of cascade n.

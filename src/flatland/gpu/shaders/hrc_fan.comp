@@ -1,13 +1,13 @@
 #version 450
 #extension GL_GOOGLE_include_directive : require
 #include "storage.glsl"
-// HrcOptions::wall_fan and near_fan, quadrant d (hrc.cpp fan_light): the light at each cell
-// hrc_fan_cells marked, through 2 rays per cone of cascade n, each traced from the cell's centre
-// (from where it leaves an open cell) to the first probe column of the cascade more than M / 2
-// cells ahead and merged with its cone of R_n there, between the two rows it lands between. One
-// invocation per world cell; a cell outside the fan gets -1 (the gather then reads its
-// quadrant as usual).
-layout(local_size_x = 64, local_size_y = 4) in;
+// HrcOptions::wall_fan, quadrant d (hrc.cpp fan_light): the light at each cell of the fan's
+// list (hrc::fan_cells, the CPU's), through 2 rays per cone of cascade n, each traced from the
+// cell's centre (from where it leaves an open cell) to the first probe column of the cascade
+// more than M / 2 cells ahead and merged with its cone of R_n there, between the two rows it
+// lands between. One invocation per cell of the list; the other cells keep hrc_fan_clear's -1
+// (the gather then reads their quadrant as usual).
+layout(local_size_x = 64) in;
 layout(std430, binding = 0) readonly buffer Step { float step_[]; };
 layout(std430, binding = 1) readonly buffer Emission { float emission[]; };
 layout(std430, binding = 2) readonly buffer Rn { stored_t rn[]; };
@@ -15,7 +15,7 @@ layout(std430, binding = 3) readonly buffer Angles { float angles[]; };
 layout(std430, binding = 4) writeonly buffer Light { float light[]; };
 layout(std430, binding = 5) readonly buffer Cells { uint fan[]; };
 layout(push_constant) uniform Push {
-  int W; int H; int d; int n; int P; int h; float er; float eg; float eb;
+  int W; int H; int d; int n; int P; int h; float er; float eg; float eb; uint count;
 } p;
 
 #include "trace.glsl"
@@ -30,13 +30,12 @@ vec2 world_point(float u, float v) {
 }
 
 void main() {
-  int x = int(gl_GlobalInvocationID.x), y = int(gl_GlobalInvocationID.y);
-  if (x >= p.W || y >= p.H) return;
-  uint c = (uint(y) * uint(p.W) + uint(x)) * 3u;
-  if (fan[uint(y) * uint(p.W) + uint(x)] == 0u) {
-    light[c] = -1.0;
-    return;
-  }
+  // 1-D work folded into x and y (gpu::groups_1d), so no dimension passes the device limit.
+  uint i = gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * gl_WorkGroupSize.x;
+  if (i >= p.count) return;
+  uint cell = fan[i];
+  int x = int(cell % uint(p.W)), y = int(cell / uint(p.W));
+  uint c = cell * 3u;
   int u = p.d == 0 ? x : p.d == 1 ? y : p.d == 2 ? p.W - 1 - x : p.H - 1 - y;
   int v = p.d == 0 ? y : p.d == 1 ? p.W - 1 - x : p.d == 2 ? p.H - 1 - y : x;
   int M = 1 << p.n;

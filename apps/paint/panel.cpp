@@ -113,6 +113,8 @@ void Painter::draw_panel() {
       if (ImGui::Checkbox("corners: walls only", &walls))
         options_.hrc.corners = walls ? Corners::walls : Corners::half, changed = true;
       changed |= ImGui::SliderInt("wall fan", &options_.hrc.wall_fan, 0, kMaxWallFan);
+      changed |= ImGui::SliderFloat("fan share", &options_.hrc.fan_share, 1.0f / 1024, 1.0f, "%.4f",
+                                    ImGuiSliderFlags_Logarithmic);
       changed |= ImGui::SliderInt("near fan", &options_.hrc.near_fan, 0, kMaxNearFan);
       changed |= ImGui::SliderFloat("even weight", &options_.hrc.even_weight, 0.0f, 1.0f, "%.3f");
     } else if (options_.method == Method::rc) {

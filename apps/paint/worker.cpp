@@ -26,6 +26,7 @@ std::string render_command(const std::string& file, const RenderOptions& o, cons
     if (!h.near_segment) c << " --no-near-segment";
     if (h.corners != hd.corners) c << " --corners " << to_string(h.corners);
     if (h.wall_fan != hd.wall_fan) c << " --wall-fan " << h.wall_fan;
+    if (h.fan_share != hd.fan_share) c << " --fan-share " << h.fan_share;
     if (h.near_fan != hd.near_fan) c << " --near-fan " << h.near_fan;
     if (h.even_weight != hd.even_weight) c << " --even-weight " << h.even_weight;
   } else if (o.method == Method::rc) {

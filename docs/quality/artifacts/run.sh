@@ -70,7 +70,7 @@ done
 # slanted occluder (512^2), relative RMSE over the open cells against 4096-sample references,
 # for HRC's defaults, each of its options and RC.
 echo
-echo "| scene | HRC | --corners walls | --blur-near-segment | --no-cross-blur | --near-fan 0 | --even-weight 0.5 | RC (defaults) |"
+echo "| scene | HRC | --corners walls | --blur-near-segment | --no-cross-blur | --wall-fan 0 | --even-weight 0.5 | RC (defaults) |"
 echo "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"
 cat > "$T/disk.json" <<JSON
 { "penumbra": 1, "width": 128, "height": 128,
@@ -81,7 +81,7 @@ for name in disk two_lights; do
   S="$T/$name.json"
   "$P" render "$S" --method pt --nee --spp 4096 -q -o "$T/${name}_ref.pfm"
   row="| $name"
-  for opts in "" "--corners walls" "--blur-near-segment" "--no-cross-blur" "--near-fan 0" \
+  for opts in "" "--corners walls" "--blur-near-segment" "--no-cross-blur" "--wall-fan 0" \
     "--even-weight 0.5"; do
     # shellcheck disable=SC2086 # the options are words
     "$P" render "$S" --method hrc $opts -q -o "$T/${name}_hrc.pfm"

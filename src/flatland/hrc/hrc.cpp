@@ -1032,24 +1032,29 @@ void rank_fan_cells(int W, int H, const HrcOptions& o, Opaque opaque, Emits emit
       rank[i] = rim ? 0 : far;
     }
   });
-  // The distance along x and y (chessboard) by the two passes of a 3x3 mask, which is exact
-  // for it (Rosenfeld and Pfaltz), up to K (farther: `far`).
-  auto relax = [&](std::size_t i, int x, int y) {
-    if (x < 0 || x >= W || y < 0 || y >= H) return;
-    const int d = rank[at(x, y)] + 1;
-    if (d <= K && d < rank[i]) rank[i] = std::uint8_t(d);
-  };
+  // The distance along x and y (chessboard) to the nearest rim, up to K: along each row first
+  // (K + 1: none within K), then the nearest of the rows within K (rows in parallel both ways).
   if (K > 0) {
-    for (int y = 0; y < H; ++y)
+    std::vector<std::uint8_t> along(N);
+    parallel_for(H, [&](int y) {
+      int last = -K - 1;  // the last rim at or left of x, then the next at or right of it
       for (int x = 0; x < W; ++x) {
-        const std::size_t i = at(x, y);
-        relax(i, x - 1, y), relax(i, x - 1, y - 1), relax(i, x, y - 1), relax(i, x + 1, y - 1);
+        if (rank[at(x, y)] == 0) last = x;
+        along[at(x, y)] = std::uint8_t(std::min(x - last, K + 1));
       }
-    for (int y = H - 1; y >= 0; --y)
-      for (int x = W - 1; x >= 0; --x) {
-        const std::size_t i = at(x, y);
-        relax(i, x + 1, y), relax(i, x + 1, y + 1), relax(i, x, y + 1), relax(i, x - 1, y + 1);
+      for (int x = W - 1, next = W + K + 1; x >= 0; --x) {
+        if (rank[at(x, y)] == 0) next = x;
+        along[at(x, y)] = std::min(along[at(x, y)], std::uint8_t(std::min(next - x, K + 1)));
       }
+    });
+    parallel_for(H, [&](int y) {
+      for (int x = 0; x < W; ++x) {
+        int d = K + 1;
+        for (int b = std::max(y - K, 0); b <= std::min(y + K, H - 1); ++b)
+          d = std::min(d, std::max(std::abs(b - y), int(along[at(x, b)])));
+        if (d <= K) rank[at(x, y)] = std::uint8_t(d);
+      }
+    });
   }
   parallel_for(H, [&](int y) {
     for (int x = 0; x < W; ++x) {
@@ -1193,10 +1198,11 @@ std::uint64_t working_bytes(int width, int height, const HrcOptions& o) {
   std::uint64_t b = o.storage == Storage::f16
                         ? bytes_of<Half>(s, width, height, blurs_whole_fluence(o))
                         : bytes_of<float>(s, width, height, blurs_whole_fluence(o));
-  // The fan: an index and a light per cell it gathers, and the byte of rank per cell and the
-  // counts per row and rank it chooses them with.
+  // The fan: an index and a light per cell it gathers, and the two bytes per cell (a rank, a
+  // distance along the row) and the counts per row and rank it chooses them with.
   if (runs_fan(width, height, o))
-    b += fan_budget(width, height, o) * (4 + 3 * sizeof(float)) + std::uint64_t(width) * height +
+    b += fan_budget(width, height, o) * (4 + 3 * sizeof(float)) +
+         std::uint64_t(width) * height * 2 +
          std::uint64_t(height) * ((kMaxNearFan + 3) * 4 + 2 * sizeof(std::size_t));
   return b;
 }

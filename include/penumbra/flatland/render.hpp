@@ -76,8 +76,9 @@ struct HrcOptions {
   // reads its quadrants (the paper's formula). 1..8; a grid with fewer cascades uses its
   // highest below the environment.
   int wall_fan = 3;
-  // How many cells the fan gathers: ceil(fan_share * cells), whatever the scene holds, so the
-  // fan costs the same on every scene of a grid size. The cells taken are, in this order: lit
+  // How many cells the fan gathers: ceil(fan_share * cells) but at least 512 (or every cell of a
+  // smaller grid), whatever the scene holds, so the fan costs the same on every scene of a
+  // grid size. The cells taken are, in this order: lit
   // wall cells (opaque, with a cell that is not among their 8 neighbours) and lights' rims (a
   // cell of the scene's own emission with a cell that emits nothing among its 8 neighbours);
   // the cells that are not opaque within `near_fan` cells of a rim (along x and y), nearest

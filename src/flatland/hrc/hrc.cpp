@@ -997,7 +997,8 @@ float own_transmittance(float t) {
 std::size_t fan_budget(int width, int height, const HrcOptions& o) {
   if (!runs_fan(width, height, o)) return 0;
   const double cells = double(width) * double(height);
-  return std::size_t(std::clamp(std::ceil(double(o.fan_share) * cells), 1.0, cells));
+  const double share = std::ceil(double(o.fan_share) * cells);
+  return std::size_t(std::min(std::max(share, double(kMinFanCells)), cells));
 }
 
 namespace {

@@ -98,9 +98,13 @@ float own_transmittance(float t);
 
 // ---- The geometry of the solve, shared with the GPU backend (src/gpu/hrc.cpp) ----
 
-// HrcOptions::fan_share: how many cells the fan gathers on a grid, the same on every scene
-// (0 when the solve runs no fan).
+// HrcOptions::fan_share: how many cells the fan gathers on a grid, the same on every scene:
+// ceil(fan_share * cells), at least kMinFanCells (or every cell of a smaller grid); 0 when the
+// solve runs no fan.
 std::size_t fan_budget(int width, int height, const HrcOptions& options);
+// The smallest grids' budget: the rim of a light 24 cells across and the cells within 2 of it
+// (the disk of the tests, 128^2, needs about 330; 1/64 of its grid is 256).
+inline constexpr std::size_t kMinFanCells = 512;
 // The cells the fan gathers, fan_budget of them, as row-major world indices in order, ranked as
 // HrcOptions::fan_share says: lit wall cells and lights' rims, then the cells that are not
 // opaque by their distance along x and y to a rim (up to near_fan), then the cells inside

@@ -126,6 +126,8 @@ int run(int scenes, bool rings, int pt_spp) {
       [](RenderOptions& o) { o.method = Method::hrc, o.hrc.fan_share = 1.0f / 16; });
   add("rc (defaults)", [](RenderOptions& o) { o.method = Method::rc; });
   add("hrc --near-fan 0", [](RenderOptions& o) { o.method = Method::hrc, o.hrc.near_fan = 0; });
+  add("hrc --wall-fan 4 --near-fan 8",
+      [](RenderOptions& o) { o.method = Method::hrc, o.hrc.wall_fan = 4, o.hrc.near_fan = 8; });
   if (pt_spp > 0)
     add("pt --nee " + std::to_string(pt_spp) + " spp",
         [&](RenderOptions& o) { o.method = Method::pt, o.pt.nee = true, o.pt.spp = pt_spp; });

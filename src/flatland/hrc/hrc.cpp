@@ -1094,7 +1094,9 @@ void rank_fan_cells(int W, int H, const HrcOptions& o, Opaque opaque, Emits emit
     std::size_t i = first[std::size_t(y)], tie = ties[std::size_t(y)];
     for (int x = 0; x < W; ++x) {
       const int r = rank[at(x, y)];
-      if (r < last || (r == last && tie > 0 && tie--)) cells[i++] = std::uint32_t(at(x, y));
+      bool take = r < last;
+      if (r == last && tie > 0) take = true, --tie;
+      if (take) cells[i++] = std::uint32_t(at(x, y));
     }
   });
 }

@@ -607,9 +607,8 @@ TEST(FlatlandHrc, WorldPointsFollowTheRotation) {
 // The fan's cells, against a brute-force reading of their definition: exactly fan_budget of
 // them, ranked lit walls (opaque, with an open cell among the 8 around) and lights' rims (a cell
 // of the lights with one among its 8 neighbours that emits nothing) first, then the open cells
-// by their distance along x and y to the nearest rim up to K, then the opaque cells inside
-// walls, then the other open cells, within a rank in row-major order; the list in row-major
-// order.
+// by their distance along x and y to the nearest rim up to K, then the other open cells, then
+// the opaque cells inside walls, within a rank in row-major order; the list in row-major order.
 TEST(FlatlandHrc, FanCellsAreTheBudgetNearestToWallsAndRims) {
   SceneDesc d;
   d.width = 64;
@@ -646,9 +645,9 @@ TEST(FlatlandHrc, FanCellsAreTheBudgetNearestToWallsAndRims) {
         std::vector<std::pair<int, std::uint32_t>> ranked;  // (rank, index)
         for (int y = 0; y < H; ++y)
           for (int x = 0; x < W; ++x) {
-            int r = K + 2;
+            int r = K + 1;
             if (opaque(x, y)) {
-              r = any_around(x, y, 1, [&](int a, int b) { return !opaque(a, b); }) ? 0 : K + 1;
+              r = any_around(x, y, 1, [&](int a, int b) { return !opaque(a, b); }) ? 0 : K + 2;
             } else {
               for (int k = 0; k <= K && r > K; ++k)
                 if (any_around(x, y, k, rim)) r = k;

@@ -82,9 +82,9 @@ struct HrcOptions {
   // wall cells (opaque, with a cell that is not among their 8 neighbours) and lights' rims (a
   // cell of the scene's own emission with a cell that emits nothing among its 8 neighbours);
   // the cells that are not opaque within `near_fan` cells of a rim (along x and y), nearest
-  // first; the cells inside walls, where the fan gives what the quadrants give; the other
-  // cells. Within one rank in row order, so where the budget ends inside a rank (a scene of
-  // many small lights) the first rows have the fan and the last do not. In (0, 1].
+  // first; the other open cells; the cells inside walls. Within one rank in row order, so where the
+  // budget ends inside a rank (a scene of many small lights) the first rows have the fan and the
+  // last do not. In (0, 1].
   float fan_share = 1.0f / 64.0f;
   // How far from a light's rim (in cells, along x and y) the fan ranks open cells by their
   // distance; 0..16. Farther, its rays do no better than the cascades (docs/QUALITY.md).

@@ -107,8 +107,8 @@ std::size_t fan_budget(int width, int height, const HrcOptions& options);
 inline constexpr std::size_t kMinFanCells = 512;
 // The cells the fan gathers, fan_budget of them, as row-major world indices in order, ranked as
 // HrcOptions::fan_share says: lit wall cells and lights' rims, then the cells that are not
-// opaque by their distance along x and y to a rim (up to near_fan), then the cells inside
-// walls, then the other open cells, within a rank in row order. A rim is a cell whose `lights` (3
+// opaque by their distance along x and y to a rim (up to near_fan), then the other open cells,
+// then the cells inside walls, within a rank in row order. A rim is a cell whose `lights` (3
 // per cell; null: the medium's emission) are not all 0 with one among its 8 neighbours whose are.
 // The scene overload reads its opacity (1: opaque) and its own emission: the GPU backend's cells,
 // the same as the CPU's.

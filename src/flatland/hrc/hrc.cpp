@@ -1022,10 +1022,10 @@ void rank_fan_cells(int W, int H, const HrcOptions& o, Opaque opaque, Emits emit
   };
   // A cell's rank: 0 a lit wall cell or a rim, d the distance along x and y to the nearest rim
   // up to K, then K + 1 the other open cells (farther from a rim, where the fan's rays do no
-  // better than the cascades, docs/QUALITY.md, and no worse far from lights) and K + 2 the
-  // cells inside walls (where the fan gives what the quadrants give, but its rays stop at once:
-  // taken before them, a budget larger than a scene needs would cost it less than an empty
-  // grid, 0.86x of the fan's time with 2 lights).
+  // better than the cascades and somewhat worse far from lights, docs/QUALITY.md) and K + 2
+  // the cells inside walls (where the fan gives what the quadrants give, but its rays stop at
+  // once: taken before them, a budget larger than a scene needs would cost it less than an
+  // empty grid, 0.8x of the fan's time with 2 lights).
   const std::uint8_t far = std::uint8_t(K + 1), inside = std::uint8_t(K + 2);
   std::vector<std::uint8_t> rank(N);
   parallel_for(H, [&](int y) {

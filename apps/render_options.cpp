@@ -135,13 +135,7 @@ void add_render_options(CLI::App* app, RenderOptions& options, RenderOptionFlags
     app->add_option("--even-weight", options.hrc.even_weight,
                     "hrc: eqs. 15-17 at an even probe column, the weight of the cones at its own "
                     "probe against the merges along the edges (the paper: 0.5); in [0, 1]")
-        ->check(CLI::Validator(
-            [](std::string& text) {
-              float v = 0;
-              const bool ok = CLI::detail::lexical_cast(text, v) && v > 0.0f && v <= 1.0f;
-              return ok ? std::string() : "a share of the cells in (0, 1], found " + text;
-            },
-            "SHARE in (0, 1]"))
+        ->check(CLI::Range(0.0f, 1.0f))
         ->capture_default_str();
   }
   if (which.bounces)

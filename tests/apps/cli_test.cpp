@@ -255,6 +255,10 @@ TEST_F(Cli, HolographicCascadesReportStagesAndParameters) {
                  2);
   expect_failure(run({"render", scene_, "--method", "hrc", "--near-fan", "17", "-o", out("x.pfm")}),
                  2);
+  // The even weight's ends are weights (the fan share's check is its own).
+  for (const char* w : {"0", "1"})
+    render_ok({"--method", "hrc", "--even-weight", w, "-q", "-o", out("e.pfm")});
+  fs::remove(out("e.pfm"));
   for (const char* share : {"0", "1.5", "nan"})
     expect_failure(
         run({"render", scene_, "--method", "hrc", "--fan-share", share, "-o", out("x.pfm")}), 2);

@@ -510,6 +510,22 @@ TEST(MeshFileGltf, RefusesCyclesAndKeepsDeepTrees) {
   const MeshFile m = loads(d.write("deep.gltf", j.dump()));
   ASSERT_EQ(m.mesh.positions.size(), 3u);
   EXPECT_FLOAT_EQ(m.mesh.positions[0].x, float(depth));
+  // `extras` nested 30,000 deep (60 KB): tinygltf reads them by recursion and overflowed the
+  // stack; refused before it, naming where. 500 levels load.
+  for (const int levels : {500, 30000}) {
+    std::string text = gltf(kTriangle).dump();
+    text.pop_back();  // the closing brace
+    text += ",\"extras\":" + std::string(std::size_t(levels), '[') +
+            std::string(std::size_t(levels), ']') + "}";
+    const std::string file = d.write("nested" + std::to_string(levels) + ".gltf", text);
+    if (levels == 500) {
+      EXPECT_EQ(loads(file).mesh.positions.size(), 3u);
+      continue;
+    }
+    msg = refusal(file);
+    EXPECT_NE(msg.find("extras[0][0][0]"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("nests more than 512 levels deep"), std::string::npos) << msg;
+  }
 }
 
 // ---- glTF, the assimp test models ----

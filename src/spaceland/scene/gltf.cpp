@@ -28,6 +28,9 @@
 #include <filesystem>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <string>
+#include <tuple>
+#include <vector>
 
 #include "io/json_reader.hpp"
 #include "spaceland/scene/mesh_reader.hpp"
@@ -119,6 +122,31 @@ void check_types(const nlohmann::json& doc) {
   }
 }
 
+// tinygltf reads `extras` and extensions into values of its own by recursion, so a document
+// nested deep enough overflows the stack: a 60 KB file whose `extras` nest 30,000 levels
+// crashed the reader. glTF's own properties nest about 6 levels; past kMaxJsonDepth the file is
+// refused, naming where.
+constexpr int kMaxJsonDepth = 512;
+void check_depth(const nlohmann::json& doc) {
+  std::vector<std::tuple<const nlohmann::json*, int, std::string>> stack{{&doc, 0, ""}};
+  while (!stack.empty()) {
+    auto [j, depth, path] = std::move(stack.back());
+    stack.pop_back();
+    if (!j->is_structured()) continue;
+    if (depth == kMaxJsonDepth) {
+      if (path.size() > 60) path = path.substr(0, 60) + "...";
+      mesh_fail(path + ": the JSON nests more than " + std::to_string(kMaxJsonDepth) +
+                " levels deep (the glTF reader follows " + std::to_string(kMaxJsonDepth) + ")");
+    }
+    if (j->is_array())
+      for (std::size_t i = 0; i < j->size(); ++i)
+        stack.emplace_back(&(*j)[i], depth + 1, path + "[" + std::to_string(i) + "]");
+    else
+      for (const auto& [key, v] : j->items())
+        stack.emplace_back(&v, depth + 1, path.empty() ? key : path + "." + key);
+  }
+}
+
 // Before tinygltf: the version (glTF 1.0 files have objects where 2.0 has arrays; tinygltf's
 // messages about them would not say what is wrong), the property types, the required extensions.
 void check_json(const std::string& bytes, bool binary) {
@@ -135,6 +163,7 @@ void check_json(const std::string& bytes, bool binary) {
   }
   const nlohmann::json j = nlohmann::json::parse(json_text, nullptr, false);
   if (!j.is_object()) return;  // tinygltf's parser reports it
+  check_depth(j);
   const auto asset = j.find("asset");
   if (asset == j.end() || !asset->is_object() || !asset->contains("version"))
     mesh_fail("glTF 2.0 is needed (this file has no asset.version, so it is version 1.0)");

@@ -31,6 +31,7 @@ const std::vector<Tool> kTools = {
     {"penumbra_quality3d", PENUMBRA_QUALITY3D},
     {"penumbra_gpu_passes", PENUMBRA_GPU_PASSES},
     {"penumbra_grid_scaling", PENUMBRA_GRID_SCALING},
+    {"penumbra_quality_walls", PENUMBRA_QUALITY_WALLS},
 #endif
 };
 

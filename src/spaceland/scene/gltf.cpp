@@ -29,7 +29,6 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <string>
-#include <tuple>
 #include <vector>
 
 #include "io/json_reader.hpp"
@@ -83,22 +82,42 @@ bool is_index(const nlohmann::json& v) {
 // `extras` and extensions: tinygltf skips a property of the wrong type silently (a name of 42, an
 // array for pbrMetallicRoughness, an index of -1), so such a file would load as something else.
 // Draco-compressed primitives are refused here, extensionsRequired or not.
+// The same walk bounds the nesting, `extras` and extensions included: tinygltf reads those into
+// values of its own by recursion, so a document nested deep enough overflowed the stack (a
+// 60 KB file whose `extras` nest 30,000 levels). glTF's own properties nest about 6 levels;
+// past kMaxJsonDepth the file is refused, naming where.
+constexpr int kMaxJsonDepth = 512;
 void check_types(const nlohmann::json& doc) {
   using json = nlohmann::json;
   auto expect = [](const std::string& path, const char* what, const json& found) {
     mesh_fail(path + ": expected " + what + ", found " + io::describe(found));
   };
-  std::vector<std::pair<const json*, std::string>> stack{{&doc, ""}};
+  struct Item {
+    const json* j;
+    std::string path;
+    int depth;
+    bool typed;  // false inside `extras` and extensions: only the nesting is checked
+  };
+  std::vector<Item> stack{{&doc, "", 0, true}};
   while (!stack.empty()) {
-    const auto [j, path] = stack.back();
+    const Item it = std::move(stack.back());
     stack.pop_back();
+    const json* j = it.j;
+    const std::string& path = it.path;
+    if (!j->is_structured()) continue;
+    if (it.depth == kMaxJsonDepth)
+      mesh_fail((path.size() > 60 ? path.substr(0, 60) + "..." : path) +
+                ": the JSON nests more than " + std::to_string(kMaxJsonDepth) + " levels deep");
     if (j->is_array())
       for (std::size_t i = 0; i < j->size(); ++i)
-        stack.push_back({&(*j)[i], path + "[" + std::to_string(i) + "]"});
+        stack.push_back({&(*j)[i], path + "[" + std::to_string(i) + "]", it.depth + 1, it.typed});
     if (!j->is_object()) continue;
     for (const auto& [key, v] : j->items()) {
       const std::string p = path.empty() ? key : path + "." + key;
-      if (key == "extras") continue;
+      if (!it.typed || key == "extras") {
+        stack.push_back({&v, p, it.depth + 1, false});
+        continue;
+      }
       if (key == "extensions") {
         if (!v.is_object()) expect(p, "an object", v);
         for (const auto& [ext, e] : v.items()) {
@@ -106,6 +125,7 @@ void check_types(const nlohmann::json& doc) {
           if (ext == "KHR_draco_mesh_compression")
             mesh_fail(path + ": Draco compression (KHR_draco_mesh_compression) is not supported");
         }
+        stack.push_back({&v, p, it.depth + 1, false});
         continue;
       }
       if (in(key, kStrings) && !v.is_string()) expect(p, "a string", v);
@@ -117,33 +137,8 @@ void check_types(const nlohmann::json& doc) {
       if (key == "scale" && !v.is_number() && !v.is_array()) expect(p, "a number or an array", v);
       if (in(key, kObjects) && !v.is_object()) expect(p, "an object", v);
       if (in(key, kArrays) && !v.is_array()) expect(p, "an array", v);
-      stack.push_back({&v, p});
+      stack.push_back({&v, p, it.depth + 1, true});
     }
-  }
-}
-
-// tinygltf reads `extras` and extensions into values of its own by recursion, so a document
-// nested deep enough overflows the stack: a 60 KB file whose `extras` nest 30,000 levels
-// crashed the reader. glTF's own properties nest about 6 levels; past kMaxJsonDepth the file is
-// refused, naming where.
-constexpr int kMaxJsonDepth = 512;
-void check_depth(const nlohmann::json& doc) {
-  std::vector<std::tuple<const nlohmann::json*, int, std::string>> stack{{&doc, 0, ""}};
-  while (!stack.empty()) {
-    auto [j, depth, path] = std::move(stack.back());
-    stack.pop_back();
-    if (!j->is_structured()) continue;
-    if (depth == kMaxJsonDepth) {
-      if (path.size() > 60) path = path.substr(0, 60) + "...";
-      mesh_fail(path + ": the JSON nests more than " + std::to_string(kMaxJsonDepth) +
-                " levels deep (the glTF reader follows " + std::to_string(kMaxJsonDepth) + ")");
-    }
-    if (j->is_array())
-      for (std::size_t i = 0; i < j->size(); ++i)
-        stack.emplace_back(&(*j)[i], depth + 1, path + "[" + std::to_string(i) + "]");
-    else
-      for (const auto& [key, v] : j->items())
-        stack.emplace_back(&v, depth + 1, path.empty() ? key : path + "." + key);
   }
 }
 
@@ -163,7 +158,6 @@ void check_json(const std::string& bytes, bool binary) {
   }
   const nlohmann::json j = nlohmann::json::parse(json_text, nullptr, false);
   if (!j.is_object()) return;  // tinygltf's parser reports it
-  check_depth(j);
   const auto asset = j.find("asset");
   if (asset == j.end() || !asset->is_object() || !asset->contains("version"))
     mesh_fail("glTF 2.0 is needed (this file has no asset.version, so it is version 1.0)");

@@ -300,7 +300,8 @@ TEST(Scene3d, ScaleOverflowIsRefused) {
                        "scene.json");
   ASSERT_FALSE(r.ok());
   EXPECT_EQ(r.error().message.rfind("scene.json: objects[0]: ", 0), 0u) << r.error().message;
-  EXPECT_NE(r.error().message.find("float range"), std::string::npos) << r.error().message;
+  EXPECT_NE(r.error().message.find("past the largest world coordinate"), std::string::npos)
+      << r.error().message;
 }
 
 TEST(Scene3d, MemoryLimitCoversShapes) {
@@ -487,6 +488,35 @@ std::vector<ErrorCase> error_cases() {
       {"TooLargeForFloat",
        object_doc(R"({"type": "sphere", "center": [0, 0, 0], "radius": 1e300})"),
        "objects[1].radius", "finite"},
+      // Past the world's bound (1e15): Embree asserted on such rays and bounds (issue 37).
+      {"CameraPastTheWorld", camera_doc(R"({"position": [1.9e18, 0, 5], "look_at": [0, 0, 0],
+          "fov_y": 40, "width": 8, "height": 6})"),
+       "camera.position", "the camera reaches x = 1.9e+18, past the largest world coordinate"},
+      {"LookAtPastTheWorld", camera_doc(R"({"position": [0, 0, 5], "look_at": [0, -2e15, 0],
+          "fov_y": 40, "width": 8, "height": 6})"),
+       "camera.look_at", "reaches y = -2e+15"},
+      {"SpherePastTheWorld",
+       object_doc(R"({"type": "sphere", "center": [1e30, 0, 0], "radius": 1})"), "objects[1]",
+       "the sphere (after its transform) reaches x = 1e+30"},
+      {"SphereRadiusPastTheWorld",
+       object_doc(R"({"type": "sphere", "center": [0, 0, 0], "radius": 2e15})"), "objects[1]",
+       "reaches x = -2e+15"},
+      {"DiskPastTheWorld", object_doc(R"({"type": "disk", "center": [0, 0, 0], "normal": [0, 1, 0],
+          "radius": 1e30})"),
+       "objects[1]", "the disk (after its transform) reaches x = -1e+30"},
+      {"BoxPastTheWorld", box_doc(R"(, "transform": {"translate": [1e19, 0, 0]})"), "objects[1]",
+       "the box (after its transform) reaches x = 1e+19"},
+      {"ScalePastTheWorld", box_doc(R"(, "transform": {"scale": 1e30})"), "objects[1]",
+       "the box (after its transform)"},
+      {"EllipsoidPastTheWorld", object_doc(R"({"type": "sphere", "center": [0, 0, 0],
+          "radius": 1, "transform": {"scale": [1, 1e30, 1]}})"),
+       "objects[1]", "the sphere (after its transform) reaches y"},
+      {"MediumPastTheWorld", doc(R"(, "media": [{"center": [1e30, 0, 0], "size": [1, 1, 1],
+          "extinction": 1, "albedo": [0, 0, 0]}])"),
+       "media[0]", "the fog box reaches x = 1e+30"},
+      {"RotatedMediumPastTheWorld", doc(R"(, "media": [{"center": [0, 0, 0],
+          "size": [3e15, 1, 1], "rotate": [0, 0, 90], "extinction": 1, "albedo": [0, 0, 0]}])"),
+       "media[0]", "the fog box reaches y"},
   };
 }
 

@@ -17,6 +17,12 @@ namespace penumbra::spaceland {
 // Largest image side the format allows (camera width and height, --width, --height).
 inline constexpr int kMaxImageSide = 8192;
 
+// Largest magnitude of a world coordinate: the camera, every surface (after its transform) and
+// every fog box lie within [-kMaxCoordinate, kMaxCoordinate] on each axis. Embree takes ray origins
+// only below 1.8e18 and squares of distances must stay within a float; this leaves room for
+// both (docs/scene-format.md, "Limits").
+inline constexpr float kMaxCoordinate = 1e15f;
+
 // The pinhole camera of the format: one ray through each pixel centre (CameraRays, in
 // src/spaceland/camera.hpp).
 struct Camera {

@@ -462,6 +462,12 @@ Status check_options(const GridOptions& o) {
   if (!std::isfinite(o.voxel) || o.voxel < 0)
     return Error{"`grid.voxel`: expected a voxel size > 0 in world units (0: derived), found " +
                  io::format_number(o.voxel)};
+  // The outermost level (136 voxels, doubling per level) stays within the coordinates the ray
+  // tracer takes (Embree: 1.8e18) wherever the camera stands.
+  if (o.voxel > kMaxCoordinate / 100)
+    return Error{"`grid.voxel`: expected at most " + io::format_number(kMaxCoordinate / 100) +
+                 " world units (a hundredth of the largest world coordinate), found " +
+                 io::format_number(o.voxel)};
   if (o.levels < 0 || o.levels > kMaxLevels)
     return Error{"`grid.levels`: expected 1.." + std::to_string(kMaxLevels) +
                  " (0: derived), found " + std::to_string(o.levels)};

@@ -86,11 +86,27 @@ void check_object_index(const std::string& file, const std::string& path, int ob
              std::to_string(s.objects.size()) + " objects)");
 }
 
+// The document's path of an object ("objects[2]") from its line in Scene::objects, or `fallback`
+// (a scene built in code).
+std::string object_path(const Scene& s, int object, const std::string& fallback) {
+  if (object < 0 || std::size_t(object) >= s.objects.size()) return fallback;
+  const std::string& line = s.objects[std::size_t(object)];
+  return line.substr(0, line.find(" ("));
+}
+
 void check_mesh(const std::string& file, const std::string& path, const TriangleMesh& m,
                 const Scene& s) {
   const std::size_t n = m.positions.size();
   for (std::size_t i = 0; i < n; ++i)
     check_vec3(file, item(path + ".positions", i), m.positions[i]);
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec3 p = m.positions[i];
+    if (std::fabs(p.x) <= kMaxCoordinate && std::fabs(p.y) <= kMaxCoordinate &&
+        std::fabs(p.z) <= kMaxCoordinate)
+      continue;
+    check_within_world(file, object_path(s, m.object, path), p, p,
+                       "vertex " + std::to_string(i) + " (in world space)");
+  }
   if (!m.normals.empty() && m.normals.size() != n)
     fail(file, path + ".normals",
          "expected none or one per position (" + std::to_string(n) + "), found " +
@@ -143,6 +159,9 @@ void check_analytic(const std::string& file, const std::string& path, const Shap
                     const Scene& s) {
   check_vec3(file, path + ".center", shape.center);
   check_float(file, path + ".radius", shape.radius, Range::positive);
+  const Vec3 r{shape.radius, shape.radius, shape.radius};
+  check_within_world(file, object_path(s, shape.object, path), shape.center - r, shape.center + r,
+                     "the shape");
   check_material_index(file, path + ".material", shape.material, s);
   check_object_index(file, path, shape.object, s);
 }
@@ -160,9 +179,26 @@ std::string format_vec3(Vec3 v) {
   return s;
 }
 
+void check_within_world(const std::string& file, const std::string& path, Vec3 lo, Vec3 hi,
+                        const std::string& what) {
+  for (int k = 0; k < 3; ++k) {
+    for (float v : {lo[k], hi[k]}) {
+      if (std::fabs(v) <= kMaxCoordinate) continue;  // false for NaN too
+      const char axis[2] = {char('x' + k), 0};
+      fail(file, path,
+           what + " reaches " + axis + " = " + format_number(v) +
+               ", past the largest world coordinate the format allows (" +
+               format_number(kMaxCoordinate) +
+               " in magnitude, so that rays and squared distances stay within floats)");
+    }
+  }
+}
+
 void check_camera(const std::string& file, const Camera& c) {
   check_vec3(file, "camera.position", c.position);
   check_vec3(file, "camera.look_at", c.look_at);
+  check_within_world(file, "camera.position", c.position, c.position, "the camera");
+  check_within_world(file, "camera.look_at", c.look_at, c.look_at, "the point looked at");
   check_vec3(file, "camera.up", c.up);
   check_open_interval(file, "camera.fov_y", c.fov_y, 0, 180, false);
   for (auto [name, side] :
@@ -230,6 +266,11 @@ void check_scene_or_throw(const Scene& s) {
       check_float(file, item(path + ".half_size", k), m.half_size[k], Range::positive);
       check_unit(file, item(path + ".axes", k), m.axes[k]);
     }
+    // The box's reach along each world axis: its half sizes along its axes, projected.
+    Vec3 reach;
+    for (int w = 0; w < 3; ++w)
+      for (int k = 0; k < 3; ++k) reach[w] += m.half_size[k] * std::fabs(m.axes[k][w]);
+    check_within_world(file, path, m.center - reach, m.center + reach, "the fog box");
     for (int a = 0; a < 3; ++a) {
       const int b = (a + 1) % 3;
       const double d = double(m.axes[a].x) * m.axes[b].x + double(m.axes[a].y) * m.axes[b].y +

@@ -15,6 +15,11 @@ std::string format_vec3(Vec3 v);
 // (ranges included, so that a scene built in code is checked too).
 void check_camera(const std::string& file, const Camera& camera);
 
+// The box [lo, hi] of an object lies within kMaxCoordinate of the origin on every axis; `what`
+// says what reaches past it ("the sphere", "vertex 3 of the file, after the transform").
+void check_within_world(const std::string& file, const std::string& path, Vec3 lo, Vec3 hi,
+                        const std::string& what);
+
 // Every rule of check_scene, throwing.
 void check_scene_or_throw(const Scene& scene);
 

@@ -277,7 +277,7 @@ class SceneReader : public io::JsonReader {
       if (j.contains("rotate")) rotate = vec3(j["rotate"], path + ".rotate");
       const ObjectTransform t = read_transform(j, path);
       // The object's own rotate turns the box about its centre; the transform comes after.
-      add_mesh(box_mesh(t.affine * Affine::trs(size, rotate, center)), j, path, index);
+      add_mesh(box_mesh(t.affine * Affine::trs(size, rotate, center)), j, path, index, "box");
     } else if (type == "sphere") {
       check_keys(j, path, {"type", "center", "radius", "material", "transform"});
       const Vec3 center = required_vec3(j, path, "center");
@@ -286,10 +286,10 @@ class SceneReader : public io::JsonReader {
       const ObjectTransform t = read_transform(j, path);
       if (t.uniform) {
         Sphere s{t.affine.point(center), radius * t.scale, object_material(j, path), index};
-        check_finite(s.center, s.radius, path);
+        check_extent(s.center, s.radius, path, "sphere");
         scene_.spheres.push_back(s);
       } else {
-        add_mesh(ellipsoid_mesh(center, radius, t.affine), j, path, index);
+        add_mesh(ellipsoid_mesh(center, radius, t.affine), j, path, index, "sphere");
       }
     } else if (type == "quad") {
       check_keys(j, path, {"type", "corner", "u", "v", "material", "transform"});
@@ -304,7 +304,7 @@ class SceneReader : public io::JsonReader {
       if (!(c[0] * c[0] + c[1] * c[1] + c[2] * c[2] > 1e-12 * uu * vv))
         fail_at(path + ".v", "expected a non-zero edge vector not parallel to u = " +
                                  format_vec3(u) + ", found " + format_vec3(v));
-      add_mesh(quad_mesh(corner, u, v, read_transform(j, path).affine), j, path, index);
+      add_mesh(quad_mesh(corner, u, v, read_transform(j, path).affine), j, path, index, "quad");
     } else if (type == "disk") {
       check_keys(j, path, {"type", "center", "normal", "radius", "material", "transform"});
       const Vec3 center = required_vec3(j, path, "center");
@@ -315,10 +315,10 @@ class SceneReader : public io::JsonReader {
       if (t.uniform) {
         Disk d{t.affine.point(center), t.affine.normal(normal), radius * t.scale,
                object_material(j, path), index};
-        check_finite(d.center, d.radius, path);
+        check_extent(d.center, d.radius, path, "disk");
         scene_.disks.push_back(d);
       } else {
-        add_mesh(ellipse_mesh(center, normal, radius, t.affine), j, path, index);
+        add_mesh(ellipse_mesh(center, normal, radius, t.affine), j, path, index, "disk");
       }
     } else {
       fail_at(path + ".type", "unknown object type \"" + type + "\", expected " + kObjectTypes);
@@ -358,25 +358,35 @@ class SceneReader : public io::JsonReader {
     }
     transform_mesh(mesh, read_transform(j, path).affine);
     mesh.object = index;
-    check_finite(mesh, path);
+    check_extent(mesh, path, nullptr);
     scene_.meshes.push_back(std::move(mesh));
   }
 
-  void add_mesh(TriangleMesh mesh, const json& j, const std::string& path, int index) {
+  void add_mesh(TriangleMesh mesh, const json& j, const std::string& path, int index,
+                const char* type) {
     mesh.materials.assign(mesh.triangles.size(), object_material(j, path));
     mesh.object = index;
-    check_finite(mesh, path);
+    check_extent(mesh, path, type);
     scene_.meshes.push_back(std::move(mesh));
   }
 
-  // A transform can carry finite coordinates past the float range.
-  void check_finite(Vec3 p, float radius, const std::string& path) const {
-    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z) || !std::isfinite(radius))
-      fail_at(path, "the transformed object is past the float range (centre " + format_vec3(p) +
-                        ", radius " + io::format_number(radius) + ")");
+  // Within the format's world (a transform can also carry finite coordinates past floats).
+  void check_extent(Vec3 p, float radius, const std::string& path, const char* type) const {
+    const Vec3 r{radius, radius, radius};
+    check_within_world(file(), path, p - r, p + r,
+                       std::string("the ") + type + " (after its transform)");
   }
-  void check_finite(const TriangleMesh& mesh, const std::string& path) const {
-    for (Vec3 p : mesh.positions) check_finite(p, 1, path);
+  // `type`: the shape a mesh was made for, or null for a mesh file.
+  void check_extent(const TriangleMesh& mesh, const std::string& path, const char* type) const {
+    for (std::size_t i = 0; i < mesh.positions.size(); ++i) {
+      const Vec3 p = mesh.positions[i];
+      if (std::fabs(p.x) <= kMaxCoordinate && std::fabs(p.y) <= kMaxCoordinate &&
+          std::fabs(p.z) <= kMaxCoordinate)
+        continue;
+      check_within_world(file(), type ? path : path + ".file", p, p,
+                         type ? std::string("the ") + type + " (after its transform)"
+                              : "vertex " + std::to_string(i) + " (after the transform)");
+    }
   }
 
   // Mesh files are refused as they are read; shapes and the total are checked here.

@@ -167,6 +167,11 @@ int render_scene_3d(const RenderArgs& a) {
     std::cerr << "penumbra render: " << a.scene << ": " << with_flags(s.error().message) << "\n";
     return kFailure;
   }
+  // Its message names the file and the brightest value's path.
+  if (penumbra::Status s = sl::check_brightness(*scene, options); !s) {
+    std::cerr << "penumbra render: " << s.error().message << "\n";
+    return kFailure;
+  }
 
   const bool progress = !a.quiet && isatty(STDERR_FILENO) && options.aov == sl::Aov::radiance;
   if (progress) options.progress = draw_progress;

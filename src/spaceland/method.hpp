@@ -22,6 +22,8 @@ struct Plan {
   int width = 0, height = 0;  // the camera's image
   // Later bounces from the radiance cache (a method that does not follow them, bounces > 1).
   bool radiance_cache = false;
+  // The light is rendered at 2^-light_exponent and scaled back (spaceland/brightness.hpp).
+  int light_exponent = 0;
   std::uint64_t pixels() const { return std::uint64_t(width) * std::uint64_t(height); }
 };
 

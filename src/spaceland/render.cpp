@@ -10,6 +10,7 @@
 
 #include "core/timer.hpp"
 #include "io/json_reader.hpp"
+#include "spaceland/brightness.hpp"
 #include "spaceland/embree/ray_scene.hpp"
 #include "spaceland/gbuffer.hpp"
 #include "spaceland/method.hpp"
@@ -166,7 +167,18 @@ Expected<Plan> make_plan(const Scene& scene, const RenderOptions& options) {
   plan.width = scene.camera.width;
   plan.height = scene.camera.height;
   plan.radiance_cache = options.aov == Aov::radiance && needs_cache(options);
+  if (options.aov == Aov::radiance) {
+    Expected<int> k = light_exponent(scene, options.bounces);
+    if (!k) return k.error();
+    plan.light_exponent = *k;
+  }
   return plan;
+}
+
+Status check_brightness(const Scene& scene, const RenderOptions& options) {
+  if (options.aov != Aov::radiance) return {};
+  if (Expected<int> k = light_exponent(scene, options.bounces); !k) return k.error();
+  return {};
 }
 
 std::uint64_t estimate_memory(const Scene& scene, const RenderOptions& options) {
@@ -178,7 +190,12 @@ std::uint64_t estimate_memory(const Scene& scene, const RenderOptions& options) 
     if (needs_cache(options))
       method += RadianceCache::estimate_bytes(scene, cache_grid(options), options.max_memory);
   }
-  return RayScene::estimate_bytes(scene) + pixels * per_pixel + method;
+  // A scene brighter than the methods compute with is rendered from a dimmed copy.
+  std::uint64_t copy = 0;
+  if (options.aov == Aov::radiance)
+    if (Expected<int> k = light_exponent(scene, options.bounces); k && *k > 0)
+      copy = scene_bytes(scene);
+  return RayScene::estimate_bytes(scene) + pixels * per_pixel + method + copy;
 }
 
 Status check_memory(const Scene& scene, const RenderOptions& options) {
@@ -273,8 +290,15 @@ Expected<RenderResult> render(const Scene& scene, const RenderOptions& options) 
     if (options.aov != Aov::radiance) {
       result.radiance = aov_image(scene, g, options.aov);
       result.stages.push_back({"AOV", stage.ms()});
-    } else if (Status s = solve(*plan, scene, *rays, g, result); !s) {
-      return s.error();
+    } else {
+      // Bright light at 2^-k, scaled back: exact, as powers of two move exponents only.
+      const int k = plan->light_exponent;
+      const Scene lit = k ? dimmed(scene, k) : Scene{};
+      if (Status s = solve(*plan, k ? lit : scene, *rays, g, result); !s) return s.error();
+      if (k) {
+        float* p = result.radiance.data();
+        for (std::size_t i = 0; i < result.radiance.size(); ++i) p[i] = std::ldexp(p[i], k);
+      }
     }
     result.time_ms = total.ms();
     if (Status s = check_finite(result.radiance, options.aov); !s) return s.error();

@@ -101,5 +101,110 @@ TEST(HardInputs, GridVoxelIsBoundedByTheWorld) {
   expect_error(grid::check_options(g), "`grid.voxel`: ", "expected at most 1e+13");
 }
 
+// ---- Brightness (items 3 and 4): refused past floats, rendered exactly below. ----
+
+// A floor under a sphere light, a sky and a sun, each light times 2^scale.
+Scene lit_floor(int scale) {
+  Scene s;
+  s.camera = camera({0, 1.5f, 4}, {0, 0.3f, 0}, 12, 9);
+  add_floor(s, 5, {0.6f, 0.6f, 0.6f});
+  add_sphere(s, {0.4f, 0.8f, 0}, 0.3f, add_material(s, {0.5f, 0.5f, 0.5f}, {5, 4, 3}));
+  testing::add_box(s, {-1.5f, 0, -0.5f}, {-0.8f, 0.7f, 0.2f}, add_material(s, {0.7f, 0.7f, 0.7f}));
+  s.sky = {{0.2f, 0.3f, 0.6f}, {0.5f, 0.5f, 0.6f}, {0.1f, 0.1f, 0.1f}};
+  s.has_sun = true;
+  s.sun.direction = normalize(Vec3{0.4f, 1, 0.3f});
+  s.sun.irradiance = {3, 2.5f, 2};
+  for (Material& m : s.materials) m.emission = m.emission * std::ldexp(1.0f, scale);
+  for (Rgb* c : {&s.sky.zenith, &s.sky.horizon, &s.sky.ground, &s.sun.irradiance})
+    *c = *c * std::ldexp(1.0f, scale);
+  return s;
+}
+
+// Before, spwi and the grid ended in "not finite ... a bug" on a sky of 3e37 and the path tracer
+// drew an enclosure of 1e38 black at 8 bounces. A scene 2^k times brighter now renders to exactly
+// 2^k times the image (rendered at 2^-k of its light when past 2^64, scaled back).
+TEST(HardInputs, PowerOfTwoBrighterScenesRenderExactlyScaled) {
+  for (Method m : {Method::pt, Method::spwi, Method::grid}) {
+    RenderOptions o = testing::pt(2, 2);
+    o.method = m;
+    const ImageRgb base = testing::render_ok(lit_floor(0), o).radiance;
+    ASSERT_GT(base.size(), 0u);
+    for (int scale : {20, 70, 100}) {
+      const ImageRgb bright = testing::render_ok(lit_floor(scale), o).radiance;
+      ASSERT_EQ(bright.size(), base.size());
+      std::size_t differ = 0;
+      for (std::size_t i = 0; i < base.size(); ++i)
+        differ += bright.data()[i] != std::ldexp(base.data()[i], scale);
+      EXPECT_EQ(differ, 0u) << to_string(m) << " at 2^" << scale;
+    }
+  }
+}
+
+// The case: a sky of 3e37 over an open floor, a * 3e37 there (a uniform sky's irradiance is
+// pi L), 3e37 where the camera sees the sky; spwi and the grid used to end in "not finite".
+TEST(HardInputs, ASkyOf3e37RendersInEveryMethod) {
+  Scene s;
+  s.camera = camera({0, 1, 4}, {0, 0.8f, 0}, 8, 6);
+  add_floor(s, 1e3f, {0.5f, 0.5f, 0.5f});
+  s.sky = {{3e37f, 3e37f, 3e37f}, {3e37f, 3e37f, 3e37f}, {3e37f, 3e37f, 3e37f}};
+  for (Method m : {Method::pt, Method::spwi, Method::grid}) {
+    RenderOptions o = testing::pt(4, 2);
+    o.method = m;
+    const ImageRgb img = testing::render_ok(s, o).radiance;
+    ASSERT_EQ(img.size(), 8u * 6 * 3) << to_string(m);
+    EXPECT_FLOAT_EQ(img.data()[0], 3e37f) << to_string(m);  // the top left pixel sees the sky
+    const float floor = img.data()[img.size() - 1];         // the bottom right sees the floor
+    EXPECT_NEAR(floor / 1.5e37, 1, 0.05) << to_string(m);
+  }
+}
+
+// An enclosure emitting Le with albedo 1 is Le (N + 1) at N bounces: 2e38 at one bounce fits a
+// float and renders; at 8 bounces (9e38) it does not and is refused, naming the emission.
+TEST(HardInputs, TooBrightIsRefusedNamingTheValueAndTheEdgeRenders) {
+  Scene s;
+  s.camera = camera({0.1f, -0.2f, 0.3f}, {0.5f, 0.4f, -1}, 6, 4, 90);
+  testing::add_box(s, {-1, -1, -1}, {1, 1.5f, 2},
+                   add_material(s, {1, 1, 1}, {1e38f, 1e38f, 1e38f}));
+  s.source = "box.json";
+  for (Method m : {Method::pt, Method::spwi, Method::grid}) {
+    RenderOptions o = testing::pt(16, 1);
+    o.method = m;
+    EXPECT_TRUE(check_brightness(s, o).ok());
+    const ImageRgb img = testing::render_ok(s, o).radiance;
+    double sum = 0;
+    for (std::size_t i = 0; i < img.size(); ++i) sum += img.data()[i];
+    EXPECT_NEAR(sum / double(img.size()) / 2e38, 1, 0.02) << to_string(m);
+    o.bounces = 8;
+    const std::string words =
+        "1e+38 is too bright to render: with albedo up to 1 the radiance can reach 1e+38 x (1 + 1 "
+        "+ "
+        "... + 1^8) = 9e+38 at 8 bounces, more than a float holds (3.4e+38)";
+    expect_error(check_brightness(s, o), "box.json: materials.m0.emission: ", words);
+    const Expected<RenderResult> r = render(s, o);
+    expect_error(r.ok() ? Status{} : Status{r.error()}, "box.json: materials.m0.emission: ", words);
+  }
+}
+
+// The sun's disk has radiance E / (pi sin^2(angular radius)): past a float it is refused by name
+// (it used to vanish, leaving the picture darker than with no sun); so is a bright sun's light.
+TEST(HardInputs, ASunPastTheFloatsIsRefused) {
+  Scene s = lit_floor(0);
+  s.source = "sun.json";
+  s.sun.angular_radius = 1e-20f;
+  RenderOptions o = testing::pt(1, 1);
+  expect_error(check_brightness(s, o), "sun.json: sun: ",
+               "3 / (pi sin^2(1e-20 degrees)) = 3.13e+43, is more than a float holds");
+  s.sun.angular_radius = 45;
+  s.sun.irradiance = {3e38f, 1, 1};
+  s.materials[2].albedo = {1, 1, 1};
+  o.bounces = 8;
+  expect_error(check_brightness(s, o), "sun.json: sun.irradiance: ", "from the sun");
+  s.sun.irradiance = {1e30f, 1, 1};
+  EXPECT_TRUE(check_brightness(s, o).ok());
+  // A value that is not finite, in a scene built in code.
+  s.sky.horizon.g = INFINITY;
+  EXPECT_FALSE(render(s, o).ok());
+}
+
 }  // namespace
 }  // namespace penumbra::spaceland

@@ -179,6 +179,11 @@ struct RenderResult {
 // Checks options: ranges and combinations.
 Status check_options(const RenderOptions& options);
 
+// Refuses a scene whose radiance can pass the float range at options.bounces, naming its
+// brightest value (an emission, the sky, fog or the sun; a sun whose disk's radiance alone passes
+// it). render() checks it too; brighter scenes that fit are rendered exactly (docs/RELIABILITY.md).
+Status check_brightness(const Scene& scene, const RenderOptions& options);
+
 // Working memory of the render (the ray tracer's BVH and the image buffers), known before
 // anything is allocated.
 std::uint64_t estimate_memory(const Scene& scene, const RenderOptions& options);

@@ -4,7 +4,9 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <charconv>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <map>
 #include <optional>
@@ -62,6 +64,30 @@ inline CLI::Validator real_above(double lo, bool or_equal) {
         return {};
       },
       "NUMBER " + bound);
+}
+
+// An unsigned 64-bit integer as written: CLI11 alone takes "-1" and 2^64 as 2^64 - 1.
+inline CLI::Validator uint64_text() {
+  return CLI::Validator(
+      [](std::string& text) -> std::string {
+        std::uint64_t v = 0;
+        const char* end = text.data() + text.size();
+        auto [p, ec] = std::from_chars(text.data(), end, v);
+        if (text.empty() || ec != std::errc() || p != end)
+          return "expected an integer in 0.." + std::to_string(UINT64_MAX) + ", found '" + text +
+                 "'";
+        return {};
+      },
+      "UINT64");
+}
+
+// A positional file path: an empty one would mean "no file" (the built-in scene) by accident.
+inline CLI::Validator non_empty_path() {
+  return CLI::Validator(
+      [](std::string& text) -> std::string {
+        return text.empty() ? "expected a file path, found an empty string" : "";
+      },
+      "");
 }
 
 // --exposure of render, paint and compare: a finite number of EV; left empty when not given,

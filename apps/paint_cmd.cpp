@@ -37,7 +37,8 @@ std::unique_ptr<PaintCommand> add_paint_command(CLI::App& app) {
   PaintArgs& a = cmd->args;
   cmd->app = app.add_subcommand("paint", "Paint lights, walls and fog; see the light at once");
   CLI::App* c = cmd->app;
-  c->add_option("scene", a.scene, "Scene file to start from (JSON, format 1)");
+  c->add_option("scene", a.scene, "Scene file to start from (JSON, format 1)")
+      ->check(non_empty_path());
   a.size_option = c->add_option("--size", a.size,
                                 "Grid of a blank canvas, WxH cells (a scene file has its own)")
                       ->capture_default_str();

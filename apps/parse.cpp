@@ -24,7 +24,8 @@ bool parse_bytes(const std::string& text, std::uint64_t& bytes) {
     scale = 1024.0 * 1024 * 1024;
   else
     return false;
-  if (!(v > 0) || !std::isfinite(v) || v * scale >= 18446744073709551615.0) return false;
+  // Less than a byte ("0.5") would become 0, which means no memory at all.
+  if (!(v * scale >= 1) || !std::isfinite(v) || v * scale >= 18446744073709551615.0) return false;
   bytes = std::uint64_t(v * scale);
   return true;
 }

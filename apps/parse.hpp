@@ -5,7 +5,7 @@
 #include <string>
 
 // "512M", "8G", "1.5GiB", or a plain number of bytes (K, M, G and KiB, MiB, GiB are powers of
-// 1024). False for anything else, for zero or less, and for sizes that do not fit 64 bits.
+// 1024). False for anything else, for less than one byte, and for sizes that do not fit 64 bits.
 bool parse_bytes(const std::string& text, std::uint64_t& bytes);
 
 // "WxH" with positive integers (no signs, no spaces, no overflow of int).

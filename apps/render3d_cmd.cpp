@@ -156,7 +156,7 @@ int render_scene_3d(const RenderArgs& a) {
   penumbra::Stopwatch load_watch;
   penumbra::Expected<sl::Scene> scene = sl::load_scene(a.scene, {options.max_memory});
   if (!scene) {
-    std::cerr << "penumbra render: " << scene.error().message << "\n";
+    std::cerr << "penumbra render: " << with_flags(scene.error().message) << "\n";
     return kFailure;
   }
   const double load_ms = load_watch.ms();

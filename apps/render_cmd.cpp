@@ -362,9 +362,11 @@ std::unique_ptr<RenderCommand> add_render_command(CLI::App& app) {
       app.add_subcommand("render", "Render a 2D or 3D scene file (or the built-in 2D scene)");
   cmd->app = render;
   a.app = render;
-  render->add_option("scene", a.scene,
-                     "Scene file (JSON, format 1; 2D or 3D by its `dimensions`); omitted: the "
-                     "built-in 2D scene");
+  render
+      ->add_option("scene", a.scene,
+                   "Scene file (JSON, format 1; 2D or 3D by its `dimensions`); omitted: the "
+                   "built-in 2D scene")
+      ->check(non_empty_path());
   render
       ->add_option("-o,--output", a.outputs,
                    "Output file: .png (display), .exr or .pfm (2D fluence, 3D radiance); "

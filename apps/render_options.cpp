@@ -43,7 +43,9 @@ void add_render_options(CLI::App* app, RenderOptions& options, RenderOptionFlags
         app, "--sampler", pt.sampler, {Sampler::r1, Sampler::random},
         "2D pt: direction sequence: r1 (low discrepancy) or random (the 3D path tracer always "
         "takes Owen-scrambled Sobol points)");
-    app->add_option("--seed", pt.seed, "pt: random seed")->capture_default_str();
+    app->add_option("--seed", pt.seed, "pt: random seed")
+        ->check(uint64_text())
+        ->capture_default_str();
   }
   if (which.rc) {
     RcOptions& rc = options.rc;

@@ -427,6 +427,11 @@ std::mutex mutex;  // guards `staged` and the handlers' installation
 int staged = 0;
 struct sigaction previous[2];
 bool installed[2] = {false, false};
+// SIGXFSZ (past `ulimit -f`) is ignored while files are staged, so that the write fails with
+// EFBIG and the temporary file is removed as for any failed write, instead of the process dying
+// with it in place.
+struct sigaction previous_xfsz;
+bool ignoring_xfsz = false;
 
 extern "C" void remove_staged_and_die(int sig) {
   for (Slot& s : slots)
@@ -458,6 +463,17 @@ int hold(const std::string& temp) {
       sigemptyset(&ours.sa_mask);
       ::sigaction(kSignals[k], &ours, &previous[k]);
     }
+  if (staged == 1) {
+    struct sigaction now {};
+    ::sigaction(SIGXFSZ, nullptr, &now);
+    ignoring_xfsz = now.sa_handler == SIG_DFL && !(now.sa_flags & SA_SIGINFO);
+    if (ignoring_xfsz) {
+      struct sigaction ignore {};
+      ignore.sa_handler = SIG_IGN;
+      sigemptyset(&ignore.sa_mask);
+      ::sigaction(SIGXFSZ, &ignore, &previous_xfsz);
+    }
+  }
   return slot;
 }
 
@@ -474,6 +490,10 @@ void release(int slot) {
       if (now.sa_handler == remove_staged_and_die) ::sigaction(kSignals[k], &previous[k], nullptr);
       installed[k] = false;
     }
+  if (staged == 0 && ignoring_xfsz) {
+    ::sigaction(SIGXFSZ, &previous_xfsz, nullptr);
+    ignoring_xfsz = false;
+  }
 }
 
 }  // namespace staging
@@ -756,6 +776,9 @@ Expected<std::string> read_text(const std::string& path, const std::string& what
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) return Error{fail + "no such file"};
   if (std::filesystem::is_directory(path, ec)) return Error{fail + "it is a directory"};
+  // A device or a pipe (/dev/zero, /dev/urandom) might never end; scenes are read twice anyway
+  // (their dimensions, then the document).
+  if (!std::filesystem::is_regular_file(path, ec)) return Error{fail + "not a regular file"};
   std::ifstream in(path, std::ios::binary);
   if (!in) return Error{fail + "cannot open it"};
   std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());

@@ -66,7 +66,7 @@ Status write_all(const std::vector<std::string>& paths,
 Expected<StagedFile> stage_text(const std::string& path, const std::string& text);
 Status write_text_files(const std::vector<std::pair<std::string, std::string>>& files);
 // The whole content of a text file; `what` names it in the errors ("path: cannot read the scene
-// file: no such file").
+// file: no such file"); a pipe or a device is refused ("not a regular file").
 Expected<std::string> read_text(const std::string& path, const std::string& what = "the file");
 
 // Writers that stage and publish at once, so the target appears whole or not at all.

@@ -363,6 +363,53 @@ TEST_F(Cli3d, BadDocumentsNameTheFileAndThePathAndWriteNothing) {
   EXPECT_TRUE(out_empty());
 }
 
+// Issue 37's command-line items: each refused with a message, a non-zero exit and no output.
+TEST_F(Cli3d, HardInputsAreRefusedAndLeaveNothing) {
+  // A device is not read without end (it grew to 2-4 GiB, then "internal error: bad_alloc").
+  auto r = run({"render", "/dev/zero", "-o", out("x.pfm")});
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("/dev/zero: cannot read the scene file: not a regular file"),
+            std::string::npos)
+      << r.err;
+  // An empty path rendered the built-in 2D scene.
+  r = run({"render", "", "-o", out("x.pfm")});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("expected a file path, found an empty string"), std::string::npos) << r.err;
+  // Seeds past 64 bits or negative were taken as 2^64 - 1.
+  for (const char* seed : {"-1", "18446744073709551616"}) {
+    r = run({"render", scene_, "--seed", seed, "-o", out("x.pfm")});
+    EXPECT_EQ(r.status, 2) << seed;
+    EXPECT_NE(r.err.find("--seed: expected an integer in 0..18446744073709551615"),
+              std::string::npos)
+        << r.err;
+  }
+  r = run({"render", scene_, "--seed", "18446744073709551615", "--spp", "1", "-o", out("s.pfm")});
+  EXPECT_EQ(r.status, 0) << r.err;
+  fs::remove(out("s.pfm"));
+  // Less than a byte became a limit of 0 bytes (exit 1), where 0 is a usage error.
+  r = run({"render", scene_, "--max-memory", "0.5", "-o", out("x.pfm")});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("--max-memory: expected a size"), std::string::npos) << r.err;
+  // A scene file whose parsed document would pass the limit is refused before it is read.
+  r = run({"render", scene_, "--max-memory", "4K", "-o", out("x.pfm")});
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("parsing it may take 24 times that, more than the --max-memory limit"),
+            std::string::npos)
+      << r.err;
+  // Past `ulimit -f` the write fails (SIGXFSZ is ignored while files are staged) and the
+  // temporary file is removed; it used to kill the process and leave OUT.tmp.PID.0.
+  for (const char* ext : {"pfm", "exr", "png"}) {
+    r = penumbra::testing::run_program(
+        "bash",
+        {"-c", "ulimit -f 4; exec \"$0\" \"$@\"", PENUMBRA_CLI, "render", scene_, "--spp", "1",
+         "--width", "300", "--height", "200", "-o", out(std::string("big.") + ext)},
+        tmp_.root());
+    EXPECT_EQ(r.status, 1) << ext;
+    EXPECT_NE(r.err.find("File too large"), std::string::npos) << r.err;
+  }
+  EXPECT_TRUE(out_empty());
+}
+
 TEST_F(Cli3d, CompareReadsThreeDImagesAgainstTheirScene) {
   ASSERT_EQ(run({"render", scene_, "--spp", "4", "-o", out("few.exr"), "-q"}).status, 0);
   ASSERT_EQ(run({"render", scene_, "--spp", "256", "-o", out("many.exr"), "-q"}).status, 0);

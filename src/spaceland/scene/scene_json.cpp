@@ -443,6 +443,18 @@ Expected<Scene> parse_scene(std::string_view json_text, const std::string& path,
 }
 
 Expected<Scene> load_scene(const std::string& path, const LoadOptions& options) {
+  // The parsed document takes up to about 24 bytes per byte of text (a 16-byte value for a
+  // one-digit number, an allocation for each empty array): refused before it is read.
+  constexpr std::uint64_t kDocumentBytesPerByte = 24;
+  std::error_code ec;
+  if (std::filesystem::is_regular_file(path, ec)) {
+    const std::uintmax_t size = std::filesystem::file_size(path, ec);
+    if (!ec && double(size) * kDocumentBytesPerByte > double(options.max_memory))
+      return Error{path + ": the scene file has " + std::to_string(size) +
+                   " bytes; parsing it may take " + std::to_string(kDocumentBytesPerByte) +
+                   " times that, more than the `max_memory` limit of " +
+                   io::format_rounded(double(options.max_memory)) + " bytes"};
+  }
   Expected<std::string> text = io::read_text(path, "the scene file");
   if (!text) return text.error();
   return parse_scene(*text, path, options);

@@ -8,6 +8,8 @@
 #include <cstdio>
 #include <string>
 
+#include "io/image_io.hpp"
+
 std::atomic<bool> g_cancel{false};
 
 namespace {
@@ -16,7 +18,8 @@ extern "C" void on_interrupt(int) {
   g_cancel.store(true);
   static const char msg[] = "\npenumbra: stopping after this pass (Ctrl-C again to abort)\n";
   [[maybe_unused]] ssize_t n = write(STDERR_FILENO, msg, sizeof msg - 1);
-  std::signal(SIGINT, SIG_DFL);
+  // The second one aborts, removing any output still being written.
+  std::signal(SIGINT, penumbra::io::remove_staged_and_die);
 }
 
 }  // namespace

@@ -175,10 +175,16 @@ int render_scene_3d(const RenderArgs& a) {
 
   const bool progress = !a.quiet && isatty(STDERR_FILENO) && options.aov == sl::Aov::radiance;
   if (progress) options.progress = draw_progress;
-  options.cancel = &g_cancel;
-  watch_interrupts(true);
+  // Only the path tracer has something to show when stopped early: Ctrl-C stops it after the
+  // pass and it writes what it has, finishing the files even if Ctrl-C comes while they are
+  // written. The other methods have nothing whole before they finish: Ctrl-C ends them at once,
+  // writing nothing.
+  const bool progressive = options.method == sl::Method::pt && options.aov == sl::Aov::radiance;
+  if (progressive) {
+    options.cancel = &g_cancel;
+    watch_interrupts(true);
+  }
   penumbra::Expected<sl::RenderResult> result = sl::render(*scene, options);
-  watch_interrupts(false);
   if (progress) std::fprintf(stderr, "\n");
   if (!result) {
     std::cerr << "penumbra render: " << a.scene << ": " << with_flags(result.error().message)
@@ -194,6 +200,7 @@ int render_scene_3d(const RenderArgs& a) {
     std::cerr << "penumbra render: " << s.error().message << "\n";
     return kFailure;
   }
+  watch_interrupts(false);
   const double write_ms = write_watch.ms();
   const sl::Camera& cam = scene->camera;
   if (a.json) {
@@ -251,7 +258,8 @@ int render_scene_3d(const RenderArgs& a) {
     for (const std::string& out : a.outputs) std::printf("  wrote %s\n", out.c_str());
     print_png_exposure(a, exposure);
   }
-  if (result->cancelled) {
+  // Ctrl-C while the outputs were written: they were finished, and the exit says it came.
+  if (result->cancelled || g_cancel.load()) {
     std::fprintf(stderr,
                  "penumbra render: interrupted; wrote the image of %llu samples per pixel\n",
                  (unsigned long long)result->samples);

@@ -253,7 +253,8 @@ int render_scene(const RenderArgs& a) {
   }
   penumbra::Expected<penumbra::flatland::RenderResult> result =
       penumbra::flatland::render(*scene, options);
-  watch_interrupts(false);
+  // The path tracer keeps watching Ctrl-C until its outputs are written, so that they are
+  // finished rather than lost (docs/RELIABILITY.md).
   if (progress && options.method == penumbra::flatland::Method::pt) std::fprintf(stderr, "\n");
   if (!result) {
     std::cerr << "penumbra render: " << desc->source << ": " << with_flags(result.error().message)
@@ -272,6 +273,7 @@ int render_scene(const RenderArgs& a) {
     std::cerr << "penumbra render: " << s.error().message << "\n";
     return kFailure;
   }
+  watch_interrupts(false);
   const double write_ms = write_watch.ms();
 
   if (a.json) {
@@ -341,7 +343,8 @@ int render_scene(const RenderArgs& a) {
     for (const std::string& out : a.outputs) std::printf("  wrote %s\n", out.c_str());
     print_png_exposure(a, exposure);
   }
-  if (result->cancelled) {
+  // Ctrl-C while the outputs were written: they were finished, and the exit says it came.
+  if (result->cancelled || g_cancel.load()) {
     std::fprintf(stderr, "penumbra render: interrupted; wrote the image of %llu samples per cell\n",
                  (unsigned long long)result->samples);
     return kInterrupted;

@@ -771,6 +771,10 @@ Expected<StagedFile> stage_text(const std::string& path, const std::string& text
   });
 }
 
+void remove_staged_and_die(int sig) {
+  staging::remove_staged_and_die(sig);
+}
+
 Expected<std::string> read_text(const std::string& path, const std::string& what) {
   const std::string fail = path + ": cannot read " + what + ": ";
   std::error_code ec;

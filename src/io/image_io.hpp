@@ -62,6 +62,11 @@ void discard(const StagedFile& file);
 Status write_all(const std::vector<std::string>& paths,
                  const std::function<Expected<StagedFile>(std::size_t)>& stage);
 
+// A signal handler for programs that handle SIGINT or SIGTERM themselves and want a second one to
+// end them: removes the temporary files being written, then dies of the signal
+// (async-signal-safe).
+void remove_staged_and_die(int sig);
+
 // Text files (CSV, markdown, SVG), staged like the images; several at once, all or nothing.
 Expected<StagedFile> stage_text(const std::string& path, const std::string& text);
 Status write_text_files(const std::vector<std::pair<std::string, std::string>>& files);

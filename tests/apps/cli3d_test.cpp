@@ -1,12 +1,16 @@
 // `penumbra render` on 3D scenes, run as a user runs it: the document's `dimensions` picks the
 // world, options that do not apply are refused, the camera's size can be overridden, AOVs.
 #include <gtest/gtest.h>
+#include <signal.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
+#include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "penumbra/io.hpp"
@@ -408,6 +412,76 @@ TEST_F(Cli3d, HardInputsAreRefusedAndLeaveNothing) {
     EXPECT_NE(r.err.find("File too large"), std::string::npos) << r.err;
   }
   EXPECT_TRUE(out_empty());
+}
+
+// Starts the CLI with `args` and returns its pid.
+pid_t start_cli(const std::vector<std::string>& args) {
+  std::vector<std::string> all = {PENUMBRA_CLI};
+  all.insert(all.end(), args.begin(), args.end());
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    std::vector<char*> argv;
+    for (const std::string& a : all) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    ::execv(argv[0], argv.data());
+    ::_exit(127);
+  }
+  return pid;
+}
+
+// Whether `dir` holds a temporary output file (NAME.tmp.PID.N).
+bool staged_in(const fs::path& dir) {
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(dir, ec))
+    if (e.path().filename().string().find(".tmp.") != std::string::npos) return true;
+  return false;
+}
+
+// SPWI and the grid have nothing whole before they finish: Ctrl-C ends them at once, writing
+// nothing (they printed "stopping after this pass", then rendered to the end and exited 0).
+TEST_F(Cli3d, InterruptEndsSpwiAndTheGridAtOnceWritingNothing) {
+  const std::string room = std::string(PENUMBRA_SOURCE_DIR) + "/scenes/3d/cornell.json";
+  for (const char* method : {"spwi", "grid"}) {
+    const pid_t pid = start_cli({"render", room, "--method", method, "--width", "1200", "--height",
+                                 "900", "--bounces", "4", "-q", "-o", out("r.pfm")});
+    ASSERT_GT(pid, 0);
+    std::this_thread::sleep_for(std::chrono::milliseconds(500));  // within the render (seconds)
+    ::kill(pid, SIGINT);
+    int status = 0;
+    ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+    EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGINT) << method << " " << status;
+    EXPECT_TRUE(out_empty()) << method;
+  }
+}
+
+// Ctrl-C while the path tracer writes its outputs: they are finished (it used to die there and
+// write nothing), the exit is 130 and no temporary file is left.
+TEST_F(Cli3d, InterruptWhileThePathTracerWritesFinishesTheFiles) {
+  const pid_t pid =
+      start_cli({"render", scene_, "--spp", "1", "--width", "1600", "--height", "1200", "-q", "-o",
+                 out("a.pfm"), "-o", out("a.exr"), "-o", out("a.png")});
+  ASSERT_GT(pid, 0);
+  bool seen = false;
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(120);
+  while (!seen && std::chrono::steady_clock::now() < give_up) {
+    int st = 0;
+    if (::waitpid(pid, &st, WNOHANG) == pid) break;  // finished before anything was seen
+    seen = staged_in(tmp_.root() / "out");
+    if (!seen) std::this_thread::sleep_for(std::chrono::microseconds(200));
+  }
+  ASSERT_TRUE(seen) << "no temporary file seen while writing";
+  ::kill(pid, SIGINT);
+  int status = 0;
+  ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+  ASSERT_TRUE(WIFEXITED(status)) << status;
+  EXPECT_EQ(WEXITSTATUS(status), 130);
+  EXPECT_FALSE(staged_in(tmp_.root() / "out"));
+  for (const char* name : {"a.pfm", "a.exr"}) {
+    const penumbra::Expected<penumbra::ImageRgb> img = penumbra::read_rgb_image(out(name));
+    ASSERT_TRUE(img.ok()) << name;
+    EXPECT_EQ(img->width(), 1600);
+  }
+  EXPECT_TRUE(fs::is_regular_file(out("a.png")));
 }
 
 TEST_F(Cli3d, CompareReadsThreeDImagesAgainstTheirScene) {

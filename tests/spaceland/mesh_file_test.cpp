@@ -113,6 +113,53 @@ TEST(MeshFileObj, QuadIsTwoTrianglesWithTheMtlMaterials) {
   EXPECT_TRUE(m.mesh.uvs.empty());
 }
 
+// A face of more corners than tinyobjloader's byte counts (it kept 100,000 as 160), between two
+// small faces of other materials: read from the file's lines, triangulated in linear time (it
+// took 25 s), materials kept per face.
+TEST(MeshFileObj, FacesOfManyCornersAreReadWhole) {
+  Dir d;
+  d.write("m.mtl", "newmtl a\nKd 0.1 0.1 0.1\nnewmtl b\nKd 0.2 0.2 0.2\n");
+  std::string text = "mtllib m.mtl\n";
+  const int n = 100000;
+  // Appended piece by piece: GCC 12 warns falsely (-Wrestrict) on "v " + std::to_string(...).
+  auto add = [&text](auto v) {  // an int stays an integer ("7", not "7.000000")
+    text += ' ';
+    text += std::to_string(v);
+  };
+  for (int i = 0; i < n; ++i) {
+    text += 'v';
+    add(std::cos(2 * M_PI * i / n));
+    add(std::sin(2 * M_PI * i / n));
+    text += " 0\n";
+  }
+  text += "usemtl a\r\nf 1 2 3\r\nusemtl b\nf";
+  for (int i = 1; i <= n; ++i) add(i);
+  text += "\nusemtl a\nf 3 4 5 6\n";
+  const MeshFile m = loads(d.write("big.obj", text));
+  ASSERT_EQ(m.mesh.triangles.size(), 1u + (n - 2) + 2u);
+  EXPECT_EQ(m.mesh.materials.front(), 0u);
+  EXPECT_EQ(m.mesh.materials[1], 1u);
+  EXPECT_EQ(m.mesh.materials[n - 2], 1u);
+  EXPECT_EQ(m.mesh.materials.back(), 0u);
+  // A comb of 40,000 corners, half of them reflex: refused, naming the face, in bounded time.
+  text = "";
+  for (int i = 0; i < 20000; ++i) {
+    text += 'v';
+    add(2 * i);
+    text += " 0 0\nv";
+    add(2 * i + 1);
+    text += " 10 0\n";
+  }
+
+  text += "v 40000 -5 0\nv 0 -5 0\nf";
+  for (int i = 1; i <= 40002; ++i) add(i);
+  text += "\n";
+  const std::string msg = refusal(d.write("comb.obj", text));
+  EXPECT_NE(msg.find("a face of 40002 corners, not convex: triangulating it takes more than"),
+            std::string::npos)
+      << msg;
+}
+
 TEST(MeshFileObj, NormalsAndUvsSplitVertices) {
   Dir d;
   // Two triangles share positions 1 and 3 but not their normals; the second lacks a normal on

@@ -15,6 +15,7 @@
 
 #include "io/json_reader.hpp"
 #include "spaceland/scene/mesh_reader.hpp"
+#include "spaceland/scene/polygon.hpp"
 
 namespace penumbra::spaceland::mesh_detail {
 
@@ -46,7 +47,10 @@ double finite_number(std::string_view token, const std::string& where) {
 // Every number after the keywords in `numeric` must be finite, at least `min_count` of them.
 // Faces' indices are checked against the vertex counts: negative ones (relative) against those
 // before the line, positive ones against the totals at the end.
-void check_text(std::string_view text, const std::string& file, bool obj) {
+// The corners of each face go to `face_sizes` in the file's order (tinyobjloader keeps a face's
+// count in a byte).
+void check_text(std::string_view text, const std::string& file, bool obj,
+                std::vector<std::uint32_t>* face_sizes = nullptr) {
   struct Kind {
     long long count = 0, max_index = 0;
     std::size_t max_line = 0;
@@ -55,7 +59,8 @@ void check_text(std::string_view text, const std::string& file, bool obj) {
   Kind kinds[3] = {{0, 0, 0, "vertex"}, {0, 0, 0, "texture coordinate"}, {0, 0, 0, "normal"}};
   std::size_t line = 0, begin = 0;
   while (begin < text.size()) {
-    std::size_t end = text.find('\n', begin);
+    // Lines end at \n or \r, as tinyobjloader's do (\r\n leaves empty lines between).
+    std::size_t end = text.find_first_of("\n\r", begin);
     if (end == std::string_view::npos) end = text.size();
     const std::string_view l = text.substr(begin, end - begin);
     begin = end + 1;
@@ -99,6 +104,7 @@ void check_text(std::string_view text, const std::string& file, bool obj) {
         }
       }
       if (corners < 3) mesh_fail(where + ": a face needs at least 3 corners");
+      if (face_sizes) face_sizes->push_back(std::uint32_t(corners));
     }
   }
   for (const Kind& k : kinds)
@@ -147,6 +153,10 @@ Material convert(const tinyobj::material_t& m, const std::string& file) {
   return out;
 }
 
+// Ear clipping of a face that is not convex costs its corners times its reflex corners: bounded,
+// so that a hostile face costs seconds at most.
+constexpr std::uint64_t kMaxPolygonSteps = 200'000'000;
+
 struct Corner {
   int v, vt, vn;
   bool operator==(const Corner&) const = default;
@@ -163,7 +173,8 @@ struct CornerHash {
 MeshFile read_obj(const std::string& path, Budget& budget) {
   const std::string name = std::filesystem::path(path).filename().string();
   const std::string text = read_whole_file(path, budget.max(), "the file");
-  check_text(text, name, true);
+  std::vector<std::uint32_t> face_sizes;
+  check_text(text, name, true, &face_sizes);
 
   tinyobj::attrib_t attrib;
   std::vector<tinyobj::shape_t> shapes;
@@ -171,7 +182,9 @@ MeshFile read_obj(const std::string& path, Budget& budget) {
   std::string warn, err;
   MtlReader mtl(std::filesystem::path(path).parent_path(), budget);
   std::istringstream in(text);
-  if (!tinyobj::LoadObj(&attrib, &shapes, &materials, &warn, &err, &in, &mtl, true, false))
+  // Faces as written: tinyobjloader's own triangulation takes time quadratic in a face's corners
+  // (25 s for one face of 100,000); triangulate_polygon is linear where the face is convex.
+  if (!tinyobj::LoadObj(&attrib, &shapes, &materials, &warn, &err, &in, &mtl, false, false))
     mesh_fail("invalid OBJ: " + err);
 
   MeshFile out;
@@ -179,17 +192,18 @@ MeshFile read_obj(const std::string& path, Budget& budget) {
     out.materials.push_back(convert(materials[i], mtl.files[i]));
   int default_material = -1;
 
-  std::uint64_t corners = 0;
+  std::uint64_t triangles = 0;
   bool any_normals = false, any_uvs = false;
+  for (std::uint32_t n : face_sizes) triangles += n - 2;  // check_text: n >= 3
   for (const auto& s : shapes) {
-    corners += s.mesh.indices.size();
     for (const auto& idx : s.mesh.indices) {
       any_normals |= idx.normal_index >= 0;
       any_uvs |= idx.texcoord_index >= 0;
     }
   }
-  budget.take(mesh_bytes(corners, any_normals, any_uvs, corners / 3),
-              std::to_string(corners / 3) + " triangles");
+  const std::uint64_t corners = 3 * triangles;
+  budget.take(mesh_bytes(corners, any_normals, any_uvs, triangles),
+              std::to_string(triangles) + " triangles");
   if (corners > UINT32_MAX) mesh_fail("more than 2^32 vertices");
 
   TriangleMesh& mesh = out.mesh;
@@ -199,61 +213,91 @@ MeshFile read_obj(const std::string& path, Budget& budget) {
   auto position = [&](int v) {
     return Vec3{attrib.vertices[3 * v], attrib.vertices[3 * v + 1], attrib.vertices[3 * v + 2]};
   };
+  std::vector<Vec3> face;
+  std::vector<std::array<std::uint32_t, 3>> pieces;
+  PolygonWork work;
+  std::size_t face_no = 0;
   for (const auto& s : shapes) {
-    const auto& ids = s.mesh.indices;
-    for (std::size_t f = 0; f + 2 < ids.size(); f += 3) {
-      std::array<std::uint32_t, 3> tri{};
-      Corner c[3];
-      for (int k = 0; k < 3; ++k) {
-        const auto& idx = ids[f + k];
-        // check_text has checked the ranges; this guards against a reading that differs.
-        if (idx.vertex_index < 0 || std::size_t(idx.vertex_index) >= nv ||
-            std::size_t(idx.normal_index + 1) > nn || std::size_t(idx.texcoord_index + 1) > nt)
+    const auto& face_ids = s.mesh.indices;
+    std::size_t first = 0;
+    for (std::size_t fi = 0; fi < s.mesh.num_face_vertices.size(); ++fi) {
+      // The count as the file has it; tinyobjloader's is kept modulo 256.
+      if (face_no >= face_sizes.size() ||
+          (face_sizes[face_no] & 0xFF) != s.mesh.num_face_vertices[fi])
+        mesh_fail("the faces read differ from the file's 'f' lines (face " +
+                  std::to_string(face_no + 1) + ")");
+      const std::size_t n = face_sizes[face_no++];
+      if (first + n > face_ids.size()) mesh_fail("shape '" + s.name + "': a face is cut short");
+      face.clear();
+      for (std::size_t k = 0; k < n; ++k) {
+        const int v = face_ids[first + k].vertex_index;
+        if (v < 0 || std::size_t(v) >= nv)
           mesh_fail("shape '" + s.name + "': an index is out of range");
-        c[k] = {idx.vertex_index, idx.texcoord_index, idx.normal_index};
+        face.push_back(position(v));
       }
-      const Vec3 p[3] = {position(c[0].v), position(c[1].v), position(c[2].v)};
-      for (int k = 0; k < 3; ++k) {
-        Vec3 n{0, 0, 1};
-        bool shared = true;
-        if (any_normals) {
-          if (c[k].vn >= 0) {
-            const float* a = &attrib.normals[3 * c[k].vn];
-            n = Vec3{a[0], a[1], a[2]};
+      pieces.clear();
+      if (!triangulate_polygon(face, pieces, kMaxPolygonSteps, work))
+        mesh_fail("shape '" + s.name + "': a face of " + std::to_string(n) +
+                  " corners, not convex: triangulating it takes more than " +
+                  io::format_rounded(double(kMaxPolygonSteps)) +
+                  " steps (its corners times its reflex corners); split it into smaller faces");
+      for (const auto& piece : pieces) {
+        std::array<std::uint32_t, 3> tri{};
+        Corner c[3];
+        for (int k = 0; k < 3; ++k) {
+          const auto& idx = face_ids[first + piece[k]];
+          // check_text has checked the ranges; this guards against a reading that differs.
+          if (idx.vertex_index < 0 || std::size_t(idx.vertex_index) >= nv ||
+              std::size_t(idx.normal_index + 1) > nn || std::size_t(idx.texcoord_index + 1) > nt)
+            mesh_fail("shape '" + s.name + "': an index is out of range");
+          c[k] = {idx.vertex_index, idx.texcoord_index, idx.normal_index};
+        }
+        const Vec3 p[3] = {position(c[0].v), position(c[1].v), position(c[2].v)};
+        for (int k = 0; k < 3; ++k) {
+          Vec3 n{0, 0, 1};
+          bool shared = true;
+          if (any_normals) {
+            if (c[k].vn >= 0) {
+              const float* a = &attrib.normals[3 * c[k].vn];
+              n = Vec3{a[0], a[1], a[2]};
+            }
+            const float len = length(n);
+            // A corner without a usable normal gets its triangle's, on a vertex of its own.
+            shared = c[k].vn >= 0 && len > 0 && std::isfinite(len);
+            n = shared ? n / len : flat_normal(p[0], p[1], p[2]);
           }
-          const float len = length(n);
-          // A corner without a usable normal gets its triangle's, on a vertex of its own.
-          shared = c[k].vn >= 0 && len > 0 && std::isfinite(len);
-          n = shared ? n / len : flat_normal(p[0], p[1], p[2]);
+          if (shared) {
+            const auto [it, added] = unique.try_emplace(c[k], std::uint32_t(mesh.positions.size()));
+            tri[k] = it->second;
+            if (!added) continue;
+          } else {
+            tri[k] = std::uint32_t(mesh.positions.size());
+          }
+          mesh.positions.push_back(p[k]);
+          if (any_normals) mesh.normals.push_back(n);
+          if (any_uvs) {
+            const float* t = c[k].vt >= 0 ? &attrib.texcoords[2 * c[k].vt] : nullptr;
+            // OBJ's v runs up the image, the Texture convention's (glTF's) down.
+            mesh.uvs.push_back(t ? std::array<float, 2>{t[0], 1 - t[1]}
+                                 : std::array<float, 2>{0, 0});
+          }
         }
-        if (shared) {
-          const auto [it, added] = unique.try_emplace(c[k], std::uint32_t(mesh.positions.size()));
-          tri[k] = it->second;
-          if (!added) continue;
-        } else {
-          tri[k] = std::uint32_t(mesh.positions.size());
+        int m = s.mesh.material_ids[fi];
+        if (m < 0 || std::size_t(m) >= out.materials.size()) {
+          // Faces without usemtl (or naming no material of the MTL files): albedo 0.8, no emission.
+          if (default_material < 0) {
+            default_material = int(out.materials.size());
+            out.materials.push_back(Material{.name = "default"});
+          }
+          m = default_material;
         }
-        mesh.positions.push_back(p[k]);
-        if (any_normals) mesh.normals.push_back(n);
-        if (any_uvs) {
-          const float* t = c[k].vt >= 0 ? &attrib.texcoords[2 * c[k].vt] : nullptr;
-          // OBJ's v runs up the image, the Texture convention's (glTF's) down.
-          mesh.uvs.push_back(t ? std::array<float, 2>{t[0], 1 - t[1]} : std::array<float, 2>{0, 0});
-        }
+        mesh.triangles.push_back(tri);
+        mesh.materials.push_back(std::uint32_t(m));
       }
-      int m = s.mesh.material_ids[f / 3];
-      if (m < 0 || std::size_t(m) >= out.materials.size()) {
-        // Faces without usemtl (or naming no material of the MTL files): albedo 0.8, no emission.
-        if (default_material < 0) {
-          default_material = int(out.materials.size());
-          out.materials.push_back(Material{.name = "default"});
-        }
-        m = default_material;
-      }
-      mesh.triangles.push_back(tri);
-      mesh.materials.push_back(std::uint32_t(m));
+      first += n;
     }
   }
+  if (face_no != face_sizes.size()) mesh_fail("the faces read differ from the file's 'f' lines");
   if (out.materials.empty()) out.materials.push_back(Material{.name = "default"});
   return out;
 }

@@ -4,6 +4,7 @@
 
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <cmath>
 #include <optional>
 #include <string>
@@ -212,18 +213,20 @@ Status check_memory(const Scene& scene, const RenderOptions& options) {
 namespace {
 
 // The method's image: the radiance cache first where it needs one, then its solve.
+// `room`: the memory limit less what is held already (the scene, the BVH, the pixel buffers),
+// which the method's own refusals (the grid's cascades, the radiance cache) are held to.
 Status solve(const Plan& plan, const Scene& scene, const RayScene& rays, const GBuffer& g,
-             RenderResult& result) {
+             std::uint64_t room, RenderResult& result) {
   const RenderOptions& o = plan.options;
   const MethodEntry& m = entry(o.method);
-  SolveContext ctx{scene, rays, g, o.bounces, o.max_memory, o.sun_rays};
+  SolveContext ctx{scene, rays, g, o.bounces, room, o.sun_rays};
   ctx.progress = &o.progress;
   ctx.cancel = o.cancel;
   std::optional<RadianceCache> cache;
   if (plan.radiance_cache) {
     Stopwatch watch;
-    Expected<RadianceCache> built = RadianceCache::build(scene, rays, cache_grid(o), o.max_memory,
-                                                         o.bounces - 1, focus_distance(g));
+    Expected<RadianceCache> built =
+        RadianceCache::build(scene, rays, cache_grid(o), room, o.bounces - 1, focus_distance(g));
     if (!built) return built.error();
     cache = std::move(*built);
     ctx.cache = &*cache;
@@ -294,7 +297,10 @@ Expected<RenderResult> render(const Scene& scene, const RenderOptions& options) 
       // Bright light at 2^-k, scaled back: exact, as powers of two move exponents only.
       const int k = plan->light_exponent;
       const Scene lit = k ? dimmed(scene, k) : Scene{};
-      if (Status s = solve(*plan, k ? lit : scene, *rays, g, result); !s) return s.error();
+      const std::uint64_t held =
+          result.memory_bytes + scene_bytes(scene) * (k ? 2 : 1);  // the copy, where dimmed
+      const std::uint64_t room = options.max_memory - std::min(options.max_memory, held);
+      if (Status s = solve(*plan, k ? lit : scene, *rays, g, room, result); !s) return s.error();
       if (k) {
         float* p = result.radiance.data();
         for (std::size_t i = 0; i < result.radiance.size(); ++i) p[i] = std::ldexp(p[i], k);

@@ -18,7 +18,10 @@ class RadianceStore {
   void assign(std::uint64_t probes, int side, Rgb fill = {}) {
     side_ = side;
     directions_ = std::size_t(side) * std::size_t(side);
-    data_.assign(std::size_t(probes) * directions_, fill);
+    const std::size_t n = std::size_t(probes) * directions_;
+    // Growing: the old values go first, so that the old and new arrays are never held at once.
+    if (n > data_.capacity()) data_ = {};
+    data_.assign(n, fill);
   }
   const Rgb& at(std::uint64_t probe, std::size_t d) const {
     return data_[std::size_t(probe) * directions_ + d];

@@ -119,8 +119,15 @@ std::uint64_t cascades_bytes(const std::vector<CascadePlan>& plan, const GridOpt
     const std::uint64_t extension =
         extension_doublings(plan[i], o, voxel, top) > 0 ? rays * (4 * sizeof(Rgb) + 1) : 0;
     const std::uint64_t pair = plan[i].bytes() + (i + 1 < plan.size() ? plan[i + 1].bytes() : 0);
+    // The two cascades' direction maps: past the scene's size a cascade is a probe or two of
+    // millions of directions, and its map is as large as its radiance.
+    const auto map = [](const CascadePlan& c) {
+      return std::uint64_t(c.side) * std::uint64_t(c.side) * sizeof(Vec3);
+    };
+    const std::uint64_t maps = map(plan[i]) + (i + 1 < plan.size() ? map(plan[i + 1]) : 0);
     // Sphere lights: a float a ray besides its radiance, where it stopped.
-    need = std::max(need, pair + extension + (lights ? pair / sizeof(Rgb) * sizeof(float) : 0));
+    need =
+        std::max(need, pair + maps + extension + (lights ? pair / sizeof(Rgb) * sizeof(float) : 0));
   }
   return need;
 }
@@ -390,7 +397,11 @@ Expected<RadianceField> solve(const Voxels& v, const Background& bg, const GridO
     const bool top = levels->top(i);
     dirs = cascade::direction_map(*levels, i);
     lower.assign(c.probes(), c.side);
-    if (spread) lower_reach.assign(std::size_t(c.probes()) * std::size_t(c.side) * c.side, -1.0f);
+    if (spread) {
+      const std::size_t rays = std::size_t(c.probes()) * std::size_t(c.side) * c.side;
+      if (rays > lower_reach.capacity()) lower_reach = {};  // never old and new at once
+      lower_reach.assign(rays, -1.0f);
+    }
     const int doublings = extension_doublings(c, o, v.size, top);
     const Extended ext = doublings > 0 ? extend_cascade(v, c, dirs, doublings) : Extended{};
     const GridCascade solver{v,

@@ -2,6 +2,7 @@
 #include "spaceland/scene/mesh_file.hpp"
 
 #include <cmath>
+#include <cstdio>
 #include <exception>
 #include <filesystem>
 #include <fstream>
@@ -16,11 +17,22 @@ namespace penumbra::spaceland {
 
 namespace mesh_detail {
 
+namespace {
+
+// "62914561 bytes (60.0 MiB)": exact, so that a need just past the limit does not read as equal.
+std::string bytes_text(double bytes) {
+  char mib[32];
+  std::snprintf(mib, sizeof mib, "%.1f", bytes / double(1 << 20));
+  return (bytes < 1.8e19 ? std::to_string(std::uint64_t(bytes)) : io::format_rounded(bytes)) +
+         " bytes (" + mib + " MiB)";
+}
+
+}  // namespace
+
 void Budget::take(std::uint64_t bytes, const std::string& what) {
   if (bytes > max_ || used_ > max_ - bytes)
-    mesh_fail(what + " need " + io::format_rounded(double(used_) + double(bytes)) +
-              " bytes, more than the memory limit of " + io::format_rounded(double(max_)) +
-              " bytes");
+    mesh_fail(what + " need " + bytes_text(double(used_) + double(bytes)) +
+              " in all, more than the memory limit of " + bytes_text(double(max_)));
   used_ += bytes;
 }
 

@@ -49,8 +49,12 @@ double finite_number(std::string_view token, const std::string& where) {
 // before the line, positive ones against the totals at the end.
 // The corners of each face go to `face_sizes` in the file's order (tinyobjloader keeps a face's
 // count in a byte).
+struct ObjCounts {
+  std::uint64_t vertices = 0, uvs = 0, normals = 0;
+};
+
 void check_text(std::string_view text, const std::string& file, bool obj,
-                std::vector<std::uint32_t>* face_sizes = nullptr) {
+                std::vector<std::uint32_t>* face_sizes = nullptr, ObjCounts* counts = nullptr) {
   struct Kind {
     long long count = 0, max_index = 0;
     std::size_t max_line = 0;
@@ -107,6 +111,9 @@ void check_text(std::string_view text, const std::string& file, bool obj,
       if (face_sizes) face_sizes->push_back(std::uint32_t(corners));
     }
   }
+  if (counts)
+    *counts = {std::uint64_t(kinds[0].count), std::uint64_t(kinds[1].count),
+               std::uint64_t(kinds[2].count)};
   for (const Kind& k : kinds)
     if (k.max_index > k.count)
       mesh_fail(file + " " + line_at(k.max_line) + ": " + k.name + " index " +
@@ -173,8 +180,33 @@ struct CornerHash {
 MeshFile read_obj(const std::string& path, Budget& budget) {
   const std::string name = std::filesystem::path(path).filename().string();
   const std::string text = read_whole_file(path, budget.max(), "the file");
+  budget.take(text.size(), "the file's text");
   std::vector<std::uint32_t> face_sizes;
-  check_text(text, name, true, &face_sizes);
+  ObjCounts counts;
+  check_text(text, name, true, &face_sizes, &counts);
+  // What tinyobjloader holds while it reads, refused before it starts: a copy of the text (its
+  // stream), its arrays (a vertex 16 bytes with its weight, a uv 12, a normal 12, a corner 12 in
+  // the shapes and 12 in its face list, a face about 90 with its list's own allocation), and
+  // ours after it (the corners' index, 48 bytes a distinct corner, 4 bytes a face count).
+  std::uint64_t corners = 0;
+  for (std::uint32_t n : face_sizes) corners += n;
+  const std::uint64_t faces = face_sizes.size();
+  const std::uint64_t distinct =
+      std::min<long double>(corners, (long double)std::max<std::uint64_t>(counts.vertices, 1) *
+                                         std::max<std::uint64_t>(counts.uvs, 1) *
+                                         std::max<std::uint64_t>(counts.normals, 1));
+  std::uint64_t triangles = 0;
+  for (std::uint32_t n : face_sizes) triangles += n - 2;  // check_text: n >= 3
+  // Ours at the end: no more vertices than distinct corners, plus those given a triangle's
+  // normal where a corner has none.
+  budget.take(mesh_bytes(std::min<std::uint64_t>(distinct + triangles, 3 * triangles),
+                         counts.normals > 0, counts.uvs > 0, triangles),
+              std::to_string(triangles) + " triangles");
+  if (3 * triangles > UINT32_MAX) mesh_fail("more than 2^32 vertices");
+  budget.take(
+      text.size() + 16 * counts.vertices + 12 * (counts.uvs + counts.normals) + 24 * corners +
+          94 * faces + 48 * distinct,
+      "reading " + std::to_string(faces) + " faces of " + std::to_string(corners) + " corners");
 
   tinyobj::attrib_t attrib;
   std::vector<tinyobj::shape_t> shapes;
@@ -192,19 +224,13 @@ MeshFile read_obj(const std::string& path, Budget& budget) {
     out.materials.push_back(convert(materials[i], mtl.files[i]));
   int default_material = -1;
 
-  std::uint64_t triangles = 0;
   bool any_normals = false, any_uvs = false;
-  for (std::uint32_t n : face_sizes) triangles += n - 2;  // check_text: n >= 3
   for (const auto& s : shapes) {
     for (const auto& idx : s.mesh.indices) {
       any_normals |= idx.normal_index >= 0;
       any_uvs |= idx.texcoord_index >= 0;
     }
   }
-  const std::uint64_t corners = 3 * triangles;
-  budget.take(mesh_bytes(corners, any_normals, any_uvs, triangles),
-              std::to_string(triangles) + " triangles");
-  if (corners > UINT32_MAX) mesh_fail("more than 2^32 vertices");
 
   TriangleMesh& mesh = out.mesh;
   std::unordered_map<Corner, std::uint32_t, CornerHash> unique;

@@ -67,6 +67,26 @@ TEST(HardInputs, ShapesPastTheWorldAreRefusedNamingTheObject) {
   expect_error(check_scene(s), "<code>: camera.position: ", "past the largest world coordinate");
 }
 
+// A mesh's values that are not finite (a transform's doing) are named by the document's object and
+// the vertex, not by the scene's internal arrays ("meshes[3].normals[0][1]").
+TEST(HardInputs, MeshValuesAreNamedByTheirObject) {
+  Scene s;
+  s.camera = camera({0, 1, 4}, {0, 0, 0}, 8, 6);
+  add_floor(s, 5, {0.5f, 0.5f, 0.5f});
+  testing::add_quad(s, {0, 0, 0}, {1, 0, 0}, {0, 1, 0}, 0);
+  s.objects.back() = "objects[1] (mesh)";
+  TriangleMesh& m = s.meshes.back();
+  m.normals.assign(m.positions.size(), {0, 0, 1});
+  m.normals[2] = {0, NAN, 1};
+  expect_error(check_scene(s),
+               "<code>: objects[1].file: ", "the normal of vertex 2 is not finite: [0, nan, 1]");
+  m.normals[2] = {0, 0, 1};
+  m.uvs.assign(m.positions.size(), {0, 0});
+  m.uvs[1] = {INFINITY, 0};
+  expect_error(check_scene(s), "<code>: objects[1].file: ",
+               "the texture coordinates of vertex 1 are not finite: [inf, 0]");
+}
+
 // At the bound every method renders: a small lit scene 9e14 from the origin, seen from there, and
 // one at the origin with a far sphere (the probe grid's bounds then span the world).
 TEST(HardInputs, ScenesAtTheWorldsEdgeRenderInEveryMethod) {

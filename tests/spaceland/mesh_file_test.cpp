@@ -225,6 +225,9 @@ TEST(MeshFileObj, RefusesNonFiniteCoordinates) {
   EXPECT_NE(msg.find("line 2: '1e999' is not a finite number"), std::string::npos) << msg;
   msg = refusal(d.write("s.obj", "v 0 0 0\nv 1 0\nv 0 1 0\nf 1 2 3\n"));
   EXPECT_NE(msg.find("line 2: 'v' needs 3 numbers"), std::string::npos) << msg;
+  // Finite as written, infinite as a float: named by its line (it was "centre [inf, -nan, -nan]").
+  msg = refusal(d.write("f.obj", "v 0 0 0\nv 1e39 0 0\nv 0 1 0\nf 1 2 3\n"));
+  EXPECT_EQ(msg, prefix("f.obj") + "f.obj line 2: '1e39' is past the float range (3.4e+38)");
 }
 
 TEST(MeshFile, RefusesMissingAndUnknownFiles) {

@@ -94,9 +94,40 @@ std::string object_path(const Scene& s, int object, const std::string& fallback)
   return line.substr(0, line.find(" ("));
 }
 
+void check_vec3_named(const std::string& file, const std::string& path, const std::string& what,
+                      Vec3 v) {
+  for (int k = 0; k < 3; ++k)
+    if (!std::isfinite(v[k]))
+      fail(file, path,
+           what + " is not finite: " + format_vec3(v) +
+               " (a value of the mesh file, after the "
+               "object's transform)");
+}
+
 void check_mesh(const std::string& file, const std::string& path, const TriangleMesh& m,
                 const Scene& s) {
   const std::size_t n = m.positions.size();
+  // A document's mesh: messages name its object, not the scene's internal arrays.
+  if (m.object >= 0 && std::size_t(m.object) < s.objects.size()) {
+    const std::string& line = s.objects[std::size_t(m.object)];
+    const std::string obj =
+        object_path(s, m.object, path) + (line.find("(mesh") != std::string::npos ? ".file" : "");
+    for (std::size_t i = 0; i < n; ++i)
+      check_vec3_named(file, obj, "vertex " + std::to_string(i), m.positions[i]);
+    for (std::size_t i = 0; i < m.normals.size(); ++i) {
+      check_vec3_named(file, obj, "the normal of vertex " + std::to_string(i), m.normals[i]);
+      const double len = length_d(m.normals[i]);
+      if (std::fabs(len - 1) > kUnitTolerance)
+        fail(file, obj,
+             "the normal of vertex " + std::to_string(i) +
+                 " is not a unit vector: " + format_vec3(m.normals[i]));
+    }
+    for (std::size_t i = 0; i < m.uvs.size(); ++i)
+      if (!std::isfinite(m.uvs[i][0]) || !std::isfinite(m.uvs[i][1]))
+        fail(file, obj,
+             "the texture coordinates of vertex " + std::to_string(i) + " are not finite: [" +
+                 format_number(m.uvs[i][0]) + ", " + format_number(m.uvs[i][1]) + "]");
+  }
   for (std::size_t i = 0; i < n; ++i)
     check_vec3(file, item(path + ".positions", i), m.positions[i]);
   for (std::size_t i = 0; i < n; ++i) {

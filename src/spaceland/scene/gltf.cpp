@@ -675,8 +675,12 @@ class Reader {
       return v;
     };
     auto uv = [&](std::size_t i) {
-      return p.has_uvs ? std::array<float, 2>{p.uvs.get(i, 0), p.uvs.get(i, 1)}
-                       : std::array<float, 2>{0, 0};
+      if (!p.has_uvs) return std::array<float, 2>{0, 0};
+      const std::array<float, 2> t{p.uvs.get(i, 0), p.uvs.get(i, 1)};
+      if (!std::isfinite(t[0]) || !std::isfinite(t[1]))
+        mesh_fail(p.uvs.name + ": texture coordinate " + std::to_string(i) + " (" + num(t[0]) +
+                  ", " + num(t[1]) + ") is not finite");
+      return t;
     };
     if (any_normals && !p.has_normals) {
       for (std::size_t t = 0; t < p.triangles; ++t) {
@@ -703,7 +707,12 @@ class Reader {
       if (!std::isfinite(len) || !(len > 0))
         mesh_fail(p.normals.name + ": normal " + std::to_string(i) + " (" + num(raw.x) + ", " +
                   num(raw.y) + ", " + num(raw.z) + ") is not a finite non-zero vector");
-      mesh.normals.push_back(world.normal(raw / len));
+      const Vec3 n = world.normal(raw / len);
+      // A node scaled by 0 (or nearly) has no normal matrix.
+      if (!std::isfinite(n.x) || !std::isfinite(n.y) || !std::isfinite(n.z))
+        mesh_fail(p.normals.name + ": normal " + std::to_string(i) +
+                  " is not finite after the node transforms (a scale of 0?)");
+      mesh.normals.push_back(n);
     }
     for (std::size_t t = 0; t < p.triangles; ++t) {
       std::array<std::uint32_t, 3> tri{};

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <limits>
 #include <map>
 #include <sstream>
 #include <string_view>
@@ -41,6 +42,9 @@ double finite_number(std::string_view token, const std::string& where) {
   const auto r = std::from_chars(t.data(), t.data() + t.size(), v);
   if (r.ec != std::errc() || r.ptr != t.data() + t.size() || !std::isfinite(v))
     mesh_fail(where + ": '" + std::string(token) + "' is not a finite number");
+  // Read as a float: 1e39 would become infinite.
+  if (std::fabs(v) > double(std::numeric_limits<float>::max()))
+    mesh_fail(where + ": '" + std::string(token) + "' is past the float range (3.4e+38)");
   return v;
 }
 

@@ -15,6 +15,7 @@
 #include "cli_enums.hpp"
 #include "io/image_io.hpp"
 #include "io/path_util.hpp"
+#include "parse.hpp"
 #include "penumbra/penumbra.hpp"
 
 namespace {
@@ -32,15 +33,24 @@ std::string size_text(int w, int h) {
 }
 
 // A linear image: PNG holds display values (tone-mapped, sRGB), so it is refused.
-penumbra::Expected<penumbra::ImageRgb> read_linear(const std::string& path) {
+penumbra::Expected<penumbra::ImageRgb> read_linear(const std::string& path,
+                                                   std::uint64_t max_bytes) {
   if (penumbra::io::lowercase_extension(path) == ".png")
     return penumbra::Error{path +
                            ": PNG holds display-encoded values, not linear ones; compare the "
                            ".pfm or .exr files (penumbra render -o out.pfm)"};
-  penumbra::Expected<penumbra::ImageRgb> image = penumbra::read_rgb_image(path);
+  penumbra::Expected<penumbra::ImageRgb> image = penumbra::read_rgb_image(path, max_bytes);
   if (!image) return image;
   if (penumbra::Status s = penumbra::check_finite(*image, path); !s) return s.error();
   return image;
+}
+
+// Names the flag that sets the memory limit in a reader's message.
+std::string with_limit(std::string message) {
+  const std::string limit = "the memory limit";
+  const std::size_t at = message.find(limit);
+  if (at != std::string::npos) message.replace(at, limit.size(), "half the --max-memory limit");
+  return message;
 }
 
 // The rectangle [x, x + w) x [y, y + h) of an image, or of a scene's cells.
@@ -133,10 +143,16 @@ int compare(const CompareArgs& a) {
     if (penumbra::Status s = penumbra::check_output(out); !s)
       return fail(kFailure, s.error().message);
 
-  penumbra::Expected<penumbra::ImageRgb> test = read_linear(a.test);
-  if (!test) return fail(kFailure, test.error().message);
-  penumbra::Expected<penumbra::ImageRgb> ref = read_linear(a.reference);
-  if (!ref) return fail(kFailure, ref.error().message);
+  std::uint64_t max_memory = 0;
+  if (!parse_bytes(a.max_memory, max_memory))
+    return fail(kUsage,
+                "--max-memory: expected a size such as 512M or 8G, found '" + a.max_memory + "'");
+  // Each image's reading may take half the limit, refused from its header (two 16384^2 PFMs
+  // ended in bad_alloc at 5.1 GiB).
+  penumbra::Expected<penumbra::ImageRgb> test = read_linear(a.test, max_memory / 2);
+  if (!test) return fail(kFailure, with_limit(test.error().message));
+  penumbra::Expected<penumbra::ImageRgb> ref = read_linear(a.reference, max_memory / 2);
+  if (!ref) return fail(kFailure, with_limit(ref.error().message));
   const int w = ref->width(), h = ref->height();
   if (test->width() != w || test->height() != h)
     return fail(kFailure, a.test + ": the image is " + size_text(test->width(), test->height()) +
@@ -285,6 +301,9 @@ std::unique_ptr<CompareCommand> add_compare_command(CLI::App& app) {
                       "render's PNGs)");
   c->add_option("--crop", a.crop, "Compare only the cells X Y W H (metrics and pictures)")
       ->expected(4);
+  c->add_option("--max-memory", a.max_memory,
+                "Refuse images whose reading needs more memory (each may take half)")
+      ->capture_default_str();
   c->add_flag("-q,--quiet", a.quiet, "Print nothing on success");
   cmd->app = c;
   return cmd;

@@ -19,7 +19,8 @@ struct CompareArgs {
   std::vector<int> crop;          // empty, or X Y W H: compare only this rectangle of cells
   bool json = false;
   bool quiet = false;
-  bool radiance = false;  // 3D images: pixels of radiance (set too by a 3D --scene)
+  bool radiance = false;          // 3D images: pixels of radiance (set too by a 3D --scene)
+  std::string max_memory = "8G";  // each image may take half of it to read
 };
 
 struct CompareCommand {

@@ -2,6 +2,7 @@
 // Writing a world's results (fluence with its display PNG) is in that world's io.hpp.
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <utility>
 #include <vector>
@@ -39,7 +40,9 @@ Status check_output(const std::string& path);
 // True when a result can be written to `path`: .pfm, .exr or .png (case-insensitive).
 bool is_supported_output(const std::string& path);
 
-// Reads a PFM or EXR file as linear RGB (used by tests and by tools that compare results).
-Expected<ImageRgb> read_rgb_image(const std::string& path);
+// Reads a PFM or EXR file as linear RGB (used by tests and by tools that compare results). With
+// `max_bytes`, an image whose reading would take more (7 floats a pixel) is refused from its
+// header.
+Expected<ImageRgb> read_rgb_image(const std::string& path, std::uint64_t max_bytes = 0);
 
 }  // namespace penumbra

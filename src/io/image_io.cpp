@@ -79,6 +79,7 @@ long long remaining_bytes(std::FILE* f) {
 // layer of the wrong size costs nothing.
 struct Expect {
   int width = 0, height = 0;
+  std::uint64_t max_bytes = 0;  // 0: no limit
 };
 
 Status check_size(const std::string& path, long long width, long long height, Expect e) {
@@ -89,6 +90,16 @@ Status check_size(const std::string& path, long long width, long long height, Ex
   if (width > kMaxImageSide || height > kMaxImageSide) {
     return fail(path, "image too large (" + std::to_string(width) + " x " + std::to_string(height) +
                           ", the limit is " + std::to_string(kMaxImageSide) + " per side)");
+  }
+  // Read, then made RGB float: the decoded values and their copy, 4 + 3 floats a pixel at most.
+  const double bytes = double(width) * double(height) * 7 * sizeof(float);
+  if (e.max_bytes > 0 && bytes > double(e.max_bytes)) {
+    char text[160];
+    std::snprintf(text, sizeof text,
+                  "reading the %lldx%lld image takes %.1f MiB, more than the memory limit of %.1f "
+                  "MiB",
+                  width, height, bytes / double(1 << 20), double(e.max_bytes) / double(1 << 20));
+    return fail(path, text);
   }
   if (e.width > 0 && (width != e.width || height != e.height)) {
     return fail(path, "the image is " + std::to_string(width) + "x" + std::to_string(height) +
@@ -598,9 +609,10 @@ Status write_all(const std::vector<std::string>& paths,
   return {};
 }
 
-Expected<RawImage> read_image(const std::string& path, int expect_width, int expect_height) {
+Expected<RawImage> read_image(const std::string& path, int expect_width, int expect_height,
+                              std::uint64_t max_bytes) {
   const std::string ext = lowercase_extension(path);
-  const Expect e{expect_width, expect_height};
+  const Expect e{expect_width, expect_height, max_bytes};
   if (ext == ".png") return read_png(path, e);
   if (ext == ".exr") return read_exr(path, e);
   if (ext == ".pfm") return read_pfm(path, e);

@@ -24,8 +24,11 @@ struct RawImage {
 };
 
 // Reads .png, .exr or .pfm (by extension, case-insensitive). Messages name the file. With an
-// expected size, an image of another size is refused from its header, before decoding.
-Expected<RawImage> read_image(const std::string& path, int expect_width = 0, int expect_height = 0);
+// expected size, an image of another size is refused from its header, before decoding; with
+// `max_bytes`, so is one whose decoding (7 floats a pixel at most, with its RGB copy) would take
+// more.
+Expected<RawImage> read_image(const std::string& path, int expect_width = 0, int expect_height = 0,
+                              std::uint64_t max_bytes = 0);
 
 // sRGB transfer functions on [0, 1].
 float srgb_to_linear(float v);

@@ -59,8 +59,8 @@ Status write_pictures(const std::vector<std::pair<std::string, ImageRgb8>>& file
   });
 }
 
-Expected<ImageRgb> read_rgb_image(const std::string& path) {
-  auto raw = io::read_image(path);
+Expected<ImageRgb> read_rgb_image(const std::string& path, std::uint64_t max_bytes) {
+  auto raw = io::read_image(path, 0, 0, max_bytes);
   if (!raw) return raw.error();
   const io::RawImage& img = *raw;
   // Grey (1) and grey+alpha (2) expand to RGB; alpha (2, 4) is dropped.

@@ -414,6 +414,17 @@ TEST_F(CompareCli, JsonMatchesTheLibrary) {
   EXPECT_GT(m->rmse, 0.01);  // the inputs do differ
 }
 
+// The images' reading is refused from their headers past half of --max-memory (7 floats a
+// pixel: 6x4 pixels take 672 bytes); two 16384^2 PFMs ended in bad_alloc at 5.1 GiB.
+TEST_F(CompareCli, ImagesPastTheMemoryLimitAreRefusedFromTheirHeaders) {
+  expect_failure(run({test_pfm_, ref_exr_, "--max-memory", "1000"}), 1,
+                 {"test.pfm: reading the 6x4 image takes 0.0 MiB, more than half the "
+                  "--max-memory limit"});
+  EXPECT_EQ(run({test_pfm_, ref_exr_, "--max-memory", "1344", "-q"}).status, 0);
+  expect_failure(run({test_pfm_, ref_exr_, "--max-memory", "0.5"}), 2,
+                 {"--max-memory: expected a size"});
+}
+
 TEST_F(CompareCli, WithoutASceneEveryCellCounts) {
   const auto r = run({test_pfm_, ref_exr_, "--json"});
   ASSERT_EQ(r.status, 0) << r.err;

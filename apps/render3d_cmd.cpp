@@ -191,6 +191,8 @@ int render_scene_3d(const RenderArgs& a) {
               << "\n";
     return kFailure;
   }
+  for (const std::string& w : result->warnings)
+    std::cerr << "penumbra render: " << a.scene << ": warning: " << w << "\n";
   penumbra::Stopwatch write_watch;
   const std::optional<float> exposure = png_exposure(
       a, [&] { return sl::auto_exposure(metered ? *metered : result->radiance, options.aov); });
@@ -227,6 +229,7 @@ int render_scene_3d(const RenderArgs& a) {
         {"rays", result->rays},
         {"samples", result->samples},
         {"cancelled", result->cancelled},
+        {"warnings", result->warnings},
         {"parameters", parameters},
         {"exposure", exposure ? nlohmann::ordered_json(*exposure) : nlohmann::ordered_json()},
         {"exposure_auto", !a.exposure},

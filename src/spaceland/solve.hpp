@@ -5,6 +5,7 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <string>
 #include <vector>
 
 #include "penumbra/progress.hpp"
@@ -40,6 +41,7 @@ struct SolveReport {
   std::uint64_t memory_bytes = 0;  // the method's working memory
   std::uint64_t voxel_bytes = 0;   // the voxels' share of it (the probe grid)
   bool cancelled = false;
+  std::vector<std::string> warnings;  // what the user should know about the result
 };
 
 }  // namespace penumbra::spaceland

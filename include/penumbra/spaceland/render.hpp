@@ -174,6 +174,9 @@ struct RenderResult {
   bool cancelled = false;          // stopped early through RenderOptions::cancel
   RenderOptions options;           // the options used
   std::string device = "cpu";
+  // What the result lacks that the options asked for (the grid's voxels far coarser than the
+  // view needs, so that light near the camera is lost); the command line prints them.
+  std::vector<std::string> warnings;
 };
 
 // Checks options: ranges and combinations.

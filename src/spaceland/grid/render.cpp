@@ -8,7 +8,9 @@
 
 #include "core/parallel.hpp"
 #include "core/timer.hpp"
+#include "io/json_reader.hpp"
 #include "spaceland/gbuffer.hpp"
+#include "spaceland/grid/clipmap.hpp"
 #include "spaceland/grid/grid.hpp"
 #include "spaceland/media.hpp"
 #include "spaceland/shade.hpp"
@@ -112,6 +114,16 @@ Expected<ImageRgb> render(const SolveContext& ctx, const GridOptions& o, SolveRe
       ctx.max_memory / 4, spread_voxels(o));
   if (!map) return map.error();
   report.stages.push_back({"voxelise", watch.ms()});
+  // Far geometry makes the levels' voxels grow until the last holds the scene: near the camera
+  // the grid then resolves nothing, silently (a sphere 1e17 away took the indirect light).
+  const float wanted = focus_distance(ctx.g) / kFocusVoxels;
+  if (o.voxel == 0 && wanted > 0 && (*map)[0].size > 8 * wanted)
+    report.warnings.push_back(
+        "the probe grid's finest voxel is " + io::format_number((*map)[0].size) + ", " +
+        io::format_rounded((*map)[0].size / wanted) + " times what the view asks for (" +
+        io::format_number(wanted) +
+        "): the scene is too large for the grid's levels to reach from the camera, so light "
+        "within a voxel of the surfaces seen is lost; leave the far geometry out or use spwi");
   used.voxel = (*map)[0].size;
   used.levels = int(map->size());
   watch.restart();

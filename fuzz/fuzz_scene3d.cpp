@@ -41,8 +41,13 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   options.bounces = 2;
   options.threads = 1;
   options.max_memory = std::uint64_t(512) << 20;
+  // Light past what floats hold at these bounces is refused by design (a documented refusal).
+  if (!check_brightness(*scene, options)) return 0;
   Expected<RenderResult> r = render(*scene, options);
-  if (!r) std::abort();  // a valid small scene must render
+  // A valid small scene must render, unless its answer is so near the float range that the
+  // path tracer's spread passes it (refused, by design).
+  if (!r && r.error().message.find("passes the float range") == std::string::npos) std::abort();
+  if (!r) return 0;
   // The probe grid on the same scene, coarse (the voxel derived from a small memory limit, a
   // few thousand voxels): voxelising arbitrary geometry, fog and the sun through two bounces. It
   // may refuse (memory); what it renders must be finite.

@@ -56,6 +56,22 @@ seed_mesh 1 "$models/BoxTextured-glTF-Embedded/BoxTextured.gltf" box-embedded.gl
 seed_mesh 2 "$models/BoxTextured-glTF-Binary/BoxTextured.glb" box.glb
 printf '\000v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvn 0 0 1\nvt 0 0\nf 1/1/1 2/1/1 4/1/1 3/1/1\n' \
   >"$work/seeds/mesh/quad.obj"
+# Hard inputs (issue 37, docs/RELIABILITY.md "3D"): a face of 300 corners (past tinyobjloader's
+# byte count), a comb of 40 (ear clipping); scenes at the world's bound, too bright or of 3e37
+# sky, with a camera whose up is 1e-30 long.
+awk 'BEGIN { printf "%c", 0; for (i = 0; i < 300; i++) printf "v %f %f 0\n", cos(i / 47.75), sin(i / 47.75);
+  printf "f"; for (i = 1; i <= 300; i++) printf " %d", i; printf "\n" }' >"$work/seeds/mesh/ngon.obj"
+awk 'BEGIN { printf "%c", 0; for (i = 0; i < 20; i++) printf "v %d 0 0\nv %d 3 0\n", 2 * i, 2 * i + 1;
+  printf "v 40 -1 0\nv 0 -1 0\nf"; for (i = 1; i <= 42; i++) printf " %d", i; printf "\n" }' \
+  >"$work/seeds/mesh/comb.obj"
+hard='"penumbra": 1, "dimensions": 3, "camera": {"position": [0, 1, 4], "look_at": [0, 0, 0],
+  "fov_y": 50, "width": 8, "height": 6'
+echo "{$hard, \"up\": [0, 1e-30, 0]}, \"sky\": [3e37, 3e37, 3e37], \"objects\": [
+  {\"type\": \"disk\", \"center\": [0, 0, 0], \"normal\": [0, 1, 0], \"radius\": 5},
+  {\"type\": \"sphere\", \"center\": [9e14, 0, 0], \"radius\": 1}]}" >"$work/seeds/scene3d/edge.json"
+echo "{$hard}, \"materials\": {\"w\": {\"albedo\": [1, 1, 1], \"emission\": [1e38, 1e38, 1e38]}},
+  \"objects\": [{\"type\": \"box\", \"center\": [0, 0, 0], \"size\": [20, 20, 20],
+  \"material\": \"w\"}]}" >"$work/seeds/scene3d/bright.json"
 
 failed=()
 for t in "${targets[@]}"; do

@@ -304,7 +304,21 @@ Expected<RenderResult> render(const Scene& scene, const RenderOptions& options) 
       if (Status s = solve(*plan, k ? lit : scene, *rays, g, room, result); !s) return s.error();
       if (k) {
         float* p = result.radiance.data();
-        for (std::size_t i = 0; i < result.radiance.size(); ++i) p[i] = std::ldexp(p[i], k);
+        for (std::size_t i = 0; i < result.radiance.size(); ++i) {
+          const float v = std::ldexp(p[i], k);
+          // An estimate past the bound (the path tracer's samples scatter about the answer)
+          // where the answer is close to the float range: refused, not written as infinite.
+          if (std::isfinite(p[i]) && !std::isfinite(v)) {
+            const std::size_t px = i / 3;
+            return Error{std::string(entry(options.method).title) + "'s estimate at pixel (" +
+                         std::to_string(px % result.radiance.width()) + ", " +
+                         std::to_string(px / result.radiance.width()) +
+                         ") passes the float range (3.4e+38): the scene's light is too close to "
+                         "it for the estimate's spread; scale the scene's emission, sky and sun "
+                         "down"};
+          }
+          p[i] = v;
+        }
       }
     }
     result.time_ms = total.ms();

@@ -93,6 +93,80 @@ TEST(Voxels, FogIsBeerLambertWithEmissionInClosedForm) {
   }
 }
 
+// Hundreds of overlapping fog boxes, along the axes and turned: each voxel's extinction and
+// emission are the sum over the boxes of their coefficients times the fraction they cover,
+// computed here voxel by voxel and box by box (an axis-aligned box's exact overlap, a turned
+// one's 4^3 points), as the row-by-row voxelisation with its difference arrays must give. It
+// used to cost every box's volume times 64 points (5,000 boxes of 1-4 units: 12 s, now 0.8 s).
+TEST(Voxels, ManyFogBoxesAddUpVoxelByVoxel) {
+  Scene s;
+  std::mt19937 rng(37);
+  std::uniform_real_distribution<float> u(0, 1);
+  for (int i = 0; i < 300; ++i) {
+    Medium m;
+    m.center = {u(rng) * 4 - 2, u(rng) * 2 - 1, u(rng) * 4 - 2};
+    m.half_size = {0.05f + u(rng), 0.05f + u(rng) * 0.5f, 0.05f + u(rng)};
+    if (i % 3 == 0) {  // turned about y by an angle
+      const float a = u(rng) * 1.5f;
+      m.axes = {Vec3{std::cos(a), 0, -std::sin(a)}, Vec3{0, 1, 0},
+                Vec3{std::sin(a), 0, std::cos(a)}};
+    }
+    m.extinction = {u(rng), u(rng) * 2, 0.5f};
+    m.albedo = {0.5f, 0.5f, 0.5f};
+    m.emission = {u(rng) * 0.1f, 0, 0.2f};
+    s.media.push_back(m);
+  }
+  const Expected<Voxels> built = voxelise(s, 0.1f, kGiB);
+  ASSERT_TRUE(built.ok()) << built.error().message;
+  const Voxels& v = *built;
+  std::size_t checked = 0, wrong = 0;
+  for (int z = 0; z < v.nz; z += 3)
+    for (int y = 0; y < v.ny; y += 2)
+      for (int x = 0; x < v.nx; ++x) {
+        const Vec3 lo = v.origin + Vec3{float(x), float(y), float(z)} * v.size;
+        double ext = 0, emis = 0;
+        for (const Medium& m : s.media) {
+          double f = 0;
+          if (m.axes[0].x == 1) {
+            f = 1;
+            for (int k = 0; k < 3; ++k)
+              f *= std::max(0.0,
+                            std::min(double(lo[k]) + v.size, double(m.center[k]) + m.half_size[k]) -
+                                std::max(double(lo[k]), double(m.center[k]) - m.half_size[k])) /
+                   v.size;
+          } else {
+            int in = 0;
+            for (int i = 0; i < 64; ++i) {
+              const Vec3 p =
+                  lo +
+                  Vec3{(float(i % 4) + 0.5f) / 4 * v.size, (float(i / 4 % 4) + 0.5f) / 4 * v.size,
+                       (float(i / 16) + 0.5f) / 4 * v.size} -
+                  m.center;
+              bool inside = true;
+              for (int j = 0; j < 3; ++j)
+                inside = inside && std::abs(dot(p, m.axes[std::size_t(j)])) <= m.half_size[j];
+              in += inside;
+            }
+            f = in / 64.0;
+          }
+          ext += f * m.extinction.g;
+          emis += f * m.emission.b;
+        }
+        const std::size_t k = v.index(x, y, z);
+        ++checked;
+        const bool ok = std::abs(v.extinction[k].g - ext) <= 1e-5 * (1 + ext) &&
+                        std::abs(v.emission[k].b - emis) <= 1e-5 * (1 + emis) &&
+                        v.extinction[k].g >= 0;
+        wrong += !ok;
+        if (!ok && wrong < 5)
+          ADD_FAILURE() << "voxel " << x << " " << y << " " << z << ": extinction "
+                        << v.extinction[k].g << " want " << ext << ", emission " << v.emission[k].b
+                        << " want " << emis;
+      }
+  EXPECT_GT(checked, 10000u);
+  EXPECT_EQ(wrong, 0u);
+}
+
 // An emitting wall behind a fog slab: its radiance arrives times the slab's transmittance.
 TEST(Voxels, AnEmittingWallIsSeenThroughTheFog) {
   Scene s = thin_wall({1, 0, 0}, {4, 4, 4});

@@ -47,9 +47,10 @@ penumbra::Expected<penumbra::ImageRgb> read_linear(const std::string& path,
 
 // Names the flag that sets the memory limit in a reader's message.
 std::string with_limit(std::string message) {
-  const std::string limit = "the memory limit";
+  const std::string limit = "the memory limit of";
   const std::size_t at = message.find(limit);
-  if (at != std::string::npos) message.replace(at, limit.size(), "half the --max-memory limit");
+  if (at != std::string::npos)
+    message.replace(at, limit.size(), "its share of --max-memory (half),");
   return message;
 }
 

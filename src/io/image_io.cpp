@@ -96,9 +96,10 @@ Status check_size(const std::string& path, long long width, long long height, Ex
   if (e.max_bytes > 0 && bytes > double(e.max_bytes)) {
     char text[160];
     std::snprintf(text, sizeof text,
-                  "reading the %lldx%lld image takes %.1f MiB, more than the memory limit of %.1f "
-                  "MiB",
-                  width, height, bytes / double(1 << 20), double(e.max_bytes) / double(1 << 20));
+                  "reading the %lldx%lld image takes %.0f bytes (%.1f MiB), more than the memory "
+                  "limit of %llu bytes (%.1f MiB)",
+                  width, height, bytes, bytes / double(1 << 20), (unsigned long long)e.max_bytes,
+                  double(e.max_bytes) / double(1 << 20));
     return fail(path, text);
   }
   if (e.width > 0 && (width != e.width || height != e.height)) {

@@ -68,6 +68,10 @@ Expected<Bound> bound(const Scene& s, int bounces) {
     if (!finite(sky[k])) return Error{s.source + ": " + sky_names[k] + ": not finite"};
     consider(b.source, largest(sky[k]), sky_names[k]);
   }
+  // A ray may cross every fog box before it meets a surface: their paths' emission adds to the
+  // brightest surface or sky (named, where it is the larger part, by the brightest box).
+  Brightest fog;
+  double fog_sum = 0;
   for (std::size_t i = 0; i < s.media.size(); ++i) {
     const Medium& m = s.media[i];
     const std::string path = "media[" + std::to_string(i) + "]";
@@ -77,8 +81,13 @@ Expected<Bound> bound(const Scene& s, int bounces) {
     const double diagonal = 2 * std::sqrt(double(m.half_size.x) * m.half_size.x +
                                           double(m.half_size.y) * m.half_size.y +
                                           double(m.half_size.z) * m.half_size.z);
-    consider(b.source, largest(m.emission) * diagonal, path + ".emission");
+    fog_sum += largest(m.emission) * diagonal;
+    consider(fog, largest(m.emission) * diagonal, path + ".emission");
     b.albedo = std::fmax(b.albedo, largest(m.albedo));
+  }
+  if (fog_sum > 0) {
+    const std::string where = fog_sum > b.source.value ? fog.where : b.source.where;
+    b.source = {b.source.value + fog_sum, where};
   }
   if (s.has_sun) {
     if (!finite(s.sun.irradiance)) return Error{s.source + ": sun.irradiance: not finite"};

@@ -418,8 +418,8 @@ TEST_F(CompareCli, JsonMatchesTheLibrary) {
 // pixel: 6x4 pixels take 672 bytes); two 16384^2 PFMs ended in bad_alloc at 5.1 GiB.
 TEST_F(CompareCli, ImagesPastTheMemoryLimitAreRefusedFromTheirHeaders) {
   expect_failure(run({test_pfm_, ref_exr_, "--max-memory", "1000"}), 1,
-                 {"test.pfm: reading the 6x4 image takes 0.0 MiB, more than half the "
-                  "--max-memory limit"});
+                 {"test.pfm: reading the 6x4 image takes 672 bytes (0.0 MiB), more than its "
+                  "share of --max-memory (half), 500 bytes (0.0 MiB)"});
   EXPECT_EQ(run({test_pfm_, ref_exr_, "--max-memory", "1344", "-q"}).status, 0);
   expect_failure(run({test_pfm_, ref_exr_, "--max-memory", "0.5"}), 2,
                  {"--max-memory: expected a size"});

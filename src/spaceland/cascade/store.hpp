@@ -14,13 +14,14 @@ namespace penumbra::spaceland::cascade {
 class RadianceStore {
  public:
   // `probes` probes of a side x side map each, every value `fill`; the memory is kept from one
-  // cascade to the next where it is large enough.
+  // cascade to the next only where it is the same size.
   void assign(std::uint64_t probes, int side, Rgb fill = {}) {
     side_ = side;
     directions_ = std::size_t(side) * std::size_t(side);
     const std::size_t n = std::size_t(probes) * directions_;
-    // Growing: the old values go first, so that the old and new arrays are never held at once.
-    if (n > data_.capacity()) data_ = {};
+    // The old values go first, so that old and new arrays are never held at once, and a store
+    // holds no more than its cascade (the memory estimate counts each cascade's own size).
+    if (n != data_.capacity()) data_ = {};
     data_.assign(n, fill);
   }
   const Rgb& at(std::uint64_t probe, std::size_t d) const {

@@ -395,11 +395,12 @@ Expected<RadianceField> solve(const Voxels& v, const Background& bg, const GridO
     Stopwatch watch;
     const CascadePlan& c = plan[std::size_t(i)];
     const bool top = levels->top(i);
+    dirs = {};  // map i + 2's, freed before map i is made (two maps at once, as estimated)
     dirs = cascade::direction_map(*levels, i);
     lower.assign(c.probes(), c.side);
     if (spread) {
       const std::size_t rays = std::size_t(c.probes()) * std::size_t(c.side) * c.side;
-      if (rays > lower_reach.capacity()) lower_reach = {};  // never old and new at once
+      if (rays != lower_reach.capacity()) lower_reach = {};  // never old and new at once
       lower_reach.assign(rays, -1.0f);
     }
     const int doublings = extension_doublings(c, o, v.size, top);

@@ -67,11 +67,11 @@ void check_text(std::string_view text, const std::string& file, bool obj,
   Kind kinds[3] = {{0, 0, 0, "vertex"}, {0, 0, 0, "texture coordinate"}, {0, 0, 0, "normal"}};
   std::size_t line = 0, begin = 0;
   while (begin < text.size()) {
-    // Lines end at \n or \r, as tinyobjloader's do (\r\n leaves empty lines between).
+    // Lines end at \n, \r\n or \r, as tinyobjloader's do.
     std::size_t end = text.find_first_of("\n\r", begin);
     if (end == std::string_view::npos) end = text.size();
     const std::string_view l = text.substr(begin, end - begin);
-    begin = end + 1;
+    begin = end + (end + 1 < text.size() && text[end] == '\r' && text[end + 1] == '\n' ? 2 : 1);
     ++line;
     std::size_t pos = 0;
     const std::string_view key = next_token(l, pos);
@@ -164,8 +164,8 @@ Material convert(const tinyobj::material_t& m, const std::string& file) {
   return out;
 }
 
-// Ear clipping of a face that is not convex costs its corners times its reflex corners: bounded,
-// so that a hostile face costs seconds at most.
+// Ear clipping of a face that is not convex costs its corners times its reflex corners: bounded
+// for the whole file, so that hostile faces cost seconds at most.
 constexpr std::uint64_t kMaxPolygonSteps = 200'000'000;
 
 struct Corner {
@@ -203,7 +203,10 @@ MeshFile read_obj(const std::string& path, Budget& budget) {
   for (std::uint32_t n : face_sizes) triangles += n - 2;  // check_text: n >= 3
   // Ours at the end: no more vertices than distinct corners, plus those given a triangle's
   // normal where a corner has none.
-  budget.take(mesh_bytes(std::min<std::uint64_t>(distinct + triangles, 3 * triangles),
+  // Where the file has normals, a corner without one gets a vertex of its own: up to 3 a
+  // triangle.
+  budget.take(mesh_bytes(counts.normals > 0 ? 3 * triangles
+                                            : std::min<std::uint64_t>(distinct, 3 * triangles),
                          counts.normals > 0, counts.uvs > 0, triangles),
               std::to_string(triangles) + " triangles");
   if (3 * triangles > UINT32_MAX) mesh_fail("more than 2^32 vertices");
@@ -247,6 +250,7 @@ MeshFile read_obj(const std::string& path, Budget& budget) {
   std::vector<std::array<std::uint32_t, 3>> pieces;
   PolygonWork work;
   std::size_t face_no = 0;
+  std::uint64_t steps_left = kMaxPolygonSteps;  // for the whole file
   for (const auto& s : shapes) {
     const auto& face_ids = s.mesh.indices;
     std::size_t first = 0;
@@ -266,11 +270,14 @@ MeshFile read_obj(const std::string& path, Budget& budget) {
         face.push_back(position(v));
       }
       pieces.clear();
-      if (!triangulate_polygon(face, pieces, kMaxPolygonSteps, work))
-        mesh_fail("shape '" + s.name + "': a face of " + std::to_string(n) +
-                  " corners, not convex: triangulating it takes more than " +
+      const bool done = triangulate_polygon(face, pieces, steps_left, work);
+      steps_left -= std::min(steps_left, work.steps);
+      if (!done)
+        mesh_fail("shape '" + s.name + "': face " + std::to_string(face_no) + ", of " +
+                  std::to_string(n) +
+                  " corners, not convex: triangulating the file's faces takes more than " +
                   io::format_rounded(double(kMaxPolygonSteps)) +
-                  " steps (its corners times its reflex corners); split it into smaller faces");
+                  " steps (corners times reflex corners); split them into smaller faces");
       for (const auto& piece : pieces) {
         std::array<std::uint32_t, 3> tri{};
         Corner c[3];

@@ -219,8 +219,11 @@ Vec3 voxel_lo(const Voxels& v, int x, int y, int z) {
 Expected<Voxels> empty_grid(const Scene& scene, float size, std::uint64_t max_bytes,
                             const VoxelBox* box) {
   if (!(size > 0) || !std::isfinite(size))
-    return Error{"`grid.voxel`: expected a voxel size > 0 in world units, found " +
-                 io::format_number(size)};
+    // Given sizes were checked with the options; this one may be derived from the scene.
+    return Error{
+        "the voxel size (`grid.voxel`, or derived from the scene's size) must be a "
+        "number > 0 in world units, found " +
+        io::format_number(size)};
   const Bounds b = grid_bounds(scene);
   Voxels v;
   v.size = size;
@@ -231,8 +234,9 @@ Expected<Voxels> empty_grid(const Scene& scene, float size, std::uint64_t max_by
   for (int k = 0; k < 3; ++k) {
     const double cells = box ? double(box->dims[std::size_t(k)]) : counts[std::size_t(k)];
     if (cells > double(1 << 20))
-      return Error{"`grid.voxel`: " + io::format_number(size) + " makes " +
-                   io::format_number(cells) + " voxels along an axis; use a larger voxel"};
+      return Error{"the voxel size " + io::format_number(size) +
+                   " (`grid.voxel`, or derived) makes " + io::format_number(cells) +
+                   " voxels along an axis; use a larger --voxel"};
     dims[k] = int(cells);
     n *= cells;
     if (box) v.origin[k] += float(box->first[std::size_t(k)]) * size;

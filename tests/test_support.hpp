@@ -1,11 +1,13 @@
 // Helpers shared by the test files.
 #pragma once
 
+#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <atomic>
+#include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -13,6 +15,7 @@
 #include <sstream>
 #include <string>
 #include <system_error>
+#include <thread>
 #include <vector>
 
 #include "penumbra/flatland/render.hpp"
@@ -162,6 +165,46 @@ inline CliResult run_program(const std::string& program, const std::vector<std::
   r.out = slurp(o);
   r.err = slurp(e);
   return r;
+}
+
+// Starts `argv` (the program first) in a child process without waiting for it, its output
+// thrown away when `quiet`; returns its pid (or -1).
+inline pid_t start_program(const std::vector<std::string>& argv, bool quiet = false) {
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    if (quiet) {
+      const int null = ::open("/dev/null", O_WRONLY);
+      ::dup2(null, STDOUT_FILENO);
+      ::dup2(null, STDERR_FILENO);
+    }
+    std::vector<char*> args;
+    for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+    args.push_back(nullptr);
+    ::execv(args[0], args.data());
+    ::_exit(127);
+  }
+  return pid;
+}
+
+// Whether `dir` holds a temporary output file (NAME.tmp.PID.N, docs/RELIABILITY.md).
+inline bool has_staged_file(const std::filesystem::path& dir) {
+  std::error_code ec;
+  for (const auto& e : std::filesystem::directory_iterator(dir, ec))
+    if (e.path().filename().string().find(".tmp.") != std::string::npos) return true;
+  return false;
+}
+
+// Waits, up to 2 minutes, until `dir` holds a temporary output file while child `pid` runs;
+// false when the child ended first (it is then reaped) or none appeared.
+inline bool wait_for_staged_file(pid_t pid, const std::filesystem::path& dir) {
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(120);
+  while (std::chrono::steady_clock::now() < give_up) {
+    int status = 0;
+    if (::waitpid(pid, &status, WNOHANG) == pid) return false;
+    if (has_staged_file(dir)) return true;
+    std::this_thread::sleep_for(std::chrono::microseconds(200));
+  }
+  return false;
 }
 
 // The command line (PENUMBRA_CLI), as run_program.

@@ -4,6 +4,7 @@
 
 #include <cmath>
 
+#include "core/d3.hpp"
 #include "core/math.hpp"
 #include "penumbra/spaceland/scene.hpp"
 #include "spaceland/ray.hpp"
@@ -18,12 +19,11 @@ class CameraRays {
         height_(c.height),
         t_(std::tan(double(c.fov_y) * kPi / 360)) {
     // In double: a view direction or an `up` of length 1e-30 squares to nothing in float.
-    const D3 f = unit(D3{double(c.look_at.x) - c.position.x, double(c.look_at.y) - c.position.y,
-                         double(c.look_at.z) - c.position.z});
-    const D3 r = unit(cross_d(f, unit(D3{c.up.x, c.up.y, c.up.z})));
-    f_ = to_float(f);
-    r_ = to_float(r);
-    u_ = to_float(cross_d(r, f));
+    const D3 f = normalize_scaled(d3(c.look_at) - d3(c.position));
+    const D3 r = normalize_scaled(cross(f, normalize_scaled(d3(c.up))));
+    f_ = f3(f);
+    r_ = f3(r);
+    u_ = f3(cross(r, f));
   }
 
   // Unit direction of pixel (i, j), row 0 at the top; computed in double so that the spec's
@@ -41,21 +41,6 @@ class CameraRays {
   Vec3 origin() const { return origin_; }
 
  private:
-  struct D3 {
-    double x, y, z;
-  };
-  static D3 unit(D3 v) {
-    // Scaled by the largest component first, so that tiny vectors do not underflow when squared.
-    const double m = std::fmax(std::fabs(v.x), std::fmax(std::fabs(v.y), std::fabs(v.z)));
-    v = {v.x / m, v.y / m, v.z / m};
-    const double len = std::sqrt(v.x * v.x + v.y * v.y + v.z * v.z);
-    return {v.x / len, v.y / len, v.z / len};
-  }
-  static D3 cross_d(D3 a, D3 b) {
-    return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
-  }
-  static Vec3 to_float(D3 v) { return {float(v.x), float(v.y), float(v.z)}; }
-
   Vec3 origin_, f_, r_, u_;
   int width_, height_;
   double t_;

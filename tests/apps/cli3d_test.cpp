@@ -1,6 +1,5 @@
 // `penumbra render` on 3D scenes, run as a user runs it: the document's `dimensions` picks the
 // world, options that do not apply are refused, the camera's size can be overridden, AOVs.
-#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/resource.h>
@@ -418,26 +417,10 @@ TEST_F(Cli3d, HardInputsAreRefusedAndLeaveNothing) {
 }
 
 // Starts the CLI with `args` and returns its pid.
-pid_t start_cli(const std::vector<std::string>& args) {
+pid_t start_cli(const std::vector<std::string>& args, bool quiet = false) {
   std::vector<std::string> all = {PENUMBRA_CLI};
   all.insert(all.end(), args.begin(), args.end());
-  const pid_t pid = ::fork();
-  if (pid == 0) {
-    std::vector<char*> argv;
-    for (const std::string& a : all) argv.push_back(const_cast<char*>(a.c_str()));
-    argv.push_back(nullptr);
-    ::execv(argv[0], argv.data());
-    ::_exit(127);
-  }
-  return pid;
-}
-
-// Whether `dir` holds a temporary output file (NAME.tmp.PID.N).
-bool staged_in(const fs::path& dir) {
-  std::error_code ec;
-  for (const auto& e : fs::directory_iterator(dir, ec))
-    if (e.path().filename().string().find(".tmp.") != std::string::npos) return true;
-  return false;
+  return penumbra::testing::start_program(all, quiet);
 }
 
 // SPWI and the grid have nothing whole before they finish: Ctrl-C ends them at once, writing
@@ -464,21 +447,14 @@ TEST_F(Cli3d, InterruptWhileThePathTracerWritesFinishesTheFiles) {
       start_cli({"render", scene_, "--spp", "1", "--width", "1600", "--height", "1200", "-q", "-o",
                  out("a.pfm"), "-o", out("a.exr"), "-o", out("a.png")});
   ASSERT_GT(pid, 0);
-  bool seen = false;
-  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(120);
-  while (!seen && std::chrono::steady_clock::now() < give_up) {
-    int st = 0;
-    if (::waitpid(pid, &st, WNOHANG) == pid) break;  // finished before anything was seen
-    seen = staged_in(tmp_.root() / "out");
-    if (!seen) std::this_thread::sleep_for(std::chrono::microseconds(200));
-  }
+  const bool seen = penumbra::testing::wait_for_staged_file(pid, tmp_.root() / "out");
   ASSERT_TRUE(seen) << "no temporary file seen while writing";
   ::kill(pid, SIGINT);
   int status = 0;
   ASSERT_EQ(::waitpid(pid, &status, 0), pid);
   ASSERT_TRUE(WIFEXITED(status)) << status;
   EXPECT_EQ(WEXITSTATUS(status), 130);
-  EXPECT_FALSE(staged_in(tmp_.root() / "out"));
+  EXPECT_FALSE(penumbra::testing::has_staged_file(tmp_.root() / "out"));
   for (const char* name : {"a.pfm", "a.exr"}) {
     const penumbra::Expected<penumbra::ImageRgb> img = penumbra::read_rgb_image(out(name));
     ASSERT_TRUE(img.ok()) << name;
@@ -490,19 +466,7 @@ TEST_F(Cli3d, InterruptWhileThePathTracerWritesFinishesTheFiles) {
 // Runs the CLI with its output thrown away; the exit code (-1: no normal exit) and its peak
 // resident memory in bytes.
 std::pair<int, std::uint64_t> run_measured(const std::vector<std::string>& args) {
-  std::vector<std::string> all = {PENUMBRA_CLI};
-  all.insert(all.end(), args.begin(), args.end());
-  const pid_t pid = ::fork();
-  if (pid == 0) {
-    const int null = ::open("/dev/null", O_WRONLY);
-    ::dup2(null, STDOUT_FILENO);
-    ::dup2(null, STDERR_FILENO);
-    std::vector<char*> argv;
-    for (const std::string& a : all) argv.push_back(const_cast<char*>(a.c_str()));
-    argv.push_back(nullptr);
-    ::execv(argv[0], argv.data());
-    ::_exit(127);
-  }
+  const pid_t pid = start_cli(args, true);
   int status = 0;
   struct rusage usage {};
   if (pid < 0 || ::wait4(pid, &status, 0, &usage) != pid) return {-1, 0};

@@ -537,35 +537,15 @@ TEST_F(Cli, SignalWhileWritingLeavesNoTemporaryFile) {
                                            (where / "a.exr").string(),
                                            "-o",
                                            (where / "a.png").string()};
-    const pid_t pid = ::fork();
+    const pid_t pid = penumbra::testing::start_program(args);
     ASSERT_GE(pid, 0);
-    if (pid == 0) {
-      std::vector<char*> argv;
-      for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-      argv.push_back(nullptr);
-      ::execv(argv[0], argv.data());
-      ::_exit(127);
-    }
-    auto staged = [&] {
-      std::error_code ec;
-      for (const auto& e : fs::directory_iterator(where, ec))
-        if (e.path().filename().string().find(".tmp.") != std::string::npos) return true;
-      return false;
-    };
-    bool seen = false;
-    const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(120);
-    while (!seen && std::chrono::steady_clock::now() < give_up) {
-      int st = 0;
-      if (::waitpid(pid, &st, WNOHANG) == pid) break;  // finished before we saw anything
-      seen = staged();
-      if (!seen) std::this_thread::sleep_for(std::chrono::microseconds(200));
-    }
+    const bool seen = penumbra::testing::wait_for_staged_file(pid, where);
     ASSERT_TRUE(seen) << "no temporary file seen while writing; signal " << sig;
     ::kill(pid, sig);
     int status = 0;
     ASSERT_EQ(::waitpid(pid, &status, 0), pid);
     EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == sig) << "status " << status;
-    EXPECT_FALSE(staged()) << "signal " << sig;
+    EXPECT_FALSE(penumbra::testing::has_staged_file(where)) << "signal " << sig;
   }
 }
 

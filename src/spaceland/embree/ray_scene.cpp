@@ -13,6 +13,8 @@
 #include <string>
 #include <vector>
 
+#include "core/d3.hpp"
+
 namespace penumbra::spaceland {
 
 namespace {
@@ -105,34 +107,9 @@ Vec3 vertex(const float* p, std::uint32_t i) {
   return {p[4 * i], p[4 * i + 1], p[4 * i + 2]};
 }
 
-// Hits are refined in double from the primitive Embree found, so that single rays and streams
-// (whose SIMD intersectors round differently) give identical answers, and analytic shapes their
-// exact distance.
-struct D3 {
-  double x, y, z;
-};
-D3 d3(Vec3 a) {
-  return {a.x, a.y, a.z};
-}
-D3 operator-(D3 a, D3 b) {
-  return {a.x - b.x, a.y - b.y, a.z - b.z};
-}
-D3 operator+(D3 a, D3 b) {
-  return {a.x + b.x, a.y + b.y, a.z + b.z};
-}
-D3 operator*(double s, D3 a) {
-  return {s * a.x, s * a.y, s * a.z};
-}
-double dot(D3 a, D3 b) {
-  return a.x * b.x + a.y * b.y + a.z * b.z;
-}
-D3 cross(D3 a, D3 b) {
-  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
-}
-Vec3 f3(D3 a) {
-  return {float(a.x), float(a.y), float(a.z)};
-}
-
+// Hits are refined in double (core/d3.hpp) from the primitive Embree found, so that single rays
+// and streams (whose SIMD intersectors round differently) give identical answers, and analytic
+// shapes their exact distance.
 // Möller-Trumbore in double: t and the barycentrics of p1 and p2; false where the ray is
 // parallel to the triangle (Embree's values are kept then).
 bool refine_triangle(D3 o, D3 d, D3 p0, D3 p1, D3 p2, double& t, double& b1, double& b2) {

@@ -406,11 +406,10 @@ void rasterise_surfaces(const Scene& scene, Voxels& v, const std::vector<std::ui
   raster.finish(v);
 }
 
-// The fraction of voxel (x, y, z) inside fog box m: exact for a box along the world's axes, else
-// the fraction of its kPerAxis^3 points inside. A voxel wholly inside or
-// outside the box along each of its axes is settled from its centre (the voxel's half extent
-// projected on the axis), so only the voxels the box's faces cross are sampled: thousands of
-// small boxes cost their surfaces, not their volumes times 64 points.
+// The fraction of voxel (x, y, z) inside fog box m. A voxel wholly inside or outside the box
+// along each of its axes is settled from its centre (the voxel's half extent projected on the
+// axis); one its faces cross is the product of its overlaps on each axis for a box along the
+// world's axes (exact), else the fraction of its kPerAxis^3 points inside.
 float covered(const Voxels& v, const Medium& m, int x, int y, int z) {
   const Vec3 a = voxel_lo(v, x, y, z);
   const float h = 0.5f * v.size;
@@ -503,7 +502,7 @@ RowSpan row_span(const Voxels& v, const Medium& m, int y, int z, int x_lo, int x
   return span;
 }
 
-// Fog: the coefficients of every box, times the fraction of the voxel's points inside it. Row by
+// Fog: the coefficients of every box, times the fraction of the voxel it covers (`covered`). Row by
 // row: each box adds its wholly covered run of a row through a difference array (two entries)
 // and samples only the voxels its faces cross, so thousands of large overlapping boxes cost their
 // rows and faces, not their volumes (5,000 boxes of 1-4 units in a 10-unit room took 12 s).

@@ -8,6 +8,7 @@
 #include <string>
 #include <utility>
 
+#include "core/d3.hpp"
 #include "io/json_reader.hpp"
 
 namespace penumbra::spaceland {
@@ -94,60 +95,58 @@ std::string object_path(const Scene& s, int object, const std::string& fallback)
   return line.substr(0, line.find(" ("));
 }
 
-// `what` and the vertex's index name the value; the text is made only for a failure (meshes
-// have millions of vertices).
-void check_vec3_named(const std::string& file, const std::string& path, const char* what,
-                      std::size_t vertex, Vec3 v) {
-  if (std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z)) return;
-  fail(file, path,
-       what + std::to_string(vertex) + " is not finite: " + format_vec3(v) +
-           " (a value of the mesh file, after the object's transform)");
-}
-
 void check_mesh(const std::string& file, const std::string& path, const TriangleMesh& m,
                 const Scene& s) {
   const std::size_t n = m.positions.size();
-  // A document's mesh: messages name its object, not the scene's internal arrays.
-  if (m.object >= 0 && std::size_t(m.object) < s.objects.size()) {
-    const std::string& line = s.objects[std::size_t(m.object)];
-    const std::string obj =
-        object_path(s, m.object, path) + (line.find("(mesh") != std::string::npos ? ".file" : "");
-    for (std::size_t i = 0; i < n; ++i) check_vec3_named(file, obj, "vertex ", i, m.positions[i]);
-    for (std::size_t i = 0; i < m.normals.size(); ++i) {
-      check_vec3_named(file, obj, "the normal of vertex ", i, m.normals[i]);
-      const double len = length_d(m.normals[i]);
-      if (std::fabs(len - 1) > kUnitTolerance)
-        fail(file, obj,
-             "the normal of vertex " + std::to_string(i) +
-                 " is not a unit vector: " + format_vec3(m.normals[i]));
-    }
-    for (std::size_t i = 0; i < m.uvs.size(); ++i)
-      if (!std::isfinite(m.uvs[i][0]) || !std::isfinite(m.uvs[i][1]))
-        fail(file, obj,
-             "the texture coordinates of vertex " + std::to_string(i) + " are not finite: [" +
-                 format_number(m.uvs[i][0]) + ", " + format_number(m.uvs[i][1]) + "]");
-  }
-  for (std::size_t i = 0; i < n; ++i)
-    check_vec3(file, item(path + ".positions", i), m.positions[i]);
+  // A document's mesh is named by its object and the vertex ("objects[3].file: the normal of
+  // vertex 0 ..."), a mesh built in code by its arrays ("meshes[3].normals[0][1]"). Messages are
+  // made only for a failure: meshes have millions of vertices.
+  const bool document = m.object >= 0 && std::size_t(m.object) < s.objects.size();
+  const std::string obj =
+      document
+          ? object_path(s, m.object, path) +
+                (s.objects[std::size_t(m.object)].find("(mesh") != std::string::npos ? ".file" : "")
+          : std::string();
+  auto finite3 = [](Vec3 v) {
+    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+  };
+  auto not_finite = [&](const char* what, std::size_t i, Vec3 v) {
+    fail(file, obj,
+         what + std::to_string(i) + " is not finite: " + format_vec3(v) +
+             " (a value of the mesh file, after the object's transform)");
+  };
   for (std::size_t i = 0; i < n; ++i) {
     const Vec3 p = m.positions[i];
-    if (std::fabs(p.x) <= kMaxCoordinate && std::fabs(p.y) <= kMaxCoordinate &&
-        std::fabs(p.z) <= kMaxCoordinate)
-      continue;
-    check_within_world(file, object_path(s, m.object, path), p, p,
-                       "vertex " + std::to_string(i) + " (in world space)");
+    if (!finite3(p)) {
+      if (document) not_finite("vertex ", i, p);
+      check_vec3(file, item(path + ".positions", i), p);
+    }
+    if (!inside_world(p))
+      check_within_world(file, object_path(s, m.object, path), p, p,
+                         "vertex " + std::to_string(i) + " (in world space)");
   }
   if (!m.normals.empty() && m.normals.size() != n)
     fail(file, path + ".normals",
          "expected none or one per position (" + std::to_string(n) + "), found " +
              std::to_string(m.normals.size()));
-  for (std::size_t i = 0; i < m.normals.size(); ++i)
-    check_unit(file, item(path + ".normals", i), m.normals[i]);
+  for (std::size_t i = 0; i < m.normals.size(); ++i) {
+    const Vec3 v = m.normals[i];
+    if (finite3(v) && std::fabs(length_d(v) - 1) <= kUnitTolerance) continue;
+    if (!document) check_unit(file, item(path + ".normals", i), v);
+    if (!finite3(v)) not_finite("the normal of vertex ", i, v);
+    fail(file, obj,
+         "the normal of vertex " + std::to_string(i) + " is not a unit vector: " + format_vec3(v));
+  }
   if (!m.uvs.empty() && m.uvs.size() != n)
     fail(file, path + ".uvs",
          "expected none or one per position (" + std::to_string(n) + "), found " +
              std::to_string(m.uvs.size()));
   for (std::size_t i = 0; i < m.uvs.size(); ++i) {
+    if (std::isfinite(m.uvs[i][0]) && std::isfinite(m.uvs[i][1])) continue;
+    if (document)
+      fail(file, obj,
+           "the texture coordinates of vertex " + std::to_string(i) + " are not finite: [" +
+               format_number(m.uvs[i][0]) + ", " + format_number(m.uvs[i][1]) + "]");
     check_float(file, item(item(path + ".uvs", i), 0), m.uvs[i][0], Range::any);
     check_float(file, item(item(path + ".uvs", i), 1), m.uvs[i][1], Range::any);
   }
@@ -164,7 +163,8 @@ void check_mesh(const std::string& file, const std::string& path, const Triangle
          "expected one per triangle (" + std::to_string(m.triangles.size()) + "), found " +
              std::to_string(m.materials.size()));
   for (std::size_t t = 0; t < m.materials.size(); ++t)
-    check_material_index(file, item(path + ".materials", t), m.materials[t], s);
+    if (m.materials[t] >= s.materials.size())
+      check_material_index(file, item(path + ".materials", t), m.materials[t], s);
   check_object_index(file, path, m.object, s);
 }
 
@@ -237,19 +237,16 @@ void check_camera(const std::string& file, const Camera& c) {
       fail(file, name,
            "expected an integer in 1.." + std::to_string(kMaxImageSide) + ", found " +
                std::to_string(side));
-  // In double: float differences of nearby points may underflow.
-  const double f[3] = {double(c.look_at.x) - c.position.x, double(c.look_at.y) - c.position.y,
-                       double(c.look_at.z) - c.position.z};
-  const double flen = std::sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
-  if (!(flen > 0))
+  // In double, as CameraRays finds its basis: float differences of nearby points may underflow.
+  const D3 f = d3(c.look_at) - d3(c.position);
+  if (!(dot(f, f) > 0))
     fail(file, "camera.look_at",
          "expected a point distinct from camera.position, found " + format_vec3(c.look_at));
-  const double u[3] = {c.up.x, c.up.y, c.up.z};
-  const double ulen = length_d(c.up);
-  const double x[3] = {f[1] * u[2] - f[2] * u[1], f[2] * u[0] - f[0] * u[2],
-                       f[0] * u[1] - f[1] * u[0]};
-  const double sine = std::sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]) / (flen * ulen);
-  if (!(ulen > 0) || !(sine > 1e-6))
+  const D3 u = d3(c.up);
+  const bool ulen = dot(u, u) > 0;
+  const D3 x = ulen ? cross(normalize_scaled(f), normalize_scaled(u)) : D3{0, 0, 0};
+  const double sine = std::sqrt(dot(x, x));
+  if (!ulen || !(sine > 1e-6))
     fail(file, "camera.up",
          "expected a non-zero vector not parallel to the view direction (look_at - position), "
          "found " +

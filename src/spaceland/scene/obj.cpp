@@ -192,15 +192,13 @@ MeshFile read_obj(const std::string& path, Budget& budget) {
   // stream), its arrays (a vertex 16 bytes with its weight, a uv 12, a normal 12, a corner 12 in
   // the shapes and 12 in its face list, a face about 90 with its list's own allocation), and
   // ours after it (the corners' index, 48 bytes a distinct corner, 4 bytes a face count).
-  std::uint64_t corners = 0;
-  for (std::uint32_t n : face_sizes) corners += n;
+  std::uint64_t corners = 0, triangles = 0;
+  for (std::uint32_t n : face_sizes) corners += n, triangles += n - 2;  // check_text: n >= 3
   const std::uint64_t faces = face_sizes.size();
   const std::uint64_t distinct =
       std::min<long double>(corners, (long double)std::max<std::uint64_t>(counts.vertices, 1) *
                                          std::max<std::uint64_t>(counts.uvs, 1) *
                                          std::max<std::uint64_t>(counts.normals, 1));
-  std::uint64_t triangles = 0;
-  for (std::uint32_t n : face_sizes) triangles += n - 2;  // check_text: n >= 3
   // Ours at the end: no more vertices than distinct corners, plus those given a triangle's
   // normal where a corner has none.
   // Where the file has normals, a corner without one gets a vertex of its own: up to 3 a

@@ -380,9 +380,7 @@ class SceneReader : public io::JsonReader {
   void check_extent(const TriangleMesh& mesh, const std::string& path, const char* type) const {
     for (std::size_t i = 0; i < mesh.positions.size(); ++i) {
       const Vec3 p = mesh.positions[i];
-      if (std::fabs(p.x) <= kMaxCoordinate && std::fabs(p.y) <= kMaxCoordinate &&
-          std::fabs(p.z) <= kMaxCoordinate)
-        continue;
+      if (inside_world(p)) continue;
       check_within_world(file(), type ? path : path + ".file", p, p,
                          type ? std::string("the ") + type + " (after its transform)"
                               : "vertex " + std::to_string(i) + " (after the transform)");

@@ -3,12 +3,14 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <string_view>
 #include <variant>
+#include <vector>
 
 #include "core/timer.hpp"
 #include "io/json_reader.hpp"
@@ -49,13 +51,17 @@ int check_method_options(const RenderArgs& a, sl::Method method) {
   for (const CLI::Option* opt : a.app->get_options()) {
     const std::string name = opt->get_name();
     if (opt->count() == 0 || listed(name, kCommon) || listed(name, k3dOptions)) continue;
-    std::string readers;
+    std::vector<std::string> names;
     bool read = false;
     for (const sl::MethodInfo& m : sl::methods())
       if (reads(m, name)) {
-        readers += std::string(readers.empty() ? "--method " : " or ") + m.name;
+        names.push_back(m.name);
         read = read || m.method == method;
       }
+    // "--method spwi", "--method spwi or grid", "--method spwi, grid or ssrc".
+    std::string readers;
+    for (std::size_t k = 0; k < names.size(); ++k)
+      readers += (k == 0 ? "--method " : k + 1 == names.size() ? " or " : ", ") + names[k];
     if (readers.empty()) {
       std::cerr << "penumbra render: " << name << " applies to 2D scenes only (" << a.scene
                 << " is a 3D scene)\n";
@@ -113,6 +119,25 @@ int render_scene_3d(const RenderArgs& a) {
   if (given("--preaverage")) options.spwi.preaverage = a.options.rc.preaverage;
   options.grid = a.grid;
   cascade_options(options.grid);
+  options.ssrc = a.ssrc;
+  if (given("--probe-spacing")) options.ssrc.probe_spacing = a.options.rc.probe_spacing;
+  if (given("--directions")) options.ssrc.directions = a.options.rc.directions;
+  if (given("--cascades")) options.ssrc.cascades = a.options.rc.cascades;
+  if (given("--interval") && options.method == sl::Method::ssrc) {
+    // Pixels along the screen, a whole number (spwi's and the grid's are world units).
+    const float r0 = a.options.rc.interval;
+    if (r0 != std::floor(r0) || r0 < 1 || r0 > 4096) {
+      std::cerr << "penumbra render: --interval for ssrc is a whole number of pixels in "
+                   "1..4096, found "
+                << r0 << "\n";
+      return kUsage;
+    }
+    options.ssrc.interval = int(r0);
+  }
+  if (given("--merge")) options.ssrc.merge = a.spwi.merge;
+  if (given("--merge-edge")) options.ssrc.merge_edge = a.spwi.merge_edge;
+  if (given("--gather-edge")) options.ssrc.gather_edge = a.spwi.gather_edge;
+  if (given("--gather-normal")) options.ssrc.gather_normal = a.spwi.gather_normal;
   options.cache_probe_spacing = a.cache_probe_spacing;
   options.sun_rays = a.sun_rays;
   // Extension on with --extend, tracing --extend-length voxels (cells in 2D); the fix off unless

@@ -407,10 +407,10 @@ std::unique_ptr<RenderCommand> add_render_command(CLI::App& app) {
     add_enum_option(render, "--merge", a.spwi.merge,
                     {sl::SpwiMerge::bilinear, sl::SpwiMerge::bilateral, sl::SpwiMerge::bilinear3d,
                      sl::SpwiMerge::fix, sl::SpwiMerge::minmax},
-                    "3D spwi: merging with the upper cascade: bilinear, bilateral (depth "
-                    "edges), bilinear3d (world-space lines), fix (trace to each upper probe's "
-                    "interval start), minmax (probes on each tile's nearest and farthest "
-                    "surface)");
+                    "3D spwi (ssrc: the first three; default bilinear): merging with the upper "
+                    "cascade: bilinear, bilateral (depth edges), bilinear3d (world-space lines), "
+                    "fix (trace to each upper probe's interval start), minmax (probes on each "
+                    "tile's nearest and farthest surface)");
     add_enum_option(render, "--sun", a.spwi.sun, {sl::SpwiSun::direct, sl::SpwiSun::cascades},
                     "3D spwi: the sun on visible surfaces: direct (a shadow ray per pixel), "
                     "cascades (the top cascade sees its disk)");
@@ -436,10 +436,29 @@ std::unique_ptr<RenderCommand> add_render_command(CLI::App& app) {
         ->check(CLI::Range(1, 64))
         ->capture_default_str();
     render
-        ->add_option("--sun-rays", a.sun_rays,
-                     "3D spwi and grid: shadow rays over the sun's disk at each visible surface, "
-                     "for soft shadows (1: one towards its centre, hard shadows)")
+        ->add_option(
+            "--sun-rays", a.sun_rays,
+            "3D spwi, grid and ssrc: shadow rays over the sun's disk at each visible surface, "
+            "for soft shadows (1: one towards its centre, hard shadows)")
         ->check(CLI::Range(1, 1024))
+        ->capture_default_str();
+    render
+        ->add_option("--sectors", a.ssrc.sectors,
+                     "3D ssrc: occlusion sectors per screen direction, equal angles from the view "
+                     "vector to its opposite: 8, 16 or 32 (a 32, 64 or 128-bit mask for four "
+                     "directions)")
+        ->check(CLI::IsMember({8, 16, 32}))
+        ->capture_default_str();
+    render
+        ->add_option("--march-rays", a.ssrc.rays,
+                     "3D ssrc: screen directions marched together: 1, 2 or 4 (the same image)")
+        ->check(CLI::IsMember({1, 2, 4}))
+        ->capture_default_str();
+    render
+        ->add_option("--thickness", a.ssrc.thickness,
+                     "3D ssrc: each depth sample is solid to this fraction of its depth behind it "
+                     "(1e30: infinitely thick, as horizon-based methods assume)")
+        ->check(real_range(0, 1e30))
         ->capture_default_str();
     add_enum_option(render, "--gather", a.spwi.gather,
                     {sl::SpwiGather::pixel, sl::SpwiGather::probe},
@@ -455,18 +474,19 @@ std::unique_ptr<RenderCommand> add_render_command(CLI::App& app) {
                      "their probe (which stops light through walls near probes)");
     render
         ->add_option("--merge-edge", a.spwi.merge_edge,
-                     "3D spwi, bilateral merge: depth range over mean that is an edge")
+                     "3D spwi and ssrc, bilateral merge: depth range over mean that is an edge")
         ->check(real_range(0, 1e6))
         ->capture_default_str();
     render
-        ->add_option("--gather-normal", a.spwi.gather_normal,
-                     "3D spwi: final gather weights times cos^p of the probe's and the pixel's "
-                     "normals (0: off, as seed 000)")
+        ->add_option(
+            "--gather-normal", a.spwi.gather_normal,
+            "3D spwi and ssrc: final gather weights times cos^p of the probe's and the pixel's "
+            "normals (0: off, as seed 000)")
         ->check(real_range(0, 64))
         ->capture_default_str();
     render
         ->add_option("--gather-edge", a.spwi.gather_edge,
-                     "3D spwi: the same test in the final gather")
+                     "3D spwi and ssrc: the same test in the final gather")
         ->check(real_range(0, 1e6))
         ->capture_default_str();
   }

@@ -26,6 +26,9 @@ struct RenderArgs {
   // copied when given).
   penumbra::spaceland::SpwiOptions spwi;
   penumbra::spaceland::GridOptions grid;
+  // 3D ssrc: its own options (--sectors, --march-rays, --thickness); those it shares with spwi
+  // and 2D's cascades are copied when given.
+  penumbra::spaceland::SsrcOptions ssrc;
   int cache_probe_spacing = penumbra::spaceland::RenderOptions{}.cache_probe_spacing;
   int sun_rays = penumbra::spaceland::RenderOptions{}.sun_rays;
   bool disjoint = false;  // --disjoint: spwi's thesis intervals (SpwiOptions::overlap off)

@@ -56,7 +56,8 @@ void add_render_options(CLI::App* app, RenderOptions& options, RenderOptionFlags
     auto n = [](auto v) { return penumbra::io::format_number(double(v)); };
     app->add_option("--probe-spacing", rc.probe_spacing,
                     "Cascade-0 probe spacing s0: cells in 2D (default " + n(rc.probe_spacing) +
-                        "), pixels in 3D spwi (default " + n(penumbra::spaceland::kSpwiSpacing) +
+                        "), pixels in 3D spwi and ssrc (default " +
+                        n(penumbra::spaceland::kSpwiSpacing) +
                         ", or its half where that leaves under " +
                         n(penumbra::spaceland::kSpwiProbesAcross) +
                         " probes across the image's shorter side), voxels in the 3D grid "
@@ -65,8 +66,11 @@ void add_render_options(CLI::App* app, RenderOptions& options, RenderOptionFlags
         ->check(CLI::Range(1, 64));
     app->add_option("--directions", rc.directions,
                     "Directions Q0 of a cascade-0 probe: 1 to 64 in 2D (default " +
-                        n(rc.directions) + "); in 3D the square of a power of two (spwi default " +
-                        n(spwi.directions) + ", grid " + n(grid.directions) + ")")
+                        n(rc.directions) +
+                        "); in 3D spwi and the grid the square of a power of two (spwi default " +
+                        n(spwi.directions) + ", grid " + n(grid.directions) +
+                        "), ssrc a power of two up to 64, screen directions (default " +
+                        n(penumbra::spaceland::SsrcOptions{}.directions) + ")")
         ->check(CLI::Range(1, 1024));
     app->add_option("--branching", rc.branching,
                     "Angular branching per cascade: 2 or 4 (2D); 4 or 16 (3D spwi, default 4)")
@@ -76,7 +80,8 @@ void add_render_options(CLI::App* app, RenderOptions& options, RenderOptionFlags
            "--interval", rc.interval,
            "Cascade-0 interval length t0: cells in 2D (default " + n(rc.interval) +
                "); world units in 3D (default: spwi, four probe spacings at the median depth; "
-               "grid, four probe spacings)")
+               "grid, four probe spacings); whole pixels in 3D ssrc (default two probe "
+               "spacings)")
         ->check(real_above(0, false));
     app->add_option("--cascades", rc.cascades,
                     "Number of cascades (default 0: enough to reach across the 2D grid or the 3D "
@@ -213,6 +218,16 @@ const std::pair<const char*, const char*> kFlags[] = {
     {"`spwi.merge_edge`", "--merge-edge"},
     {"`spwi.gather_edge`", "--gather-edge"},
     {"`spwi.gather_normal`", "--gather-normal"},
+    {"`ssrc.probe_spacing`", "--probe-spacing"},
+    {"`ssrc.directions`", "--directions"},
+    {"`ssrc.interval`", "--interval"},
+    {"`ssrc.cascades`", "--cascades"},
+    {"`ssrc.sectors`", "--sectors"},
+    {"`ssrc.rays`", "--march-rays"},
+    {"`ssrc.thickness`", "--thickness"},
+    {"`ssrc.merge_edge`", "--merge-edge"},
+    {"`ssrc.gather_edge`", "--gather-edge"},
+    {"`ssrc.gather_normal`", "--gather-normal"},
     {"`grid.voxel`", "--voxel"},
     {"`grid.levels`", "--levels"},
     {"`cache_probe_spacing`", "--cache-probe-spacing"},
@@ -224,6 +239,7 @@ const std::pair<const char*, const char*> kFlags[] = {
     {"`grid.extend_length`", "--extend-length"},
     // Fields no message names, listed for the 3D methods' option groups (flags_of).
     {"`spwi.merge`", "--merge"},
+    {"`ssrc.merge`", "--merge"},
     {"`spwi.sun`", "--sun"},
     {"`spwi.gather`", "--gather"},
     {"`spwi.overlap`", "--disjoint"},

@@ -39,6 +39,9 @@ class CameraRays {
   Ray ray(int i, int j) const { return Ray{origin_, direction(i, j), 0.0f, 3.0e38f}; }
   Vec3 forward() const { return f_; }
   Vec3 origin() const { return origin_; }
+  Vec3 right() const { return r_; }  // the image's x axis in the world
+  Vec3 up() const { return u_; }     // its y axis, upwards (pixel rows run down)
+  double tan_half_fov() const { return t_; }
 
  private:
   Vec3 origin_, f_, r_, u_;

@@ -11,6 +11,7 @@
 #include "spaceland/pt/pt.hpp"
 #include "spaceland/radiance_cache.hpp"
 #include "spaceland/spwi/spwi.hpp"
+#include "spaceland/ssrc/ssrc.hpp"
 
 namespace penumbra::spaceland {
 namespace {
@@ -158,6 +159,53 @@ Expected<ImageRgb> grid_solve(const SolveContext& ctx, const RenderOptions& o, S
   return grid::render(ctx, o.grid, report, used.grid);
 }
 
+// ---- ssrc: screen-space radiance cascades (seed 001 section 4.2) ----
+
+constexpr const char* kSsrcOptions[] = {
+    "ssrc.probe_spacing", "ssrc.directions",  "ssrc.interval",      "ssrc.cascades",
+    "ssrc.sectors",       "ssrc.rays",        "ssrc.thickness",     "ssrc.merge",
+    "ssrc.merge_edge",    "ssrc.gather_edge", "ssrc.gather_normal", "sun_rays"};
+
+Status ssrc_check(const RenderOptions& o) {
+  return ssrc::check_options(o.ssrc);
+}
+
+Status ssrc_check_scene(const Scene& scene) {
+  return ssrc::check_scene(scene);
+}
+
+std::uint64_t ssrc_bytes(const Scene& scene, const RenderOptions& o) {
+  return ssrc::make_layout(scene.camera.width, scene.camera.height, o.ssrc).bytes();
+}
+
+void ssrc_describe(const RenderResult& r, std::vector<Parameter>& p, std::string& line) {
+  const SsrcOptions& o = r.options.ssrc;
+  p.push_back({"probe_spacing", std::int64_t(o.probe_spacing)});
+  p.push_back({"directions", std::int64_t(o.directions)});
+  p.push_back({"interval", std::int64_t(o.interval)});
+  p.push_back({"cascades", std::int64_t(o.cascades)});
+  p.push_back({"sectors", std::int64_t(o.sectors)});
+  p.push_back({"rays", std::int64_t(o.rays)});
+  p.push_back({"thickness", double(o.thickness)});
+  p.push_back({"merge", std::string(to_string(o.merge))});
+  p.push_back({"merge_edge", double(o.merge_edge)});
+  p.push_back({"gather_edge", double(o.gather_edge)});
+  p.push_back({"gather_normal", double(o.gather_normal)});
+  p.push_back({"sun_rays", std::int64_t(r.options.sun_rays)});
+  line = ", " + std::to_string(o.cascades) + " cascades, s0 " + std::to_string(o.probe_spacing) +
+         " px, r0 " + std::to_string(o.interval) + " px, " + std::to_string(o.sectors) +
+         " sectors, thickness " + io::format_rounded(o.thickness);
+}
+
+Expected<ImageRgb> ssrc_solve(const SolveContext& ctx, const RenderOptions& o, SolveReport& report,
+                              RenderOptions& used) {
+  const ssrc::Layout layout = ssrc::make_layout(ctx.g.width, ctx.g.height, o.ssrc);
+  used.ssrc.probe_spacing = layout.tiles.levels.spacing0;
+  used.ssrc.interval = layout.r0;
+  used.ssrc.cascades = layout.count();
+  return ssrc::render(ctx, o.ssrc, layout, report);
+}
+
 // In the order of the Method enum.
 constexpr MethodEntry kMethods[] = {
     {Method::pt, "pt", "the path tracer",
@@ -172,11 +220,16 @@ constexpr MethodEntry kMethods[] = {
      "the world-space probe grid (seed 001 4.3): radiance cascades over the scene's voxels, "
      "fog and light shafts, later bounces, the radiance cache spwi's come from",
      kGridOptions, true, grid_check, nullptr, grid_bytes, grid_describe, grid_solve, nullptr},
+    {Method::ssrc, "ssrc", "the screen-space radiance cascades",
+     "screen-space radiance cascades (seed 001 4.2): probes and intervals on the screen, filled "
+     "by marching the depth buffer with an occlusion bitmask; sees only what is on screen",
+     kSsrcOptions, true, ssrc_check, ssrc_check_scene, ssrc_bytes, ssrc_describe, ssrc_solve,
+     nullptr},
 };
 constexpr bool in_enum_order() {
   for (std::size_t i = 0; i < std::size(kMethods); ++i)
     if (std::size_t(kMethods[i].method) != i) return false;
-  return std::size(kMethods) == std::size_t(Method::grid) + 1;
+  return std::size(kMethods) == std::size_t(Method::ssrc) + 1;
 }
 static_assert(in_enum_order(), "one entry per Method, indexed by the enum");
 

@@ -238,7 +238,7 @@ TEST_F(Cli3d, GridReportsItsVoxelsAndIsRefusedItsOthersOptions) {
   EXPECT_EQ(nlohmann::json::parse(rays.out)["parameters"]["sun_rays"], 4);
   bad = run({"render", scene_, "--method", "pt", "--sun-rays", "4", "-o", out("x.pfm")});
   EXPECT_EQ(bad.status, 2);
-  EXPECT_NE(bad.err.find("--sun-rays applies to --method spwi or grid only, not pt"),
+  EXPECT_NE(bad.err.find("--sun-rays applies to --method spwi, grid or ssrc only, not pt"),
             std::string::npos)
       << bad.err;
   for (const char* n : {"0", "1025"}) {
@@ -249,11 +249,12 @@ TEST_F(Cli3d, GridReportsItsVoxelsAndIsRefusedItsOthersOptions) {
   // --merge belongs to spwi.
   bad = run({"render", scene_, "--method", "grid", "--merge", "fix", "-o", out("x.pfm")});
   EXPECT_EQ(bad.status, 2);
-  EXPECT_NE(bad.err.find("--merge applies to --method spwi only, not grid"), std::string::npos)
+  EXPECT_NE(bad.err.find("--merge applies to --method spwi or ssrc only, not grid"),
+            std::string::npos)
       << bad.err;
   // --directions belongs to both.
   bad = run({"render", scene_, "--method", "pt", "--directions", "16", "-o", out("x.pfm")});
-  EXPECT_NE(bad.err.find("applies to --method spwi or grid only, not pt"), std::string::npos)
+  EXPECT_NE(bad.err.find("applies to --method spwi, grid or ssrc only, not pt"), std::string::npos)
       << bad.err;
   EXPECT_FALSE(fs::exists(out("x.pfm")));
 }
@@ -314,7 +315,7 @@ TEST_F(Cli3d, OptionsOfTheOtherWorldAreRefused) {
   // Options of the other 3D method.
   r = run({"render", scene_, "--probe-spacing", "2", "-o", out("x.png")});
   EXPECT_EQ(r.status, 2);
-  EXPECT_NE(r.err.find("--probe-spacing applies to --method spwi or grid only, not pt"),
+  EXPECT_NE(r.err.find("--probe-spacing applies to --method spwi, grid or ssrc only, not pt"),
             std::string::npos)
       << r.err;
   r = run({"render", scene_, "--method", "spwi", "--spp", "4", "-o", out("x.png")});

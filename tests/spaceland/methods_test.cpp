@@ -68,7 +68,8 @@ struct Ladder {
   double step;  // (a): each rung's error at most this times the one below
   // The study: relative RMSE measured on each rung, per scene (SceneId order).
   std::array<std::array<double, 3>, kScenes> study;
-  int first_step = 1;  // (a) from this rung on (2: the first step is not a convergence step)
+  int first_step = 1;       // (a) from this rung on (2: the first step is not a convergence step)
+  double max_leak = kLeak;  // what the dark side may get, over the lit side's mean
 };
 
 // SPWI's rungs: h = s0, the cascade-0 probe spacing in pixels, halved with Q0 x 4 (the map's side
@@ -114,6 +115,13 @@ constexpr std::array<Rung, 3> kSpwiRungs{{
 // the lower probe lies in the world), up to 3.3 times the first rung's error (whose shares the
 // gather's cosines make exact, as the default's): (a) asks only the last step (0.66 to 0.73) to
 // be 0.85 or less. Fitted k = -0.64, 0.03, 0.24.
+// ssrc: h = s0 (r0, two probe spacings, halves with it). Not a convergence ladder yet: the
+// screen-space method's error is bounded by its model of what lies behind the depth buffer
+// (a sample solid for a fraction of its depth), not by the probe spacing, and it grows as s0
+// falls (steps 0.86 to 1.41; `step` 1.45 guards against worse). The wall leaks 0.14 to 0.23 of
+// the lit side's light (`max_leak` 0.3): the flatland merge hands a ray to upper probes whose
+// intervals start past the wall (no bilinear fix yet) and the wall's top is solid only for its
+// thickness. Both are issue 38's open items (docs/QUALITY.md, "Screen-space cascades").
 // grid: h = the voxel, halved at the defaults (Q0 16, s0 2, t0 four probe spacings). Fitted
 // k = 0.94, 0.81, 1.48; steps 0.34 to 0.88 (the penumbra's first step is slow), so `step` 1: the
 // error must not grow. The voxels are 0.1 to 0.025 against lights of radius 0.5 (5 to 20 voxels;
@@ -156,6 +164,16 @@ const Ladder kLadders[] = {
        {"voxel 0.025", 0.025, [](RenderOptions& o) { o.grid.voxel = 0.025f; }}}},
      1.0,
      {{{0.6112, 0.3530, 0.1650}, {0.7488, 0.6609, 0.2451}, {1.241, 0.4220, 0.1593}}}},
+    {"ssrc",
+     "",
+     nullptr,
+     {{{"s0 4", 4, [](RenderOptions& o) { o.ssrc.probe_spacing = 4; }},
+       {"s0 2", 2, [](RenderOptions& o) { o.ssrc.probe_spacing = 2; }},
+       {"s0 1", 1, [](RenderOptions& o) { o.ssrc.probe_spacing = 1; }}}},
+     1.45,
+     {{{0.3592, 0.3946, 0.501}, {0.3173, 0.4473, 0.5201}, {0.3869, 0.332, 0.37}}},
+     1,
+     0.3},
 };
 
 bool has_ladder(const std::string& method) {
@@ -408,7 +426,7 @@ void climb(SceneId id, const Case& c) {
         const Errors got = errors(render_ok(c.scene, o).radiance, c);
         e[i] = got.rel_rmse;
         leak = std::max(leak, got.leak);
-        EXPECT_LE(got.leak, kLeak) << rung.label << ": light crossed the wall";
+        EXPECT_LE(got.leak, ladder.max_leak) << rung.label << ": light crossed the wall";
       }
       const Fit f = fit(ladder, id);
       std::printf(
@@ -502,7 +520,8 @@ TEST(Methods, TheTableRefusesWhatItDoesNotHold) {
           m.method == Method::spwi &&
           (field == "grid.voxel" || field == "grid.levels" || field == "cache_probe_spacing");
       const bool sun =
-          field == "sun_rays" && (m.method == Method::spwi || m.method == Method::grid);
+          field == "sun_rays" &&
+          (m.method == Method::spwi || m.method == Method::grid || m.method == Method::ssrc);
       EXPECT_TRUE(own || cache || sun) << m.name << ": " << field;
     }
   }

@@ -19,6 +19,8 @@ enum class Method {
   pt,    // the reference path tracer: converges to the exact radiance the format defines
   spwi,  // screen-space probes with world-space intervals (seed 000, seed 001 section 4.5)
   grid,  // the world-space probe grid (seed 001 section 4.3): radiance cascades over voxels
+  ssrc,  // screen-space radiance cascades (seed 001 section 4.2): probes and intervals on the
+         // screen, filled by marching the depth buffer with an occlusion bitmask
 };
 
 // Where a method runs (--device). No 3D method has a GPU port yet: gpu is refused, naming the
@@ -137,12 +139,34 @@ struct GridOptions {
   bool fix = false;
 };
 
+// Screen-space radiance cascades (docs/METHODS.md, "Screen-space cascades"): cascade i has
+// probes every s0 2^i pixels, Q0 2^i directions in the image plane, each a slice through the
+// sphere about the view vector cut into `sectors`, and marches [r0 2^(i-1), r0 2^i] pixels.
+struct SsrcOptions {
+  int probe_spacing = 0;  // s0, pixels (0: as SPWI derives it, kSpwiSpacing or its half)
+  int directions = 4;     // Q0: screen directions of a cascade-0 probe, a power of two
+  int interval = 0;       // r0, pixels: cascade 0 marches [0, r0] (0: two probe spacings)
+  int cascades = 0;       // 0: until an interval reaches across the image's diagonal
+  // Occlusion sectors per direction, equal angles from the view vector to its opposite: 8, 16
+  // or 32 (a 32, 64 or 128-bit mask for four directions marched together).
+  int sectors = 32;
+  int rays = 4;  // directions marched together: 1, 2 or 4 (the same image; the time differs)
+  // Each depth sample is taken as solid from its surface to this fraction of its linear depth
+  // behind it (1e30: infinitely thick, as horizon-based methods assume).
+  float thickness = 0.05f;
+  SpwiMerge merge = SpwiMerge::bilinear;  // bilinear, bilateral or bilinear3d (as SPWI's)
+  float merge_edge = 0.1f;                // the bilateral merge's edge test (as SPWI's)
+  float gather_edge = 0.05f;              // the final gather's (as SPWI's)
+  float gather_normal = 1;                // the final gather's normal weight exponent
+};
+
 struct RenderOptions {
   Method method = Method::pt;
   Device device = Device::cpu;
   PtOptions pt;
   SpwiOptions spwi;
   GridOptions grid;
+  SsrcOptions ssrc;
   Aov aov = Aov::radiance;
   int bounces = 1;  // 1: direct light only; N: N-1 more diffuse bounces
   // The radiance cache that methods not bouncing themselves (spwi) read their later bounces from:

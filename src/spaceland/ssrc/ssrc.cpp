@@ -1,0 +1,640 @@
+#include "spaceland/ssrc/ssrc.hpp"
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <bit>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "core/math.hpp"
+#include "core/parallel.hpp"
+#include "core/timer.hpp"
+#include "io/json_reader.hpp"
+#include "spaceland/camera.hpp"
+#include "spaceland/shade.hpp"
+#include "spaceland/sky.hpp"
+#include "spaceland/spwi/probes.hpp"
+#include "spaceland/ssrc/depth_pyramid.hpp"
+#include "spaceland/sun.hpp"
+#include "spaceland/surface.hpp"
+
+namespace penumbra::spaceland::ssrc {
+
+namespace {
+
+bool power_of_two(int v) {
+  return v > 0 && (v & (v - 1)) == 0;
+}
+
+// The per-level means the march reads besides the depth pyramid: the mean position and
+// radiance of the hits under each texel, and how many there are (0: only misses).
+struct Means {
+  struct Level {
+    int width = 0, height = 0;
+    std::vector<Vec3> position, normal;  // normal: the mean of unit normals (not unit)
+    std::vector<Rgb> radiance;
+    std::vector<float> count;
+  };
+  std::vector<Level> levels;
+
+  static std::uint64_t bytes_per_texel() { return 2 * sizeof(Vec3) + sizeof(Rgb) + sizeof(float); }
+};
+
+// The levels' positions and counts (the radiance comes per bounce), sized as the depth pyramid.
+Means make_means(const GBuffer& g, const DepthPyramid& depth) {
+  Means m;
+  for (int l = 0; l < depth.levels(); ++l) {
+    Means::Level at;
+    at.width = depth.level(l).width;
+    at.height = depth.level(l).height;
+    const std::size_t n = std::size_t(at.width) * std::size_t(at.height);
+    at.position.assign(n, Vec3{});
+    at.normal.assign(n, Vec3{});
+    at.radiance.assign(n, Rgb{});
+    at.count.assign(n, 0.0f);
+    m.levels.push_back(std::move(at));
+  }
+  Means::Level& base = m.levels[0];
+  for (std::size_t k = 0; k < g.hits.size(); ++k)
+    if (g.found[k]) {
+      base.position[k] = g.hits[k].position;
+      base.normal[k] = g.hits[k].geometric_normal;
+      base.count[k] = 1;
+    }
+  for (std::size_t l = 1; l < m.levels.size(); ++l) {
+    const Means::Level& below = m.levels[l - 1];
+    Means::Level& at = m.levels[l];
+    parallel_for(at.height, [&](int y) {
+      for (int x = 0; x < at.width; ++x) {
+        Vec3 sum{}, normal{};
+        float n = 0;
+        for (int dy = 0; dy < 2; ++dy)
+          for (int dx = 0; dx < 2; ++dx) {
+            const int bx = 2 * x + dx, by = 2 * y + dy;
+            if (bx >= below.width || by >= below.height) continue;
+            const std::size_t k = std::size_t(by) * std::size_t(below.width) + std::size_t(bx);
+            sum = sum + below.position[k] * below.count[k];
+            normal = normal + below.normal[k] * below.count[k];
+            n += below.count[k];
+          }
+        const std::size_t k = std::size_t(y) * std::size_t(at.width) + std::size_t(x);
+        at.count[k] = n;
+        at.position[k] = n > 0 ? sum * (1 / n) : Vec3{};
+        at.normal[k] = n > 0 ? normal * (1 / n) : Vec3{};
+      }
+    });
+  }
+  return m;
+}
+
+// The radiance leaving each visible pixel (level 0) and its means over the levels.
+void fill_radiance(Means& m, const std::vector<Rgb>& pixels) {
+  m.levels[0].radiance = pixels;
+  for (std::size_t l = 1; l < m.levels.size(); ++l) {
+    const Means::Level& below = m.levels[l - 1];
+    Means::Level& at = m.levels[l];
+    parallel_for(at.height, [&](int y) {
+      for (int x = 0; x < at.width; ++x) {
+        Rgb sum{};
+        for (int dy = 0; dy < 2; ++dy)
+          for (int dx = 0; dx < 2; ++dx) {
+            const int bx = 2 * x + dx, by = 2 * y + dy;
+            if (bx >= below.width || by >= below.height) continue;
+            const std::size_t k = std::size_t(by) * std::size_t(below.width) + std::size_t(bx);
+            sum += below.radiance[k] * below.count[k];
+          }
+        const std::size_t k = std::size_t(y) * std::size_t(at.width) + std::size_t(x);
+        at.radiance[k] = at.count[k] > 0 ? sum * (1 / at.count[k]) : Rgb{};
+      }
+    });
+  }
+}
+
+// The camera's frame: screen point (x, y) in pixels (row 0 at the top) at linear depth z is
+// eye + z (f + X r + Y u), and a screen direction (cos phi, sin phi) is the world direction
+// cos phi r - sin phi u.
+struct Frame {
+  Vec3 eye, f, r, u;
+  float width = 1, height = 1, tan_half = 1;
+  // The camera ray through screen point (x, y), scaled so that its component along f is 1: the
+  // point at linear depth z on it is eye + z ray(x, y).
+  Vec3 ray(float x, float y) const {
+    const float sx = (2 * x / width - 1) * tan_half * width / height;
+    const float sy = (1 - 2 * y / height) * tan_half;
+    return f + r * sx + u * sy;
+  }
+  Vec3 screen_direction(double phi) const {
+    return r * float(std::cos(phi)) - u * float(std::sin(phi));
+  }
+};
+
+// The unit vector in the slice of screen direction w about the view vector v, perpendicular to
+// v and towards w.
+Vec3 slice_tangent(Vec3 v, Vec3 w) {
+  return normalize(w - v * dot(v, w));
+}
+
+// The angle of a point (a along the view vector, b along the slice's tangent) from the view
+// vector, in [0, pi]; a point behind the slice's half-plane counts as on its edge.
+inline float slice_angle(float a, float b) {
+  return std::atan2(std::max(b, 0.0f), a);
+}
+
+// The sectors whose centre angle a solid from angle lo to hi covers (lo <= hi), as bits of a
+// mask of n sectors: a sector's radiance stands for its centre's direction, as the final
+// gather's weights take it (so that a plane's own horizon splits its sectors where the gather
+// does, and a uniform sky over it comes out exact).
+inline std::uint32_t sector_bits(float lo, float hi, float sectors_per_radian, int n) {
+  const int k1 = std::max(0, int(std::ceil(lo * sectors_per_radian - 0.5f)));
+  const int k2 = std::min(n - 1, int(std::floor(hi * sectors_per_radian - 0.5f)));
+  if (k1 > k2) return 0;
+  const std::uint64_t upto = (std::uint64_t(2) << k2) - 1;
+  const std::uint64_t below = (std::uint64_t(1) << k1) - 1;
+  return std::uint32_t(upto & ~below);
+}
+
+// How far above a probe's tangent plane, over the distance, a sample counts as on it.
+constexpr float kOnPlane = 0.02f;
+
+// The length of a texel's mean unit normal above which it counts as one surface's.
+constexpr float kFlat = 0.95f;
+
+// What every cascade of a bounce shares.
+struct Shared {
+  const SolveContext& ctx;
+  const SsrcOptions& o;
+  const SpwiOptions& probe_options;
+  const Layout& layout;
+  const Frame& frame;
+  const DepthPyramid& depth;
+  const Means& means;
+  const Background& bg;
+  float sectors_per_radian;
+  std::uint32_t all;                          // every sector's bit
+  std::vector<float> cos_sector, sin_sector;  // at each sector's centre angle
+};
+
+// One direction of a probe being marched: where it runs on the screen, its slice's tangent, the
+// sectors occluded so far and the radiance of each sector.
+struct Ray {
+  float dx = 0, dy = 0;
+  Vec3 t;
+  float horizon = 0;  // the angle of the probe's own tangent plane in the slice
+  std::uint32_t occluded = 0;
+  bool left = false;  // its march left the screen
+  std::array<Rgb, 32> sectors{};
+};
+
+// One cascade, marched and merged with the one above.
+struct Cascade {
+  const Shared& s;
+  int i;
+  const std::vector<spwi::Probe>& probes;
+  const std::vector<spwi::Probe>& upper_probes;
+  const std::vector<Rgb>& upper;
+  std::vector<Rgb>& lower;
+
+  // Marches up to 4 directions together from the probe at screen point (cx, cy), position p,
+  // view vector v: the samples of their interval from the pyramid level of its step.
+  void march(Ray* rays, int n, float cx, float cy, Vec3 p, Vec3 v, Vec3 normal) const {
+    const Layout& l = s.layout;
+    const int level = l.level(i);
+    const double step = double(1 << level);
+    const double a = l.start(i), b = l.end(i);
+    const bool top = l.top(i);
+    const DepthPyramid::Level& dl = s.depth.level(level);
+    const Means::Level& ml = s.means.levels[std::size_t(level)];
+    const int width = s.ctx.g.width, height = s.ctx.g.height;
+    const float half = float(step);
+    const float grow = 1 + s.o.thickness;
+    // The top cascade runs to the screen's edge: at most its diagonal in steps.
+    const int most =
+        top ? int(std::ceil(std::sqrt(double(width) * width + double(height) * height) / step)) + 2
+            : int(std::lround((b - a) / step));
+    int active = n;
+    for (int m = 0; m < most && active > 0; ++m) {
+      const float r = float(a + double(m + 1) * step);
+      for (int j = 0; j < n; ++j) {
+        Ray& ray = rays[j];
+        if (ray.left) continue;
+        const float x = cx + r * ray.dx, y = cy + r * ray.dy;
+        if (!(x >= 0 && y >= 0 && x < float(width) && y < float(height))) {
+          ray.left = true;
+          --active;
+          continue;
+        }
+        const std::size_t k =
+            std::size_t(int(y) >> level) * std::size_t(dl.width) + std::size_t(int(x) >> level);
+        if (!(ml.count[k] > 0)) continue;  // only misses: the sky occludes nothing
+        // The texel as a small plane through its hits' mean position, facing their mean normal,
+        // met by the camera rays at either end of the sample's stretch of the line (its depth
+        // kept within the texel's range above level 0); solid for the thickness behind.
+        const Vec3 mean = ml.position[k], mn = ml.normal[k];
+        const float zc = dot(mean - s.frame.eye, s.frame.f);
+        // A texel of one surface (its normals agree) is its plane; one across an edge is kept
+        // within its depth range.
+        const bool flat = dot(mn, mn) > kFlat * kFlat;
+        const float lo = flat ? 0.5f * zc : dl.lo[k], hi = flat ? 2 * zc : dl.hi[k];
+        float t0 = kPi, t1 = 0;
+        for (float e : {-0.5f, 0.5f}) {
+          const Vec3 g = s.frame.ray(x + e * half * ray.dx, y + e * half * ray.dy);
+          const float den = dot(g, mn);
+          float z = zc;
+          if (std::abs(den) > 1e-6f * length(g) * length(mn)) z = dot(mean - s.frame.eye, mn) / den;
+          z = std::clamp(z, lo, hi);
+          for (float depth : {z, z * grow}) {
+            const Vec3 d = s.frame.eye + g * depth - p;
+            float t = slice_angle(dot(d, v), dot(d, ray.t));
+            // A point on or under the probe's tangent plane (within about a degree: a plane's
+            // own pixels, a convex surface's neighbours) lies below its horizon, where its
+            // angle as projected on the slice might not.
+            if (dot(d, normal) <= kOnPlane * length(d)) t = std::max(t, ray.horizon);
+            t0 = std::min(t0, t);
+            t1 = std::max(t1, t);
+          }
+        }
+        const Rgb* rad = &ml.radiance[k];
+        const std::uint32_t bits = sector_bits(t0, t1, s.sectors_per_radian, l.sectors);
+        std::uint32_t first = bits & ~ray.occluded;
+        if (!first) continue;
+        ray.occluded |= bits;
+        const Rgb& radiance = *rad;
+        for (; first; first &= first - 1)
+          ray.sectors[std::size_t(std::countr_zero(first))] += radiance;
+      }
+    }
+    if (top)
+      for (int j = 0; j < n; ++j) rays[j].left = true;
+  }
+
+  // The open sectors of a ray that left the screen see the sky.
+  void sky(Ray& ray, Vec3 v) const {
+    const int n = s.layout.sectors;
+    for (int k = 0; k < n; ++k) {
+      if (ray.occluded >> k & 1u) continue;
+      const Vec3 d = v * s.cos_sector[std::size_t(k)] + ray.t * s.sin_sector[std::size_t(k)];
+      ray.sectors[std::size_t(k)] += s.bg.sky(d);
+    }
+  }
+
+  // Which sectors of the slice about view vector v with tangent t lie above the plane of normal
+  // n (each at its centre's direction).
+  std::uint32_t above(Vec3 v, Vec3 n, Vec3 t) const {
+    const float nv = dot(n, v), nt = dot(n, t);
+    std::uint32_t bits = 0;
+    for (int k = 0; k < s.layout.sectors; ++k)
+      if (nv * s.cos_sector[std::size_t(k)] + nt * s.sin_sector[std::size_t(k)] > 0)
+        bits |= 1u << k;
+    return bits;
+  }
+
+  // For each sector, the nearest of `valid`'s sectors (itself where valid; every sector maps to
+  // itself where none is).
+  std::array<std::uint8_t, 32> nearest(std::uint32_t valid) const {
+    const int n = s.layout.sectors;
+    std::array<std::uint8_t, 32> to{};
+    for (int k = 0; k < n; ++k) to[std::size_t(k)] = std::uint8_t(k);
+    if (!valid) return to;
+    for (int k = 0; k < n; ++k) {
+      if (valid >> k & 1u) continue;
+      for (int d = 1; d < n; ++d) {
+        if (k - d >= 0 && (valid >> (k - d) & 1u)) {
+          to[std::size_t(k)] = std::uint8_t(k - d);
+          break;
+        }
+        if (k + d < n && (valid >> (k + d) & 1u)) {
+          to[std::size_t(k)] = std::uint8_t(k + d);
+          break;
+        }
+      }
+    }
+    return to;
+  }
+
+  // The open sectors of a ray take the upper probes' radiance in its direction: per sector, the
+  // mean of its two children (flatland's merge, sector by sector).
+  void merge(Ray& ray, int dir, const cascade::Corners& c) const {
+    const std::size_t sectors = std::size_t(s.layout.sectors);
+    const int up_dirs = s.layout.directions(i + 1);
+    const std::uint32_t open = ~ray.occluded & s.all;
+    if (!open) return;
+    for (int q = 0; q < c.n; ++q) {
+      const float w = 0.5f * c.w[std::size_t(q)];
+      if (!(w > 0)) continue;
+      const Rgb* a = upper.data() + (std::size_t(c.index[std::size_t(q)]) * std::size_t(up_dirs) +
+                                     std::size_t(2 * dir)) *
+                                        sectors;
+      const Rgb* b = a + sectors;
+      for (std::uint32_t bits = open; bits; bits &= bits - 1) {
+        const std::size_t k = std::size_t(std::countr_zero(bits));
+        ray.sectors[k] += (a[k] + b[k]) * w;
+      }
+    }
+  }
+
+  // A ray's sectors below its probe's surface hold that surface's own light (its samples occlude
+  // there) or the sky under it, which no direction above the surface sees; they take the value
+  // of the nearest sector above it. The rays below, whose directions all lie above their own
+  // surfaces, merge with these: on a plane the horizon's angle changes across a direction's wedge
+  // and from probe to probe (their view vectors differ), and the sectors as traced would darken
+  // every sector near it.
+  void extend_over_horizon(Ray& ray, Vec3 v, Vec3 n) const {
+    const std::array<std::uint8_t, 32> to = nearest(above(v, n, ray.t));
+    for (int k = 0; k < s.layout.sectors; ++k)
+      if (to[std::size_t(k)] != k) ray.sectors[std::size_t(k)] = ray.sectors[to[std::size_t(k)]];
+  }
+
+  void probe(int px, int py) const {
+    const Layout& l = s.layout;
+    const std::uint64_t q =
+        std::uint64_t(py) * std::uint64_t(l.tiles.nx[std::size_t(i)]) + std::uint64_t(px);
+    const spwi::Probe& pr = probes[std::size_t(q)];
+    if (!pr.valid) return;
+    const int spacing = l.tiles.spacing(i);
+    const int x = std::min(px * spacing + spacing / 2, s.ctx.g.width - 1);
+    const int y = std::min(py * spacing + spacing / 2, s.ctx.g.height - 1);
+    const float cx = float(x) + 0.5f, cy = float(y) + 0.5f;
+    const Vec3 v = normalize(s.frame.eye - pr.p);
+    cascade::Corners c;
+    const bool merges =
+        !l.top(i) &&
+        spwi::upper_corners(l.tiles, i + 1, spwi::tile_centre(px, spacing),
+                            spwi::tile_centre(py, spacing), pr, upper_probes, s.probe_options, c);
+    const int dirs = l.directions(i);
+    Rgb* out = lower.data() + std::size_t(q) * std::size_t(dirs) * std::size_t(l.sectors);
+    std::array<Ray, 4> rays;
+    for (int first = 0; first < dirs; first += l.rays) {
+      const int n = std::min(l.rays, dirs - first);
+      for (int j = 0; j < n; ++j) {
+        const double phi = 2 * kPi * (first + j + 0.5) / dirs;
+        Ray& ray = rays[std::size_t(j)];
+        ray = Ray{};
+        ray.dx = float(std::cos(phi));
+        ray.dy = float(std::sin(phi));
+        ray.t = slice_tangent(v, s.frame.screen_direction(phi));
+        ray.horizon = std::atan2(dot(pr.n, v), -dot(pr.n, ray.t));
+      }
+      march(rays.data(), n, cx, cy, pr.p, v, pr.n);
+      for (int j = 0; j < n; ++j) {
+        Ray& ray = rays[std::size_t(j)];
+        if (ray.left || !merges)
+          sky(ray, v);
+        else
+          merge(ray, first + j, c);
+        extend_over_horizon(ray, v, pr.n);
+
+        std::copy(ray.sectors.begin(), ray.sectors.begin() + l.sectors,
+                  out + std::size_t(first + j) * std::size_t(l.sectors));
+      }
+    }
+  }
+
+  void run() const {
+    const int nx = s.layout.tiles.nx[std::size_t(i)];
+    parallel_for(s.layout.tiles.ny[std::size_t(i)], [&](int py) {
+      for (int px = 0; px < nx; ++px) probe(px, py);
+    });
+  }
+};
+
+// The final gather: per pixel, the weight of each cascade-0 direction's sectors for its normal
+// (the cosine over each sector's solid angle, at the direction's own screen angle, where its
+// probes' horizons split the sectors), then the depth- and normal-weighted cascade-0 probes
+// around it; the cosine-weighted mean radiance over the pixel's hemisphere (false: no probe).
+struct Gather {
+  const Shared& s;
+  const std::vector<spwi::Probe>& probes;
+  const std::vector<Rgb>& store;
+  std::vector<Vec3> screen;  // each cascade-0 direction in the world
+
+  bool operator()(int x, int y, std::size_t k, const Hit& h, Rgb& mean) const {
+    const Layout& l = s.layout;
+    cascade::Corners c;
+    if (!spwi::gather_corners(l.tiles, x, y, s.ctx.g.linear_depth(k), h.geometric_normal, probes,
+                              s.probe_options, c))
+      return false;
+    const Vec3 v = -s.ctx.g.directions[k];
+    const Vec3 n = h.shading_normal;
+    const float nv = dot(n, v);
+    const int dirs = l.q0, sectors = l.sectors;
+    std::array<float, 64 * 32> w{};  // per direction and sector (q0 <= 64)
+    float total = 0;
+    for (int d = 0; d < dirs; ++d) {
+      const float nt = dot(n, slice_tangent(v, screen[std::size_t(d)]));
+      float* wd = w.data() + std::size_t(d * sectors);
+      for (int k = 0; k < sectors; ++k) {
+        const float f = nv * s.cos_sector[std::size_t(k)] + nt * s.sin_sector[std::size_t(k)];
+        if (f > 0) wd[k] = f * s.sin_sector[std::size_t(k)];
+      }
+    }
+    for (int d = 0; d < dirs * sectors; ++d) total += w[std::size_t(d)];
+    if (!(total > 0)) return false;
+    Rgb sum{};
+    for (int j = 0; j < c.n; ++j) {
+      const float cw = c.w[std::size_t(j)];
+      if (!(cw > 0)) continue;
+      const Rgb* p =
+          store.data() + std::size_t(c.index[std::size_t(j)]) * std::size_t(dirs * sectors);
+      Rgb e{};
+      for (int d = 0; d < dirs * sectors; ++d) e += p[d] * w[std::size_t(d)];
+      sum += e * cw;
+    }
+    mean = sum * (1 / total);
+    return true;
+  }
+};
+
+std::string mib(std::uint64_t bytes) {
+  return io::format_rounded(double(bytes) / double(1 << 20)) + " MiB";
+}
+
+}  // namespace
+
+Layout make_layout(int width, int height, const SsrcOptions& o) {
+  Layout l;
+  SpwiOptions so;
+  so.probe_spacing = o.probe_spacing;
+  l.tiles.width = width;
+  l.tiles.height = height;
+  l.tiles.levels.spacing0 = spwi::probe_spacing_for(so, width, height);
+  l.tiles.levels.spacing_step = 1;
+  l.q0 = o.directions;
+  l.r0 = o.interval > 0 ? o.interval : 2 * l.tiles.levels.spacing0;
+  l.sectors = o.sectors;
+  l.rays = o.rays;
+  int count = o.cascades;
+  if (count == 0) {
+    const double diagonal = std::sqrt(double(width) * width + double(height) * height);
+    count = cascade::count_until(cascade::kMaxCascades,
+                                 [&](int i) { return double(l.r0) * double(1u << i) < diagonal; });
+  }
+  l.tiles.levels.count = count;
+  for (int i = 0; i < count; ++i) {
+    const int s = l.tiles.spacing(i);
+    l.tiles.nx.push_back((width + s - 1) / s);
+    l.tiles.ny.push_back((height + s - 1) / s);
+  }
+  return l;
+}
+
+std::uint64_t Layout::bytes() const {
+  std::uint64_t largest = 0, probe_bytes = 0;
+  for (int i = 0; i < count(); ++i) {
+    largest = std::max(largest, values(i));
+    probe_bytes += probes(i) * sizeof(spwi::Probe);
+  }
+  const std::uint64_t pixels = std::uint64_t(tiles.width) * std::uint64_t(tiles.height);
+  const std::uint64_t pyramid = DepthPyramid::bytes(tiles.width, tiles.height);
+  // The depth pyramid (2 floats a texel) and the means over the same texels; per pixel the sun,
+  // the samples' radiance and a bounce's image.
+  return 2 * largest * sizeof(Rgb) + probe_bytes + pyramid +
+         pyramid / (2 * sizeof(float)) * Means::bytes_per_texel() + 3 * pixels * sizeof(Rgb);
+}
+
+Status check_options(const SsrcOptions& o) {
+  if (o.probe_spacing < 0 || o.probe_spacing > 64)
+    return Error{"`ssrc.probe_spacing`: expected 1..64 pixels (0: derived), found " +
+                 std::to_string(o.probe_spacing)};
+  if (!power_of_two(o.directions) || o.directions > 64)
+    return Error{"`ssrc.directions`: expected a power of two from 1 to 64, found " +
+                 std::to_string(o.directions)};
+  if (o.interval < 0 || o.interval > 4096)
+    return Error{"`ssrc.interval`: expected 1..4096 pixels (0: derived), found " +
+                 std::to_string(o.interval)};
+  if (o.cascades < 0 || o.cascades > cascade::kMaxCascades)
+    return Error{"`ssrc.cascades`: expected 0.." + std::to_string(cascade::kMaxCascades) +
+                 " (0: derived), found " + std::to_string(o.cascades)};
+  if (o.sectors != 8 && o.sectors != 16 && o.sectors != 32)
+    return Error{"`ssrc.sectors`: expected 8, 16 or 32 sectors per direction, found " +
+                 std::to_string(o.sectors)};
+  if (o.rays != 1 && o.rays != 2 && o.rays != 4)
+    return Error{"`ssrc.rays`: expected 1, 2 or 4 directions marched together, found " +
+                 std::to_string(o.rays)};
+  if (!(o.thickness >= 0) || !std::isfinite(o.thickness))
+    return Error{"`ssrc.thickness`: expected a fraction of the depth >= 0, found " +
+                 io::format_number(o.thickness)};
+  if (o.merge != SpwiMerge::bilinear && o.merge != SpwiMerge::bilateral &&
+      o.merge != SpwiMerge::bilinear3d)
+    return Error{"`ssrc.merge`: expected bilinear, bilateral or bilinear3d, found " +
+                 std::string(to_string(o.merge))};
+  if (!(o.merge_edge >= 0) || !(o.gather_edge >= 0) || !std::isfinite(o.merge_edge) ||
+      !std::isfinite(o.gather_edge))
+    return Error{"`ssrc.merge_edge` and `ssrc.gather_edge`: expected numbers >= 0"};
+  if (!(o.gather_normal >= 0 && o.gather_normal <= 64))
+    return Error{"`ssrc.gather_normal`: expected an exponent in [0, 64], found " +
+                 io::format_number(o.gather_normal)};
+  return {};
+}
+
+Status check_scene(const Scene& scene) {
+  if (!scene.media.empty())
+    return Error{"ssrc cannot carry fog: the scene has " + std::to_string(scene.media.size()) +
+                 " medium box(es); use --method pt or grid"};
+  return {};
+}
+
+Expected<ImageRgb> render(const SolveContext& ctx, const SsrcOptions& o, const Layout& layout,
+                          SolveReport& report) {
+  const std::uint64_t need = layout.bytes();
+  report.memory_bytes += need;
+  if (need > ctx.max_memory)
+    return Error{"ssrc's cascades need about " + mib(need) +
+                 ", more than the `max_memory` limit of " + mib(ctx.max_memory)};
+  const GBuffer& g = ctx.g;
+  const std::size_t pixels = std::size_t(g.width) * std::size_t(g.height);
+  const CameraRays camera(ctx.scene.camera);
+  const Frame frame{camera.origin(),
+                    camera.forward(),
+                    camera.right(),
+                    camera.up(),
+                    float(g.width),
+                    float(g.height),
+                    float(camera.tan_half_fov())};
+  const Background bg(ctx.scene);
+
+  Stopwatch watch;
+  const DepthPyramid depth = DepthPyramid::build(g);
+  Means means = make_means(g, depth);
+  report.stages.push_back({"pyramid", watch.ms()});
+
+  // Per pixel: the emission and the sun's light reflected there (exact shadow rays), the light
+  // every bounce starts from.
+  watch = Stopwatch();
+  std::vector<Rgb> direct(pixels), albedo(pixels);
+  {
+    const SunLight sun(ctx.scene, ctx.rays, ctx.sun_rays);
+    std::atomic<std::uint64_t> rays{0};
+    parallel_for(g.height, [&](int y) {
+      std::uint64_t local = 0;
+      for (int x = 0; x < g.width; ++x) {
+        const std::size_t k = std::size_t(y) * std::size_t(g.width) + std::size_t(x);
+        if (!g.found[k]) continue;
+        albedo[k] = albedo_at(ctx.scene, g.hits[k]);
+        direct[k] = emission_at(ctx.scene, g.hits[k]);
+        if (sun.on()) direct[k] += sun.reflected(g.hits[k], albedo[k], local);
+      }
+      rays.fetch_add(local, std::memory_order_relaxed);
+    });
+    report.rays += rays.load();
+  }
+  report.stages.push_back({"sun", watch.ms()});
+
+  SpwiOptions probe_options;
+  probe_options.merge = o.merge;
+  probe_options.merge_edge = o.merge_edge;
+  probe_options.gather_edge = o.gather_edge;
+  probe_options.gather_normal = o.gather_normal;
+  probe_options.depth_bias = 1;
+
+  Shared s{ctx, o, probe_options, layout, frame, depth, means, bg, 0, 0, {}, {}};
+  s.sectors_per_radian = float(layout.sectors / kPi);
+  s.all = std::uint32_t((std::uint64_t(1) << layout.sectors) - 1);
+  for (int k = 0; k < layout.sectors; ++k) {
+    const double theta = (k + 0.5) * kPi / layout.sectors;
+    s.cos_sector.push_back(float(std::cos(theta)));
+    s.sin_sector.push_back(float(std::sin(theta)));
+  }
+
+  std::vector<Rgb> radiance = direct;
+  ImageRgb img;
+  for (int bounce = 1; bounce <= ctx.bounces; ++bounce) {
+    const std::string of = ctx.bounces > 1 ? " (bounce " + std::to_string(bounce) + ")" : "";
+    fill_radiance(means, radiance);
+    std::vector<Rgb> upper, lower;
+    std::vector<spwi::Probe> upper_probes, probes;
+    for (int i = layout.count() - 1; i >= 0; --i) {
+      watch = Stopwatch();
+      probes = spwi::place_probes(ctx.scene, g, layout.tiles, i, probe_options);
+      lower = {};
+      lower.assign(std::size_t(layout.values(i)), Rgb{});
+      const Cascade cascade{s, i, probes, upper_probes, upper, lower};
+      cascade.run();
+      upper = {};
+      std::swap(upper, lower);
+      std::swap(upper_probes, probes);
+      report.stages.push_back({"cascade " + std::to_string(i) + of, watch.ms()});
+    }
+    watch = Stopwatch();
+    Gather gather{s, upper_probes, upper, {}};
+    for (int d = 0; d < layout.q0; ++d)
+      gather.screen.push_back(frame.screen_direction(2 * kPi * (d + 0.5) / layout.q0));
+    std::uint64_t traced = 0;
+    img =
+        shade_pixels(g, bg, traced, [&](int x, int y, std::size_t k, const Hit& h, std::uint64_t&) {
+          Rgb l = direct[k], mean;
+          if (gather(x, y, k, h, mean)) l += albedo[k] * mean;
+          return l;
+        });
+    report.stages.push_back({"gather" + of, watch.ms()});
+    if (bounce < ctx.bounces)
+      for (std::size_t k = 0; k < pixels; ++k)
+        if (g.found[k])
+          radiance[k] = img.at(int(k % std::size_t(g.width)), int(k / std::size_t(g.width)));
+  }
+  return img;
+}
+
+}  // namespace penumbra::spaceland::ssrc

@@ -1,0 +1,62 @@
+// Screen-space radiance cascades (seed 001 section 4.2, the Path of Exile 2 variant): probes on
+// the G-buffer as SPWI places them (spwi/probes.hpp), cascade i every s0 2^i pixels with Q0 2^i
+// directions in the image plane, each direction a slice through the sphere about the probe's
+// view vector cut into equal-angle sectors. A cascade's interval is marched along the screen
+// through the depth pyramid's level of its step; each depth sample, solid for a thickness behind
+// it, sets the sectors it covers in an occlusion bitmask and adds its radiance to those it covers
+// first. Merged top down: the sectors a lower interval leaves open take the upper probes'
+// radiance (flatland's merge per sector); what leaves the screen sees the sky. docs/METHODS.md,
+// "Screen-space cascades".
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "penumbra/error.hpp"
+#include "penumbra/image.hpp"
+#include "penumbra/spaceland/render.hpp"
+#include "spaceland/gbuffer.hpp"
+#include "spaceland/solve.hpp"
+#include "spaceland/spwi/spwi.hpp"
+
+namespace penumbra::spaceland::ssrc {
+
+struct Layout {
+  spwi::Layout tiles;  // the probe tiles of each cascade (levels.spacing*, nx, ny)
+  int q0 = 4;          // screen directions of cascade 0
+  int r0 = 8;          // cascade 0's interval, pixels
+  int sectors = 32;    // per direction: occlusion bits, each with its radiance
+  int rays = 4;        // directions marched together
+
+  int count() const { return tiles.count(); }
+  int directions(int i) const { return q0 << i; }
+  // Cascade i's interval in pixels along the screen: [0, r0], then [r0 2^(i-1), r0 2^i]; the
+  // top one runs to the screen's edge.
+  double start(int i) const { return i == 0 ? 0.0 : double(r0) * double(1u << (i - 1)); }
+  double end(int i) const { return double(r0) * double(1u << i); }
+  bool top(int i) const { return i == count() - 1; }
+  // The depth pyramid's level its samples read: 2^level pixels apart, r0 samples an interval.
+  int level(int i) const { return i == 0 ? 0 : i - 1; }
+  std::uint64_t probes(int i) const { return tiles.probes(i); }
+  // Radiance values (RGB) of cascade i: per probe, direction and sector.
+  std::uint64_t values(int i) const {
+    return probes(i) * std::uint64_t(directions(i)) * std::uint64_t(sectors);
+  }
+  // Working memory: two cascades' stores, the probes, the pyramids and the per-pixel buffers.
+  std::uint64_t bytes() const;
+};
+
+// The layout for a width x height image, derived values filled in.
+Layout make_layout(int width, int height, const SsrcOptions& o);
+
+// The options' ranges and combinations, fields named as in SsrcOptions (`ssrc.sectors`).
+Status check_options(const SsrcOptions& o);
+// What the scene adds: the screen carries no fog.
+Status check_scene(const Scene& scene);
+
+// Renders the camera's image at ctx.bounces: each later bounce marches the previous bounce's
+// image as the samples' radiance. Refuses (Error) work whose layout passes ctx.max_memory.
+Expected<ImageRgb> render(const SolveContext& ctx, const SsrcOptions& o, const Layout& layout,
+                          SolveReport& report);
+
+}  // namespace penumbra::spaceland::ssrc

@@ -407,7 +407,7 @@ std::unique_ptr<RenderCommand> add_render_command(CLI::App& app) {
     add_enum_option(render, "--merge", a.spwi.merge,
                     {sl::SpwiMerge::bilinear, sl::SpwiMerge::bilateral, sl::SpwiMerge::bilinear3d,
                      sl::SpwiMerge::fix, sl::SpwiMerge::minmax},
-                    "3D spwi (ssrc: the first three; default bilinear): merging with the upper "
+                    "3D spwi (ssrc: the first three; default bilateral): merging with the upper "
                     "cascade: bilinear, bilateral (depth edges), bilinear3d (world-space lines), "
                     "fix (trace to each upper probe's interval start), minmax (probes on each "
                     "tile's nearest and farthest surface)");
@@ -450,6 +450,15 @@ std::unique_ptr<RenderCommand> add_render_command(CLI::App& app) {
         ->check(CLI::IsMember({8, 16, 32}))
         ->capture_default_str();
     render
+        ->add_option("--steps", a.ssrc.steps,
+                     "3D ssrc: samples an interval at least (each cascade reads the finest "
+                     "depth-pyramid level that leaves this many)")
+        ->check(CLI::Range(1, 256))
+        ->capture_default_str();
+    render->add_flag("--backfaces", a.ssrc.backfaces,
+                     "3D ssrc: a depth sample is solid to where its camera ray leaves its object "
+                     "(one more ray a pixel), --thickness only where nothing of it lies behind");
+    render
         ->add_option("--march-rays", a.ssrc.rays,
                      "3D ssrc: screen directions marched together: 1, 2 or 4 (the same image)")
         ->check(CLI::IsMember({1, 2, 4}))
@@ -460,10 +469,10 @@ std::unique_ptr<RenderCommand> add_render_command(CLI::App& app) {
                      "(1e30: infinitely thick, as horizon-based methods assume)")
         ->check(real_range(0, 1e30))
         ->capture_default_str();
-    add_enum_option(render, "--gather", a.spwi.gather,
-                    {sl::SpwiGather::pixel, sl::SpwiGather::probe},
-                    "3D spwi: the final gather averages each probe's directions per pixel, over "
-                    "the pixel's hemisphere (pixel), or once per probe, over its own (probe)");
+    add_enum_option(
+        render, "--gather", a.spwi.gather, {sl::SpwiGather::pixel, sl::SpwiGather::probe},
+        "3D spwi and ssrc: the final gather averages each probe's directions per pixel, over "
+        "the pixel's hemisphere (pixel), or once per probe, over its own (probe)");
     render
         ->add_option("--depth-bias", a.spwi.depth_bias,
                      "3D spwi: probes moved to this fraction of their depth (seed 000: 0.98)")

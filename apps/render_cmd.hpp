@@ -29,6 +29,7 @@ struct RenderArgs {
   // 3D ssrc: its own options (--sectors, --march-rays, --thickness); those it shares with spwi
   // and 2D's cascades are copied when given.
   penumbra::spaceland::SsrcOptions ssrc;
+
   int cache_probe_spacing = penumbra::spaceland::RenderOptions{}.cache_probe_spacing;
   int sun_rays = penumbra::spaceland::RenderOptions{}.sun_rays;
   bool disjoint = false;  // --disjoint: spwi's thesis intervals (SpwiOptions::overlap off)

@@ -80,7 +80,7 @@ void add_render_options(CLI::App* app, RenderOptions& options, RenderOptionFlags
            "--interval", rc.interval,
            "Cascade-0 interval length t0: cells in 2D (default " + n(rc.interval) +
                "); world units in 3D (default: spwi, four probe spacings at the median depth; "
-               "grid, four probe spacings); whole pixels in 3D ssrc (default two probe "
+               "grid, four probe spacings); whole pixels in 3D ssrc (default four probe "
                "spacings)")
         ->check(real_above(0, false));
     app->add_option("--cascades", rc.cascades,
@@ -222,6 +222,7 @@ const std::pair<const char*, const char*> kFlags[] = {
     {"`ssrc.directions`", "--directions"},
     {"`ssrc.interval`", "--interval"},
     {"`ssrc.cascades`", "--cascades"},
+    {"`ssrc.steps`", "--steps"},
     {"`ssrc.sectors`", "--sectors"},
     {"`ssrc.rays`", "--march-rays"},
     {"`ssrc.thickness`", "--thickness"},
@@ -240,8 +241,10 @@ const std::pair<const char*, const char*> kFlags[] = {
     // Fields no message names, listed for the 3D methods' option groups (flags_of).
     {"`spwi.merge`", "--merge"},
     {"`ssrc.merge`", "--merge"},
+    {"`ssrc.backfaces`", "--backfaces"},
     {"`spwi.sun`", "--sun"},
     {"`spwi.gather`", "--gather"},
+    {"`ssrc.gather`", "--gather"},
     {"`spwi.overlap`", "--disjoint"},
     {"`grid.extend_length`", "--extend"},
     {"`grid.fix`", "--fix"},

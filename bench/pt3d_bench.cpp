@@ -1,6 +1,8 @@
 // The 3D methods on the example scenes: the path tracer's samples and rays per second, and
-// SPWI's time and rays per second, on one thread and on all, so that a change to a method or to
-// the ray queries shows in both.
+// SPWI's and the screen-space cascades' time and rays per second, on one thread and on all, so
+// that a change to a method or to the ray queries shows in both; ssrc and SPWI on the same
+// 1920x1080 frame (issue 38's aim), and ssrc with 2 or 200 of 200 spheres emitting (its cost
+// does not depend on the lights).
 #include <benchmark/benchmark.h>
 
 #include <cstdio>
@@ -83,5 +85,67 @@ BENCHMARK(BM_Spwi3d)
     ->ArgsProduct({{0, 1, 2}, {1, 0}})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
+
+// The screen-space cascades at their defaults. Args: example, threads (0: all).
+void BM_Ssrc3d(benchmark::State& state) {
+  RenderOptions o;
+  o.method = Method::ssrc;
+  o.threads = int(state.range(1));
+  run(state, example(int(state.range(0))), o, kExamples[state.range(0)].name);
+}
+BENCHMARK(BM_Ssrc3d)
+    ->ArgsProduct({{0, 1, 2}, {1, 0}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+// The Cornell box at 1920x1080 on all threads, by ssrc (arg 0) and SPWI (arg 1): one frame each.
+void BM_FullHd3d(benchmark::State& state) {
+  Scene s = example(0);
+  s.camera.width = 1920;
+  s.camera.height = 1080;
+  RenderOptions o;
+  o.method = state.range(0) == 0 ? Method::ssrc : Method::spwi;
+  run(state, s, o, std::string("cornell 1920x1080, ") + to_string(o.method));
+}
+BENCHMARK(BM_FullHd3d)->Arg(0)->Arg(1)->Iterations(1)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// 200 spheres of radius 0.1 on a floor seen from above, `emitting` of them lights (the rest
+// grey): the screen-space cascades' time must not depend on it. Arg: emitting (2 or 200).
+Scene spheres(int emitting) {
+  Scene s;
+  s.camera.position = {0, 8, 4};
+  s.camera.look_at = {0, 0, 0};
+  s.camera.width = 640;
+  s.camera.height = 360;
+  Material grey, light;
+  grey.name = "grey";
+  grey.albedo = {0.5f, 0.5f, 0.5f};
+  light.name = "light";
+  light.emission = {4, 3, 2};
+  s.materials = {grey, light};
+  Disk floor;
+  floor.radius = 20;
+  floor.material = 0;
+  floor.object = 0;
+  s.disks.push_back(floor);
+  s.objects.push_back("objects[0] (disk)");
+  for (int k = 0; k < 200; ++k) {
+    Sphere b;
+    b.center = {float(k % 20) * 0.5f - 4.75f, 0.1f, float(k / 20) * 0.5f - 2.25f};
+    b.radius = 0.1f;
+    b.material = k % (200 / emitting) == 0 ? 1 : 0;
+    b.object = int(s.objects.size());
+    s.objects.push_back("objects[" + std::to_string(s.objects.size()) + "] (sphere)");
+    s.spheres.push_back(b);
+  }
+  return s;
+}
+void BM_Ssrc3dLights(benchmark::State& state) {
+  const Scene s = spheres(int(state.range(0)));
+  RenderOptions o;
+  o.method = Method::ssrc;
+  run(state, s, o, std::to_string(state.range(0)) + " of 200 spheres emitting");
+}
+BENCHMARK(BM_Ssrc3dLights)->Arg(2)->Arg(200)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace

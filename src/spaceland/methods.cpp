@@ -162,9 +162,9 @@ Expected<ImageRgb> grid_solve(const SolveContext& ctx, const RenderOptions& o, S
 // ---- ssrc: screen-space radiance cascades (seed 001 section 4.2) ----
 
 constexpr const char* kSsrcOptions[] = {
-    "ssrc.probe_spacing", "ssrc.directions",  "ssrc.interval",      "ssrc.cascades",
-    "ssrc.sectors",       "ssrc.rays",        "ssrc.thickness",     "ssrc.merge",
-    "ssrc.merge_edge",    "ssrc.gather_edge", "ssrc.gather_normal", "sun_rays"};
+    "ssrc.probe_spacing", "ssrc.directions", "ssrc.interval",    "ssrc.cascades",      "ssrc.steps",
+    "ssrc.backfaces",     "ssrc.sectors",    "ssrc.rays",        "ssrc.thickness",     "ssrc.merge",
+    "ssrc.merge_edge",    "ssrc.gather",     "ssrc.gather_edge", "ssrc.gather_normal", "sun_rays"};
 
 Status ssrc_check(const RenderOptions& o) {
   return ssrc::check_options(o.ssrc);
@@ -184,17 +184,21 @@ void ssrc_describe(const RenderResult& r, std::vector<Parameter>& p, std::string
   p.push_back({"directions", std::int64_t(o.directions)});
   p.push_back({"interval", std::int64_t(o.interval)});
   p.push_back({"cascades", std::int64_t(o.cascades)});
+  p.push_back({"steps", std::int64_t(o.steps)});
   p.push_back({"sectors", std::int64_t(o.sectors)});
   p.push_back({"rays", std::int64_t(o.rays)});
+  p.push_back({"backfaces", o.backfaces});
   p.push_back({"thickness", double(o.thickness)});
   p.push_back({"merge", std::string(to_string(o.merge))});
   p.push_back({"merge_edge", double(o.merge_edge)});
+  p.push_back({"gather", std::string(to_string(o.gather))});
   p.push_back({"gather_edge", double(o.gather_edge)});
   p.push_back({"gather_normal", double(o.gather_normal)});
   p.push_back({"sun_rays", std::int64_t(r.options.sun_rays)});
   line = ", " + std::to_string(o.cascades) + " cascades, s0 " + std::to_string(o.probe_spacing) +
          " px, r0 " + std::to_string(o.interval) + " px, " + std::to_string(o.sectors) +
-         " sectors, thickness " + io::format_rounded(o.thickness);
+         " sectors, " + std::to_string(o.steps) + " steps, " +
+         (o.backfaces ? "back faces" : "thickness " + io::format_rounded(o.thickness));
 }
 
 Expected<ImageRgb> ssrc_solve(const SolveContext& ctx, const RenderOptions& o, SolveReport& report,

@@ -261,6 +261,37 @@ TEST_F(Cli3d, GridReportsItsVoxelsAndIsRefusedItsOthersOptions) {
 
 // SPWI's and the grid's option values are usage errors (exit 2) named by their flags, checked
 // before the scene is read, as 2D's are.
+TEST_F(Cli3d, SsrcRendersAndReportsItsLayout) {
+  const auto r = run({"render", scene_, "--method", "ssrc", "--sectors", "16", "--march-rays", "2",
+                      "--backfaces", "--gather", "pixel", "--json", "-o", out("s.pfm")});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["method"], "ssrc");
+  const nlohmann::json& p = j["parameters"];
+  EXPECT_EQ(p["sectors"], 16);
+  EXPECT_EQ(p["rays"], 2);
+  EXPECT_EQ(p["backfaces"], true);
+  EXPECT_EQ(p["gather"], "pixel");
+  EXPECT_EQ(p["interval"].get<int>(), 4 * p["probe_spacing"].get<int>());  // derived
+  EXPECT_GE(p["cascades"].get<int>(), 2);
+  EXPECT_TRUE(j["stages"].contains("back faces"));
+  EXPECT_TRUE(fs::exists(out("s.pfm")));
+  // Options of other methods are refused by name, and fog by the method.
+  const auto bad =
+      run({"render", scene_, "--method", "ssrc", "--voxel", "0.5", "-o", out("x.pfm")});
+  EXPECT_EQ(bad.status, 2);
+  EXPECT_NE(bad.err.find("--voxel applies to --method spwi or grid only, not ssrc"),
+            std::string::npos)
+      << bad.err;
+  const auto thick =
+      run({"render", scene_, "--method", "spwi", "--thickness", "0.1", "-o", out("x.pfm")});
+  EXPECT_EQ(thick.status, 2);
+  EXPECT_NE(thick.err.find("--thickness applies to --method ssrc only, not spwi"),
+            std::string::npos)
+      << thick.err;
+  EXPECT_FALSE(fs::exists(out("x.pfm")));
+}
+
 TEST_F(Cli3d, BadMethodOptionValuesAreUsageErrorsNamingTheFlag) {
   const std::vector<std::vector<std::string>> cases = {
       {"spwi", "--directions", "8", "--directions: expected the square of a power of two"},
@@ -268,6 +299,11 @@ TEST_F(Cli3d, BadMethodOptionValuesAreUsageErrorsNamingTheFlag) {
       {"spwi", "--branching", "2", "--branching: expected 4 or 16"},
       {"grid", "--directions", "8", "--directions: expected the square of a power of two"},
       {"grid", "--cascades", "13", "--cascades: expected 0..12"},
+      {"ssrc", "--directions", "6", "--directions: expected a power of two"},
+      {"ssrc", "--merge", "fix", "--merge: expected bilinear, bilateral or bilinear3d"},
+      {"ssrc", "--interval", "2.5", "--interval for ssrc is a whole number of pixels"},
+      {"ssrc", "--sectors", "12", "--sectors"},
+      {"ssrc", "--march-rays", "3", "--march-rays"},
   };
   for (const auto& c : cases) {
     const auto r = run({"render", scene_, "--method", c[0], c[1], c[2], "-o", out("x.pfm")});

@@ -115,13 +115,13 @@ constexpr std::array<Rung, 3> kSpwiRungs{{
 // the lower probe lies in the world), up to 3.3 times the first rung's error (whose shares the
 // gather's cosines make exact, as the default's): (a) asks only the last step (0.66 to 0.73) to
 // be 0.85 or less. Fitted k = -0.64, 0.03, 0.24.
-// ssrc: h = s0 (r0, two probe spacings, halves with it). Not a convergence ladder yet: the
-// screen-space method's error is bounded by its model of what lies behind the depth buffer
-// (a sample solid for a fraction of its depth), not by the probe spacing, and it grows as s0
-// falls (steps 0.86 to 1.41; `step` 1.45 guards against worse). The wall leaks 0.14 to 0.23 of
-// the lit side's light (`max_leak` 0.3): the flatland merge hands a ray to upper probes whose
-// intervals start past the wall (no bilinear fix yet) and the wall's top is solid only for its
-// thickness. Both are issue 38's open items (docs/QUALITY.md, "Screen-space cascades").
+// ssrc: h = s0 (r0, four probe spacings, halves with it). Not a convergence ladder: the screen-
+// space method's error is bounded by its model of what lies behind the depth buffer (a sample
+// solid for 0.05 of its depth) and by its merges, not by the probe spacing (steps 0.65 to 1.08;
+// `step` 1.2 guards against growth). The wall leaks 0.24 of the lit side's light (`max_leak`
+// 0.3): the wall's top is solid only for its thickness, and the flatland merge hands a ray on to
+// upper probes past it (no bilinear fix yet). Both are issue 38's open items (docs/QUALITY.md,
+// "Screen-space cascades").
 // grid: h = the voxel, halved at the defaults (Q0 16, s0 2, t0 four probe spacings). Fitted
 // k = 0.94, 0.81, 1.48; steps 0.34 to 0.88 (the penumbra's first step is slow), so `step` 1: the
 // error must not grow. The voxels are 0.1 to 0.025 against lights of radius 0.5 (5 to 20 voxels;
@@ -170,8 +170,8 @@ const Ladder kLadders[] = {
      {{{"s0 4", 4, [](RenderOptions& o) { o.ssrc.probe_spacing = 4; }},
        {"s0 2", 2, [](RenderOptions& o) { o.ssrc.probe_spacing = 2; }},
        {"s0 1", 1, [](RenderOptions& o) { o.ssrc.probe_spacing = 1; }}}},
-     1.45,
-     {{{0.3592, 0.3946, 0.501}, {0.3173, 0.4473, 0.5201}, {0.3869, 0.332, 0.37}}},
+     1.2,
+     {{{0.1706, 0.1106, 0.115}, {0.1981, 0.1802, 0.1948}, {0.2172, 0.1856, 0.1689}}},
      1,
      0.3},
 };

@@ -53,7 +53,7 @@ double sky_plane_error(const ImageRgb& img) {
   return worst;
 }
 
-TEST(Ssrc, UniformSkyOverAnOpenPlaneIsALInEveryMergeSectorCountAndBounce) {
+TEST(Ssrc, UniformSkyOverAnOpenPlaneIsALInEveryMergeGatherSectorCountAndBounce) {
   const Scene s = sky_plane();
   for (SpwiMerge m : {SpwiMerge::bilinear, SpwiMerge::bilateral, SpwiMerge::bilinear3d})
     for (int sectors : {8, 16, 32})
@@ -61,11 +61,13 @@ TEST(Ssrc, UniformSkyOverAnOpenPlaneIsALInEveryMergeSectorCountAndBounce) {
         RenderOptions o = ssrc(bounces);
         o.ssrc.merge = m;
         o.ssrc.sectors = sectors;
+        o.ssrc.gather = sectors == 16 ? SpwiGather::pixel : SpwiGather::probe;
         const RenderResult r = render_ok(s, o);
         // Measured 0.17% to 1.0%: the pixel's view vector is not its probes' (their slices'
         // horizons differ), and a coarse texel's plane is clamped to [z/2, 2z].
         EXPECT_LT(sky_plane_error(r.radiance), 0.015)
-            << to_string(m) << ", " << sectors << " sectors, " << bounces << " bounces";
+            << to_string(m) << ", " << sectors << " sectors, " << bounces << " bounces, gather "
+            << to_string(o.ssrc.gather);
       }
 }
 
@@ -82,25 +84,30 @@ Scene walled_floor() {
 }
 
 // The wall stops most of the light, more as it is thicker; measured (dark side's brightest over
-// the lit side's mean): 0.46 at the default thickness (the wall's top is a slab 0.05 of its
-// depth thick, and light passes under it) and 0.14 infinitely thick (the flatland merge hands a
-// ray on to upper probes past the wall: no bilinear fix yet).
+// the lit side's mean): 0.36 at the default thickness (the wall's top is a slab 0.05 of its depth
+// thick, and light passes under it), 0.24 with the back faces (the wall solid along each camera
+// ray through it) and 0.13 infinitely thick (the flatland merge hands a ray on to upper probes
+// past the wall: no bilinear fix yet).
 TEST(Ssrc, AnOnScreenWallStopsMostOfTheLightWhileTheLightsSideIsLit) {
   const Scene s = walled_floor();
-  for (float thickness : {0.05f, 1e30f}) {
+  for (int model = 0; model < 3; ++model) {
     RenderOptions o = ssrc();
-    o.ssrc.thickness = thickness;
+    o.ssrc.thickness = model == 2 ? 1e30f : 0.05f;
+    o.ssrc.backfaces = model == 1;
+    const char* const name[] = {"thickness 0.05", "back faces", "infinitely thick"};
     const RenderResult r = render_ok(s, o);
     const ImageRgb& img = r.radiance;
     // Floor pixels left of the light (lit) and right of the wall (dark), on the middle row.
     double lit = 0, dark = 0;
     for (int i = 2; i < 10; ++i) lit += img.at(i, 32).r;
     for (int i = 40; i < 62; ++i) dark = std::max(dark, double(img.at(i, 32).r));
-    EXPECT_GT(lit / 8, 0.05) << "thickness " << thickness << ": the light's side is not lit";
-    std::printf("ssrc_test: wall, thickness %g: dark side over lit %.3f\n", thickness,
-                dark / (lit / 8));
-    EXPECT_LT(dark, (thickness > 1 ? 0.2 : 0.55) * lit / 8)
-        << "thickness " << thickness << ": more light passed the wall";
+    EXPECT_GT(lit / 8, 0.05) << name[model] << ": the light's side is not lit";
+    std::printf("ssrc_test: wall, %s: dark side over lit %.3f\n", name[model], dark / (lit / 8));
+    EXPECT_LT(dark, (model == 0   ? 0.45
+                     : model == 1 ? 0.3
+                                  : 0.2) *
+                        lit / 8)
+        << name[model] << ": more light passed the wall";
   }
 }
 
@@ -121,8 +128,8 @@ SphereOverFloor sphere_over_floor(int size) {
   return f;
 }
 
-// Measured 0.54 relative RMSE against the aim of 0.1: too bright behind the light (from the
-// camera), too dark in front, where the coarse cascades' texels straddle the light's edge.
+// Measured 0.39 relative RMSE against the aim of 0.1 (docs/QUALITY.md, "Screen-space
+// cascades").
 TEST(Ssrc, ASphereLightInViewLightsTheFloorNearItsClosedForm) {
   const SphereOverFloor f = sphere_over_floor(128);
   const RenderResult r = render_ok(f.s, ssrc());
@@ -153,7 +160,9 @@ TEST(Ssrc, ASphereLightInViewLightsTheFloorNearItsClosedForm) {
       ++n;
     }
   ASSERT_GT(n, 500);
-  EXPECT_LT(std::sqrt(sum_err / sum_want), 0.6);
+  const double e = std::sqrt(sum_err / sum_want);
+  std::printf("ssrc_test: sphere light's pool, relative RMSE %.3f\n", e);
+  EXPECT_LT(e, 0.5);
 }
 
 // The same light behind the camera: the path tracer's floor is lit, ssrc's is not (it sees only
@@ -194,7 +203,7 @@ TEST(Ssrc, TheLayoutFollowsTheFlatlandLaw) {
   SsrcOptions o;
   const ssrc::Layout l = ssrc::make_layout(640, 480, o);
   EXPECT_EQ(l.tiles.spacing(0), kSpwiSpacing);
-  EXPECT_EQ(l.r0, 2 * kSpwiSpacing);
+  EXPECT_EQ(l.r0, 4 * kSpwiSpacing);
   for (int i = 0; i < l.count(); ++i) {
     EXPECT_EQ(l.tiles.spacing(i), kSpwiSpacing << i);
     EXPECT_EQ(l.directions(i), o.directions << i);

@@ -144,20 +144,30 @@ struct GridOptions {
 // sphere about the view vector cut into `sectors`, and marches [r0 2^(i-1), r0 2^i] pixels.
 struct SsrcOptions {
   int probe_spacing = 0;  // s0, pixels (0: as SPWI derives it, kSpwiSpacing or its half)
-  int directions = 4;     // Q0: screen directions of a cascade-0 probe, a power of two
-  int interval = 0;       // r0, pixels: cascade 0 marches [0, r0] (0: two probe spacings)
+  int directions = 16;    // Q0: screen directions of a cascade-0 probe, a power of two
+  int interval = 0;       // r0, pixels: cascade 0 marches [0, r0] (0: four probe spacings)
   int cascades = 0;       // 0: until an interval reaches across the image's diagonal
+  // Samples an interval at least: each cascade reads the finest depth-pyramid level whose step
+  // (2^level pixels) leaves this many in its interval.
+  int steps = 16;
   // Occlusion sectors per direction, equal angles from the view vector to its opposite: 8, 16
   // or 32 (a 32, 64 or 128-bit mask for four directions marched together).
   int sectors = 32;
   int rays = 4;  // directions marched together: 1, 2 or 4 (the same image; the time differs)
-  // Each depth sample is taken as solid from its surface to this fraction of its linear depth
-  // behind it (1e30: infinitely thick, as horizon-based methods assume).
+  // Each depth sample is solid from its surface to `thickness` times its linear depth behind it
+  // (1e30: infinitely thick, as horizon-based methods assume); with `backfaces`, to where its
+  // camera ray leaves the object it entered (a second hit on the same object: one ray a pixel,
+  // a back-face depth layer), `thickness` only where nothing of its object lies behind it.
+  bool backfaces = false;
   float thickness = 0.05f;
-  SpwiMerge merge = SpwiMerge::bilinear;  // bilinear, bilateral or bilinear3d (as SPWI's)
-  float merge_edge = 0.1f;                // the bilateral merge's edge test (as SPWI's)
-  float gather_edge = 0.05f;              // the final gather's (as SPWI's)
-  float gather_normal = 1;                // the final gather's normal weight exponent
+  SpwiMerge merge = SpwiMerge::bilateral;  // bilinear, bilateral or bilinear3d (as SPWI's)
+  float merge_edge = 0.1f;                 // the bilateral merge's edge test (as SPWI's)
+  float gather_edge = 0.05f;               // the final gather's (as SPWI's)
+  float gather_normal = 1;                 // the final gather's normal weight exponent
+  // probe: each probe's mean for its own normal, once, and a pixel reads 4 values (exact where
+  // their normals agree, as on planes; the same error as pixel on the quality scenes, a tenth of
+  // the time); pixel: each pixel weighs its probes' directions for its own normal.
+  SpwiGather gather = SpwiGather::probe;
 };
 
 struct RenderOptions {

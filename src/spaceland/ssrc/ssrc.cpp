@@ -36,6 +36,8 @@ struct Means {
     int width = 0, height = 0;
     std::vector<Vec3> position, normal;  // normal: the mean of unit normals (not unit)
     std::vector<Rgb> radiance;
+    // The depth where the solid behind the hits ends, over theirs (>= 1): the mean over them.
+    std::vector<float> grow;
     std::vector<float> count;
   };
   std::vector<Level> levels;
@@ -43,8 +45,9 @@ struct Means {
   static std::uint64_t bytes_per_texel() { return 2 * sizeof(Vec3) + sizeof(Rgb) + sizeof(float); }
 };
 
-// The levels' positions and counts (the radiance comes per bounce), sized as the depth pyramid.
-Means make_means(const GBuffer& g, const DepthPyramid& depth) {
+// The levels' positions, normals, solids and counts (the radiance comes per bounce), sized as the
+// depth pyramid; `grow`, per pixel, where its solid ends over its depth.
+Means make_means(const GBuffer& g, const DepthPyramid& depth, const std::vector<float>& grow) {
   Means m;
   for (int l = 0; l < depth.levels(); ++l) {
     Means::Level at;
@@ -53,24 +56,29 @@ Means make_means(const GBuffer& g, const DepthPyramid& depth) {
     const std::size_t n = std::size_t(at.width) * std::size_t(at.height);
     at.position.assign(n, Vec3{});
     at.normal.assign(n, Vec3{});
+    at.grow.assign(n, 1.0f);
     at.radiance.assign(n, Rgb{});
     at.count.assign(n, 0.0f);
     m.levels.push_back(std::move(at));
   }
   Means::Level& base = m.levels[0];
-  for (std::size_t k = 0; k < g.hits.size(); ++k)
-    if (g.found[k]) {
+  parallel_for(g.height, [&](int y) {
+    for (int x = 0; x < g.width; ++x) {
+      const std::size_t k = std::size_t(y) * std::size_t(g.width) + std::size_t(x);
+      if (!g.found[k]) continue;
       base.position[k] = g.hits[k].position;
       base.normal[k] = g.hits[k].geometric_normal;
+      base.grow[k] = grow[k];
       base.count[k] = 1;
     }
+  });
   for (std::size_t l = 1; l < m.levels.size(); ++l) {
     const Means::Level& below = m.levels[l - 1];
     Means::Level& at = m.levels[l];
     parallel_for(at.height, [&](int y) {
       for (int x = 0; x < at.width; ++x) {
         Vec3 sum{}, normal{};
-        float n = 0;
+        float n = 0, solid = 0;
         for (int dy = 0; dy < 2; ++dy)
           for (int dx = 0; dx < 2; ++dx) {
             const int bx = 2 * x + dx, by = 2 * y + dy;
@@ -78,12 +86,14 @@ Means make_means(const GBuffer& g, const DepthPyramid& depth) {
             const std::size_t k = std::size_t(by) * std::size_t(below.width) + std::size_t(bx);
             sum = sum + below.position[k] * below.count[k];
             normal = normal + below.normal[k] * below.count[k];
+            solid += below.grow[k] * below.count[k];
             n += below.count[k];
           }
         const std::size_t k = std::size_t(y) * std::size_t(at.width) + std::size_t(x);
         at.count[k] = n;
         at.position[k] = n > 0 ? sum * (1 / n) : Vec3{};
         at.normal[k] = n > 0 ? normal * (1 / n) : Vec3{};
+        at.grow[k] = n > 0 ? solid / n : 1.0f;
       }
     });
   }
@@ -126,6 +136,10 @@ struct Frame {
     const float sy = (1 - 2 * y / height) * tan_half;
     return f + r * sx + u * sy;
   }
+  // The change of ray(x, y) per pixel along screen direction (dx, dy).
+  Vec3 ray_step(float dx, float dy) const {
+    return r * (2 * dx / width * tan_half * width / height) - u * (2 * dy / height * tan_half);
+  }
   Vec3 screen_direction(double phi) const {
     return r * float(std::cos(phi)) - u * float(std::sin(phi));
   }
@@ -138,9 +152,18 @@ Vec3 slice_tangent(Vec3 v, Vec3 w) {
 }
 
 // The angle of a point (a along the view vector, b along the slice's tangent) from the view
-// vector, in [0, pi]; a point behind the slice's half-plane counts as on its edge.
+// vector, in [0, pi]; a point behind the slice's half-plane counts as on its edge. A minimax
+// polynomial for atan on [0, 1] (error under 1e-5 radians, a tenth of a thousandth of a
+// sector): the march takes four a sample.
 inline float slice_angle(float a, float b) {
-  return std::atan2(std::max(b, 0.0f), a);
+  b = std::max(b, 0.0f);
+  const float ax = std::abs(a);
+  const float lo = std::min(ax, b), hi = std::max(ax, b);
+  if (!(hi > 0)) return 0;
+  const float q = lo / hi, q2 = q * q;
+  float t = ((-0.0464964749f * q2 + 0.15931422f) * q2 - 0.327622764f) * q2 * q + q;
+  if (b > ax) t = 1.57079632679f - t;
+  return a < 0 ? 3.14159265359f - t : t;
 }
 
 // The sectors whose centre angle a solid from angle lo to hi covers (lo <= hi), as bits of a
@@ -173,14 +196,18 @@ struct Shared {
   const Means& means;
   const Background& bg;
   float sectors_per_radian;
+  int per_bin;                                // sectors per stored radiance bin
   std::uint32_t all;                          // every sector's bit
   std::vector<float> cos_sector, sin_sector;  // at each sector's centre angle
+  // Prefix sums over the sectors before k of cos sin and sin^2 (the gather's cosine weights).
+  std::vector<float> cos_sum, sin_sum;
 };
 
 // One direction of a probe being marched: where it runs on the screen, its slice's tangent, the
 // sectors occluded so far and the radiance of each sector.
 struct Ray {
   float dx = 0, dy = 0;
+  Vec3 g;  // the change of the camera ray (Frame::ray) per pixel along the line
   Vec3 t;
   float horizon = 0;  // the angle of the probe's own tangent plane in the slice
   std::uint32_t occluded = 0;
@@ -207,13 +234,13 @@ struct Cascade {
     const bool top = l.top(i);
     const DepthPyramid::Level& dl = s.depth.level(level);
     const Means::Level& ml = s.means.levels[std::size_t(level)];
+    const Vec3 g0 = s.frame.ray(cx, cy);
     const int width = s.ctx.g.width, height = s.ctx.g.height;
     const float half = float(step);
-    const float grow = 1 + s.o.thickness;
     // The top cascade runs to the screen's edge: at most its diagonal in steps.
     const int most =
         top ? int(std::ceil(std::sqrt(double(width) * width + double(height) * height) / step)) + 2
-            : int(std::lround((b - a) / step));
+            : int(std::floor((b - a) / step + 1e-9));
     int active = n;
     for (int m = 0; m < most && active > 0; ++m) {
       const float r = float(a + double(m + 1) * step);
@@ -239,19 +266,21 @@ struct Cascade {
         const bool flat = dot(mn, mn) > kFlat * kFlat;
         const float lo = flat ? 0.5f * zc : dl.lo[k], hi = flat ? 2 * zc : dl.hi[k];
         float t0 = kPi, t1 = 0;
+        const float mn2 = dot(mn, mn), plane = dot(mean - s.frame.eye, mn);
         for (float e : {-0.5f, 0.5f}) {
-          const Vec3 g = s.frame.ray(x + e * half * ray.dx, y + e * half * ray.dy);
+          const Vec3 g = g0 + ray.g * (r + e * half);
           const float den = dot(g, mn);
           float z = zc;
-          if (std::abs(den) > 1e-6f * length(g) * length(mn)) z = dot(mean - s.frame.eye, mn) / den;
+          if (den * den > 1e-12f * dot(g, g) * mn2) z = plane / den;
           z = std::clamp(z, lo, hi);
-          for (float depth : {z, z * grow}) {
+          for (float depth : {z, z * ml.grow[k]}) {
             const Vec3 d = s.frame.eye + g * depth - p;
             float t = slice_angle(dot(d, v), dot(d, ray.t));
             // A point on or under the probe's tangent plane (within about a degree: a plane's
             // own pixels, a convex surface's neighbours) lies below its horizon, where its
             // angle as projected on the slice might not.
-            if (dot(d, normal) <= kOnPlane * length(d)) t = std::max(t, ray.horizon);
+            const float h = dot(d, normal);
+            if (h <= 0 || h * h <= kOnPlane * kOnPlane * dot(d, d)) t = std::max(t, ray.horizon);
             t0 = std::min(t0, t);
             t1 = std::max(t1, t);
           }
@@ -280,44 +309,10 @@ struct Cascade {
     }
   }
 
-  // Which sectors of the slice about view vector v with tangent t lie above the plane of normal
-  // n (each at its centre's direction).
-  std::uint32_t above(Vec3 v, Vec3 n, Vec3 t) const {
-    const float nv = dot(n, v), nt = dot(n, t);
-    std::uint32_t bits = 0;
-    for (int k = 0; k < s.layout.sectors; ++k)
-      if (nv * s.cos_sector[std::size_t(k)] + nt * s.sin_sector[std::size_t(k)] > 0)
-        bits |= 1u << k;
-    return bits;
-  }
-
-  // For each sector, the nearest of `valid`'s sectors (itself where valid; every sector maps to
-  // itself where none is).
-  std::array<std::uint8_t, 32> nearest(std::uint32_t valid) const {
-    const int n = s.layout.sectors;
-    std::array<std::uint8_t, 32> to{};
-    for (int k = 0; k < n; ++k) to[std::size_t(k)] = std::uint8_t(k);
-    if (!valid) return to;
-    for (int k = 0; k < n; ++k) {
-      if (valid >> k & 1u) continue;
-      for (int d = 1; d < n; ++d) {
-        if (k - d >= 0 && (valid >> (k - d) & 1u)) {
-          to[std::size_t(k)] = std::uint8_t(k - d);
-          break;
-        }
-        if (k + d < n && (valid >> (k + d) & 1u)) {
-          to[std::size_t(k)] = std::uint8_t(k + d);
-          break;
-        }
-      }
-    }
-    return to;
-  }
-
   // The open sectors of a ray take the upper probes' radiance in its direction: per sector, the
-  // mean of its two children (flatland's merge, sector by sector).
+  // mean of its two children's (flatland's merge, sector by sector), each read in its bin.
   void merge(Ray& ray, int dir, const cascade::Corners& c) const {
-    const std::size_t sectors = std::size_t(s.layout.sectors);
+    const std::size_t bins = std::size_t(s.layout.bins), per_bin = std::size_t(s.per_bin);
     const int up_dirs = s.layout.directions(i + 1);
     const std::uint32_t open = ~ray.occluded & s.all;
     if (!open) return;
@@ -326,25 +321,28 @@ struct Cascade {
       if (!(w > 0)) continue;
       const Rgb* a = upper.data() + (std::size_t(c.index[std::size_t(q)]) * std::size_t(up_dirs) +
                                      std::size_t(2 * dir)) *
-                                        sectors;
-      const Rgb* b = a + sectors;
+                                        bins;
+      const Rgb* b = a + bins;
       for (std::uint32_t bits = open; bits; bits &= bits - 1) {
         const std::size_t k = std::size_t(std::countr_zero(bits));
-        ray.sectors[k] += (a[k] + b[k]) * w;
+        ray.sectors[k] += (a[k / per_bin] + b[k / per_bin]) * w;
       }
     }
   }
 
   // A ray's sectors below its probe's surface hold that surface's own light (its samples occlude
   // there) or the sky under it, which no direction above the surface sees; they take the value
-  // of the nearest sector above it. The rays below, whose directions all lie above their own
-  // surfaces, merge with these: on a plane the horizon's angle changes across a direction's wedge
-  // and from probe to probe (their view vectors differ), and the sectors as traced would darken
-  // every sector near it.
-  void extend_over_horizon(Ray& ray, Vec3 v, Vec3 n) const {
-    const std::array<std::uint8_t, 32> to = nearest(above(v, n, ray.t));
-    for (int k = 0; k < s.layout.sectors; ++k)
-      if (to[std::size_t(k)] != k) ray.sectors[std::size_t(k)] = ray.sectors[to[std::size_t(k)]];
+  // of the last sector above it (those above are the ones before the horizon's angle: the cosine
+  // nv cos(theta) + nt sin(theta) changes sign once on [0, pi]). The rays below, whose
+  // directions all lie above their own surfaces, merge with these: on a plane the horizon's angle
+  // changes across a direction's wedge and from probe to probe (their view vectors differ), and
+  // the sectors as traced would darken every sector near it.
+  void extend_over_horizon(Ray& ray) const {
+    const int above =
+        std::clamp(int(std::ceil(ray.horizon * s.sectors_per_radian - 0.5f)), 0, s.layout.sectors);
+    if (above == 0) return;
+    for (int k = above; k < s.layout.sectors; ++k)
+      ray.sectors[std::size_t(k)] = ray.sectors[std::size_t(above - 1)];
   }
 
   void probe(int px, int py) const {
@@ -364,7 +362,7 @@ struct Cascade {
         spwi::upper_corners(l.tiles, i + 1, spwi::tile_centre(px, spacing),
                             spwi::tile_centre(py, spacing), pr, upper_probes, s.probe_options, c);
     const int dirs = l.directions(i);
-    Rgb* out = lower.data() + std::size_t(q) * std::size_t(dirs) * std::size_t(l.sectors);
+    Rgb* out = lower.data() + std::size_t(q) * std::size_t(dirs) * std::size_t(l.bins);
     std::array<Ray, 4> rays;
     for (int first = 0; first < dirs; first += l.rays) {
       const int n = std::min(l.rays, dirs - first);
@@ -374,8 +372,9 @@ struct Cascade {
         ray = Ray{};
         ray.dx = float(std::cos(phi));
         ray.dy = float(std::sin(phi));
+        ray.g = s.frame.ray_step(ray.dx, ray.dy);
         ray.t = slice_tangent(v, s.frame.screen_direction(phi));
-        ray.horizon = std::atan2(dot(pr.n, v), -dot(pr.n, ray.t));
+        ray.horizon = slice_angle(-dot(pr.n, ray.t), dot(pr.n, v));
       }
       march(rays.data(), n, cx, cy, pr.p, v, pr.n);
       for (int j = 0; j < n; ++j) {
@@ -384,10 +383,15 @@ struct Cascade {
           sky(ray, v);
         else
           merge(ray, first + j, c);
-        extend_over_horizon(ray, v, pr.n);
-
-        std::copy(ray.sectors.begin(), ray.sectors.begin() + l.sectors,
-                  out + std::size_t(first + j) * std::size_t(l.sectors));
+        extend_over_horizon(ray);
+        // Stored per bin: the mean of its sectors.
+        Rgb* bins = out + std::size_t(first + j) * std::size_t(l.bins);
+        for (int b = 0; b < l.bins; ++b) {
+          Rgb sum{};
+          for (int k = b * s.per_bin; k < (b + 1) * s.per_bin; ++k)
+            sum += ray.sectors[std::size_t(k)];
+          bins[b] = sum * (1.0f / float(s.per_bin));
+        }
       }
     }
   }
@@ -409,43 +413,109 @@ struct Gather {
   const std::vector<spwi::Probe>& probes;
   const std::vector<Rgb>& store;
   std::vector<Vec3> screen;  // each cascade-0 direction in the world
+  // --gather probe: each probe's mean about its own normal and view vector, once (false where
+  // it has none: a probe on the sky, or facing away).
+  std::vector<Rgb> probe_mean;
+  std::vector<std::uint8_t> probe_has;
 
-  bool operator()(int x, int y, std::size_t k, const Hit& h, Rgb& mean) const {
+  // The weights of each direction's bins for a surface of normal n seen along v, into w
+  // (q0 x bins); their sum.
+  float weights(Vec3 v, Vec3 n, float* w) const {
     const Layout& l = s.layout;
-    cascade::Corners c;
-    if (!spwi::gather_corners(l.tiles, x, y, s.ctx.g.linear_depth(k), h.geometric_normal, probes,
-                              s.probe_options, c))
-      return false;
-    const Vec3 v = -s.ctx.g.directions[k];
-    const Vec3 n = h.shading_normal;
     const float nv = dot(n, v);
-    const int dirs = l.q0, sectors = l.sectors;
-    std::array<float, 64 * 32> w{};  // per direction and sector (q0 <= 64)
+    const int sectors = l.sectors, bins = l.bins;
     float total = 0;
-    for (int d = 0; d < dirs; ++d) {
+    for (int d = 0; d < l.q0; ++d) {
+      // cos(w, n) = nv cos(theta) + nt sin(theta) is positive below the surface's horizon angle
+      // theta_h: the sectors whose centres lie before it, summed per bin from prefix sums.
       const float nt = dot(n, slice_tangent(v, screen[std::size_t(d)]));
-      float* wd = w.data() + std::size_t(d * sectors);
-      for (int k = 0; k < sectors; ++k) {
-        const float f = nv * s.cos_sector[std::size_t(k)] + nt * s.sin_sector[std::size_t(k)];
-        if (f > 0) wd[k] = f * s.sin_sector[std::size_t(k)];
+      const int above = std::clamp(
+          int(std::ceil(slice_angle(-nt, nv) * s.sectors_per_radian - 0.5f)), 0, sectors);
+      float* wd = w + std::size_t(d * bins);
+      for (int b = 0; b < bins; ++b) {
+        wd[b] = 0;
+        if (b * s.per_bin >= above) continue;
+        const std::size_t from = std::size_t(b * s.per_bin);
+        const std::size_t to = std::size_t(std::min((b + 1) * s.per_bin, above));
+        wd[b] = std::max(
+            0.0f, nv * (s.cos_sum[to] - s.cos_sum[from]) + nt * (s.sin_sum[to] - s.sin_sum[from]));
+        total += wd[b];
       }
     }
-    for (int d = 0; d < dirs * sectors; ++d) total += w[std::size_t(d)];
-    if (!(total > 0)) return false;
+    return total;
+  }
+
+  // Probe q's cosine-weighted mean radiance for weights w (summing to total).
+  Rgb mean_of(std::uint64_t q, const float* w, float total) const {
+    const std::size_t values = std::size_t(s.layout.q0 * s.layout.bins);
+    const Rgb* p = store.data() + std::size_t(q) * values;
+    Rgb e{};
+    for (std::size_t d = 0; d < values; ++d) e += p[d] * w[d];
+    return e * (1 / total);
+  }
+
+  void prepare_probes() {
+    if (s.o.gather != SpwiGather::probe) return;
+    probe_mean.assign(probes.size(), Rgb{});
+    probe_has.assign(probes.size(), 0);
+    parallel_for(int(probes.size()), [&](int q) {
+      const spwi::Probe& pr = probes[std::size_t(q)];
+      if (!pr.valid) return;
+      std::array<float, 64 * kMaxBins> w;
+      const float total = weights(normalize(s.frame.eye - pr.p), pr.n, w.data());
+      if (!(total > 0)) return;
+      probe_mean[std::size_t(q)] = mean_of(std::uint64_t(q), w.data(), total);
+      probe_has[std::size_t(q)] = 1;
+    });
+  }
+
+  bool operator()(int x, int y, std::size_t k, const Hit& h, Rgb& mean) const {
+    cascade::Corners c;
+    if (!spwi::gather_corners(s.layout.tiles, x, y, s.ctx.g.linear_depth(k), h.geometric_normal,
+                              probes, s.probe_options, c))
+      return false;
     Rgb sum{};
-    for (int j = 0; j < c.n; ++j) {
-      const float cw = c.w[std::size_t(j)];
-      if (!(cw > 0)) continue;
-      const Rgb* p =
-          store.data() + std::size_t(c.index[std::size_t(j)]) * std::size_t(dirs * sectors);
-      Rgb e{};
-      for (int d = 0; d < dirs * sectors; ++d) e += p[d] * w[std::size_t(d)];
-      sum += e * cw;
+    float used = 0;
+    if (!probe_mean.empty()) {
+      for (int j = 0; j < c.n; ++j) {
+        const float cw = c.w[std::size_t(j)];
+        const std::size_t q = std::size_t(c.index[std::size_t(j)]);
+        if (!(cw > 0) || !probe_has[q]) continue;
+        sum += probe_mean[q] * cw;
+        used += cw;
+      }
+    } else {
+      std::array<float, 64 * kMaxBins> w;
+      const float total = weights(-s.ctx.g.directions[k], h.shading_normal, w.data());
+      if (!(total > 0)) return false;
+      for (int j = 0; j < c.n; ++j) {
+        const float cw = c.w[std::size_t(j)];
+        if (!(cw > 0)) continue;
+        sum += mean_of(c.index[std::size_t(j)], w.data(), total) * cw;
+        used += cw;
+      }
     }
-    mean = sum * (1 / total);
+    if (!(used > 0)) return false;
+    mean = sum * (1 / used);
     return true;
   }
 };
+
+// Calls visit(k, rays) for every pixel k that sees a surface, rows in parallel; the rays each
+// call counts are added to `traced`.
+template <class Visit>
+void for_each_hit(const GBuffer& g, std::uint64_t& traced, Visit&& visit) {
+  std::atomic<std::uint64_t> count{0};
+  parallel_for(g.height, [&](int y) {
+    std::uint64_t local = 0;
+    for (int x = 0; x < g.width; ++x) {
+      const std::size_t k = std::size_t(y) * std::size_t(g.width) + std::size_t(x);
+      if (g.found[k]) visit(k, local);
+    }
+    count.fetch_add(local, std::memory_order_relaxed);
+  });
+  traced += count.load();
+}
 
 std::string mib(std::uint64_t bytes) {
   return io::format_rounded(double(bytes) / double(1 << 20)) + " MiB";
@@ -462,8 +532,10 @@ Layout make_layout(int width, int height, const SsrcOptions& o) {
   l.tiles.levels.spacing0 = spwi::probe_spacing_for(so, width, height);
   l.tiles.levels.spacing_step = 1;
   l.q0 = o.directions;
-  l.r0 = o.interval > 0 ? o.interval : 2 * l.tiles.levels.spacing0;
+  l.r0 = o.interval > 0 ? o.interval : 4 * l.tiles.levels.spacing0;
+  l.steps = o.steps;
   l.sectors = o.sectors;
+  l.bins = std::min(kMaxBins, o.sectors);
   l.rays = o.rays;
   int count = o.cascades;
   if (count == 0) {
@@ -491,7 +563,8 @@ std::uint64_t Layout::bytes() const {
   // The depth pyramid (2 floats a texel) and the means over the same texels; per pixel the sun,
   // the samples' radiance and a bounce's image.
   return 2 * largest * sizeof(Rgb) + probe_bytes + pyramid +
-         pyramid / (2 * sizeof(float)) * Means::bytes_per_texel() + 3 * pixels * sizeof(Rgb);
+         pyramid / (2 * sizeof(float)) * Means::bytes_per_texel() + 3 * pixels * sizeof(Rgb) +
+         pixels * sizeof(float);
 }
 
 Status check_options(const SsrcOptions& o) {
@@ -507,6 +580,9 @@ Status check_options(const SsrcOptions& o) {
   if (o.cascades < 0 || o.cascades > cascade::kMaxCascades)
     return Error{"`ssrc.cascades`: expected 0.." + std::to_string(cascade::kMaxCascades) +
                  " (0: derived), found " + std::to_string(o.cascades)};
+  if (o.steps < 1 || o.steps > 256)
+    return Error{"`ssrc.steps`: expected 1..256 samples an interval, found " +
+                 std::to_string(o.steps)};
   if (o.sectors != 8 && o.sectors != 16 && o.sectors != 32)
     return Error{"`ssrc.sectors`: expected 8, 16 or 32 sectors per direction, found " +
                  std::to_string(o.sectors)};
@@ -523,6 +599,8 @@ Status check_options(const SsrcOptions& o) {
   if (!(o.merge_edge >= 0) || !(o.gather_edge >= 0) || !std::isfinite(o.merge_edge) ||
       !std::isfinite(o.gather_edge))
     return Error{"`ssrc.merge_edge` and `ssrc.gather_edge`: expected numbers >= 0"};
+  if (o.gather != SpwiGather::pixel && o.gather != SpwiGather::probe)
+    return Error{"`ssrc.gather`: expected pixel or probe"};
   if (!(o.gather_normal >= 0 && o.gather_normal <= 64))
     return Error{"`ssrc.gather_normal`: expected an exponent in [0, 64], found " +
                  io::format_number(o.gather_normal)};
@@ -555,9 +633,29 @@ Expected<ImageRgb> render(const SolveContext& ctx, const SsrcOptions& o, const L
                     float(camera.tan_half_fov())};
   const Background bg(ctx.scene);
 
+  // Per pixel, where the solid behind its hit ends (over its depth): where its camera ray leaves
+  // the object it entered (the next hit on the same object: a sphere's, a box's far side), else
+  // `thickness` behind (a sheet with nothing of its own behind it: a floor, a wall's face).
   Stopwatch watch;
+  std::vector<float> grow(pixels, 1 + o.thickness);
+  if (o.backfaces) {
+    for_each_hit(g, report.rays, [&](std::size_t k, std::uint64_t& rays) {
+      const Hit& h = g.hits[k];
+      const Vec3 d = g.directions[k];
+      Hit exit;
+      ++rays;
+      if (!ctx.rays.intersect(spaceland::Ray{ctx.rays.spawn(h.position, h.geometric_normal, d), d},
+                              exit) ||
+          exit.object != h.object)
+        return;
+      const float z = g.linear_depth(k), back = dot(exit.position - frame.eye, frame.f);
+      if (z > 0 && back > z) grow[k] = back / z;
+    });
+    report.stages.push_back({"back faces", watch.ms()});
+  }
+  watch = Stopwatch();
   const DepthPyramid depth = DepthPyramid::build(g);
-  Means means = make_means(g, depth);
+  Means means = make_means(g, depth, grow);
   report.stages.push_back({"pyramid", watch.ms()});
 
   // Per pixel: the emission and the sun's light reflected there (exact shadow rays), the light
@@ -566,19 +664,11 @@ Expected<ImageRgb> render(const SolveContext& ctx, const SsrcOptions& o, const L
   std::vector<Rgb> direct(pixels), albedo(pixels);
   {
     const SunLight sun(ctx.scene, ctx.rays, ctx.sun_rays);
-    std::atomic<std::uint64_t> rays{0};
-    parallel_for(g.height, [&](int y) {
-      std::uint64_t local = 0;
-      for (int x = 0; x < g.width; ++x) {
-        const std::size_t k = std::size_t(y) * std::size_t(g.width) + std::size_t(x);
-        if (!g.found[k]) continue;
-        albedo[k] = albedo_at(ctx.scene, g.hits[k]);
-        direct[k] = emission_at(ctx.scene, g.hits[k]);
-        if (sun.on()) direct[k] += sun.reflected(g.hits[k], albedo[k], local);
-      }
-      rays.fetch_add(local, std::memory_order_relaxed);
+    for_each_hit(g, report.rays, [&](std::size_t k, std::uint64_t& rays) {
+      albedo[k] = albedo_at(ctx.scene, g.hits[k]);
+      direct[k] = emission_at(ctx.scene, g.hits[k]);
+      if (sun.on()) direct[k] += sun.reflected(g.hits[k], albedo[k], rays);
     });
-    report.rays += rays.load();
   }
   report.stages.push_back({"sun", watch.ms()});
 
@@ -589,13 +679,22 @@ Expected<ImageRgb> render(const SolveContext& ctx, const SsrcOptions& o, const L
   probe_options.gather_normal = o.gather_normal;
   probe_options.depth_bias = 1;
 
-  Shared s{ctx, o, probe_options, layout, frame, depth, means, bg, 0, 0, {}, {}};
+  Shared s{ctx, o, probe_options, layout, frame, depth, means, bg, 0, 0, 0, {}, {}, {}, {}};
+  s.per_bin = layout.sectors / layout.bins;
   s.sectors_per_radian = float(layout.sectors / kPi);
   s.all = std::uint32_t((std::uint64_t(1) << layout.sectors) - 1);
   for (int k = 0; k < layout.sectors; ++k) {
     const double theta = (k + 0.5) * kPi / layout.sectors;
     s.cos_sector.push_back(float(std::cos(theta)));
     s.sin_sector.push_back(float(std::sin(theta)));
+  }
+  s.cos_sum.push_back(0);
+  s.sin_sum.push_back(0);
+  for (int k = 0; k < layout.sectors; ++k) {
+    s.cos_sum.push_back(s.cos_sum.back() +
+                        s.cos_sector[std::size_t(k)] * s.sin_sector[std::size_t(k)]);
+    s.sin_sum.push_back(s.sin_sum.back() +
+                        s.sin_sector[std::size_t(k)] * s.sin_sector[std::size_t(k)]);
   }
 
   std::vector<Rgb> radiance = direct;
@@ -618,9 +717,10 @@ Expected<ImageRgb> render(const SolveContext& ctx, const SsrcOptions& o, const L
       report.stages.push_back({"cascade " + std::to_string(i) + of, watch.ms()});
     }
     watch = Stopwatch();
-    Gather gather{s, upper_probes, upper, {}};
+    Gather gather{s, upper_probes, upper, {}, {}, {}};
     for (int d = 0; d < layout.q0; ++d)
       gather.screen.push_back(frame.screen_direction(2 * kPi * (d + 0.5) / layout.q0));
+    gather.prepare_probes();
     std::uint64_t traced = 0;
     img =
         shade_pixels(g, bg, traced, [&](int x, int y, std::size_t k, const Hit& h, std::uint64_t&) {

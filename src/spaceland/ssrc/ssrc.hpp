@@ -21,11 +21,20 @@
 
 namespace penumbra::spaceland::ssrc {
 
+// A direction's radiance is stored in at most this many bins of adjacent sectors (4 sectors each
+// at 32): the bitmask resolves occlusion finer than the radiance the cascades carry, which keeps
+// a cascade's store at 8 RGB values a direction. A ray's sectors below its probe's surface take
+// the nearest value above it before they are binned, so a bin across the horizon holds the light
+// above it.
+inline constexpr int kMaxBins = 8;
+
 struct Layout {
   spwi::Layout tiles;  // the probe tiles of each cascade (levels.spacing*, nx, ny)
   int q0 = 4;          // screen directions of cascade 0
   int r0 = 8;          // cascade 0's interval, pixels
-  int sectors = 32;    // per direction: occlusion bits, each with its radiance
+  int steps = 8;       // samples an interval at least (the top one: to the screen's edge)
+  int sectors = 32;    // per direction: occlusion bits
+  int bins = 8;        // per direction: stored radiance, sectors / bins sectors each
   int rays = 4;        // directions marched together
 
   int count() const { return tiles.count(); }
@@ -35,12 +44,17 @@ struct Layout {
   double start(int i) const { return i == 0 ? 0.0 : double(r0) * double(1u << (i - 1)); }
   double end(int i) const { return double(r0) * double(1u << i); }
   bool top(int i) const { return i == count() - 1; }
-  // The depth pyramid's level its samples read: 2^level pixels apart, r0 samples an interval.
-  int level(int i) const { return i == 0 ? 0 : i - 1; }
+  // The depth pyramid's level its samples read, 2^level pixels apart: the finest whose step
+  // leaves at least `steps` samples in the interval.
+  int level(int i) const {
+    int l = 0;
+    while ((end(i) - start(i)) / double(2 << l) >= double(steps)) ++l;
+    return l;
+  }
   std::uint64_t probes(int i) const { return tiles.probes(i); }
-  // Radiance values (RGB) of cascade i: per probe, direction and sector.
+  // Radiance values (RGB) of cascade i: per probe, direction and bin.
   std::uint64_t values(int i) const {
-    return probes(i) * std::uint64_t(directions(i)) * std::uint64_t(sectors);
+    return probes(i) * std::uint64_t(directions(i)) * std::uint64_t(bins);
   }
   // Working memory: two cascades' stores, the probes, the pyramids and the per-pixel buffers.
   std::uint64_t bytes() const;

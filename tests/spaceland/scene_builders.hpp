@@ -112,6 +112,30 @@ inline Camera camera(Vec3 position, Vec3 look_at, int w, int h, float fov = 60,
   return c;
 }
 
+// An open plane (a disk 1000 across, albedo 0.6) under a uniform sky L = (1.5, 1, 0.5), seen at
+// a slant: every plane pixel is a L, every sky pixel L.
+inline Scene sky_plane() {
+  Scene s;
+  s.camera = camera({0.3f, 2, 3}, {0, 0, -1}, 64, 48, 60);
+  s.sky = {{1.5f, 1, 0.5f}, {1.5f, 1, 0.5f}, {1.5f, 1, 0.5f}};
+  add_floor(s, 1000, {0.6f, 0.6f, 0.6f});
+  return s;
+}
+
+// Largest relative deviation of sky_plane()'s image from its closed form: plane pixels a L, sky
+// pixels (the top rows) L.
+inline double sky_plane_error(const ImageRgb& img) {
+  double worst = 0;
+  for (int j = 0; j < img.height(); ++j)
+    for (int i = 0; i < img.width(); ++i) {
+      const Rgb c = img.at(i, j);
+      const double k = c.g < 0.8 ? 0.6 : 1.0;
+      worst = std::max({worst, std::abs(c.r / (1.5 * k) - 1), std::abs(c.g / (1.0 * k) - 1),
+                        std::abs(c.b / (0.5 * k) - 1)});
+    }
+  return worst;
+}
+
 // The path tracer with `spp` samples per pixel and `bounces`.
 inline RenderOptions pt(int spp, int bounces = 1) {
   RenderOptions o;

@@ -32,15 +32,6 @@ RenderOptions spwi(SpwiMerge merge, bool preaverage = false) {
   return o;
 }
 
-// An open plane (a disk 1000 across) under a uniform sky, seen at a slant.
-Scene sky_plane() {
-  Scene s;
-  s.camera = camera({0.3f, 2, 3}, {0, 0, -1}, 64, 48, 60);
-  s.sky = {{1.5f, 1, 0.5f}, {1.5f, 1, 0.5f}, {1.5f, 1, 0.5f}};
-  add_floor(s, 1000, {0.6f, 0.6f, 0.6f});
-  return s;
-}
-
 // The inside of an emitting box (albedo 0.6, Le (1, 0.5, 0.25)): one bounce gives Le (1 + a).
 Scene enclosure() {
   Scene s;
@@ -56,20 +47,6 @@ double worst_red(const ImageRgb& img, double want) {
   for (int j = 0; j < img.height(); ++j)
     for (int i = 0; i < img.width(); ++i)
       worst = std::max(worst, std::abs(img.at(i, j).r / want - 1));
-  return worst;
-}
-
-// Largest relative deviation of sky_plane()'s image from its closed form: plane pixels a L, sky
-// pixels (the top rows) L.
-double sky_plane_error(const ImageRgb& img) {
-  double worst = 0;
-  for (int j = 0; j < img.height(); ++j)
-    for (int i = 0; i < img.width(); ++i) {
-      const Rgb c = img.at(i, j);
-      const double k = c.g < 0.8 ? 0.6 : 1.0;
-      worst = std::max({worst, std::abs(c.r / (1.5 * k) - 1), std::abs(c.g / (1.0 * k) - 1),
-                        std::abs(c.b / (0.5 * k) - 1)});
-    }
   return worst;
 }
 

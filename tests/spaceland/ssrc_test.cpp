@@ -31,28 +31,6 @@ RenderOptions ssrc(int bounces = 1) {
   return o;
 }
 
-// An open plane (a disk 1000 across) under a uniform sky, seen at a slant.
-Scene sky_plane() {
-  Scene s;
-  s.camera = camera({0.3f, 2, 3}, {0, 0, -1}, 64, 48, 60);
-  s.sky = {{1.5f, 1, 0.5f}, {1.5f, 1, 0.5f}, {1.5f, 1, 0.5f}};
-  add_floor(s, 1000, {0.6f, 0.6f, 0.6f});
-  return s;
-}
-
-// Largest relative deviation of sky_plane()'s image from a L on the plane and L on the sky.
-double sky_plane_error(const ImageRgb& img) {
-  double worst = 0;
-  for (int j = 0; j < img.height(); ++j)
-    for (int i = 0; i < img.width(); ++i) {
-      const Rgb c = img.at(i, j);
-      const double k = c.g < 0.8 ? 0.6 : 1.0;
-      worst = std::max({worst, std::abs(c.r / (1.5 * k) - 1), std::abs(c.g / (1.0 * k) - 1),
-                        std::abs(c.b / (0.5 * k) - 1)});
-    }
-  return worst;
-}
-
 TEST(Ssrc, UniformSkyOverAnOpenPlaneIsALInEveryMergeGatherSectorCountAndBounce) {
   const Scene s = sky_plane();
   for (SpwiMerge m : {SpwiMerge::bilinear, SpwiMerge::bilateral, SpwiMerge::bilinear3d})

@@ -236,7 +236,7 @@ struct Cascade {
     const Means::Level& ml = s.means.levels[std::size_t(level)];
     const Vec3 g0 = s.frame.ray(cx, cy);
     const int width = s.ctx.g.width, height = s.ctx.g.height;
-    const float half = float(step);
+    const float stretch = float(step);  // each sample stands for this much of the line
     // The top cascade runs to the screen's edge: at most its diagonal in steps.
     const int most =
         top ? int(std::ceil(std::sqrt(double(width) * width + double(height) * height) / step)) + 2
@@ -268,7 +268,7 @@ struct Cascade {
         float t0 = kPi, t1 = 0;
         const float mn2 = dot(mn, mn), plane = dot(mean - s.frame.eye, mn);
         for (float e : {-0.5f, 0.5f}) {
-          const Vec3 g = g0 + ray.g * (r + e * half);
+          const Vec3 g = g0 + ray.g * (r + e * stretch);
           const float den = dot(g, mn);
           float z = zc;
           if (den * den > 1e-12f * dot(g, g) * mn2) z = plane / den;
@@ -285,12 +285,11 @@ struct Cascade {
             t1 = std::max(t1, t);
           }
         }
-        const Rgb* rad = &ml.radiance[k];
         const std::uint32_t bits = sector_bits(t0, t1, s.sectors_per_radian, l.sectors);
         std::uint32_t first = bits & ~ray.occluded;
         if (!first) continue;
         ray.occluded |= bits;
-        const Rgb& radiance = *rad;
+        const Rgb& radiance = ml.radiance[k];
         for (; first; first &= first - 1)
           ray.sectors[std::size_t(std::countr_zero(first))] += radiance;
       }
@@ -699,25 +698,29 @@ Expected<ImageRgb> render(const SolveContext& ctx, const SsrcOptions& o, const L
 
   std::vector<Rgb> radiance = direct;
   ImageRgb img;
+  // Every cascade's probes, placed once for all bounces (Layout::bytes counts them all).
+  std::vector<std::vector<spwi::Probe>> probes(std::size_t(layout.count()));
+  for (int i = 0; i < layout.count(); ++i)
+    probes[std::size_t(i)] = spwi::place_probes(ctx.scene, g, layout.tiles, i, probe_options);
+  const std::vector<spwi::Probe> none;
   for (int bounce = 1; bounce <= ctx.bounces; ++bounce) {
     const std::string of = ctx.bounces > 1 ? " (bounce " + std::to_string(bounce) + ")" : "";
     fill_radiance(means, radiance);
     std::vector<Rgb> upper, lower;
-    std::vector<spwi::Probe> upper_probes, probes;
     for (int i = layout.count() - 1; i >= 0; --i) {
       watch = Stopwatch();
-      probes = spwi::place_probes(ctx.scene, g, layout.tiles, i, probe_options);
       lower = {};
       lower.assign(std::size_t(layout.values(i)), Rgb{});
-      const Cascade cascade{s, i, probes, upper_probes, upper, lower};
+      const Cascade cascade{
+          s,     i,    probes[std::size_t(i)], layout.top(i) ? none : probes[std::size_t(i + 1)],
+          upper, lower};
       cascade.run();
       upper = {};
       std::swap(upper, lower);
-      std::swap(upper_probes, probes);
       report.stages.push_back({"cascade " + std::to_string(i) + of, watch.ms()});
     }
     watch = Stopwatch();
-    Gather gather{s, upper_probes, upper, {}, {}, {}};
+    Gather gather{s, probes[0], upper, {}, {}, {}};
     for (int d = 0; d < layout.q0; ++d)
       gather.screen.push_back(frame.screen_direction(2 * kPi * (d + 0.5) / layout.q0));
     gather.prepare_probes();

@@ -30,9 +30,9 @@ inline constexpr int kMaxBins = 8;
 
 struct Layout {
   spwi::Layout tiles;  // the probe tiles of each cascade (levels.spacing*, nx, ny)
-  int q0 = 4;          // screen directions of cascade 0
-  int r0 = 8;          // cascade 0's interval, pixels
-  int steps = 8;       // samples an interval at least (the top one: to the screen's edge)
+  int q0 = 16;         // screen directions of cascade 0
+  int r0 = 16;         // cascade 0's interval, pixels
+  int steps = 16;      // samples an interval at least (the top one: to the screen's edge)
   int sectors = 32;    // per direction: occlusion bits
   int bins = 8;        // per direction: stored radiance, sectors / bins sectors each
   int rays = 4;        // directions marched together

@@ -11,6 +11,7 @@
 #include "spaceland/pt/pt.hpp"
 #include "spaceland/radiance_cache.hpp"
 #include "spaceland/spwi/spwi.hpp"
+#include "spaceland/ssrc/gpu.hpp"
 #include "spaceland/ssrc/ssrc.hpp"
 
 namespace penumbra::spaceland {
@@ -201,13 +202,24 @@ void ssrc_describe(const RenderResult& r, std::vector<Parameter>& p, std::string
          (o.backfaces ? "back faces" : "thickness " + io::format_rounded(o.thickness));
 }
 
-Expected<ImageRgb> ssrc_solve(const SolveContext& ctx, const RenderOptions& o, SolveReport& report,
-                              RenderOptions& used) {
+// On the CPU, or with a port (the GPU's) running the cascades, the gather and the shading.
+Expected<ImageRgb> ssrc_run(const SolveContext& ctx, const RenderOptions& o, SolveReport& report,
+                            RenderOptions& used, ssrc::Port port) {
   const ssrc::Layout layout = ssrc::make_layout(ctx.g.width, ctx.g.height, o.ssrc);
   used.ssrc.probe_spacing = layout.tiles.levels.spacing0;
   used.ssrc.interval = layout.r0;
   used.ssrc.cascades = layout.count();
-  return ssrc::render(ctx, o.ssrc, layout, report);
+  return ssrc::render(ctx, o.ssrc, layout, report, port);
+}
+
+Expected<ImageRgb> ssrc_solve(const SolveContext& ctx, const RenderOptions& o, SolveReport& report,
+                              RenderOptions& used) {
+  return ssrc_run(ctx, o, report, used, nullptr);
+}
+
+Expected<ImageRgb> ssrc_solve_gpu(const SolveContext& ctx, const RenderOptions& o,
+                                  SolveReport& report, RenderOptions& used) {
+  return ssrc_run(ctx, o, report, used, ssrc::render_gpu);
 }
 
 // In the order of the Method enum.
@@ -228,7 +240,7 @@ constexpr MethodEntry kMethods[] = {
      "screen-space radiance cascades (seed 001 4.2): probes and intervals on the screen, filled "
      "by marching the depth buffer with an occlusion bitmask; sees only what is on screen",
      kSsrcOptions, true, ssrc_check, ssrc_check_scene, ssrc_bytes, ssrc_describe, ssrc_solve,
-     nullptr},
+     ssrc_solve_gpu},
 };
 constexpr bool in_enum_order() {
   for (std::size_t i = 0; i < std::size(kMethods); ++i)

@@ -292,6 +292,26 @@ TEST_F(Cli3d, SsrcRendersAndReportsItsLayout) {
   EXPECT_FALSE(fs::exists(out("x.pfm")));
 }
 
+// ssrc runs on the GPU (lavapipe in CI): the report names the device and times its stages; the
+// other 3D methods still refuse it by name.
+TEST_F(Cli3d, SsrcRendersOnTheGpuAndReportsTheDevice) {
+  const auto r = run({"render", scene_, "--method", "ssrc", "--device", "gpu", "--bounces", "2",
+                      "--json", "-o", out("g.pfm")});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["method"], "ssrc");
+  EXPECT_EQ(j["device"], "gpu");
+  for (const char* stage : {"upload", "cascade 0 (bounce 2)", "gather (bounce 2)", "readback"})
+    EXPECT_TRUE(j["stages"].contains(stage)) << stage;
+  EXPECT_TRUE(fs::exists(out("g.pfm")));
+  for (const std::string m : {"spwi", "grid"}) {
+    const auto bad = run({"render", scene_, "--method", m, "--device", "gpu", "-o", out("x.pfm")});
+    EXPECT_EQ(bad.status, 2);
+    EXPECT_NE(bad.err.find("(" + m + ") runs on the CPU only"), std::string::npos) << bad.err;
+  }
+  EXPECT_FALSE(fs::exists(out("x.pfm")));
+}
+
 TEST_F(Cli3d, BadMethodOptionValuesAreUsageErrorsNamingTheFlag) {
   const std::vector<std::vector<std::string>> cases = {
       {"spwi", "--directions", "8", "--directions: expected the square of a power of two"},

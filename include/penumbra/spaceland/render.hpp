@@ -23,8 +23,8 @@ enum class Method {
          // screen, filled by marching the depth buffer with an occlusion bitmask
 };
 
-// Where a method runs (--device). No 3D method has a GPU port yet: gpu is refused, naming the
-// method (docs/GPU.md).
+// Where a method runs (--device). Only ssrc has a 3D GPU port: gpu is refused for the others,
+// naming the method (docs/GPU.md).
 enum class Device { cpu, gpu };
 
 // How a ray of an SPWI cascade continues into the probes of the cascade above (--merge).

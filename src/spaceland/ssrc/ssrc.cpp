@@ -614,7 +614,7 @@ Status check_scene(const Scene& scene) {
 }
 
 Expected<ImageRgb> render(const SolveContext& ctx, const SsrcOptions& o, const Layout& layout,
-                          SolveReport& report) {
+                          SolveReport& report, Port port) {
   const std::uint64_t need = layout.bytes();
   report.memory_bytes += need;
   if (need > ctx.max_memory)
@@ -702,6 +702,14 @@ Expected<ImageRgb> render(const SolveContext& ctx, const SsrcOptions& o, const L
   std::vector<std::vector<spwi::Probe>> probes(std::size_t(layout.count()));
   for (int i = 0; i < layout.count(); ++i)
     probes[std::size_t(i)] = spwi::place_probes(ctx.scene, g, layout.tiles, i, probe_options);
+  if (port) {
+    Prepared p{layout,       frame.eye,    frame.f,   frame.r,  frame.u, frame.tan_half,
+               depth,        {},           direct,    albedo,   probes,  probe_options,
+               s.cos_sector, s.sin_sector, s.cos_sum, s.sin_sum};
+    for (const Means::Level& m : means.levels)
+      p.means.push_back({m.position, m.normal, m.grow, m.count});
+    return port(ctx, o, p, report);
+  }
   const std::vector<spwi::Probe> none;
   for (int bounce = 1; bounce <= ctx.bounces; ++bounce) {
     const std::string of = ctx.bounces > 1 ? " (bounce " + std::to_string(bounce) + ")" : "";

@@ -10,6 +10,7 @@
 #pragma once
 
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "penumbra/error.hpp"
@@ -17,7 +18,9 @@
 #include "penumbra/spaceland/render.hpp"
 #include "spaceland/gbuffer.hpp"
 #include "spaceland/solve.hpp"
+#include "spaceland/spwi/probes.hpp"
 #include "spaceland/spwi/spwi.hpp"
+#include "spaceland/ssrc/depth_pyramid.hpp"
 
 namespace penumbra::spaceland::ssrc {
 
@@ -68,9 +71,33 @@ Status check_options(const SsrcOptions& o);
 // What the scene adds: the screen carries no fog.
 Status check_scene(const Scene& scene);
 
+// What render() prepares on the CPU before the cascades, as views of its own buffers: handed to
+// a port that runs the cascades, the gather and the shading elsewhere (ssrc/gpu.hpp).
+struct Prepared {
+  const Layout& layout;
+  Vec3 eye, forward, right, up;  // the camera's frame
+  float tan_half = 1;            // tan of half the vertical field of view
+  const DepthPyramid& depth;
+  // The depth pyramid's means per level (their radiance is filled per bounce).
+  struct MeansLevel {
+    std::span<const Vec3> position, normal;
+    std::span<const float> grow, count;
+  };
+  std::vector<MeansLevel> means;
+  const std::vector<Rgb>& direct;  // per pixel: emission and the sun's light
+  const std::vector<Rgb>& albedo;
+  const std::vector<std::vector<spwi::Probe>>& probes;  // per cascade
+  const SpwiOptions& probe_options;                     // the merge's and gather's weights
+  // Per sector: cos and sin at its centre angle; prefix sums of cos sin and sin^2.
+  std::span<const float> cos_sector, sin_sector, cos_sum, sin_sum;
+};
+using Port = Expected<ImageRgb> (*)(const SolveContext& ctx, const SsrcOptions& o,
+                                    const Prepared& prepared, SolveReport& report);
+
 // Renders the camera's image at ctx.bounces: each later bounce marches the previous bounce's
-// image as the samples' radiance. Refuses (Error) work whose layout passes ctx.max_memory.
+// image as the samples' radiance. Refuses (Error) work whose layout passes ctx.max_memory. With
+// a port, the cascades and what follows are the port's (the GPU's).
 Expected<ImageRgb> render(const SolveContext& ctx, const SsrcOptions& o, const Layout& layout,
-                          SolveReport& report);
+                          SolveReport& report, Port port = nullptr);
 
 }  // namespace penumbra::spaceland::ssrc

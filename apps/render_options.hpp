@@ -32,8 +32,8 @@ struct RenderOptionSet {
   std::vector<penumbra::flatland::Method> methods;
   std::string method_help = "Method";
   std::string device_help =
-      "cpu; gpu (Vulkan, a CPU driver such as lavapipe included); auto (a hardware GPU when "
-      "there is one and the method runs there, else the CPU)";
+      "cpu; gpu (Vulkan, a CPU driver such as lavapipe included; 3D: ssrc only); auto (a "
+      "hardware GPU when there is one and the method runs there, else the CPU; 3D: the CPU)";
   int max_bounces = 64;
   std::string bounces_help = "Diffuse bounces (1: direct light only)";
   std::string threads_help = "Worker threads (0: all cores)";

@@ -284,6 +284,9 @@ Expected<ImageRgb> render_gpu(const SolveContext& ctx, const SsrcOptions& o, con
     probe_total += pr.probes[std::size_t(i)].size();
     largest = std::max(largest, l.values(i));
   }
+  report.stages.push_back({"GPU tables", watch.ms()});
+
+  watch.restart();
   CornerTable upper;
   upper.words.assign(8 * std::size_t(probe_total), 0);
   for (int i = 0; i + 1 < count; ++i) {
@@ -372,6 +375,9 @@ Expected<ImageRgb> render_gpu(const SolveContext& ctx, const SsrcOptions& o, con
   if (!b_view) return b_view.error();
   if (Expected<std::vector<std::pair<std::string, double>>> t = up->run(); !t) return t.error();
   u.staging.clear();
+  // The host's copies are on the device now (the corners stay: they plan the slabs).
+  for (std::vector<float>* v : {&lohi, &position, &normal, &grow_count, &radiance, &light, &view})
+    std::vector<float>().swap(*v);
   // Written on the device only: the two cascades' stores (ping-pong, bound in slabs), the
   // probes' means (--gather probe) and the image.
   const std::size_t store_bytes = std::size_t(largest) * 3 * sizeof(float);

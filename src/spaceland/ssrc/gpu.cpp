@@ -48,7 +48,7 @@ struct Global {
   float ground[4], horizon[4], zenith[4];
   float width, height, tan_half, spr;
   std::int32_t sectors, bins, per_bin, q0;
-  std::int32_t image_w, image_h, levels, pad;
+  std::int32_t image_w, image_h, pad0, pad1;
   float cos_sector[32], sin_sector[32], cos_sum[36], sin_sum[36];
 };
 static_assert(sizeof(Global) == 704);
@@ -210,7 +210,6 @@ Expected<ImageRgb> render_gpu(const SolveContext& ctx, const SsrcOptions& o, con
   global.q0 = l.q0;
   global.image_w = g.width;
   global.image_h = g.height;
-  global.levels = int(pr.means.size());
   for (int k = 0; k < l.sectors; ++k) {
     global.cos_sector[k] = pr.cos_sector[std::size_t(k)];
     global.sin_sector[k] = pr.sin_sector[std::size_t(k)];
@@ -257,6 +256,7 @@ Expected<ImageRgb> render_gpu(const SolveContext& ctx, const SsrcOptions& o, con
     c.level = level;
     c.level_w = pr.depth.level(level).width;
     c.level_off = std::int32_t(level_off[std::size_t(level)]);
+    // Samples an interval, as ssrc.cpp's march(): the top cascade's to the screen's edge.
     c.most = l.top(i)
                  ? int(std::ceil(
                        std::sqrt(double(g.width) * g.width + double(g.height) * g.height) / step)) +

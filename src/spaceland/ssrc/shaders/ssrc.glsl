@@ -9,7 +9,7 @@ struct Global {
   float width, height, tan_half;  // the image and the field of view
   float spr;                      // sectors per radian
   int sectors, bins, per_bin, q0;
-  int image_w, image_h, levels, pad;
+  int image_w, image_h, pad0, pad1;
   float cos_sector[32];
   float sin_sector[32];
   float cos_sum[36];  // 33 used

@@ -5,8 +5,9 @@
 // through the depth pyramid's level of its step; each depth sample, solid for a thickness behind
 // it, sets the sectors it covers in an occlusion bitmask and adds its radiance to those it covers
 // first. Merged top down: the sectors a lower interval leaves open take the upper probes'
-// radiance (flatland's merge per sector); what leaves the screen sees the sky. docs/METHODS.md,
-// "Screen-space cascades".
+// radiance (flatland's merge per sector); what leaves the screen sees the sky, or with
+// --offscreen world what an exact ray through the scene meets. docs/METHODS.md, "Screen-space
+// radiance cascades".
 #pragma once
 
 #include <cstdint>

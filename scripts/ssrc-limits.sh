@@ -29,7 +29,7 @@ cat > "$out/hidden.json" <<JSON
  "objects": [$floor,
   {"type": "box", "center": [-0.6, 0.6, 1.5], "size": [0.8, 1.2, 0.1], "material": "white"},
   {"type": "box", "center": [-0.6, 0.5, 0.4], "size": [0.15, 1.0, 0.15], "material": "white"},
-  {"type": "sphere", "center": [-2.5, 1.0, 0.2], "radius": 0.25, "material": "lamp"}]}
+  {"type": "sphere", "center": [-1.6, 1.0, 0.2], "radius": 0.25, "material": "lamp"}]}
 JSON
 # A wall 2 cm thick seen edge on splits the floor; the light is on its left, lower than its top:
 # the floor on its right is dark.

@@ -469,6 +469,11 @@ std::unique_ptr<RenderCommand> add_render_command(CLI::App& app) {
                      "(1e30: infinitely thick, as horizon-based methods assume)")
         ->check(real_range(0, 1e30))
         ->capture_default_str();
+    add_enum_option(render, "--offscreen", a.ssrc.offscreen,
+                    {sl::SsrcOffscreen::sky, sl::SsrcOffscreen::world},
+                    "3D ssrc: what a ray sees once its march leaves the screen: the sky, or the "
+                    "world (an exact ray on through the scene, as SPWI's: light from off screen, "
+                    "rooms; a cost that depends on the scene)");
     add_enum_option(
         render, "--gather", a.spwi.gather, {sl::SpwiGather::pixel, sl::SpwiGather::probe},
         "3D spwi and ssrc: the final gather averages each probe's directions per pixel, over "

@@ -245,6 +245,7 @@ const std::pair<const char*, const char*> kFlags[] = {
     {"`spwi.sun`", "--sun"},
     {"`spwi.gather`", "--gather"},
     {"`ssrc.gather`", "--gather"},
+    {"`ssrc.offscreen`", "--offscreen"},
     {"`spwi.overlap`", "--disjoint"},
     {"`grid.extend_length`", "--extend"},
     {"`grid.fix`", "--fix"},

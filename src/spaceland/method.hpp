@@ -38,9 +38,10 @@ struct MethodEntry {
   const char* summary;  // one line for --help
   // The RenderOptions fields it reads (MethodInfo::options).
   std::span<const char* const> options;
-  // The method follows light through every bounce itself; otherwise the dispatcher hands it a
-  // radiance cache holding bounces 2..N at the surfaces (RadianceCache, its options `grid`).
-  bool bounces_itself;
+  // Whether, with these options, the method follows light through every bounce itself;
+  // otherwise the dispatcher hands it a radiance cache holding bounces 2..N at the surfaces
+  // (RadianceCache, its options `grid`).
+  bool (*bounces_itself)(const RenderOptions& options);
   // The ranges and combinations of its own options, before any scene is read; fields named as
   // in RenderOptions (`spwi.directions`). Null: none of its own.
   Status (*check_options)(const RenderOptions& options);

@@ -17,6 +17,13 @@
 namespace penumbra::spaceland {
 namespace {
 
+bool always(const RenderOptions&) {
+  return true;
+}
+bool never(const RenderOptions&) {
+  return false;
+}
+
 // The cascade parameters SPWI and the grid share, as used.
 template <class Cascades>
 void cascade_parameters(const Cascades& m, std::vector<Parameter>& p) {
@@ -162,12 +169,21 @@ Expected<ImageRgb> grid_solve(const SolveContext& ctx, const RenderOptions& o, S
 
 // ---- ssrc: screen-space radiance cascades (seed 001 section 4.2) ----
 
+// On screen it marches the last bounce's image; rays going on through the world (--offscreen
+// world) read the light the surfaces off screen reflect from the radiance cache.
+bool ssrc_bounces_itself(const RenderOptions& o) {
+  return o.ssrc.offscreen != SsrcOffscreen::world;
+}
+
 constexpr const char* kSsrcOptions[] = {
-    "ssrc.probe_spacing", "ssrc.directions", "ssrc.interval",    "ssrc.cascades",      "ssrc.steps",
-    "ssrc.backfaces",     "ssrc.sectors",    "ssrc.rays",        "ssrc.thickness",     "ssrc.merge",
-    "ssrc.merge_edge",    "ssrc.gather",     "ssrc.gather_edge", "ssrc.gather_normal", "sun_rays"};
+    "ssrc.probe_spacing", "ssrc.directions",    "ssrc.interval",   "ssrc.cascades",
+    "ssrc.steps",         "ssrc.backfaces",     "ssrc.sectors",    "ssrc.rays",
+    "ssrc.thickness",     "ssrc.merge",         "ssrc.merge_edge", "ssrc.gather",
+    "ssrc.gather_edge",   "ssrc.gather_normal", "ssrc.offscreen",  "sun_rays"};
 
 Status ssrc_check(const RenderOptions& o) {
+  if (o.device == Device::gpu)
+    if (Status s = ssrc::check_gpu_options(o.ssrc); !s) return s;
   return ssrc::check_options(o.ssrc);
 }
 
@@ -195,11 +211,13 @@ void ssrc_describe(const RenderResult& r, std::vector<Parameter>& p, std::string
   p.push_back({"gather", std::string(to_string(o.gather))});
   p.push_back({"gather_edge", double(o.gather_edge)});
   p.push_back({"gather_normal", double(o.gather_normal)});
+  p.push_back({"offscreen", std::string(to_string(o.offscreen))});
   p.push_back({"sun_rays", std::int64_t(r.options.sun_rays)});
   line = ", " + std::to_string(o.cascades) + " cascades, s0 " + std::to_string(o.probe_spacing) +
          " px, r0 " + std::to_string(o.interval) + " px, " + std::to_string(o.sectors) +
          " sectors, " + std::to_string(o.steps) + " steps, " +
-         (o.backfaces ? "back faces" : "thickness " + io::format_rounded(o.thickness));
+         (o.backfaces ? "back faces" : "thickness " + io::format_rounded(o.thickness)) +
+         (o.offscreen == SsrcOffscreen::world ? ", off screen: world" : "");
 }
 
 // On the CPU, or with a port (the GPU's) running the cascades, the gather and the shading.
@@ -226,21 +244,21 @@ Expected<ImageRgb> ssrc_solve_gpu(const SolveContext& ctx, const RenderOptions& 
 constexpr MethodEntry kMethods[] = {
     {Method::pt, "pt", "the path tracer",
      "reference path tracer (next event estimation + MIS, fog, Owen-scrambled Sobol points)",
-     kPtOptions, true, pt_check, nullptr, pt_bytes, pt_describe, pt_solve, nullptr},
+     kPtOptions, always, pt_check, nullptr, pt_bytes, pt_describe, pt_solve, nullptr},
     {Method::spwi, "spwi", "screen-space probes with world-space intervals",
      "screen-space probes with world-space intervals (seed 000): radiance cascades on the "
      "G-buffer, later bounces from the probe grid's radiance cache",
-     kSpwiOptions, false, spwi_check, spwi_check_scene, spwi_bytes, spwi_describe, spwi_solve,
+     kSpwiOptions, never, spwi_check, spwi_check_scene, spwi_bytes, spwi_describe, spwi_solve,
      nullptr},
     {Method::grid, "grid", "the world-space probe grid",
      "the world-space probe grid (seed 001 4.3): radiance cascades over the scene's voxels, "
      "fog and light shafts, later bounces, the radiance cache spwi's come from",
-     kGridOptions, true, grid_check, nullptr, grid_bytes, grid_describe, grid_solve, nullptr},
+     kGridOptions, always, grid_check, nullptr, grid_bytes, grid_describe, grid_solve, nullptr},
     {Method::ssrc, "ssrc", "the screen-space radiance cascades",
      "screen-space radiance cascades (seed 001 4.2): probes and intervals on the screen, filled "
      "by marching the depth buffer with an occlusion bitmask; sees only what is on screen",
-     kSsrcOptions, true, ssrc_check, ssrc_check_scene, ssrc_bytes, ssrc_describe, ssrc_solve,
-     ssrc_solve_gpu},
+     kSsrcOptions, ssrc_bounces_itself, ssrc_check, ssrc_check_scene, ssrc_bytes, ssrc_describe,
+     ssrc_solve, ssrc_solve_gpu},
 };
 constexpr bool in_enum_order() {
   for (std::size_t i = 0; i < std::size(kMethods); ++i)

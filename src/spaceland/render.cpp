@@ -30,7 +30,7 @@ bool known(Method m) {
 
 // Later bounces from the radiance cache: a method that does not follow them, more than one.
 bool needs_cache(const RenderOptions& o) {
-  return known(o.method) && !entry(o.method).bounces_itself && o.bounces > 1;
+  return known(o.method) && !entry(o.method).bounces_itself(o) && o.bounces > 1;
 }
 
 // The radiance cache's grid: the grid's defaults but its voxels, levels and probe spacing (the
@@ -104,6 +104,9 @@ const char* to_string(SpwiMerge m) {
 
 const char* to_string(SpwiGather g) {
   return g == SpwiGather::pixel ? "pixel" : "probe";
+}
+const char* to_string(SsrcOffscreen o) {
+  return o == SsrcOffscreen::sky ? "sky" : "world";
 }
 const char* to_string(SpwiSun s) {
   return s == SpwiSun::direct ? "direct" : "cascades";

@@ -263,7 +263,8 @@ TEST_F(Cli3d, GridReportsItsVoxelsAndIsRefusedItsOthersOptions) {
 // before the scene is read, as 2D's are.
 TEST_F(Cli3d, SsrcRendersAndReportsItsLayout) {
   const auto r = run({"render", scene_, "--method", "ssrc", "--sectors", "16", "--march-rays", "2",
-                      "--backfaces", "--gather", "pixel", "--json", "-o", out("s.pfm")});
+                      "--backfaces", "--gather", "pixel", "--offscreen", "world", "--bounces", "2",
+                      "--json", "-o", out("s.pfm")});
   ASSERT_EQ(r.status, 0) << r.err;
   const nlohmann::json j = nlohmann::json::parse(r.out);
   EXPECT_EQ(j["method"], "ssrc");
@@ -272,9 +273,12 @@ TEST_F(Cli3d, SsrcRendersAndReportsItsLayout) {
   EXPECT_EQ(p["rays"], 2);
   EXPECT_EQ(p["backfaces"], true);
   EXPECT_EQ(p["gather"], "pixel");
+  EXPECT_EQ(p["offscreen"], "world");
   EXPECT_EQ(p["interval"].get<int>(), 4 * p["probe_spacing"].get<int>());  // derived
   EXPECT_GE(p["cascades"].get<int>(), 2);
   EXPECT_TRUE(j["stages"].contains("back faces"));
+  // Off screen at the second bounce: the surfaces its image does not hold, from the cache.
+  EXPECT_TRUE(j["stages"].contains("radiance cache")) << j["stages"].dump();
   EXPECT_TRUE(fs::exists(out("s.pfm")));
   // Options of other methods are refused by name, and fog by the method.
   const auto bad =
@@ -324,6 +328,8 @@ TEST_F(Cli3d, BadMethodOptionValuesAreUsageErrorsNamingTheFlag) {
       {"ssrc", "--interval", "2.5", "--interval for ssrc is a whole number of pixels"},
       {"ssrc", "--sectors", "12", "--sectors"},
       {"ssrc", "--march-rays", "3", "--march-rays"},
+      {"ssrc", "--offscreen", "grid", "--offscreen"},
+      {"spwi", "--offscreen", "world", "--offscreen applies to --method ssrc only"},
   };
   for (const auto& c : cases) {
     const auto r = run({"render", scene_, "--method", c[0], c[1], c[2], "-o", out("x.pfm")});

@@ -199,7 +199,7 @@ TEST(SsrcGpu, SlabsOfTheStoreGiveTheSameBits) {
       << refused.error().message;
 }
 
-// Only ssrc has a 3D GPU port.
+// Only ssrc has a 3D GPU port, for every option but --offscreen world.
 TEST(SsrcGpu, TheOtherThreeDMethodsStillRefuseTheGpu) {
   for (Method m : {Method::pt, Method::spwi, Method::grid}) {
     RenderOptions o;
@@ -213,6 +213,15 @@ TEST(SsrcGpu, TheOtherThreeDMethodsStillRefuseTheGpu) {
   RenderOptions o;
   o.method = Method::ssrc;
   o.device = Device::gpu;
+  EXPECT_TRUE(check_options(o).ok());
+  // --offscreen world's exact rays are Embree's, on the CPU.
+  o.ssrc.offscreen = SsrcOffscreen::world;
+  const Status st = check_options(o);
+  ASSERT_FALSE(st.ok());
+  EXPECT_NE(st.error().message.find("`ssrc.offscreen` world traces rays through the scene"),
+            std::string::npos)
+      << st.error().message;
+  o.device = Device::cpu;
   EXPECT_TRUE(check_options(o).ok());
 }
 

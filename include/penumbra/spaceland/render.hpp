@@ -50,6 +50,13 @@ enum class SpwiGather {
   probe,  // once per probe, over the probe's hemisphere; a pixel reads 4 values
 };
 
+// What a screen-space cascade ray sees once its march leaves the screen (--offscreen).
+enum class SsrcOffscreen {
+  sky,    // the sky (the seed's method: the screen is all it knows)
+  world,  // the world: an exact ray on from where it left, its hit's emission (and with
+          // bounces > 1 the radiance cache's reflected light), or the sky (SPWI's answer)
+};
+
 // What an image holds: the radiance (the methods' answer) or a G-buffer channel of the first hits
 // (the same for every method). Misses: depth +inf (EXR/PFM; PNG shows them black), normal 0,
 // albedo 0, position 0, emission the sky's radiance (the sun's disk included), object -1.
@@ -168,6 +175,9 @@ struct SsrcOptions {
   // their normals agree, as on planes; the same error as pixel on the quality scenes, a tenth of
   // the time); pixel: each pixel weighs its probes' directions for its own normal.
   SpwiGather gather = SpwiGather::probe;
+  // Rays that leave the screen see the sky, or (world) go on as exact rays through the scene: a
+  // cost that depends on the scene, for rooms and light from off screen.
+  SsrcOffscreen offscreen = SsrcOffscreen::sky;
 };
 
 struct RenderOptions {
@@ -264,5 +274,6 @@ const char* to_string(Aov a);
 const char* to_string(SpwiMerge m);
 const char* to_string(SpwiSun s);
 const char* to_string(SpwiGather g);
+const char* to_string(SsrcOffscreen o);
 
 }  // namespace penumbra::spaceland

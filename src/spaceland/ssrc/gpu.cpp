@@ -38,9 +38,9 @@ using gpu::Batch;
 using gpu::Buffer;
 using gpu::Memory;
 
-// ssrc.cpp's kOnPlane and kFlat, squared as the CPU squares them (in float), and the threshold
-// of its test for a camera ray parallel to a texel's plane.
-constexpr float kOnPlane = 0.02f, kFlat = 0.95f, kParallel = 1e-12f;
+// ssrc.cpp's kOnPlane, squared as the CPU squares it (in float), and the threshold of its test
+// for a camera ray parallel to a texel's plane.
+constexpr float kOnPlane = 0.02f, kParallel = 1e-12f;
 
 // The kernels' parameters (ssrc/shaders/ssrc.glsl, std430: the same offsets).
 struct Global {
@@ -49,9 +49,9 @@ struct Global {
   float width, height, tan_half, spr;
   std::int32_t sectors, bins, per_bin, q0;
   std::int32_t image_w, image_h, pad0, pad1;
-  float cos_sector[32], sin_sector[32], cos_sum[36], sin_sum[36];
+  float cos_sector[32], sin_sector[32], bin_weight[32], cos_sum[36], sin_sum[36];
 };
-static_assert(sizeof(Global) == 704);
+static_assert(sizeof(Global) == 832);
 struct CascadeParams {
   std::int32_t level, level_w, level_off, most;
   float a, step, stretch, pad;
@@ -167,6 +167,14 @@ struct Uploads {
 
 }  // namespace
 
+Status check_gpu_options(const SsrcOptions& o) {
+  if (o.offscreen == SsrcOffscreen::world)
+    return Error{
+        "`device` gpu: `ssrc.offscreen` world traces rays through the scene, on the CPU only; "
+        "use `ssrc.offscreen` sky or `device` cpu"};
+  return {};
+}
+
 Expected<ImageRgb> render_gpu(const SolveContext& ctx, const SsrcOptions& o,
                               const Prepared& prepared, SolveReport& report) {
   return render_gpu(ctx, o, prepared, report, 0);
@@ -174,6 +182,7 @@ Expected<ImageRgb> render_gpu(const SolveContext& ctx, const SsrcOptions& o,
 
 Expected<ImageRgb> render_gpu(const SolveContext& ctx, const SsrcOptions& o, const Prepared& pr,
                               SolveReport& report, std::uint64_t binding_bytes) {
+  if (Status s = check_gpu_options(o); !s) return s.error();
   Stopwatch watch;
   Expected<std::shared_ptr<gpu::Context>> opened = gpu::Context::create(true);
   if (!opened) return opened.error();
@@ -213,36 +222,30 @@ Expected<ImageRgb> render_gpu(const SolveContext& ctx, const SsrcOptions& o, con
   for (int k = 0; k < l.sectors; ++k) {
     global.cos_sector[k] = pr.cos_sector[std::size_t(k)];
     global.sin_sector[k] = pr.sin_sector[std::size_t(k)];
+    global.bin_weight[k] = pr.bin_weight[std::size_t(k)];
   }
   for (int k = 0; k <= l.sectors; ++k) {
     global.cos_sum[k] = pr.cos_sum[std::size_t(k)];
     global.sin_sum[k] = pr.sin_sum[std::size_t(k)];
   }
 
-  // The pyramid's levels one after the other.
+  // The pyramid's levels one after the other: the march's texel records, the hits' counts and
+  // the radiance (level 0: what the first bounce marches; the refill fills the levels above).
   std::vector<std::uint64_t> level_off;
   std::uint64_t texels = 0;
-  for (int lv = 0; lv < pr.depth.levels(); ++lv) {
+  for (const Prepared::Level& lv : pr.levels) {
     level_off.push_back(texels);
-    texels += std::uint64_t(pr.depth.level(lv).width) * std::uint64_t(pr.depth.level(lv).height);
+    texels += std::uint64_t(lv.width) * std::uint64_t(lv.height);
   }
-  std::vector<float> lohi(2 * texels), position(3 * texels), normal(3 * texels),
-      grow_count(2 * texels), radiance(3 * texels, 0.0f);
-  for (int lv = 0; lv < pr.depth.levels(); ++lv) {
-    const DepthPyramid::Level& d = pr.depth.level(lv);
-    const Prepared::MeansLevel& m = pr.means[std::size_t(lv)];
-    const std::size_t at = std::size_t(level_off[std::size_t(lv)]);
-    for (std::size_t k = 0; k < d.lo.size(); ++k) {
-      lohi[2 * (at + k)] = d.lo[k];
-      lohi[2 * (at + k) + 1] = d.hi[k];
-      std::memcpy(&position[3 * (at + k)], &m.position[k], 3 * sizeof(float));
-      std::memcpy(&normal[3 * (at + k)], &m.normal[k], 3 * sizeof(float));
-      grow_count[2 * (at + k)] = m.grow[k];
-      grow_count[2 * (at + k) + 1] = m.count[k];
-    }
+  std::vector<float> texel_data(kTexelFloats * texels), count_data(texels),
+      radiance(3 * texels, 0.0f);
+  for (std::size_t lv = 0; lv < pr.levels.size(); ++lv) {
+    const std::size_t at = std::size_t(level_off[lv]);
+    std::memcpy(texel_data.data() + kTexelFloats * at, pr.levels[lv].texels.data(),
+                pr.levels[lv].texels.size());
+    std::copy(pr.levels[lv].count.begin(), pr.levels[lv].count.end(), count_data.begin() + at);
   }
-  // The first bounce marches the direct light (level 0; the refill fills the levels above).
-  std::memcpy(radiance.data(), pr.direct.data(), pixels * sizeof(Rgb));
+  std::memcpy(radiance.data(), pr.radiance.data(), pixels * sizeof(Rgb));
 
   // Per cascade: its parameters, screen directions (the CPU's floats), probes and the upper
   // probes each merges with.
@@ -254,7 +257,7 @@ Expected<ImageRgb> render_gpu(const SolveContext& ctx, const SsrcOptions& o, con
     const double step = double(1 << level), a = l.start(i), b = l.end(i);
     CascadeParams& c = params[std::size_t(i)];
     c.level = level;
-    c.level_w = pr.depth.level(level).width;
+    c.level_w = pr.levels[std::size_t(level)].width;
     c.level_off = std::int32_t(level_off[std::size_t(level)]);
     // Samples an interval, as ssrc.cpp's march(): the top cascade's to the screen's edge.
     c.most = l.top(i)
@@ -333,7 +336,7 @@ Expected<ImageRgb> render_gpu(const SolveContext& ctx, const SsrcOptions& o, con
 
   // ---- Upload ----
   watch.restart();
-  Expected<gpu::Kernel> march = device.kernel("ssrc_march", kMarch, 11, 32);
+  Expected<gpu::Kernel> march = device.kernel("ssrc_march", kMarch, 8, 32);
   if (!march) return march.error();
   Expected<gpu::Kernel> refill = device.kernel("ssrc_refill", kRefill, 2, 24);
   if (!refill) return refill.error();
@@ -357,14 +360,10 @@ Expected<ImageRgb> render_gpu(const SolveContext& ctx, const SsrcOptions& o, con
   if (!b_probes) return b_probes.error();
   Expected<Buffer> b_upper = u.upload(*up, upper.words, "the merge's corners");
   if (!b_upper) return b_upper.error();
-  Expected<Buffer> b_lohi = u.upload(*up, lohi, "the depth pyramid's ranges");
-  if (!b_lohi) return b_lohi.error();
-  Expected<Buffer> b_position = u.upload(*up, position, "the pyramid's mean positions");
-  if (!b_position) return b_position.error();
-  Expected<Buffer> b_normal = u.upload(*up, normal, "the pyramid's mean normals");
-  if (!b_normal) return b_normal.error();
-  Expected<Buffer> b_grow = u.upload(*up, grow_count, "the pyramid's solids and counts");
-  if (!b_grow) return b_grow.error();
+  Expected<Buffer> b_texels = u.upload(*up, texel_data, "the pyramid's texel records");
+  if (!b_texels) return b_texels.error();
+  Expected<Buffer> b_count = u.upload(*up, count_data, "the pyramid's hit counts");
+  if (!b_count) return b_count.error();
   Expected<Buffer> b_radiance = u.upload(*up, radiance, "the pyramid's radiance");
   if (!b_radiance) return b_radiance.error();
   Expected<Buffer> b_gather = u.upload(*up, gather.words, "the gather's corners");
@@ -376,7 +375,7 @@ Expected<ImageRgb> render_gpu(const SolveContext& ctx, const SsrcOptions& o, con
   if (Expected<std::vector<std::pair<std::string, double>>> t = up->run(); !t) return t.error();
   u.staging.clear();
   // The host's copies are on the device now (the corners stay: they plan the slabs).
-  for (std::vector<float>* v : {&lohi, &position, &normal, &grow_count, &radiance, &light, &view})
+  for (std::vector<float>* v : {&texel_data, &count_data, &radiance, &light, &view})
     std::vector<float>().swap(*v);
   // Written on the device only: the two cascades' stores (ping-pong, bound in slabs), the
   // probes' means (--gather probe) and the image.
@@ -438,7 +437,7 @@ Expected<ImageRgb> render_gpu(const SolveContext& ctx, const SsrcOptions& o, con
   if (!shade_slabs) return shade_slabs.error();
 
   // ---- Per bounce: the pyramid's radiance, the cascades top down, the gather ----
-  const float on_plane2 = kOnPlane * kOnPlane, flat2 = kFlat * kFlat;
+  const float on_plane2 = kOnPlane * kOnPlane;
   Buffer* const dummy = &*b_params;  // bound where a kernel reads nothing (never read)
   const Batch::Range dummy_range{dummy, 0, 16};
   for (int bounce = 1; bounce <= ctx.bounces; ++bounce) {
@@ -447,11 +446,11 @@ Expected<ImageRgb> render_gpu(const SolveContext& ctx, const SsrcOptions& o, con
     if (!batch) return batch.error();
     batch->mark("radiance" + of);
     if (bounce > 1) batch->copy(*image, 0, *b_radiance, 0, pixels * 12);
-    for (std::size_t lv = 1; lv < pr.means.size(); ++lv) {
-      const DepthPyramid::Level &below = pr.depth.level(int(lv - 1)), &at = pr.depth.level(int(lv));
+    for (std::size_t lv = 1; lv < pr.levels.size(); ++lv) {
+      const Prepared::Level &below = pr.levels[lv - 1], &at = pr.levels[lv];
       const std::int32_t push[6] = {std::int32_t(level_off[lv - 1]), below.width, below.height,
                                     std::int32_t(level_off[lv]),     at.width,    at.height};
-      Buffer* bufs[] = {&*b_grow, &*b_radiance};
+      Buffer* bufs[] = {&*b_count, &*b_radiance};
       batch->dispatch(*refill, bufs, push, (std::uint32_t(at.width) + 15) / 16,
                       (std::uint32_t(at.height) + 15) / 16);
     }
@@ -464,22 +463,21 @@ Expected<ImageRgb> render_gpu(const SolveContext& ctx, const SsrcOptions& o, con
         struct {
           std::int32_t cascade;
           std::uint32_t first, count, out_origin, up_origin;
-          float on_plane2, flat2, tiny;
+          float on_plane2, tiny, pad;
         } push{i,
                std::uint32_t(s.first * dirs_i),
                std::uint32_t(s.count * dirs_i),
                0,
                0,
                on_plane2,
-               flat2,
-               kParallel};
+               kParallel,
+               0};
         static_assert(sizeof(push) == 32);
         const Batch::Range out_range = bind(*out, s.out, align, push.out_origin);
         const Batch::Range up_range =
             s.read.empty() ? dummy_range : bind(*upper_store, s.read, align, push.up_origin);
-        const Batch::Range ranges[] = {{&*b_params},   {&*b_dirs},     {&*b_probes}, {&*b_upper},
-                                       {&*b_lohi},     {&*b_position}, {&*b_normal}, {&*b_grow},
-                                       {&*b_radiance}, up_range,       out_range};
+        const Batch::Range ranges[] = {{&*b_params}, {&*b_dirs},     {&*b_probes}, {&*b_upper},
+                                       {&*b_texels}, {&*b_radiance}, up_range,     out_range};
         const gpu::Groups gr = gpu::groups_1d(std::size_t(push.count), 64, info);
         batch->dispatch(*march, ranges, &push, gr.x, gr.y);
       }
@@ -505,7 +503,7 @@ Expected<ImageRgb> render_gpu(const SolveContext& ctx, const SsrcOptions& o, con
       const Batch::Range store_range =
           s.read.empty() ? dummy_range : bind(*upper_store, s.read, align, push.store_origin);
       const Batch::Range ranges[] = {{&*b_params}, {&*b_dirs},  {&*b_gather},
-                                     {&*b_grow},   {&*b_light}, {&*b_view},
+                                     {&*b_count},  {&*b_light}, {&*b_view},
                                      store_range,  {&*means},   {&*image}};
       const gpu::Groups gr = gpu::groups_1d(s.count, 64, info);
       batch->dispatch(*shade, ranges, &push, gr.x, gr.y);

@@ -16,6 +16,10 @@
 
 namespace penumbra::spaceland::ssrc {
 
+// What the port cannot do, fields named as in RenderOptions: --offscreen world's exact rays
+// through the scene (Embree's, on the CPU).
+Status check_gpu_options(const SsrcOptions& o);
+
 // The port on the first Vulkan device (a hardware GPU, else a CPU driver such as lavapipe).
 // `--rays` is a batching detail of the CPU's march and changes nothing here.
 Expected<ImageRgb> render_gpu(const SolveContext& ctx, const SsrcOptions& o,

@@ -14,6 +14,7 @@
 #include "core/timer.hpp"
 #include "io/json_reader.hpp"
 #include "spaceland/camera.hpp"
+#include "spaceland/radiance_cache.hpp"
 #include "spaceland/shade.hpp"
 #include "spaceland/sky.hpp"
 #include "spaceland/spwi/probes.hpp"
@@ -42,7 +43,9 @@ struct Means {
   };
   std::vector<Level> levels;
 
-  static std::uint64_t bytes_per_texel() { return 2 * sizeof(Vec3) + sizeof(Rgb) + sizeof(float); }
+  static std::uint64_t bytes_per_texel() {
+    return 2 * sizeof(Vec3) + sizeof(Rgb) + 2 * sizeof(float);
+  }
 };
 
 // The levels' positions, normals, solids and counts (the radiance comes per bounce), sized as the
@@ -123,6 +126,19 @@ void fill_radiance(Means& m, const std::vector<Rgb>& pixels) {
   }
 }
 
+// What the march reads of a texel, in one place (one or two cache lines a sample rather than six
+// arrays' worth): its plane (the mean normal, not unit, and its offset from the eye), the depth
+// range a meeting point is kept in, and the solid's end over the depth; lo = +inf marks a texel
+// over misses only.
+struct Texel {
+  Vec3 n;
+  float n2;     // |n|^2
+  float plane;  // dot(mean - eye, n)
+  float zc;     // the mean's linear depth: the meeting point where a ray runs along the plane
+  float lo, hi;
+  float grow;
+};
+
 // The camera's frame: screen point (x, y) in pixels (row 0 at the top) at linear depth z is
 // eye + z (f + X r + Y u), and a screen direction (cos phi, sin phi) is the world direction
 // cos phi r - sin phi u.
@@ -144,6 +160,51 @@ struct Frame {
     return r * float(std::cos(phi)) - u * float(std::sin(phi));
   }
 };
+
+// The spread of a texel's depths, over the nearest, beyond which it spans a depth step (measured:
+// 0.1 against 0.05, 0.25 and 0.5).
+constexpr float kStep = 0.1f;
+
+// The length of a texel's mean unit normal above which it counts as one surface's.
+constexpr float kFlat = 0.95f;
+
+// Each level's texels as the march reads them, from the depth pyramid and the means (the
+// position, normal and solid of their hits). A texel of one surface (its normals agree) is its
+// plane, met within [zc / 2, 2 zc]; one across an edge is kept within its depth range; one across
+// a depth step (a lamp over the floor far behind it) is its nearest surface alone: the plane
+// through the mean of both, or the whole range between them, was a phantom slab carrying the
+// lamp's light over the step.
+std::vector<std::vector<Texel>> make_texels(const DepthPyramid& depth, const Means& m,
+                                            const Frame& frame) {
+  std::vector<std::vector<Texel>> levels(m.levels.size());
+  for (std::size_t l = 0; l < m.levels.size(); ++l) {
+    const Means::Level& ml = m.levels[l];
+    const DepthPyramid::Level& dl = depth.level(int(l));
+    std::vector<Texel>& out = levels[l];
+    out.resize(ml.count.size());
+    parallel_for(ml.height, [&](int y) {
+      for (int x = 0; x < ml.width; ++x) {
+        const std::size_t k = std::size_t(y) * std::size_t(ml.width) + std::size_t(x);
+        Texel& t = out[k];
+        t.n = ml.normal[k];
+        t.n2 = dot(t.n, t.n);
+        t.plane = dot(ml.position[k] - frame.eye, t.n);
+        t.zc = dot(ml.position[k] - frame.eye, frame.f);
+        t.grow = ml.grow[k];
+        if (!(ml.count[k] > 0)) {  // only misses: the sky occludes nothing
+          t.lo = std::numeric_limits<float>::infinity();
+          t.hi = -t.lo;
+          continue;
+        }
+        const bool flat = t.n2 > kFlat * kFlat;
+        t.lo = flat ? 0.5f * t.zc : dl.lo[k];
+        t.hi = flat ? 2 * t.zc : dl.hi[k];
+        if (dl.hi[k] > dl.lo[k] * (1 + kStep)) t.lo = t.hi = dl.lo[k];
+      }
+    });
+  }
+  return levels;
+}
 
 // The unit vector in the slice of screen direction w about the view vector v, perpendicular to
 // v and towards w.
@@ -182,9 +243,6 @@ inline std::uint32_t sector_bits(float lo, float hi, float sectors_per_radian, i
 // How far above a probe's tangent plane, over the distance, a sample counts as on it.
 constexpr float kOnPlane = 0.02f;
 
-// The length of a texel's mean unit normal above which it counts as one surface's.
-constexpr float kFlat = 0.95f;
-
 // What every cascade of a bounce shares.
 struct Shared {
   const SolveContext& ctx;
@@ -192,13 +250,18 @@ struct Shared {
   const SpwiOptions& probe_options;
   const Layout& layout;
   const Frame& frame;
-  const DepthPyramid& depth;
-  const Means& means;
+  const std::vector<std::vector<Texel>>& texels;
+  const Means& means;  // the radiance
   const Background& bg;
   float sectors_per_radian;
   int per_bin;                                // sectors per stored radiance bin
   std::uint32_t all;                          // every sector's bit
   std::vector<float> cos_sector, sin_sector;  // at each sector's centre angle
+  // Each sector's share of its bin: its solid angle (sin theta d theta d phi) over the bin's. A
+  // plain mean would give a sector by the view vector, a sliver of the sphere, a bin's share of
+  // the light: a bright light there (a panel behind the camera, a lamp between the camera and
+  // the floor under it) would come out several times too bright.
+  std::vector<float> bin_weight;
   // Prefix sums over the sectors before k of cos sin and sin^2 (the gather's cosine weights).
   std::vector<float> cos_sum, sin_sum;
 };
@@ -223,6 +286,11 @@ struct Cascade {
   const std::vector<spwi::Probe>& upper_probes;
   const std::vector<Rgb>& upper;
   std::vector<Rgb>& lower;
+  // What --offscreen world's rays read at the surfaces they meet besides their emission (null:
+  // nothing): the radiance cache holds the light reflected after all bounces but the last, which
+  // only the last bounce's rays should see (read by the earlier ones, an enclosure at two
+  // bounces came out 1.4% bright).
+  const RadianceCache* reflected;
 
   // Marches up to 4 directions together from the probe at screen point (cx, cy), position p,
   // view vector v: the samples of their interval from the pyramid level of its step.
@@ -232,8 +300,8 @@ struct Cascade {
     const double step = double(1 << level);
     const double a = l.start(i), b = l.end(i);
     const bool top = l.top(i);
-    const DepthPyramid::Level& dl = s.depth.level(level);
     const Means::Level& ml = s.means.levels[std::size_t(level)];
+    const Texel* texels = s.texels[std::size_t(level)].data();
     const Vec3 g0 = s.frame.ray(cx, cy);
     const int width = s.ctx.g.width, height = s.ctx.g.height;
     const float stretch = float(step);  // each sample stands for this much of the line
@@ -254,26 +322,27 @@ struct Cascade {
           continue;
         }
         const std::size_t k =
-            std::size_t(int(y) >> level) * std::size_t(dl.width) + std::size_t(int(x) >> level);
-        if (!(ml.count[k] > 0)) continue;  // only misses: the sky occludes nothing
-        // The texel as a small plane through its hits' mean position, facing their mean normal,
-        // met by the camera rays at either end of the sample's stretch of the line (its depth
-        // kept within the texel's range above level 0); solid for the thickness behind.
-        const Vec3 mean = ml.position[k], mn = ml.normal[k];
-        const float zc = dot(mean - s.frame.eye, s.frame.f);
-        // A texel of one surface (its normals agree) is its plane; one across an edge is kept
-        // within its depth range.
-        const bool flat = dot(mn, mn) > kFlat * kFlat;
-        const float lo = flat ? 0.5f * zc : dl.lo[k], hi = flat ? 2 * zc : dl.hi[k];
+            std::size_t(int(y) >> level) * std::size_t(ml.width) + std::size_t(int(x) >> level);
+        // The next sample's texel is fetched while this one is worked on: the march waited on
+        // its texels' loads (a sixth of its time, measured with perf).
+        {
+          const float nx = x + float(step) * ray.dx, ny = y + float(step) * ray.dy;
+          if (nx >= 0 && ny >= 0 && nx < float(width) && ny < float(height))
+            __builtin_prefetch(texels + std::size_t(int(ny) >> level) * std::size_t(ml.width) +
+                               std::size_t(int(nx) >> level));
+        }
+        // The texel (make_texels) met by the camera rays at either end of the sample's stretch
+        // of the line; solid for the thickness behind.
+        const Texel& tx = texels[k];
+        if (!(tx.lo <= tx.hi)) continue;  // only misses: the sky occludes nothing
         float t0 = kPi, t1 = 0;
-        const float mn2 = dot(mn, mn), plane = dot(mean - s.frame.eye, mn);
         for (float e : {-0.5f, 0.5f}) {
           const Vec3 g = g0 + ray.g * (r + e * stretch);
-          const float den = dot(g, mn);
-          float z = zc;
-          if (den * den > 1e-12f * dot(g, g) * mn2) z = plane / den;
-          z = std::clamp(z, lo, hi);
-          for (float depth : {z, z * ml.grow[k]}) {
+          const float den = dot(g, tx.n);
+          float z = tx.zc;
+          if (den * den > 1e-12f * dot(g, g) * tx.n2) z = tx.plane / den;
+          z = std::clamp(z, tx.lo, tx.hi);
+          for (float depth : {z, z * tx.grow}) {
             const Vec3 d = s.frame.eye + g * depth - p;
             float t = slice_angle(dot(d, v), dot(d, ray.t));
             // A point on or under the probe's tangent plane (within about a degree: a plane's
@@ -296,6 +365,36 @@ struct Cascade {
     }
     if (top)
       for (int j = 0; j < n; ++j) rays[j].left = true;
+  }
+
+  // --offscreen world: each open sector of a ray that left the screen takes what an exact ray
+  // from the probe along its centre's direction meets, as SPWI's rays do: the emission, with
+  // later bounces the radiance cache's reflected light, or the sky. It starts at the probe: from
+  // the point of the sector's line seen where the line left the screen, or at the interval's
+  // start, a ray that had passed behind an on-screen wall (through its thin solid between two
+  // samples) starts outside the room and sees the sky through the wall (rooms lit through a
+  // window 1.3-1.5 relative RMSE against 0.15, an emitting enclosure 1% dark). The price: what
+  // the cascades below saw on screen, an upper probe's ray meets again at other angles (a lamp
+  // in view counted twice near it; docs/QUALITY.md).
+  void world(Ray& ray, Vec3 p, Vec3 v, Vec3 normal, std::uint64_t& traced) const {
+    for (int k = 0; k < s.layout.sectors; ++k) {
+      if (ray.occluded >> k & 1u) continue;
+      const Vec3 d = v * s.cos_sector[std::size_t(k)] + ray.t * s.sin_sector[std::size_t(k)];
+      const spaceland::Ray r{s.ctx.rays.spawn(p, normal, d), d};
+      ++traced;
+      Hit h;
+      Rgb l;
+      if (!s.ctx.rays.intersect(r, h)) {
+        l = s.bg.sky(d);
+      } else {
+        l = emission_at(s.ctx.scene, h);
+        if (reflected)
+          l += reflected->reflected(h.position, dot(h.geometric_normal, d) < 0
+                                                    ? h.geometric_normal
+                                                    : -h.geometric_normal);
+      }
+      ray.sectors[std::size_t(k)] += l;
+    }
   }
 
   // The open sectors of a ray that left the screen see the sky.
@@ -344,7 +443,7 @@ struct Cascade {
       ray.sectors[std::size_t(k)] = ray.sectors[std::size_t(above - 1)];
   }
 
-  void probe(int px, int py) const {
+  void probe(int px, int py, std::uint64_t& traced) const {
     const Layout& l = s.layout;
     const std::uint64_t q =
         std::uint64_t(py) * std::uint64_t(l.tiles.nx[std::size_t(i)]) + std::uint64_t(px);
@@ -378,28 +477,35 @@ struct Cascade {
       march(rays.data(), n, cx, cy, pr.p, v, pr.n);
       for (int j = 0; j < n; ++j) {
         Ray& ray = rays[std::size_t(j)];
-        if (ray.left || !merges)
+        if (ray.left && s.o.offscreen == SsrcOffscreen::world)
+          world(ray, pr.p, v, pr.n, traced);
+        else if (ray.left || !merges)
           sky(ray, v);
         else
           merge(ray, first + j, c);
         extend_over_horizon(ray);
-        // Stored per bin: the mean of its sectors.
+        // Stored per bin: the mean of its sectors over their solid angles.
         Rgb* bins = out + std::size_t(first + j) * std::size_t(l.bins);
         for (int b = 0; b < l.bins; ++b) {
           Rgb sum{};
           for (int k = b * s.per_bin; k < (b + 1) * s.per_bin; ++k)
-            sum += ray.sectors[std::size_t(k)];
-          bins[b] = sum * (1.0f / float(s.per_bin));
+            sum += ray.sectors[std::size_t(k)] * s.bin_weight[std::size_t(k)];
+          bins[b] = sum;
         }
       }
     }
   }
 
-  void run() const {
+  // Marches and merges every probe; returns the rays traced off screen.
+  std::uint64_t run() const {
     const int nx = s.layout.tiles.nx[std::size_t(i)];
+    std::atomic<std::uint64_t> count{0};
     parallel_for(s.layout.tiles.ny[std::size_t(i)], [&](int py) {
-      for (int px = 0; px < nx; ++px) probe(px, py);
+      std::uint64_t traced = 0;
+      for (int px = 0; px < nx; ++px) probe(px, py, traced);
+      count.fetch_add(traced, std::memory_order_relaxed);
     });
+    return count.load();
   }
 };
 
@@ -559,11 +665,12 @@ std::uint64_t Layout::bytes() const {
   }
   const std::uint64_t pixels = std::uint64_t(tiles.width) * std::uint64_t(tiles.height);
   const std::uint64_t pyramid = DepthPyramid::bytes(tiles.width, tiles.height);
-  // The depth pyramid (2 floats a texel) and the means over the same texels; per pixel the sun,
-  // the samples' radiance and a bounce's image.
+  // The depth pyramid (2 floats a texel), the means and the march's texels over the same texels,
+  // all three at once while the texels are made; per pixel the direct light, the albedo, the
+  // samples' radiance and a bounce's image, and the solid's end.
   return 2 * largest * sizeof(Rgb) + probe_bytes + pyramid +
-         pyramid / (2 * sizeof(float)) * Means::bytes_per_texel() + 3 * pixels * sizeof(Rgb) +
-         pixels * sizeof(float);
+         pyramid / (2 * sizeof(float)) * (Means::bytes_per_texel() + sizeof(Texel)) +
+         4 * pixels * sizeof(Rgb) + pixels * sizeof(float);
 }
 
 Status check_options(const SsrcOptions& o) {
@@ -600,6 +707,8 @@ Status check_options(const SsrcOptions& o) {
     return Error{"`ssrc.merge_edge` and `ssrc.gather_edge`: expected numbers >= 0"};
   if (o.gather != SpwiGather::pixel && o.gather != SpwiGather::probe)
     return Error{"`ssrc.gather`: expected pixel or probe"};
+  if (o.offscreen != SsrcOffscreen::sky && o.offscreen != SsrcOffscreen::world)
+    return Error{"`ssrc.offscreen`: expected sky or world"};
   if (!(o.gather_normal >= 0 && o.gather_normal <= 64))
     return Error{"`ssrc.gather_normal`: expected an exponent in [0, 64], found " +
                  io::format_number(o.gather_normal)};
@@ -653,19 +762,30 @@ Expected<ImageRgb> render(const SolveContext& ctx, const SsrcOptions& o, const L
     report.stages.push_back({"back faces", watch.ms()});
   }
   watch = Stopwatch();
-  const DepthPyramid depth = DepthPyramid::build(g);
-  Means means = make_means(g, depth, grow);
+  std::vector<std::vector<Texel>> texels;
+  Means means;
+  {
+    const DepthPyramid depth = DepthPyramid::build(g);
+    means = make_means(g, depth, grow);
+    texels = make_texels(depth, means, frame);
+    // What the texels hold is not needed again: the radiance and counts stay, per bounce.
+    for (Means::Level& ml : means.levels) {
+      ml.position = {};
+      ml.normal = {};
+      ml.grow = {};
+    }
+  }
   report.stages.push_back({"pyramid", watch.ms()});
 
   // Per pixel: the emission and the sun's light reflected there (exact shadow rays), the light
-  // every bounce starts from.
+  // every bounce's image starts from.
   watch = Stopwatch();
-  std::vector<Rgb> direct(pixels), albedo(pixels);
+  std::vector<Rgb> direct(pixels), albedo(pixels), radiance(pixels);
   {
     const SunLight sun(ctx.scene, ctx.rays, ctx.sun_rays);
     for_each_hit(g, report.rays, [&](std::size_t k, std::uint64_t& rays) {
       albedo[k] = albedo_at(ctx.scene, g.hits[k]);
-      direct[k] = emission_at(ctx.scene, g.hits[k]);
+      direct[k] = radiance[k] = emission_at(ctx.scene, g.hits[k]);
       if (sun.on()) direct[k] += sun.reflected(g.hits[k], albedo[k], rays);
     });
   }
@@ -678,7 +798,7 @@ Expected<ImageRgb> render(const SolveContext& ctx, const SsrcOptions& o, const L
   probe_options.gather_normal = o.gather_normal;
   probe_options.depth_bias = 1;
 
-  Shared s{ctx, o, probe_options, layout, frame, depth, means, bg, 0, 0, 0, {}, {}, {}, {}};
+  Shared s{ctx, o, probe_options, layout, frame, texels, means, bg, 0, 0, 0, {}, {}, {}, {}, {}};
   s.per_bin = layout.sectors / layout.bins;
   s.sectors_per_radian = float(layout.sectors / kPi);
   s.all = std::uint32_t((std::uint64_t(1) << layout.sectors) - 1);
@@ -686,6 +806,12 @@ Expected<ImageRgb> render(const SolveContext& ctx, const SsrcOptions& o, const L
     const double theta = (k + 0.5) * kPi / layout.sectors;
     s.cos_sector.push_back(float(std::cos(theta)));
     s.sin_sector.push_back(float(std::sin(theta)));
+  }
+  for (int b = 0; b < layout.bins; ++b) {
+    float sum = 0;
+    for (int k = b * s.per_bin; k < (b + 1) * s.per_bin; ++k) sum += s.sin_sector[std::size_t(k)];
+    for (int k = b * s.per_bin; k < (b + 1) * s.per_bin; ++k)
+      s.bin_weight.push_back(s.sin_sector[std::size_t(k)] / sum);
   }
   s.cos_sum.push_back(0);
   s.sin_sum.push_back(0);
@@ -696,18 +822,22 @@ Expected<ImageRgb> render(const SolveContext& ctx, const SsrcOptions& o, const L
                         s.sin_sector[std::size_t(k)] * s.sin_sector[std::size_t(k)]);
   }
 
-  std::vector<Rgb> radiance = direct;
+  // The first bounce marches the emission alone: the sun's light a sample reflects is a second
+  // bounce (the path tracer's `--bounces 1` has one diffuse reflection, at the camera's hit),
+  // which the next bounce's march of the first image carries.
   ImageRgb img;
   // Every cascade's probes, placed once for all bounces (Layout::bytes counts them all).
   std::vector<std::vector<spwi::Probe>> probes(std::size_t(layout.count()));
   for (int i = 0; i < layout.count(); ++i)
     probes[std::size_t(i)] = spwi::place_probes(ctx.scene, g, layout.tiles, i, probe_options);
   if (port) {
-    Prepared p{layout,       frame.eye,    frame.f,   frame.r,  frame.u, frame.tan_half,
-               depth,        {},           direct,    albedo,   probes,  probe_options,
-               s.cos_sector, s.sin_sector, s.cos_sum, s.sin_sum};
-    for (const Means::Level& m : means.levels)
-      p.means.push_back({m.position, m.normal, m.grow, m.count});
+    static_assert(sizeof(Texel) == kTexelFloats * sizeof(float));
+    Prepared p{layout,       frame.eye,    frame.f,      frame.r,   frame.u,  frame.tan_half,
+               {},           radiance,     direct,       albedo,    probes,   probe_options,
+               s.cos_sector, s.sin_sector, s.bin_weight, s.cos_sum, s.sin_sum};
+    for (std::size_t l = 0; l < means.levels.size(); ++l)
+      p.levels.push_back({means.levels[l].width, means.levels[l].height,
+                          std::as_bytes(std::span<const Texel>(texels[l])), means.levels[l].count});
     return port(ctx, o, p, report);
   }
   const std::vector<spwi::Probe> none;
@@ -719,10 +849,14 @@ Expected<ImageRgb> render(const SolveContext& ctx, const SsrcOptions& o, const L
       watch = Stopwatch();
       lower = {};
       lower.assign(std::size_t(layout.values(i)), Rgb{});
-      const Cascade cascade{
-          s,     i,    probes[std::size_t(i)], layout.top(i) ? none : probes[std::size_t(i + 1)],
-          upper, lower};
-      cascade.run();
+      const Cascade cascade{s,
+                            i,
+                            probes[std::size_t(i)],
+                            layout.top(i) ? none : probes[std::size_t(i + 1)],
+                            upper,
+                            lower,
+                            bounce == ctx.bounces ? ctx.cache : nullptr};
+      report.rays += cascade.run();
       upper = {};
       std::swap(upper, lower);
       report.stages.push_back({"cascade " + std::to_string(i) + of, watch.ms()});

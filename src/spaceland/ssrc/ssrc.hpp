@@ -5,10 +5,12 @@
 // through the depth pyramid's level of its step; each depth sample, solid for a thickness behind
 // it, sets the sectors it covers in an occlusion bitmask and adds its radiance to those it covers
 // first. Merged top down: the sectors a lower interval leaves open take the upper probes'
-// radiance (flatland's merge per sector); what leaves the screen sees the sky. docs/METHODS.md,
-// "Screen-space cascades".
+// radiance (flatland's merge per sector); what leaves the screen sees the sky, or with
+// --offscreen world what an exact ray through the scene meets. docs/METHODS.md, "Screen-space
+// radiance cascades".
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -20,7 +22,6 @@
 #include "spaceland/solve.hpp"
 #include "spaceland/spwi/probes.hpp"
 #include "spaceland/spwi/spwi.hpp"
-#include "spaceland/ssrc/depth_pyramid.hpp"
 
 namespace penumbra::spaceland::ssrc {
 
@@ -77,20 +78,26 @@ struct Prepared {
   const Layout& layout;
   Vec3 eye, forward, right, up;  // the camera's frame
   float tan_half = 1;            // tan of half the vertical field of view
-  const DepthPyramid& depth;
-  // The depth pyramid's means per level (their radiance is filled per bounce).
-  struct MeansLevel {
-    std::span<const Vec3> position, normal;
-    std::span<const float> grow, count;
+  // Per level of the depth pyramid: its size, the march's record of each texel (kTexelFloats
+  // floats: the plane's normal, its square, the plane's offset, the mean's depth, the depth
+  // range and the solid's end) and how many hits it covers (the radiance is filled per bounce).
+  struct Level {
+    int width = 0, height = 0;
+    std::span<const std::byte> texels;
+    std::span<const float> count;
   };
-  std::vector<MeansLevel> means;
-  const std::vector<Rgb>& direct;  // per pixel: emission and the sun's light
+  std::vector<Level> levels;
+  const std::vector<Rgb>& radiance;  // per pixel: what the first bounce marches (the emission)
+  const std::vector<Rgb>& direct;    // per pixel: emission and the sun's light
   const std::vector<Rgb>& albedo;
   const std::vector<std::vector<spwi::Probe>>& probes;  // per cascade
   const SpwiOptions& probe_options;                     // the merge's and gather's weights
-  // Per sector: cos and sin at its centre angle; prefix sums of cos sin and sin^2.
-  std::span<const float> cos_sector, sin_sector, cos_sum, sin_sum;
+  // Per sector: cos and sin at its centre angle and its share of its bin; prefix sums of cos sin
+  // and sin^2.
+  std::span<const float> cos_sector, sin_sector, bin_weight, cos_sum, sin_sum;
 };
+// Floats in a texel's record (ssrc.cpp's Texel; the GPU's kernels read the same layout).
+inline constexpr int kTexelFloats = 9;
 using Port = Expected<ImageRgb> (*)(const SolveContext& ctx, const SsrcOptions& o,
                                     const Prepared& prepared, SolveReport& report);
 

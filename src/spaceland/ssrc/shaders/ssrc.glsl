@@ -12,6 +12,7 @@ struct Global {
   int image_w, image_h, pad0, pad1;
   float cos_sector[32];
   float sin_sector[32];
+  float bin_weight[32];  // each sector's share of its bin (its solid angle over the bin's)
   float cos_sum[36];  // 33 used
   float sin_sum[36];
 };

@@ -13,26 +13,19 @@ layout(std430, binding = 0) readonly buffer Params { Global g; CascadeParams c[]
 layout(std430, binding = 1) readonly buffer Dirs { vec2 dirs[]; };
 layout(std430, binding = 2) readonly buffer Probes { vec4 probes[]; };    // (p, valid), (n, depth)
 layout(std430, binding = 3) readonly buffer Corners { uvec4 corners[]; };  // indices, weight bits
-layout(std430, binding = 4) readonly buffer DepthRange { vec2 lohi[]; };
-layout(std430, binding = 5) readonly buffer Position { float position[]; };
-layout(std430, binding = 6) readonly buffer Normal { float normal[]; };
-layout(std430, binding = 7) readonly buffer GrowCount { vec2 grow_count[]; };
-layout(std430, binding = 8) readonly buffer Radiance { float radiance[]; };
-layout(std430, binding = 9) readonly buffer Upper { float upper[]; };
-layout(std430, binding = 10) writeonly buffer Out { float outs[]; };
+// Per texel, ssrc.cpp's Texel: the plane's normal (3), its square, the plane's offset from the
+// eye, the mean's depth, the depth range (lo > hi: only misses) and the solid's end.
+layout(std430, binding = 4) readonly buffer Texels { float texels[]; };
+layout(std430, binding = 5) readonly buffer Radiance { float radiance[]; };
+layout(std430, binding = 6) readonly buffer Upper { float upper[]; };
+layout(std430, binding = 7) writeonly buffer Out { float outs[]; };
 layout(push_constant) uniform Push {
   int cascade;
   uint first, count;  // the pairs of this dispatch
   uint out_origin, up_origin;
-  float on_plane2, flat2, tiny;  // ssrc.cpp's kOnPlane^2, kFlat^2 and the parallel test's 1e-12
+  float on_plane2, tiny;  // ssrc.cpp's kOnPlane^2 and the parallel test's 1e-12
 } p;
 
-vec3 at3(uint k) {  // texel k's mean position
-  return vec3(position[3u * k], position[3u * k + 1u], position[3u * k + 2u]);
-}
-vec3 nrm3(uint k) {
-  return vec3(normal[3u * k], normal[3u * k + 1u], normal[3u * k + 2u]);
-}
 vec3 upper3(uint f) {
   f -= p.up_origin;
   return vec3(upper[f], upper[f + 1u], upper[f + 2u]);
@@ -94,19 +87,13 @@ void main() {
     }
     const uint k = uint(cp.level_off) + uint(int(Y) >> level) * uint(cp.level_w) +
                    uint(int(X) >> level);
-    const vec2 gc = grow_count[k];
-    if (!(gc.y > 0.0)) continue;  // only misses: the sky occludes nothing
-    const vec3 mean = at3(k), mn = nrm3(k);
-    precise vec3 rel = mean - eye;
-    const float zc = dot3(rel, F);
-    const float mn2 = dot3(mn, mn);
-    const bool flat_texel = mn2 > p.flat2;
-    precise float half_zc = 0.5 * zc;
-    precise float twice_zc = 2.0 * zc;
-    const vec2 range = lohi[k];
-    const float lo = flat_texel ? half_zc : range.x, hi = flat_texel ? twice_zc : range.y;
+    const uint tk = 9u * k;
+    const float lo = texels[tk + 6u], hi = texels[tk + 7u];
+    if (!(lo <= hi)) continue;  // only misses: the sky occludes nothing
+    const vec3 mn = vec3(texels[tk], texels[tk + 1u], texels[tk + 2u]);
+    const float mn2 = texels[tk + 3u], plane = texels[tk + 4u], zc = texels[tk + 5u];
+    const float grow = texels[tk + 8u];
     float t0 = 3.14159265358979, t1 = 0.0;
-    const float plane = dot3(rel, mn);
     for (int e = 0; e < 2; ++e) {
       precise float along = r + (e == 0 ? -0.5 : 0.5) * stretch;
       precise vec3 gg = g0 + rg * along;
@@ -117,7 +104,7 @@ void main() {
       if (den2 > least) z = plane / den;
       z = z < lo ? lo : (hi < z ? hi : z);  // std::clamp
       for (int s = 0; s < 2; ++s) {
-        precise float depth = s == 0 ? z : z * gc.x;
+        precise float depth = s == 0 ? z : z * grow;
         precise vec3 d = eye + gg * depth - P;
         float t = slice_angle(dot3(d, v), dot3(d, T));
         const float h = dot3(d, N);
@@ -177,11 +164,11 @@ void main() {
   const int above = above_of(horizon, g.spr, n_sec);
   if (above != 0)
     for (int k = above; k < n_sec; ++k) sectors[k] = sectors[above - 1];
-  precise float inv = 1.0 / float(per_bin);
+  // Per bin: its sectors' mean over their solid angles.
   for (int b = 0; b < bins; ++b) {
-    precise vec3 sum = vec3(0.0);
-    for (int k = b * per_bin; k < (b + 1) * per_bin; ++k) sum = sum + sectors[k];
-    precise vec3 mean = sum * inv;
+    precise vec3 mean = vec3(0.0);
+    for (int k = b * per_bin; k < (b + 1) * per_bin; ++k)
+      mean = mean + sectors[k] * g.bin_weight[k];
     outs[out_at + uint(3 * b)] = mean.r;
     outs[out_at + uint(3 * b) + 1u] = mean.g;
     outs[out_at + uint(3 * b) + 2u] = mean.b;

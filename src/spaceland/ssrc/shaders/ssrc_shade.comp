@@ -12,7 +12,7 @@ layout(local_size_x = 64) in;
 layout(std430, binding = 0) readonly buffer Params { Global g; CascadeParams c[]; };
 layout(std430, binding = 1) readonly buffer Dirs { vec2 dirs[]; };
 layout(std430, binding = 2) readonly buffer Corners { uvec4 corners[]; };  // indices, weight bits
-layout(std430, binding = 3) readonly buffer GrowCount { vec2 grow_count[]; };  // level 0: hit
+layout(std430, binding = 3) readonly buffer Count { float hits[]; };  // level 0: 1 on a hit
 layout(std430, binding = 4) readonly buffer Light { float light[]; };  // direct rgb, albedo rgb
 layout(std430, binding = 5) readonly buffer View { float view[]; };  // pixel: view, normal
 layout(std430, binding = 6) readonly buffer Store { float store[]; };
@@ -30,7 +30,7 @@ void main() {
   const uint gid = gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * 64u;
   if (gid >= p.count) return;
   const uint k = p.first + gid;
-  if (!(grow_count[k].y > 0.0)) {
+  if (!(hits[k] > 0.0)) {
     image[3u * k] = 0.0;
     image[3u * k + 1u] = 0.0;
     image[3u * k + 2u] = 0.0;

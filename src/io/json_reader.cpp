@@ -135,6 +135,10 @@ std::string format_number(double v) {
   return std::string(buf, r.ptr);
 }
 
+std::string format_mib(std::uint64_t bytes) {
+  return format_rounded(double(bytes) / double(1 << 20)) + " MiB";
+}
+
 std::string format_rounded(double v) {
   char buf[40];
   const double a = std::fabs(v);

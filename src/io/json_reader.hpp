@@ -4,6 +4,7 @@
 #pragma once
 
 #include <array>
+#include <cstdint>
 #include <initializer_list>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -25,6 +26,8 @@ std::string format_number(float v);
 std::string format_number(double v);
 // A computed quantity as a person reads it: three significant digits ("3.4e+38", "41700").
 std::string format_rounded(double v);
+// Bytes in MiB as messages give them ("775 MiB").
+std::string format_mib(std::uint64_t bytes);
 
 // Parses JSON text of `file`. A syntax error throws JsonFailure "file: line L, column C: invalid
 // JSON: ..."; a number beyond the double range "file: path: expected a finite number, found

@@ -192,7 +192,8 @@ Status ssrc_check_scene(const Scene& scene) {
 }
 
 std::uint64_t ssrc_bytes(const Scene& scene, const RenderOptions& o) {
-  return ssrc::make_layout(scene.camera.width, scene.camera.height, o.ssrc).bytes();
+  const ssrc::Layout l = ssrc::make_layout(scene.camera.width, scene.camera.height, o.ssrc);
+  return l.bytes() + (o.device == Device::gpu ? ssrc::gpu_bytes(l, o.ssrc) : 0);
 }
 
 void ssrc_describe(const RenderResult& r, std::vector<Parameter>& p, std::string& line) {

@@ -43,10 +43,6 @@ GridOptions cache_grid(const RenderOptions& o) {
   return g;
 }
 
-std::string mib(std::uint64_t bytes) {
-  return io::format_rounded(double(bytes) / double(1 << 20)) + " MiB";
-}
-
 }  // namespace
 
 std::vector<MethodInfo> methods() {
@@ -206,10 +202,11 @@ Status check_memory(const Scene& scene, const RenderOptions& options) {
   const std::uint64_t held = scene_bytes(scene);
   const std::uint64_t need = estimate_memory(scene, options) + held;
   if (need > options.max_memory)
-    return Error{"needs about " + mib(need) + " of memory (the scene " + mib(held) +
-                 ", the ray tracer's BVH and " + std::to_string(scene.camera.width) + "x" +
-                 std::to_string(scene.camera.height) + " pixels of buffers), more than the `" +
-                 "max_memory` limit of " + mib(options.max_memory)};
+    return Error{"needs about " + io::format_mib(need) + " of memory (the scene " +
+                 io::format_mib(held) + ", the ray tracer's BVH and " +
+                 std::to_string(scene.camera.width) + "x" + std::to_string(scene.camera.height) +
+                 " pixels of buffers), more than the `" + "max_memory` limit of " +
+                 io::format_mib(options.max_memory)};
   return {};
 }
 

@@ -17,6 +17,7 @@
 #include "flatland/method.hpp"
 #include "flatland/rc/cascade.hpp"
 #include "gpu/vulkan.hpp"
+#include "image_metrics.hpp"
 #include "penumbra/flatland/render.hpp"
 #include "penumbra/flatland/scene.hpp"
 #include "test_support.hpp"
@@ -25,6 +26,7 @@ namespace {
 
 using namespace penumbra;
 using namespace penumbra::flatland;
+using penumbra::testing::relative_rmse;
 
 // The plan render() would make, for calling the GPU solver directly (RC's directions filled).
 Plan plan_of(int w, int h, const RenderOptions& o, bool fill = true) {
@@ -356,16 +358,6 @@ TEST(Gpu, RenderOnTheGpuDevice) {
 
 std::vector<float> pixels(const ImageRgb& f) {
   return std::vector<float>(f.data(), f.data() + f.size());
-}
-
-double relative_rmse(const ImageRgb& a, const ImageRgb& b) {
-  double err = 0, ref = 0;
-  for (std::size_t k = 0; k < a.size(); ++k) {
-    const double x = a.data()[k], y = b.data()[k];
-    err += (x - y) * (x - y);
-    ref += y * y;
-  }
-  return std::sqrt(err / ref);
 }
 
 // A scene with walls, lights, fog, a thin wall and an environment.

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "gpu/vulkan.hpp"
+#include "image_metrics.hpp"
 #include "penumbra/spaceland/render.hpp"
 #include "penumbra/spaceland/scene.hpp"
 #include "spaceland/embree/ray_scene.hpp"
@@ -23,17 +24,7 @@ namespace penumbra::spaceland {
 namespace {
 
 using namespace penumbra::spaceland::testing;
-
-// Relative RMSE of a against b over every channel of every pixel.
-double relative_rmse(const ImageRgb& a, const ImageRgb& b) {
-  double num = 0, den = 0;
-  for (std::size_t i = 0; i < a.size(); ++i) {
-    const double d = double(a.data()[i]) - double(b.data()[i]);
-    num += d * d;
-    den += double(b.data()[i]) * double(b.data()[i]);
-  }
-  return std::sqrt(num / den);
-}
+using penumbra::testing::relative_rmse;
 
 RenderOptions ssrc(Device device, SpwiMerge merge, SpwiGather gather, int sectors, int bounces) {
   RenderOptions o;
@@ -78,6 +69,26 @@ struct Case {
   const char* name;
   Scene scene;
 };
+
+// The up-front memory check counts the port's buffers (gpu_bytes): what a render on the GPU
+// reports it used stays within the CPU's estimate plus the port's, in either gather, and a
+// limit between the CPU's need and the GPU's refuses the GPU's render before it starts.
+TEST(SsrcGpu, TheMemoryCheckCountsThePortsBuffers) {
+  const Scene s = lit_box();
+  for (SpwiGather gather : {SpwiGather::probe, SpwiGather::pixel}) {
+    RenderOptions o = ssrc(Device::gpu, SpwiMerge::bilateral, gather, 32, 1);
+    const ssrc::Layout l = ssrc::make_layout(s.camera.width, s.camera.height, o.ssrc);
+    const RenderResult gpu = render_ok(s, o);
+    EXPECT_GT(gpu.memory_bytes, l.bytes());
+    EXPECT_LE(gpu.memory_bytes, l.bytes() + ssrc::gpu_bytes(l, o.ssrc) + (64u << 20))
+        << "gather " << to_string(gather);  // 64 MiB: the BVH, the G-buffer and the image
+    o.max_memory = l.bytes() + ssrc::gpu_bytes(l, o.ssrc) / 2;
+    const Expected<RenderResult> refused = render(s, o);
+    ASSERT_FALSE(refused.ok());
+    EXPECT_NE(refused.error().message.find("max_memory"), std::string::npos)
+        << refused.error().message;
+  }
+}
 
 // Every merge and gather at 8, 16 and 32 sectors over two bounces, each scene. The kernels do
 // the CPU's float operations in its order, with no multiply-add fused (`precise`): on lavapipe

@@ -53,8 +53,9 @@ enum class SpwiGather {
 // What a screen-space cascade ray sees once its march leaves the screen (--offscreen).
 enum class SsrcOffscreen {
   sky,    // the sky (the seed's method: the screen is all it knows)
-  world,  // the world: an exact ray on from where it left, its hit's emission (and with
-          // bounces > 1 the radiance cache's reflected light), or the sky (SPWI's answer)
+  world,  // the world: an exact ray from the probe along each open sector above its surface, its
+          // hit's emission (and at the last of bounces > 1 the radiance cache's reflected
+          // light), or the sky (SPWI's answer)
 };
 
 // What an image holds: the radiance (the methods' answer) or a G-buffer channel of the first hits

@@ -540,10 +540,6 @@ ImageRgb gather(const SolveContext& ctx, const SpwiOptions& o, const Layout& lay
       });
 }
 
-std::string mib(std::uint64_t bytes) {
-  return io::format_rounded(double(bytes) / double(1 << 20)) + " MiB";
-}
-
 }  // namespace
 
 Expected<ImageRgb> render(const SolveContext& ctx, const SpwiOptions& o, const Layout& layout,
@@ -555,8 +551,8 @@ Expected<ImageRgb> render(const SolveContext& ctx, const SpwiOptions& o, const L
   const std::uint64_t need = layout.bytes() + (lights.empty() ? 0 : 2 * largest * sizeof(float));
   report.memory_bytes += need;
   if (need > ctx.max_memory)
-    return Error{"spwi's cascades need about " + mib(need) + ", more than the `" +
-                 "max_memory` limit of " + mib(ctx.max_memory)};
+    return Error{"spwi's cascades need about " + io::format_mib(need) + ", more than the `" +
+                 "max_memory` limit of " + io::format_mib(ctx.max_memory)};
   const Background bg(ctx.scene);
   const Surfaces surface{ctx.scene, ctx.cache};
   std::uint64_t rays = 0;

@@ -38,10 +38,6 @@ using gpu::Batch;
 using gpu::Buffer;
 using gpu::Memory;
 
-// ssrc.cpp's kOnPlane, squared as the CPU squares it (in float), and the threshold of its test
-// for a camera ray parallel to a texel's plane.
-constexpr float kOnPlane = 0.02f, kParallel = 1e-12f;
-
 // The kernels' parameters (ssrc/shaders/ssrc.glsl, std430: the same offsets).
 struct Global {
   float eye[4], f[4], r[4], u[4];
@@ -65,10 +61,6 @@ void put(float* out, Vec3 v) {
 }
 void put(float* out, Rgb c) {
   out[0] = c.r, out[1] = c.g, out[2] = c.b, out[3] = 0;
-}
-
-std::string mib(std::uint64_t bytes) {
-  return io::format_rounded(double(bytes) / double(1 << 20)) + " MiB";
 }
 
 // A range of floats of a buffer that one dispatch reads or writes.
@@ -103,7 +95,7 @@ Expected<std::vector<Slab>> plan_slabs(std::uint64_t n, std::uint64_t limit, std
     }
     if (cur.count == 0)
       return Error{std::string("ssrc on the GPU: one ") + what +
-                   " needs more than one binding of " + mib(limit) + " holds"};
+                   " needs more than one binding of " + io::format_mib(limit) + " holds"};
     slabs.push_back(cur);
     cur = Slab{};
     --i;  // this item starts the next slab
@@ -143,15 +135,20 @@ struct Uploads {
   std::vector<Buffer> staging;
   std::uint64_t bytes = 0;
 
-  Expected<Buffer> upload(Batch& batch, const void* data, std::size_t size, const char* what) {
-    size = std::max<std::size_t>(size, 16);
+  Expected<Buffer> upload(Batch& batch, const void* data, std::size_t bytes_in, const char* what) {
+    // At least 16 bytes bound (the padding zeroed); only the caller's bytes are read.
+    const std::size_t size = std::max<std::size_t>(bytes_in, 16);
     if (size > limit)
-      return Error{std::string("ssrc on the GPU: ") + what + " take " + mib(size) +
-                   ", more than one binding of " + mib(limit) +
+      return Error{std::string("ssrc on the GPU: ") + what + " take " + io::format_mib(size) +
+                   ", more than one binding of " + io::format_mib(limit) +
                    " holds; render a smaller image or use --device cpu"};
     Expected<Buffer> host = context.buffer(size, Memory::host);
     if (!host) return host.error();
-    if (data) std::memcpy(host->data(), data, size);
+    if (data) {
+      std::memcpy(host->data(), data, bytes_in);
+      if (size > bytes_in)
+        std::memset(static_cast<char*>(host->data()) + bytes_in, 0, size - bytes_in);
+    }
     Expected<Buffer> dev = context.buffer(size, Memory::device);
     if (!dev) return dev.error();
     batch.copy(*host, 0, *dev, 0, size);
@@ -166,6 +163,30 @@ struct Uploads {
 };
 
 }  // namespace
+
+std::uint64_t gpu_bytes(const Layout& l, const SsrcOptions& o) {
+  const std::uint64_t pixels = std::uint64_t(l.tiles.width) * std::uint64_t(l.tiles.height);
+  // The pyramid's texels: level 0 and the halvings above it, each rounded up.
+  std::uint64_t texels = 0;
+  for (std::uint64_t w = std::uint64_t(l.tiles.width), h = std::uint64_t(l.tiles.height);;
+       w = (w + 1) / 2, h = (h + 1) / 2) {
+    texels += w * h;
+    if (w == 1 && h == 1) break;
+  }
+  std::uint64_t probes = 0, largest = 0;
+  for (int i = 0; i < l.count(); ++i) {
+    probes += l.probes(i);
+    largest = std::max(largest, l.values(i));
+  }
+  const std::uint64_t f = sizeof(float);
+  // Uploaded (a host copy, its staging copy, the device's): texel records, counts, radiance;
+  // per pixel light and albedo, the view and normal (--gather pixel), the gather's corners; per
+  // probe its record and its merge corners.
+  const std::uint64_t uploaded = texels * (std::uint64_t(kTexelFloats) + 1 + 3) * f +
+                                 pixels * (6 + (o.gather == SpwiGather::pixel ? 6 : 0) + 8) * f +
+                                 probes * 16 * f;
+  return 3 * uploaded + 2 * largest * 3 * f + l.probes(0) * 4 * f + 2 * pixels * 3 * f;
+}
 
 Status check_gpu_options(const SsrcOptions& o) {
   if (o.offscreen == SsrcOffscreen::world)
@@ -254,17 +275,12 @@ Expected<ImageRgb> render_gpu(const SolveContext& ctx, const SsrcOptions& o, con
   std::uint64_t probe_total = 0, largest = 0;
   for (int i = 0; i < count; ++i) {
     const int level = l.level(i);
-    const double step = double(1 << level), a = l.start(i), b = l.end(i);
+    const double step = double(1 << level), a = l.start(i);
     CascadeParams& c = params[std::size_t(i)];
     c.level = level;
     c.level_w = pr.levels[std::size_t(level)].width;
     c.level_off = std::int32_t(level_off[std::size_t(level)]);
-    // Samples an interval, as ssrc.cpp's march(): the top cascade's to the screen's edge.
-    c.most = l.top(i)
-                 ? int(std::ceil(
-                       std::sqrt(double(g.width) * g.width + double(g.height) * g.height) / step)) +
-                       2
-                 : int(std::floor((b - a) / step + 1e-9));
+    c.most = l.samples(i);
     c.a = float(a);
     c.step = float(step);
     c.stretch = float(step);
@@ -277,7 +293,7 @@ Expected<ImageRgb> render_gpu(const SolveContext& ctx, const SsrcOptions& o, con
     c.dir_off = std::int32_t(dirs.size() / 2);
     c.up_dirs = l.top(i) ? 0 : l.directions(i + 1);
     for (int d = 0; d < c.dirs; ++d) {
-      const double phi = 2 * kPi * (d + 0.5) / c.dirs;
+      const double phi = l.phi(i, d);
       dirs.push_back(float(std::cos(phi)));
       dirs.push_back(float(std::sin(phi)));
     }
@@ -386,8 +402,8 @@ Expected<ImageRgb> render_gpu(const SolveContext& ctx, const SsrcOptions& o, con
   if (!store_b) return store_b.error();
   const std::size_t probes0 = pr.probes[0].size();
   if (probes0 * 16 > limit || pixels * 12 > limit)
-    return Error{"ssrc on the GPU: the image takes more than one binding of " + mib(limit) +
-                 " holds; render a smaller image or use --device cpu"};
+    return Error{"ssrc on the GPU: the image takes more than one binding of " +
+                 io::format_mib(limit) + " holds; render a smaller image or use --device cpu"};
   Expected<Buffer> means = device.buffer(std::max<std::size_t>(probes0 * 16, 16), Memory::device);
   if (!means) return means.error();
   Expected<Buffer> image = device.buffer(pixels * 12, Memory::device);

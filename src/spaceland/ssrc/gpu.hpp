@@ -20,6 +20,13 @@ namespace penumbra::spaceland::ssrc {
 // through the scene (Embree's, on the CPU).
 Status check_gpu_options(const SsrcOptions& o);
 
+// The port's memory besides the CPU's (Layout::bytes), known before anything is allocated, for
+// the up-front check: its packed host copies of the texel records, counts and radiance, the
+// light, normals and corner weights, each staged once more for the upload, the probes, the two
+// cascade stores, the probes' means, the image and its readback (on lavapipe, device memory is
+// host memory too).
+std::uint64_t gpu_bytes(const Layout& l, const SsrcOptions& o);
+
 // The port on the first Vulkan device (a hardware GPU, else a CPU driver such as lavapipe).
 // `--rays` is a batching detail of the CPU's march and changes nothing here.
 Expected<ImageRgb> render_gpu(const SolveContext& ctx, const SsrcOptions& o,

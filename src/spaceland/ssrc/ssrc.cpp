@@ -260,8 +260,6 @@ inline std::uint32_t sector_bits(float lo, float hi, float sectors_per_radian, i
   return std::uint32_t(upto & ~below);
 }
 
-// How far above a probe's tangent plane, over the distance, a sample counts as on it.
-constexpr float kOnPlane = 0.02f;
 constexpr float kOnPlane2 = kOnPlane * kOnPlane;
 
 // What every cascade of a bounce shares.
@@ -319,7 +317,7 @@ struct Cascade {
     const Layout& l = s.layout;
     const int level = l.level(i);
     const double step = double(1 << level);
-    const double a = l.start(i), b = l.end(i);
+    const double a = l.start(i);
     const bool top = l.top(i);
     const Means::Level& ml = s.means.levels[std::size_t(level)];
     const Texel* texels = s.texels[std::size_t(level)].data();
@@ -327,9 +325,7 @@ struct Cascade {
     const int width = s.ctx.g.width, height = s.ctx.g.height;
     const float stretch = float(step);  // each sample stands for this much of the line
     // The top cascade runs to the screen's edge: at most its diagonal in steps.
-    const int most =
-        top ? int(std::ceil(std::sqrt(double(width) * width + double(height) * height) / step)) + 2
-            : int(std::floor((b - a) / step + 1e-9));
+    const int most = l.samples(i);
     // The rays' own values, one lane each (lanes past n stay idle).
     Lanes rgx = 0, rgy = 0, rgz = 0, rtx = 0, rty = 0, rtz = 0, horizon = 0;
     for (int j = 0; j < n; ++j) {
@@ -382,7 +378,7 @@ struct Cascade {
         const Lanes gx = g0.x + rgx * re, gy = g0.y + rgy * re, gz = g0.z + rgz * re;
         const Lanes den = gx * nx + gy * ny + gz * nz;
         Lanes z = zc;
-        where(den * den > 1e-12f * (gx * gx + gy * gy + gz * gz) * n2, z) = plane / den;
+        where(den * den > kParallel * (gx * gx + gy * gy + gz * gz) * n2, z) = plane / den;
         where(z < lo, z) = lo;
         where(hi < z, z) = hi;
         for (int side = 0; side < 2; ++side) {
@@ -417,6 +413,11 @@ struct Cascade {
       for (int j = 0; j < n; ++j) rays[j].left = true;
   }
 
+  // How many sectors lie before a horizon's angle: those above the probe's surface.
+  int above_horizon(float horizon) const {
+    return std::clamp(int(std::ceil(horizon * s.sectors_per_radian - 0.5f)), 0, s.layout.sectors);
+  }
+
   // --offscreen world: each open sector of a ray that left the screen takes what an exact ray
   // from the probe along its centre's direction meets, as SPWI's rays do: the emission, with
   // later bounces the radiance cache's reflected light, or the sky. It starts at the probe: from
@@ -427,7 +428,9 @@ struct Cascade {
   // the cascades below saw on screen, an upper probe's ray meets again at other angles (a lamp
   // in view counted twice near it; docs/QUALITY.md).
   void world(Ray& ray, Vec3 p, Vec3 v, Vec3 normal, std::uint64_t& traced) const {
-    for (int k = 0; k < s.layout.sectors; ++k) {
+    // Only the sectors above the probe's surface: extend_over_horizon overwrites the others.
+    const int above = above_horizon(ray.horizon);
+    for (int k = 0; k < above; ++k) {
       if (ray.occluded >> k & 1u) continue;
       const Vec3 d = v * s.cos_sector[std::size_t(k)] + ray.t * s.sin_sector[std::size_t(k)];
       const spaceland::Ray r{s.ctx.rays.spawn(p, normal, d), d};
@@ -486,8 +489,7 @@ struct Cascade {
   // changes across a direction's wedge and from probe to probe (their view vectors differ), and
   // the sectors as traced would darken every sector near it.
   void extend_over_horizon(Ray& ray) const {
-    const int above =
-        std::clamp(int(std::ceil(ray.horizon * s.sectors_per_radian - 0.5f)), 0, s.layout.sectors);
+    const int above = above_horizon(ray.horizon);
     if (above == 0) return;
     for (int k = above; k < s.layout.sectors; ++k)
       ray.sectors[std::size_t(k)] = ray.sectors[std::size_t(above - 1)];
@@ -515,7 +517,7 @@ struct Cascade {
     for (int first = 0; first < dirs; first += l.rays) {
       const int n = std::min(l.rays, dirs - first);
       for (int j = 0; j < n; ++j) {
-        const double phi = 2 * kPi * (first + j + 0.5) / dirs;
+        const double phi = l.phi(i, first + j);
         Ray& ray = rays[std::size_t(j)];
         ray = Ray{};
         ray.dx = float(std::cos(phi));
@@ -527,7 +529,9 @@ struct Cascade {
       march(rays.data(), n, cx, cy, pr.p, v, pr.n);
       for (int j = 0; j < n; ++j) {
         Ray& ray = rays[std::size_t(j)];
-        if (ray.left && s.o.offscreen == SsrcOffscreen::world)
+        // A ray with no upper probe to go on with (all on the sky or facing away) is as one
+        // that left the screen.
+        if ((ray.left || !merges) && s.o.offscreen == SsrcOffscreen::world)
           world(ray, pr.p, v, pr.n, traced);
         else if (ray.left || !merges)
           sky(ray, v);
@@ -672,10 +676,6 @@ void for_each_hit(const GBuffer& g, std::uint64_t& traced, Visit&& visit) {
   traced += count.load();
 }
 
-std::string mib(std::uint64_t bytes) {
-  return io::format_rounded(double(bytes) / double(1 << 20)) + " MiB";
-}
-
 }  // namespace
 
 Layout make_layout(int width, int height, const SsrcOptions& o) {
@@ -777,8 +777,8 @@ Expected<ImageRgb> render(const SolveContext& ctx, const SsrcOptions& o, const L
   const std::uint64_t need = layout.bytes();
   report.memory_bytes += need;
   if (need > ctx.max_memory)
-    return Error{"ssrc's cascades need about " + mib(need) +
-                 ", more than the `max_memory` limit of " + mib(ctx.max_memory)};
+    return Error{"ssrc's cascades need about " + io::format_mib(need) +
+                 ", more than the `max_memory` limit of " + io::format_mib(ctx.max_memory)};
   const GBuffer& g = ctx.g;
   const std::size_t pixels = std::size_t(g.width) * std::size_t(g.height);
   const CameraRays camera(ctx.scene.camera);
@@ -914,7 +914,7 @@ Expected<ImageRgb> render(const SolveContext& ctx, const SsrcOptions& o, const L
     watch = Stopwatch();
     Gather gather{s, probes[0], upper, {}, {}, {}};
     for (int d = 0; d < layout.q0; ++d)
-      gather.screen.push_back(frame.screen_direction(2 * kPi * (d + 0.5) / layout.q0));
+      gather.screen.push_back(frame.screen_direction(layout.phi(0, d)));
     gather.prepare_probes();
     std::uint64_t traced = 0;
     img =

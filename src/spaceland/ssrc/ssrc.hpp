@@ -10,8 +10,10 @@
 // radiance cascades".
 #pragma once
 
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <numbers>
 #include <span>
 #include <vector>
 
@@ -32,6 +34,11 @@ namespace penumbra::spaceland::ssrc {
 // above it.
 inline constexpr int kMaxBins = 8;
 
+// How far above a probe's tangent plane, over the distance, a sample counts as on it.
+inline constexpr float kOnPlane = 0.02f;
+// A camera ray counts as running along a texel's plane where (g.n)^2 <= kParallel |g|^2 |n|^2.
+inline constexpr float kParallel = 1e-12f;
+
 struct Layout {
   spwi::Layout tiles;  // the probe tiles of each cascade (levels.spacing*, nx, ny)
   int q0 = 16;         // screen directions of cascade 0
@@ -48,6 +55,19 @@ struct Layout {
   double start(int i) const { return i == 0 ? 0.0 : double(r0) * double(1u << (i - 1)); }
   double end(int i) const { return double(r0) * double(1u << i); }
   bool top(int i) const { return i == count() - 1; }
+  // The angle of cascade i's screen direction d: 2 pi (d + 1/2) / directions.
+  double phi(int i, int d) const { return 2 * std::numbers::pi * (d + 0.5) / directions(i); }
+  // Cascade i's samples along a direction (fewer where it leaves the screen): its interval over
+  // its level's step; the top cascade's, the image's diagonal over the step and 2.
+  int samples(int i) const {
+    const double step = double(1 << level(i));
+    if (top(i))
+      return int(std::ceil(std::sqrt(double(tiles.width) * tiles.width +
+                                     double(tiles.height) * tiles.height) /
+                           step)) +
+             2;
+    return int(std::floor((end(i) - start(i)) / step + 1e-9));
+  }
   // The depth pyramid's level its samples read, 2^level pixels apart: the finest whose step
   // leaves at least `steps` samples in the interval.
   int level(int i) const {

@@ -2,7 +2,7 @@
 # The screen-space cascades' limitations measured side by side with SPWI on the same frames
 # (docs/QUALITY.md, "What the screen cannot hold"): a light behind the camera, an occluder hidden
 # behind another, and a thin wall seen edge on. Each scene (160x120) is rendered by the path
-# tracer (512 samples per pixel, kept in OUT), ssrc, ssrc --offscreen world and SPWI; prints each
+# tracer (512 samples per pixel, kept in OUT under each scene's checksum), ssrc, ssrc --offscreen world and SPWI; prints each
 # one's relative RMSE and writes OUT/limits_SCENE_METHOD.png (method, reference, error).
 # Usage: scripts/ssrc-limits.sh [BUILD] [OUT]
 set -euo pipefail
@@ -41,7 +41,8 @@ cat > "$out/thin.json" <<JSON
   {"type": "sphere", "center": [-0.8, 0.3, -1], "radius": 0.15, "material": "lamp"}]}
 JSON
 for scene in offscreen hidden thin; do
-  ref=$out/ref_$scene.pfm
+  # The reference, kept under the scene's checksum (an edited scene gets a new one).
+  ref=$out/ref_${scene}_$(cksum < "$out/$scene.json" | cut -d' ' -f1).pfm
   [ -f "$ref" ] || "$bin" render "$out/$scene.json" --method pt --spp 512 -o "$ref" -q
   line="$scene:"
   for method in ssrc ssrc_world spwi; do

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "penumbra/error.hpp"
 #include "penumbra/progress.hpp"
 #include "penumbra/spaceland/scene.hpp"
 #include "spaceland/embree/ray_scene.hpp"
@@ -43,5 +44,13 @@ struct SolveReport {
   bool cancelled = false;
   std::vector<std::string> warnings;  // what the user should know about the result
 };
+
+// The refusal of a method that cannot carry fog (its check_scene): "<method> cannot carry fog:
+// the scene has N medium box(es); use <instead>".
+inline Status refuse_fog(const Scene& scene, const char* method, const char* instead) {
+  if (scene.media.empty()) return {};
+  return Error{std::string(method) + " cannot carry fog: the scene has " +
+               std::to_string(scene.media.size()) + " medium box(es); use " + instead};
+}
 
 }  // namespace penumbra::spaceland

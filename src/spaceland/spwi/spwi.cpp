@@ -140,10 +140,7 @@ Status check_options(const SpwiOptions& o) {
 }
 
 Status check_scene(const Scene& scene) {
-  if (!scene.media.empty())
-    return Error{"spwi cannot carry fog: the scene has " + std::to_string(scene.media.size()) +
-                 " medium box(es); use --method pt"};
-  return {};
+  return refuse_fog(scene, "spwi", "--method pt");
 }
 
 namespace {

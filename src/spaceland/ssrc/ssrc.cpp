@@ -162,6 +162,13 @@ struct Frame {
   }
 };
 
+// A cascade's screen direction, the same for each of its probes: its unit step on the screen,
+// the camera ray's change per pixel along it (Frame::ray_step) and the direction in the world.
+struct ScreenDirection {
+  float dx = 0, dy = 0;
+  Vec3 g, world;
+};
+
 // The spread of a texel's depths, over the nearest, beyond which it spans a depth step (measured:
 // 0.1 against 0.05, 0.25 and 0.5).
 constexpr float kStep = 0.1f;
@@ -283,6 +290,8 @@ struct Shared {
   std::vector<float> bin_weight;
   // Prefix sums over the sectors before k of cos sin and sin^2 (the gather's cosine weights).
   std::vector<float> cos_sum, sin_sum;
+  // Per cascade, its screen directions (worked out once, not per probe).
+  std::vector<std::vector<ScreenDirection>> directions;
 };
 
 // One direction of a probe being marched: where it runs on the screen, its slice's tangent, the
@@ -517,13 +526,13 @@ struct Cascade {
     for (int first = 0; first < dirs; first += l.rays) {
       const int n = std::min(l.rays, dirs - first);
       for (int j = 0; j < n; ++j) {
-        const double phi = l.phi(i, first + j);
+        const ScreenDirection& sd = s.directions[std::size_t(i)][std::size_t(first + j)];
         Ray& ray = rays[std::size_t(j)];
         ray = Ray{};
-        ray.dx = float(std::cos(phi));
-        ray.dy = float(std::sin(phi));
-        ray.g = s.frame.ray_step(ray.dx, ray.dy);
-        ray.t = slice_tangent(v, s.frame.screen_direction(phi));
+        ray.dx = sd.dx;
+        ray.dy = sd.dy;
+        ray.g = sd.g;
+        ray.t = slice_tangent(v, sd.world);
         ray.horizon = slice_angle(-dot(pr.n, ray.t), dot(pr.n, v));
       }
       march(rays.data(), n, cx, cy, pr.p, v, pr.n);
@@ -766,10 +775,7 @@ Status check_options(const SsrcOptions& o) {
 }
 
 Status check_scene(const Scene& scene) {
-  if (!scene.media.empty())
-    return Error{"ssrc cannot carry fog: the scene has " + std::to_string(scene.media.size()) +
-                 " medium box(es); use --method pt or grid"};
-  return {};
+  return refuse_fog(scene, "ssrc", "--method pt or grid");
 }
 
 Expected<ImageRgb> render(const SolveContext& ctx, const SsrcOptions& o, const Layout& layout,
@@ -848,7 +854,20 @@ Expected<ImageRgb> render(const SolveContext& ctx, const SsrcOptions& o, const L
   probe_options.gather_normal = o.gather_normal;
   probe_options.depth_bias = 1;
 
-  Shared s{ctx, o, probe_options, layout, frame, texels, means, bg, 0, 0, 0, {}, {}, {}, {}, {}};
+  Shared s{ctx, o, probe_options, layout, frame, texels, means, bg, 0, 0, 0, {}, {}, {}, {},
+           {},  {}};
+  for (int i = 0; i < layout.count(); ++i) {
+    std::vector<ScreenDirection>& dirs = s.directions.emplace_back();
+    for (int d = 0; d < layout.directions(i); ++d) {
+      const double phi = layout.phi(i, d);
+      ScreenDirection sd;
+      sd.dx = float(std::cos(phi));
+      sd.dy = float(std::sin(phi));
+      sd.g = frame.ray_step(sd.dx, sd.dy);
+      sd.world = frame.screen_direction(phi);
+      dirs.push_back(sd);
+    }
+  }
   s.per_bin = layout.sectors / layout.bins;
   s.sectors_per_radian = float(layout.sectors / kPi);
   s.all = std::uint32_t((std::uint64_t(1) << layout.sectors) - 1);
@@ -914,7 +933,7 @@ Expected<ImageRgb> render(const SolveContext& ctx, const SsrcOptions& o, const L
     watch = Stopwatch();
     Gather gather{s, probes[0], upper, {}, {}, {}};
     for (int d = 0; d < layout.q0; ++d)
-      gather.screen.push_back(frame.screen_direction(layout.phi(0, d)));
+      gather.screen.push_back(s.directions[0][std::size_t(d)].world);
     gather.prepare_probes();
     std::uint64_t traced = 0;
     img =

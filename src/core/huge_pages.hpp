@@ -33,6 +33,13 @@ void reserve_huge(std::vector<T>& v, std::size_t n) {
   advise_huge_pages(v.data(), n * sizeof(T));
 }
 
+// v.assign(n, value), on huge pages when the vector must grow to hold n.
+template <class T>
+void assign_huge(std::vector<T>& v, std::size_t n, const T& value = T{}) {
+  reserve_huge(v, n);
+  v.assign(n, value);
+}
+
 // An uninitialised array that only grows (a solver's workspace keeps one per buffer, so its
 // steady state allocates nothing). Large ones are aligned to and
 // advised as 2 MiB pages: a first solve then takes 512 times fewer page faults (they cost more

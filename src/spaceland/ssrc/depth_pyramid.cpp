@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <limits>
 
+#include "core/huge_pages.hpp"
 #include "core/parallel.hpp"
 
 namespace penumbra::spaceland::ssrc {
@@ -37,8 +38,8 @@ DepthPyramid DepthPyramid::build(const GBuffer& g) {
   for_each_size(g.width, g.height, [&](int w, int h) {
     Level l;
     l.width = w, l.height = h;
-    l.lo.resize(std::size_t(w) * std::size_t(h));
-    l.hi.resize(l.lo.size());
+    assign_huge(l.lo, std::size_t(w) * std::size_t(h));
+    assign_huge(l.hi, l.lo.size());
     p.levels_.push_back(std::move(l));
   });
   Level& base = p.levels_[0];

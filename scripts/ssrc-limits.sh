@@ -2,8 +2,9 @@
 # The screen-space cascades' limitations measured side by side with SPWI on the same frames
 # (docs/QUALITY.md, "What the screen cannot hold"): a light behind the camera, an occluder hidden
 # behind another, and a thin wall seen edge on. Each scene (160x120) is rendered by the path
-# tracer (512 samples per pixel, kept in OUT under each scene's checksum), ssrc, ssrc --offscreen world and SPWI; prints each
-# one's relative RMSE and writes OUT/limits_SCENE_METHOD.png (method, reference, error).
+# tracer (512 samples per pixel, kept in OUT under each scene's checksum), ssrc, ssrc --offscreen
+# world, ssrc --merge fix and SPWI; prints each one's relative RMSE and writes
+# OUT/limits_SCENE_METHOD.png (method, reference, error).
 # Usage: scripts/ssrc-limits.sh [BUILD] [OUT]
 set -euo pipefail
 build=${1:-build}
@@ -45,9 +46,10 @@ for scene in offscreen hidden thin; do
   ref=$out/ref_${scene}_$(cksum < "$out/$scene.json" | cut -d' ' -f1).pfm
   [ -f "$ref" ] || "$bin" render "$out/$scene.json" --method pt --spp 512 -o "$ref" -q
   line="$scene:"
-  for method in ssrc ssrc_world spwi; do
+  for method in ssrc ssrc_world ssrc_fix spwi; do
     case $method in
       ssrc_world) args=(--method ssrc --offscreen world) ;;
+      ssrc_fix) args=(--method ssrc --merge fix) ;;
       *) args=(--method "$method") ;;
     esac
     img=$out/${scene}_$method.pfm

@@ -234,6 +234,17 @@ TEST(SsrcGpu, TheOtherThreeDMethodsStillRefuseTheGpu) {
       << st.error().message;
   o.device = Device::cpu;
   EXPECT_TRUE(check_options(o).ok());
+  // So is --merge fix, which marches on the CPU only.
+  o = RenderOptions{};
+  o.method = Method::ssrc;
+  o.device = Device::gpu;
+  o.ssrc.merge = SpwiMerge::fix;
+  const Status fix = check_options(o);
+  ASSERT_FALSE(fix.ok());
+  EXPECT_NE(fix.error().message.find("`ssrc.merge` fix is on the CPU only"), std::string::npos)
+      << fix.error().message;
+  o.device = Device::cpu;
+  EXPECT_TRUE(check_options(o).ok());
 }
 
 }  // namespace

@@ -193,6 +193,10 @@ Status check_gpu_options(const SsrcOptions& o) {
     return Error{
         "`device` gpu: `ssrc.offscreen` world traces rays through the scene, on the CPU only; "
         "use `ssrc.offscreen` sky or `device` cpu"};
+  if (o.merge == SpwiMerge::fix)
+    return Error{
+        "`device` gpu: `ssrc.merge` fix is on the CPU only; use another `ssrc.merge` or "
+        "`device` cpu"};
   return {};
 }
 

@@ -298,8 +298,12 @@ struct Shared {
 // One direction of a probe being marched: where it runs on the screen, its slice's tangent, the
 // sectors occluded so far and the radiance of each sector.
 struct Ray {
+  // Its samples at screen point (ox + r dx, oy + r dy) for r along the interval: (ox, oy) is the
+  // probe and (dx, dy) a unit direction, except for --merge fix's segments to an upper probe.
+  float ox = 0, oy = 0;
   float dx = 0, dy = 0;
-  Vec3 g;  // the change of the camera ray (Frame::ray) per pixel along the line
+  Vec3 o;  // the camera ray (Frame::ray) through (ox, oy)
+  Vec3 g;  // the change of the camera ray per unit of r along the line
   Vec3 t;
   float horizon = 0;  // the angle of the probe's own tangent plane in the slice
   std::uint32_t occluded = 0;
@@ -321,9 +325,9 @@ struct Cascade {
   // bounces came out 1.4% bright).
   const RadianceCache* reflected;
 
-  // Marches up to 4 directions together from the probe at screen point (cx, cy), position p,
-  // view vector v: the samples of their interval from the pyramid level of its step.
-  void march(Ray* rays, int n, float cx, float cy, Vec3 p, Vec3 v, Vec3 normal) const {
+  // Marches up to 4 rays together from the probe at position p, view vector v: the samples of
+  // their interval from the pyramid level of its step.
+  void march(Ray* rays, int n, Vec3 p, Vec3 v, Vec3 normal) const {
     const Layout& l = s.layout;
     const int level = l.level(i);
     const double step = double(1 << level);
@@ -331,14 +335,15 @@ struct Cascade {
     const bool top = l.top(i);
     const Means::Level& ml = s.means.levels[std::size_t(level)];
     const Texel* texels = s.texels[std::size_t(level)].data();
-    const Vec3 g0 = s.frame.ray(cx, cy);
     const int width = s.ctx.g.width, height = s.ctx.g.height;
     const float stretch = float(step);  // each sample stands for this much of the line
     // The top cascade runs to the screen's edge: at most its diagonal in steps.
     const int most = l.samples(i);
     // The rays' own values, one lane each (lanes past n stay idle).
-    Lanes rgx = 0, rgy = 0, rgz = 0, rtx = 0, rty = 0, rtz = 0, horizon = 0;
+    Lanes rox = 0, roy = 0, roz = 0, rgx = 0, rgy = 0, rgz = 0, rtx = 0, rty = 0, rtz = 0,
+          horizon = 0;
     for (int j = 0; j < n; ++j) {
+      rox[j] = rays[j].o.x, roy[j] = rays[j].o.y, roz[j] = rays[j].o.z;
       rgx[j] = rays[j].g.x, rgy[j] = rays[j].g.y, rgz[j] = rays[j].g.z;
       rtx[j] = rays[j].t.x, rty[j] = rays[j].t.y, rtz[j] = rays[j].t.z;
       horizon[j] = rays[j].horizon;
@@ -354,7 +359,7 @@ struct Cascade {
       for (int j = 0; j < n; ++j) {
         Ray& ray = rays[j];
         if (ray.left) continue;
-        const float x = cx + r * ray.dx, y = cy + r * ray.dy;
+        const float x = ray.ox + r * ray.dx, y = ray.oy + r * ray.dy;
         if (!(x >= 0 && y >= 0 && x < float(width) && y < float(height))) {
           ray.left = true;
           --active;
@@ -385,7 +390,7 @@ struct Cascade {
       Lanes t0 = float(kPi), t1 = 0;
       for (float e : {-0.5f, 0.5f}) {
         const float re = r + e * stretch;
-        const Lanes gx = g0.x + rgx * re, gy = g0.y + rgy * re, gz = g0.z + rgz * re;
+        const Lanes gx = rox + rgx * re, gy = roy + rgy * re, gz = roz + rgz * re;
         const Lanes den = gx * nx + gy * ny + gz * nz;
         Lanes z = zc;
         where(den * den > kParallel * (gx * gx + gy * gy + gz * gz) * n2, z) = plane / den;
@@ -523,41 +528,123 @@ struct Cascade {
                             spwi::tile_centre(py, spacing), pr, upper_probes, s.probe_options, c);
     const int dirs = l.directions(i);
     Rgb* out = lower.data() + std::size_t(q) * std::size_t(dirs) * std::size_t(l.bins);
+    const Vec3 g0 = s.frame.ray(cx, cy);
     std::array<Ray, 4> rays;
+    // Stored per bin: the mean of its sectors over their solid angles.
+    const auto store = [&](Ray& ray, int d) {
+      extend_over_horizon(ray);
+      Rgb* bins = out + std::size_t(d) * std::size_t(l.bins);
+      for (int b = 0; b < l.bins; ++b) {
+        Rgb sum{};
+        for (int k = b * s.per_bin; k < (b + 1) * s.per_bin; ++k)
+          sum += ray.sectors[std::size_t(k)] * s.bin_weight[std::size_t(k)];
+        bins[b] = sum;
+      }
+    };
+    const auto start = [&](Ray& ray, int d) {
+      const ScreenDirection& sd = s.directions[std::size_t(i)][std::size_t(d)];
+      ray = Ray{};
+      ray.ox = cx, ray.oy = cy;
+      ray.dx = sd.dx, ray.dy = sd.dy;
+      ray.o = g0;
+      ray.g = sd.g;
+      ray.t = slice_tangent(v, sd.world);
+      ray.horizon = slice_angle(-dot(pr.n, ray.t), dot(pr.n, v));
+    };
+    if (merges && s.o.merge == SpwiMerge::fix) {
+      for (int d = 0; d < dirs; ++d) fixed(rays, d, c, cx, cy, pr, v, store, start, traced);
+      return;
+    }
     for (int first = 0; first < dirs; first += l.rays) {
       const int n = std::min(l.rays, dirs - first);
-      for (int j = 0; j < n; ++j) {
-        const ScreenDirection& sd = s.directions[std::size_t(i)][std::size_t(first + j)];
-        Ray& ray = rays[std::size_t(j)];
-        ray = Ray{};
-        ray.dx = sd.dx;
-        ray.dy = sd.dy;
-        ray.g = sd.g;
-        ray.t = slice_tangent(v, sd.world);
-        ray.horizon = slice_angle(-dot(pr.n, ray.t), dot(pr.n, v));
-      }
-      march(rays.data(), n, cx, cy, pr.p, v, pr.n);
+      for (int j = 0; j < n; ++j) start(rays[std::size_t(j)], first + j);
+      march(rays.data(), n, pr.p, v, pr.n);
       for (int j = 0; j < n; ++j) {
         Ray& ray = rays[std::size_t(j)];
         // A ray with no upper probe to go on with (all on the sky or facing away) is as one
         // that left the screen.
-        if ((ray.left || !merges) && s.o.offscreen == SsrcOffscreen::world)
-          world(ray, pr.p, v, pr.n, traced);
-        else if (ray.left || !merges)
-          sky(ray, v);
+        if (ray.left || !merges)
+          off_screen(ray, pr, v, traced);
         else
           merge(ray, first + j, c);
-        extend_over_horizon(ray);
-        // Stored per bin: the mean of its sectors over their solid angles.
-        Rgb* bins = out + std::size_t(first + j) * std::size_t(l.bins);
-        for (int b = 0; b < l.bins; ++b) {
-          Rgb sum{};
-          for (int k = b * s.per_bin; k < (b + 1) * s.per_bin; ++k)
-            sum += ray.sectors[std::size_t(k)] * s.bin_weight[std::size_t(k)];
-          bins[b] = sum;
-        }
+        store(ray, first + j);
       }
     }
+  }
+
+  // What a ray that left the screen sees in its open sectors.
+  void off_screen(Ray& ray, const spwi::Probe& pr, Vec3 v, std::uint64_t& traced) const {
+    if (s.o.offscreen == SsrcOffscreen::world)
+      world(ray, pr.p, v, pr.n, traced);
+    else
+      sky(ray, v);
+  }
+
+  // --merge fix (flatland's bilinear fix, seed 002): direction d marched once per upper probe,
+  // a lane each, along the segment from where this cascade's interval starts to where that
+  // probe's starts, and merged with that probe alone; the segments' results weighted as the
+  // merge weighs the probes. The sectors stay those of the direction's own slice, as the fix in
+  // flatland keeps the direction's label. Four times the march of a merged cascade.
+  template <class Store, class Start>
+  void fixed(std::array<Ray, 4>& rays, int d, const cascade::Corners& c, float cx, float cy,
+             const spwi::Probe& pr, Vec3 v, const Store& store, const Start& start,
+             std::uint64_t& traced) const {
+    const Layout& l = s.layout;
+    const int up_spacing = l.tiles.spacing(i + 1);
+    const int up_nx = l.tiles.nx[std::size_t(i + 1)];
+    const float a = float(l.start(i)), b = float(l.end(i));
+    Ray sum;
+    start(sum, d);
+    float weight = 0;
+    // The upper probes the merge weighs.
+    std::array<std::uint64_t, 8> index{};
+    std::array<float, 8> w{};
+    int count = 0;
+    for (int q = 0; q < c.n; ++q)
+      if (c.w[std::size_t(q)] > 0) {
+        index[std::size_t(count)] = c.index[std::size_t(q)];
+        w[std::size_t(count++)] = c.w[std::size_t(q)];
+      }
+    for (int first = 0; first < count; first += 4) {
+      const int n = std::min(4, count - first);
+      for (int j = 0; j < n; ++j) {
+        Ray& ray = rays[std::size_t(j)];
+        start(ray, d);
+        // The upper probe's pixel centre, as probe() places it; the line through the samples
+        // (ox, oy) + r (dx, dy) meets this cascade's start at r = a and the upper probe's at b.
+        const std::uint64_t uq = index[std::size_t(first + j)];
+        const int ux = std::min(int(uq % std::uint64_t(up_nx)) * up_spacing + up_spacing / 2,
+                                s.ctx.g.width - 1);
+        const int uy = std::min(int(uq / std::uint64_t(up_nx)) * up_spacing + up_spacing / 2,
+                                s.ctx.g.height - 1);
+        const float ddx = (float(ux) + 0.5f - cx) / (b - a),
+                    ddy = (float(uy) + 0.5f - cy) / (b - a);
+        ray.dx += ddx, ray.dy += ddy;
+        ray.ox = cx - a * ddx, ray.oy = cy - a * ddy;
+        ray.o = s.frame.ray(ray.ox, ray.oy);
+        ray.g = s.frame.ray_step(ray.dx, ray.dy);
+      }
+      march(rays.data(), n, pr.p, v, pr.n);
+      for (int j = 0; j < n; ++j) {
+        Ray& ray = rays[std::size_t(j)];
+        const float wj = w[std::size_t(first + j)];
+        if (ray.left) {
+          off_screen(ray, pr, v, traced);
+        } else {
+          cascade::Corners one;
+          one.n = 1;
+          one.index[0] = index[std::size_t(first + j)];
+          one.w[0] = 1;
+          merge(ray, d, one);
+        }
+        for (int k = 0; k < l.sectors; ++k)
+          sum.sectors[std::size_t(k)] += ray.sectors[std::size_t(k)] * wj;
+        weight += wj;
+      }
+    }
+    if (weight > 0)
+      for (int k = 0; k < l.sectors; ++k) sum.sectors[std::size_t(k)] *= 1 / weight;
+    store(sum, d);
   }
 
   // Marches and merges every probe; returns the rays traced off screen.
@@ -759,8 +846,8 @@ Status check_options(const SsrcOptions& o) {
     return Error{"`ssrc.thickness`: expected a fraction of the depth >= 0, found " +
                  io::format_number(o.thickness)};
   if (o.merge != SpwiMerge::bilinear && o.merge != SpwiMerge::bilateral &&
-      o.merge != SpwiMerge::bilinear3d)
-    return Error{"`ssrc.merge`: expected bilinear, bilateral or bilinear3d, found " +
+      o.merge != SpwiMerge::bilinear3d && o.merge != SpwiMerge::fix)
+    return Error{"`ssrc.merge`: expected bilinear, bilateral, bilinear3d or fix, found " +
                  std::string(to_string(o.merge))};
   if (!(o.merge_edge >= 0) || !(o.gather_edge >= 0) || !std::isfinite(o.merge_edge) ||
       !std::isfinite(o.gather_edge))

@@ -69,7 +69,7 @@ void add_render_options(CLI::App* app, RenderOptions& options, RenderOptionFlags
                         n(rc.directions) +
                         "); in 3D spwi and the grid the square of a power of two (spwi default " +
                         n(spwi.directions) + ", grid " + n(grid.directions) +
-                        "), ssrc a power of two up to 64, screen directions (default " +
+                        "), ssrc a power of two up to 256, screen directions (default " +
                         n(penumbra::spaceland::SsrcOptions{}.directions) + ")")
         ->check(CLI::Range(1, 1024));
     app->add_option("--branching", rc.branching,

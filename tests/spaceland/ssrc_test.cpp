@@ -271,6 +271,8 @@ TEST(Ssrc, RefusesWhatItCannotDo) {
   o = ssrc();
   o.ssrc.directions = 6;
   refused(plane, o, "`ssrc.directions`");
+  o.ssrc.directions = 2 * ssrc::kMaxDirections;
+  refused(plane, o, "`ssrc.directions`");
   o = ssrc();
   o.ssrc.thickness = -1;
   refused(plane, o, "`ssrc.thickness`");

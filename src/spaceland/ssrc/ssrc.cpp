@@ -717,7 +717,7 @@ struct Gather {
     parallel_for(int(probes.size()), [&](int q) {
       const spwi::Probe& pr = probes[std::size_t(q)];
       if (!pr.valid) return;
-      std::array<float, 64 * kMaxBins> w;
+      std::array<float, kMaxDirections * kMaxBins> w;
       const float total = weights(normalize(s.frame.eye - pr.p), pr.n, w.data());
       if (!(total > 0)) return;
       probe_mean[std::size_t(q)] = mean_of(std::uint64_t(q), w.data(), total);
@@ -741,7 +741,7 @@ struct Gather {
         used += cw;
       }
     } else {
-      std::array<float, 64 * kMaxBins> w;
+      std::array<float, kMaxDirections * kMaxBins> w;
       const float total = weights(-s.ctx.g.directions[k], h.shading_normal, w.data());
       if (!(total > 0)) return false;
       for (int j = 0; j < c.n; ++j) {
@@ -824,9 +824,9 @@ Status check_options(const SsrcOptions& o) {
   if (o.probe_spacing < 0 || o.probe_spacing > 64)
     return Error{"`ssrc.probe_spacing`: expected 1..64 pixels (0: derived), found " +
                  std::to_string(o.probe_spacing)};
-  if (!power_of_two(o.directions) || o.directions > 64)
-    return Error{"`ssrc.directions`: expected a power of two from 1 to 64, found " +
-                 std::to_string(o.directions)};
+  if (!power_of_two(o.directions) || o.directions > kMaxDirections)
+    return Error{"`ssrc.directions`: expected a power of two from 1 to " +
+                 std::to_string(kMaxDirections) + ", found " + std::to_string(o.directions)};
   if (o.interval < 0 || o.interval > 4096)
     return Error{"`ssrc.interval`: expected 1..4096 pixels (0: derived), found " +
                  std::to_string(o.interval)};

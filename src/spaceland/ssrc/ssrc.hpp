@@ -33,6 +33,8 @@ namespace penumbra::spaceland::ssrc {
 // the nearest value above it before they are binned, so a bin across the horizon holds the light
 // above it.
 inline constexpr int kMaxBins = 8;
+// Screen directions of a cascade-0 probe at most (the gather's weights are on the stack).
+inline constexpr int kMaxDirections = 256;
 
 // How far above a probe's tangent plane, over the distance, a sample counts as on it.
 inline constexpr float kOnPlane = 0.02f;

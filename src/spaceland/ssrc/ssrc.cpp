@@ -311,6 +311,12 @@ struct Ray {
   std::array<Rgb, 32> sectors{};
 };
 
+// The screen coordinate of the centre of the pixel a probe of tile p (tiles `spacing` pixels
+// wide, `size` pixels in all) sits on: the tile's middle pixel, the last one past the edge.
+inline float probe_pixel(int p, int spacing, int size) {
+  return float(std::min(p * spacing + spacing / 2, size - 1)) + 0.5f;
+}
+
 // One cascade, marched and merged with the one above.
 struct Cascade {
   const Shared& s;
@@ -517,9 +523,8 @@ struct Cascade {
     const spwi::Probe& pr = probes[std::size_t(q)];
     if (!pr.valid) return;
     const int spacing = l.tiles.spacing(i);
-    const int x = std::min(px * spacing + spacing / 2, s.ctx.g.width - 1);
-    const int y = std::min(py * spacing + spacing / 2, s.ctx.g.height - 1);
-    const float cx = float(x) + 0.5f, cy = float(y) + 0.5f;
+    const float cx = probe_pixel(px, spacing, s.ctx.g.width);
+    const float cy = probe_pixel(py, spacing, s.ctx.g.height);
     const Vec3 v = normalize(s.frame.eye - pr.p);
     cascade::Corners c;
     const bool merges =
@@ -610,15 +615,12 @@ struct Cascade {
       for (int j = 0; j < n; ++j) {
         Ray& ray = rays[std::size_t(j)];
         start(ray, d);
-        // The upper probe's pixel centre, as probe() places it; the line through the samples
+        // The upper probe's pixel centre; the line through the samples
         // (ox, oy) + r (dx, dy) meets this cascade's start at r = a and the upper probe's at b.
         const std::uint64_t uq = index[std::size_t(first + j)];
-        const int ux = std::min(int(uq % std::uint64_t(up_nx)) * up_spacing + up_spacing / 2,
-                                s.ctx.g.width - 1);
-        const int uy = std::min(int(uq / std::uint64_t(up_nx)) * up_spacing + up_spacing / 2,
-                                s.ctx.g.height - 1);
-        const float ddx = (float(ux) + 0.5f - cx) / (b - a),
-                    ddy = (float(uy) + 0.5f - cy) / (b - a);
+        const float ux = probe_pixel(int(uq % std::uint64_t(up_nx)), up_spacing, s.ctx.g.width);
+        const float uy = probe_pixel(int(uq / std::uint64_t(up_nx)), up_spacing, s.ctx.g.height);
+        const float ddx = (ux - cx) / (b - a), ddy = (uy - cy) / (b - a);
         ray.dx += ddx, ray.dy += ddy;
         ray.ox = cx - a * ddx, ray.oy = cy - a * ddy;
         ray.o = s.frame.ray(ray.ox, ray.oy);

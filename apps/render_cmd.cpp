@@ -407,7 +407,7 @@ std::unique_ptr<RenderCommand> add_render_command(CLI::App& app) {
     add_enum_option(render, "--merge", a.spwi.merge,
                     {sl::SpwiMerge::bilinear, sl::SpwiMerge::bilateral, sl::SpwiMerge::bilinear3d,
                      sl::SpwiMerge::fix, sl::SpwiMerge::minmax},
-                    "3D spwi (ssrc: the first three; default bilateral): merging with the upper "
+                    "3D spwi (ssrc: the first four; default bilateral): merging with the upper "
                     "cascade: bilinear, bilateral (depth edges), bilinear3d (world-space lines), "
                     "fix (trace to each upper probe's interval start), minmax (probes on each "
                     "tile's nearest and farthest surface)");

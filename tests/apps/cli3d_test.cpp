@@ -324,7 +324,7 @@ TEST_F(Cli3d, BadMethodOptionValuesAreUsageErrorsNamingTheFlag) {
       {"grid", "--directions", "8", "--directions: expected the square of a power of two"},
       {"grid", "--cascades", "13", "--cascades: expected 0..12"},
       {"ssrc", "--directions", "6", "--directions: expected a power of two"},
-      {"ssrc", "--merge", "fix", "--merge: expected bilinear, bilateral or bilinear3d"},
+      {"ssrc", "--merge", "minmax", "--merge: expected bilinear, bilateral, bilinear3d or fix"},
       {"ssrc", "--interval", "2.5", "--interval for ssrc is a whole number of pixels"},
       {"ssrc", "--sectors", "12", "--sectors"},
       {"ssrc", "--march-rays", "3", "--march-rays"},

@@ -1,0 +1,689 @@
+#include "spaceland/atlas/atlas.hpp"
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstring>
+#include <numbers>
+#include <queue>
+#include <unordered_map>
+
+#include "io/json_reader.hpp"
+
+namespace penumbra::spaceland::atlas {
+
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+// How far, in texels, two triangles of a chart may run into each other before they count as
+// overlapping (rounding of their shared edges).
+constexpr float kOverlap = 1e-3f;
+// How far apart, in texels, the planes of two of a chart's triangles sharing a texel may lie
+// there (a smooth surface's neighbours at 45 degrees differ by up to about a texel).
+constexpr float kHeight = 1.5f;
+
+float cross2(Uv a, Uv b) {
+  return a.x * b.y - a.y * b.x;
+}
+
+// The edge function of edge (a, b) at p, worked out from the edge's canonical order, so that the
+// two triangles sharing it get exactly opposite values (a plain cross product from a and from b
+// rounds differently, and a texel centre on the edge could fall in both or neither).
+float edge(Uv a, Uv b, Uv p) {
+  const bool ordered = a.x < b.x || (a.x == b.x && a.y < b.y);
+  const Uv lo = ordered ? a : b, hi = ordered ? b : a;
+  const float e = cross2({hi.x - lo.x, hi.y - lo.y}, {p.x - lo.x, p.y - lo.y});
+  return ordered ? e : -e;
+}
+
+// Whether p lies in the counter-clockwise triangle (a, b, c): inside every edge, and on an edge
+// only where that edge runs downwards or, level, leftwards (of two triangles sharing an edge,
+// exactly one owns the points on it).
+bool inside(const std::array<Uv, 3>& t, Uv p) {
+  for (int k = 0; k < 3; ++k) {
+    const Uv a = t[std::size_t(k)], b = t[std::size_t((k + 1) % 3)];
+    const float e = edge(a, b, p);
+    if (e > 0) continue;
+    if (e < 0) return false;
+    const float dx = b.x - a.x, dy = b.y - a.y;
+    if (!(dy < 0 || (dy == 0 && dx < 0))) return false;
+  }
+  return true;
+}
+
+// The triangle in counter-clockwise order (false: degenerate).
+bool counter_clockwise(std::array<Uv, 3>& t) {
+  const float area = cross2({t[1].x - t[0].x, t[1].y - t[0].y}, {t[2].x - t[0].x, t[2].y - t[0].y});
+  if (!(area != 0)) return false;
+  if (area < 0) std::swap(t[1], t[2]);
+  return true;
+}
+
+// Calls f(i, j) for every texel whose centre (i + 1/2, j + 1/2) the triangle holds: row by row,
+// over the span the row's centre line crosses (a long sliver costs its texels, not its box).
+template <class F>
+void for_each_texel(std::array<Uv, 3> t, F&& f) {
+  if (!counter_clockwise(t)) return;
+  const float y0 = std::min({t[0].y, t[1].y, t[2].y}), y1 = std::max({t[0].y, t[1].y, t[2].y});
+  for (int j = int(std::floor(y0 - 0.5f)); j <= int(std::ceil(y1 - 0.5f)); ++j) {
+    const float y = float(j) + 0.5f;
+    float x0 = INFINITY, x1 = -INFINITY;
+    for (int k = 0; k < 3; ++k) {
+      const Uv a = t[std::size_t(k)], b = t[std::size_t((k + 1) % 3)];
+      if ((a.y - y) * (b.y - y) > 0) continue;  // the edge lies above or below the line
+      if (a.y == b.y) {
+        x0 = std::min({x0, a.x, b.x}), x1 = std::max({x1, a.x, b.x});
+        continue;
+      }
+      const float x = a.x + (b.x - a.x) * ((y - a.y) / (b.y - a.y));
+      x0 = std::min(x0, x), x1 = std::max(x1, x);
+    }
+    if (!(x0 <= x1)) continue;
+    // A texel either side of the span, for the rounding of the crossings; inside() decides.
+    for (int i = int(std::floor(x0 - 0.5f)) - 1; i <= int(std::ceil(x1 - 0.5f)) + 1; ++i)
+      if (inside(t, {float(i) + 0.5f, y})) f(i, j);
+  }
+}
+
+// Calls f(i, j) for every texel whose square [i, i + 1] x [j, j + 1] the triangle touches
+// (conservative coverage): row by row, the x-extent of the triangle clipped to the row.
+template <class F>
+void for_each_touched(const std::array<Uv, 3>& t, F&& f) {
+  const float y0 = std::min({t[0].y, t[1].y, t[2].y}), y1 = std::max({t[0].y, t[1].y, t[2].y});
+  // Rows and columns it only meets along their edge at its top or right are left out: the
+  // chart's rectangle ends there.
+  const int j0 = int(std::floor(y0)), j1 = std::max(j0, int(std::ceil(y1)) - 1);
+  for (int j = j0; j <= j1; ++j) {
+    const float lo = float(j), hi = float(j + 1);
+    float x0 = INFINITY, x1 = -INFINITY;
+    for (int k = 0; k < 3; ++k) {
+      const Uv a = t[std::size_t(k)], b = t[std::size_t((k + 1) % 3)];
+      if (a.y >= lo && a.y <= hi) x0 = std::min(x0, a.x), x1 = std::max(x1, a.x);
+      for (float y : {lo, hi})
+        if ((a.y - y) * (b.y - y) < 0) {
+          const float x = a.x + (b.x - a.x) * ((y - a.y) / (b.y - a.y));
+          x0 = std::min(x0, x), x1 = std::max(x1, x);
+        }
+    }
+    if (!(x0 <= x1)) continue;
+    const int i0 = int(std::floor(x0)), i1 = std::max(i0, int(std::ceil(x1)) - 1);
+    for (int i = i0; i <= i1; ++i) f(i, j);
+  }
+}
+
+// Whether two triangles' interiors overlap by more than `eps` (texels): no edge normal of either
+// separates them (the separating axis test; triangles that share an edge or a corner touch and
+// do not overlap).
+bool overlap(const std::array<Uv, 3>& a, const std::array<Uv, 3>& b, float eps) {
+  for (const std::array<Uv, 3>* t : {&a, &b})
+    for (int k = 0; k < 3; ++k) {
+      const Uv p = (*t)[std::size_t(k)], q = (*t)[std::size_t((k + 1) % 3)];
+      const float nx = q.y - p.y, ny = p.x - q.x;
+      const float len = std::sqrt(nx * nx + ny * ny);
+      if (!(len > 0)) continue;
+      float a0 = INFINITY, a1 = -INFINITY, b0 = INFINITY, b1 = -INFINITY;
+      for (const Uv& v : a) {
+        const float d = (v.x * nx + v.y * ny) / len;
+        a0 = std::min(a0, d), a1 = std::max(a1, d);
+      }
+      for (const Uv& v : b) {
+        const float d = (v.x * nx + v.y * ny) / len;
+        b0 = std::min(b0, d), b1 = std::max(b1, d);
+      }
+      if (a1 <= b0 + eps || b1 <= a0 + eps) return false;
+    }
+  return true;
+}
+
+// Barycentric coordinates of p in the 2D triangle t (its area non-zero).
+std::array<float, 3> barycentric(const std::array<Uv, 3>& t, Uv p) {
+  const float area = cross2({t[1].x - t[0].x, t[1].y - t[0].y}, {t[2].x - t[0].x, t[2].y - t[0].y});
+  const float b1 = cross2({p.x - t[0].x, p.y - t[0].y}, {t[2].x - t[0].x, t[2].y - t[0].y}) / area;
+  const float b2 = cross2({t[1].x - t[0].x, t[1].y - t[0].y}, {p.x - t[0].x, p.y - t[0].y}) / area;
+  return {1 - b1 - b2, b1, b2};
+}
+
+// The point of the 2D triangle nearest p, as barycentric coordinates.
+std::array<float, 3> nearest(const std::array<Uv, 3>& t, Uv p) {
+  const std::array<float, 3> b = barycentric(t, p);
+  if (b[0] >= 0 && b[1] >= 0 && b[2] >= 0) return b;
+  std::array<float, 3> best{};
+  float best_d = INFINITY;
+  for (int k = 0; k < 3; ++k) {
+    const Uv a = t[std::size_t(k)], c = t[std::size_t((k + 1) % 3)];
+    const float ex = c.x - a.x, ey = c.y - a.y, l2 = ex * ex + ey * ey;
+    const float s =
+        l2 > 0 ? std::clamp(((p.x - a.x) * ex + (p.y - a.y) * ey) / l2, 0.0f, 1.0f) : 0.0f;
+    const float dx = a.x + s * ex - p.x, dy = a.y + s * ey - p.y, d = dx * dx + dy * dy;
+    if (d < best_d) {
+      best_d = d;
+      best = {};
+      best[std::size_t(k)] = 1 - s;
+      best[std::size_t((k + 1) % 3)] = s;
+    }
+  }
+  return best;
+}
+
+// The height over the chart's plane at p of the plane through a triangle's corners (heights h).
+float at_height(const std::array<Uv, 3>& t, const std::array<float, 3>& h, Uv p) {
+  const std::array<float, 3> b = barycentric(t, p);
+  return b[0] * h[0] + b[1] * h[1] + b[2] * h[2];
+}
+
+std::uint64_t cell(int i, int j) {
+  return std::uint64_t(std::uint32_t(i)) << 32 | std::uint32_t(j);
+}
+
+// A mesh's vertices welded by position (a box's faces have their own copies of its corners) and
+// its triangles' neighbours across their edges.
+struct Topology {
+  std::vector<std::uint32_t> weld;  // per position: its welded vertex
+  std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> edges;  // welded (lo, hi)
+  static std::uint64_t key(std::uint32_t a, std::uint32_t b) {
+    return std::uint64_t(std::min(a, b)) << 32 | std::max(a, b);
+  }
+  std::uint64_t edge_key(const TriangleMesh& m, std::uint32_t t, int k) const {
+    const auto& tri = m.triangles[t];
+    return key(weld[tri[std::size_t(k)]], weld[tri[std::size_t((k + 1) % 3)]]);
+  }
+};
+
+Topology topology(const TriangleMesh& m) {
+  Topology top;
+  std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> by_hash;
+  top.weld.resize(m.positions.size());
+  for (std::uint32_t k = 0; k < m.positions.size(); ++k) {
+    const Vec3 p = m.positions[k];
+    std::uint32_t bits[3];
+    std::memcpy(bits, &p, sizeof bits);
+    const std::uint64_t h = (std::uint64_t(bits[0]) * 0x9E3779B97F4A7C15ull) ^
+                            (std::uint64_t(bits[1]) * 0xC2B2AE3D27D4EB4Full) ^
+                            (std::uint64_t(bits[2]) * 0x165667B19E3779F9ull);
+    std::vector<std::uint32_t>& same = by_hash[h];
+    top.weld[k] = k;
+    for (std::uint32_t o : same)
+      if (m.positions[o] == p) {
+        top.weld[k] = o;
+        break;
+      }
+    if (top.weld[k] == k) same.push_back(k);
+  }
+  for (std::uint32_t t = 0; t < m.triangles.size(); ++t)
+    for (int k = 0; k < 3; ++k) top.edges[top.edge_key(m, t, k)].push_back(t);
+  return top;
+}
+
+// Grows one mesh's charts (ChartKind::mesh) and the frame coordinates of its triangles.
+void chart_mesh(const Scene& scene, std::uint32_t mi, float ts, float cos_max, Atlas& a) {
+  const TriangleMesh& m = scene.meshes[mi];
+  const std::size_t n = m.triangles.size();
+  const Topology top = topology(m);
+  std::vector<Vec3> normal(n);
+  std::vector<double> area(n);
+  for (std::size_t t = 0; t < n; ++t) {
+    const auto& tri = m.triangles[t];
+    const Vec3 c =
+        cross(m.positions[tri[1]] - m.positions[tri[0]], m.positions[tri[2]] - m.positions[tri[0]]);
+    area[t] = 0.5 * double(length(c));
+    normal[t] = area[t] > 0 ? normalize(c) : Vec3{};
+  }
+  // Seeds in order of decreasing area (ties by index): the big flat parts get their charts first.
+  std::vector<std::uint32_t> order(n);
+  for (std::uint32_t t = 0; t < n; ++t) order[t] = t;
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::uint32_t x, std::uint32_t y) { return area[x] > area[y]; });
+  std::vector<std::uint32_t>& chart_of = a.triangle_chart[mi];
+  std::vector<std::array<Uv, 3>>& uv = a.triangle_uv[mi];
+  chart_of.assign(n, std::uint32_t(-1));
+  uv.assign(n, {});
+  // Per texel cell the chart's triangles touching it, to find those a new one could overlap.
+  std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> touching;
+  std::vector<std::uint32_t> members;
+  for (std::uint32_t seed : order) {
+    if (chart_of[seed] != std::uint32_t(-1)) continue;
+    const auto& st = m.triangles[seed];
+    Chart c;
+    c.kind = ChartKind::mesh;
+    c.shape = mi;
+    c.object = m.object;
+    c.origin = m.positions[st[0]];
+    if (area[seed] > 0) {
+      // u along the longer side of the seed's corner nearest a right angle: a box's or a quad's
+      // face (two right triangles) gets a tight rectangle, not one about its diagonal.
+      Vec3 side{};
+      float best = INFINITY;
+      for (int k = 0; k < 3; ++k) {
+        const Vec3 p = m.positions[st[std::size_t(k)]];
+        const Vec3 e1 = m.positions[st[std::size_t((k + 1) % 3)]] - p;
+        const Vec3 e2 = m.positions[st[std::size_t((k + 2) % 3)]] - p;
+        const float cosine = std::abs(dot(e1, e2)) / (length(e1) * length(e2));
+        if (cosine < best) {
+          best = cosine;
+          side = dot(e1, e1) >= dot(e2, e2) ? e1 : e2;
+        }
+      }
+      c.n = normal[seed];
+      c.u = normalize(side - c.n * dot(side, c.n));
+      c.v = cross(c.n, c.u);
+    } else {
+      c.n = {0, 0, 1};
+      orthonormal_basis(c.n, c.u, c.v);
+    }
+    // A triangle's corners' heights over the chart's plane, texels.
+    const auto height = [&](std::uint32_t t) {
+      std::array<float, 3> out;
+      for (int k = 0; k < 3; ++k)
+        out[std::size_t(k)] = dot(m.positions[m.triangles[t][std::size_t(k)]] - c.origin, c.n) / ts;
+      return out;
+    };
+    const auto project = [&](std::uint32_t t) {
+      std::array<Uv, 3> out;
+      for (int k = 0; k < 3; ++k) {
+        const Vec3 d = m.positions[m.triangles[t][std::size_t(k)]] - c.origin;
+        out[std::size_t(k)] = {dot(d, c.u) / ts, dot(d, c.v) / ts};
+      }
+      return out;
+    };
+    touching.clear();
+    members.clear();
+    const std::uint32_t id = std::uint32_t(a.charts.size());
+    // Breadth first from the seed over shared edges.
+    std::queue<std::uint32_t> queue;
+    const auto take = [&](std::uint32_t t) {
+      const std::array<Uv, 3> p = project(t);
+      if (area[t] > 0) {
+        if (dot(normal[t], c.n) < cos_max) return false;
+        // Left for another chart where it would cover part of one of this chart's triangles
+        // (a surface folding back over itself within the normal cone), or share a texel with
+        // one that lies at another height there (two parts a texel apart on the chart's plane
+        // but not in space: a texel between them would hold a point of one for hits on both).
+        const std::array<float, 3> h = height(t);
+        bool free = true;
+        for_each_touched(p, [&](int i, int j) {
+          if (!free) return;
+          const auto it = touching.find(cell(i, j));
+          if (it == touching.end()) return;
+          const Uv centre{float(i) + 0.5f, float(j) + 0.5f};
+          const float here = at_height(p, h, centre);
+          for (std::uint32_t o : it->second)
+            if (overlap(p, uv[o], kOverlap) ||
+                !(std::abs(at_height(uv[o], height(o), centre) - here) <= kHeight)) {
+              free = false;
+              return;
+            }
+        });
+        if (!free) return false;
+        for_each_touched(p, [&](int i, int j) { touching[cell(i, j)].push_back(t); });
+      }
+      chart_of[t] = id;
+      uv[t] = p;
+      members.push_back(t);
+      queue.push(t);
+      return true;
+    };
+    take(seed);
+    while (!queue.empty()) {
+      const std::uint32_t t = queue.front();
+      queue.pop();
+      for (int k = 0; k < 3; ++k)
+        for (std::uint32_t o : top.edges.at(top.edge_key(m, t, k)))
+          if (chart_of[o] == std::uint32_t(-1)) take(o);
+    }
+    // The rectangle of whole frame texels around the chart's triangles.
+    float x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
+    for (std::uint32_t t : members) {
+      c.area += area[t];
+      for (const Uv& p : uv[t]) {
+        x0 = std::min(x0, p.x), x1 = std::max(x1, p.x);
+        y0 = std::min(y0, p.y), y1 = std::max(y1, p.y);
+      }
+    }
+    const int ox = int(std::floor(x0)), oy = int(std::floor(y0));
+    c.width = std::max(1, int(std::ceil(x1)) - ox);
+    c.height = std::max(1, int(std::ceil(y1)) - oy);
+    c.shift_x = -ox;  // until packed: frame texel ox is the rectangle's first
+    c.shift_y = -oy;
+    c.first = std::uint32_t(a.chart_triangles.size());
+    c.count = std::uint32_t(members.size());
+    a.chart_triangles.insert(a.chart_triangles.end(), members.begin(), members.end());
+    a.charts.push_back(c);
+  }
+}
+
+Chart shape_chart(ChartKind kind, std::uint32_t shape, int object) {
+  Chart c;
+  c.kind = kind;
+  c.shape = shape;
+  c.object = object;
+  return c;
+}
+
+// The refusal of an atlas that would pass its largest side: `what` it would need.
+Error too_large(const std::string& what, float ts, int max_side) {
+  return Error{"the surface atlas would need " + what + " at " + io::format_number(ts) +
+               " world units a texel, more than its largest side of " + std::to_string(max_side) +
+               " allows; use larger texels or fewer"};
+}
+
+// Shelf packing, tallest first: each chart's rectangle with its gutter on every side.
+Status pack(Atlas& a, int max_side) {
+  const int g = a.gutter;
+  std::vector<std::uint32_t> order(a.charts.size());
+  double sum = 0;
+  int widest = 1;
+  for (std::uint32_t k = 0; k < order.size(); ++k) {
+    order[k] = k;
+    const Chart& c = a.charts[k];
+    sum += double(c.width + 2 * g) * double(c.height + 2 * g);
+    widest = std::max(widest, c.width + 2 * g);
+  }
+  std::stable_sort(order.begin(), order.end(), [&](std::uint32_t x, std::uint32_t y) {
+    const Chart &cx = a.charts[x], &cy = a.charts[y];
+    return cx.height != cy.height ? cx.height > cy.height : cx.width > cy.width;
+  });
+  const double side = std::ceil(std::sqrt(sum) * 1.05);
+  if (widest > max_side || side > double(max_side))
+    return too_large("a chart " + std::to_string(widest) + " texels wide and about " +
+                         io::format_number(side) + " texels square",
+                     a.texel_size, max_side);
+  const int width = std::min(max_side, std::max(widest, int(side)));
+  int x = 0, y = 0, shelf = 0;
+  for (std::uint32_t k : order) {
+    Chart& c = a.charts[k];
+    const int w = c.width + 2 * g, h = c.height + 2 * g;
+    if (x + w > width) {
+      y += shelf;
+      x = 0;
+      shelf = 0;
+    }
+    const int fx = -c.shift_x, fy = -c.shift_y;  // the rectangle's first frame texel
+    c.x = x + g;
+    c.y = y + g;
+    c.shift_x = c.x - fx;
+    c.shift_y = c.y - fy;
+    x += w;
+    shelf = std::max(shelf, h);
+  }
+  const int height = y + shelf;
+  if (height > max_side)
+    return too_large(std::to_string(width) + " x " + std::to_string(height) + " texels",
+                     a.texel_size, max_side);
+  a.width = width;
+  a.height = height;
+  return {};
+}
+
+}  // namespace
+
+Uv octahedral(Vec3 d) {
+  const float l1 = std::abs(d.x) + std::abs(d.y) + std::abs(d.z);
+  float x = d.x / l1, y = d.y / l1;
+  if (d.z < 0) {
+    const float fx = (1 - std::abs(y)) * (x < 0 ? -1.0f : 1.0f);
+    const float fy = (1 - std::abs(x)) * (y < 0 ? -1.0f : 1.0f);
+    x = fx, y = fy;
+  }
+  return {0.5f * x + 0.5f, 0.5f * y + 0.5f};
+}
+
+Vec3 from_octahedral(Uv p) {
+  const float x = 2 * p.x - 1, y = 2 * p.y - 1;
+  Vec3 d{x, y, 1 - std::abs(x) - std::abs(y)};
+  if (d.z < 0) {
+    const float fx = (1 - std::abs(y)) * (x < 0 ? -1.0f : 1.0f);
+    const float fy = (1 - std::abs(x)) * (y < 0 ? -1.0f : 1.0f);
+    d.x = fx, d.y = fy;
+  }
+  return normalize(d);
+}
+
+Expected<Atlas> make_atlas(const Scene& scene, const Options& o) {
+  if (!(o.texel_size >= 0) || !std::isfinite(o.texel_size))
+    return Error{"`atlas.texel_size`: expected a size >= 0 (0: from the texel budget), found " +
+                 io::format_number(o.texel_size)};
+  if (o.texel_size == 0 && o.texels < 1)
+    return Error{"`atlas.texels`: expected a budget of at least one texel"};
+  if (o.gutter < 0 || o.gutter > 64)
+    return Error{"`atlas.gutter`: expected 0..64 texels, found " + std::to_string(o.gutter)};
+  if (!(o.max_angle > 0 && o.max_angle <= 80))
+    return Error{"`atlas.max_angle`: expected degrees in (0, 80], found " +
+                 io::format_number(o.max_angle)};
+  if (o.max_side < 1 || o.max_side > 65536)
+    return Error{"`atlas.max_side`: expected 1..65536 texels, found " + std::to_string(o.max_side)};
+  Atlas a;
+  a.gutter = o.gutter;
+  double total = 0;
+  for (const TriangleMesh& m : scene.meshes)
+    for (const auto& t : m.triangles)
+      total += 0.5 * double(length(cross(m.positions[t[1]] - m.positions[t[0]],
+                                         m.positions[t[2]] - m.positions[t[0]])));
+  for (const Disk& d : scene.disks) total += kPi * double(d.radius) * d.radius;
+  for (const Sphere& s : scene.spheres) total += 4 * kPi * double(s.radius) * s.radius;
+  a.texel_size = o.texel_size > 0 ? o.texel_size : float(std::sqrt(total / double(o.texels)));
+  if (!(a.texel_size > 0)) a.texel_size = 1;  // no surface: an empty atlas
+  const float ts = a.texel_size;
+  // Refused before any chart is grown: the surface alone would pass the atlas's texels.
+  const double need = total / (double(ts) * ts);
+  if (need > double(o.max_side) * o.max_side)
+    return too_large("about " + io::format_number(need) + " texels", ts, o.max_side);
+  const float cos_max = float(std::cos(double(o.max_angle) * kPi / 180));
+  a.triangle_chart.resize(scene.meshes.size());
+  a.triangle_uv.resize(scene.meshes.size());
+  for (std::uint32_t mi = 0; mi < scene.meshes.size(); ++mi) chart_mesh(scene, mi, ts, cos_max, a);
+  for (std::uint32_t k = 0; k < scene.disks.size(); ++k) {
+    const Disk& d = scene.disks[k];
+    Chart c = shape_chart(ChartKind::disk, k, d.object);
+    c.n = d.normal;
+    orthonormal_basis(c.n, c.u, c.v);
+    const double side = std::ceil(2 * double(d.radius) / ts);
+    if (side > o.max_side)
+      return too_large(io::format_number(side) + " texels across a disk", ts, o.max_side);
+    c.width = c.height = std::max(1, int(side));
+    // Centred in its square.
+    c.origin = d.center - (c.u + c.v) * (0.5f * float(c.width) * ts);
+    c.area = kPi * double(d.radius) * d.radius;
+    a.disk_chart.push_back(std::uint32_t(a.charts.size()));
+    a.charts.push_back(c);
+  }
+  for (std::uint32_t k = 0; k < scene.spheres.size(); ++k) {
+    const Sphere& s = scene.spheres[k];
+    Chart c = shape_chart(ChartKind::sphere, k, s.object);
+    c.origin = s.center;
+    c.area = 4 * kPi * double(s.radius) * s.radius;
+    const double side = std::ceil(std::sqrt(c.area) / ts);
+    if (side > o.max_side)
+      return too_large(io::format_number(side) + " texels across a sphere", ts, o.max_side);
+    c.width = c.height = std::max(2, int(side));
+    a.sphere_chart.push_back(std::uint32_t(a.charts.size()));
+    a.charts.push_back(c);
+  }
+  if (Status st = pack(a, o.max_side); !st) return st.error();
+  return a;
+}
+
+Uv Atlas::locate(const Scene& scene, const Hit& hit, std::uint32_t& chart) const {
+  switch (hit.kind) {
+    case ShapeKind::sphere: {
+      chart = sphere_chart[hit.shape];
+      const Chart& c = charts[chart];
+      const Uv p = octahedral(normalize(hit.position - scene.spheres[hit.shape].center));
+      return {float(c.shift_x) + p.x * float(c.width), float(c.shift_y) + p.y * float(c.height)};
+    }
+    case ShapeKind::disk: {
+      chart = disk_chart[hit.shape];
+      const Chart& c = charts[chart];
+      const Vec3 d = hit.position - c.origin;
+      return {float(c.shift_x) + dot(d, c.u) / texel_size,
+              float(c.shift_y) + dot(d, c.v) / texel_size};
+    }
+    default: {
+      const TriangleMesh& m = scene.meshes[hit.shape];
+      chart = triangle_chart[hit.shape][hit.primitive];
+      const Chart& c = charts[chart];
+      const auto& t = m.triangles[hit.primitive];
+      const std::array<Uv, 3>& uv = triangle_uv[hit.shape][hit.primitive];
+      // Barycentric coordinates of the point in the triangle's plane.
+      const Vec3 e1 = m.positions[t[1]] - m.positions[t[0]];
+      const Vec3 e2 = m.positions[t[2]] - m.positions[t[0]];
+      const Vec3 d = hit.position - m.positions[t[0]];
+      const float d11 = dot(e1, e1), d12 = dot(e1, e2), d22 = dot(e2, e2);
+      const float d1 = dot(d, e1), d2 = dot(d, e2);
+      const float den = d11 * d22 - d12 * d12;
+      float b1 = 0, b2 = 0;
+      if (den > 0) {
+        b1 = (d22 * d1 - d12 * d2) / den;
+        b2 = (d11 * d2 - d12 * d1) / den;
+      }
+      const float b0 = 1 - b1 - b2;
+      return {float(c.shift_x) + b0 * uv[0].x + b1 * uv[1].x + b2 * uv[2].x,
+              float(c.shift_y) + b0 * uv[0].y + b1 * uv[1].y + b2 * uv[2].y};
+    }
+  }
+}
+
+std::vector<Texel> rasterise(const Scene& scene, const Atlas& a) {
+  std::vector<Texel> out(std::size_t(a.width) * std::size_t(a.height));
+  const float ts = a.texel_size;
+  const auto at = [&](int x, int y) -> Texel& {
+    return out[std::size_t(y) * std::size_t(a.width) + std::size_t(x)];
+  };
+  // Per texel, how far the nearest triangle touching it lies from its centre (texels squared).
+  std::vector<float> best(out.size(), INFINITY);
+  for (std::uint32_t id = 0; id < a.charts.size(); ++id) {
+    const Chart& c = a.charts[id];
+    switch (c.kind) {
+      case ChartKind::mesh: {
+        const TriangleMesh& m = scene.meshes[c.shape];
+        const auto point = [&](std::uint32_t t, const std::array<float, 3>& b) {
+          const auto& tri = m.triangles[t];
+          return m.positions[tri[0]] * b[0] + m.positions[tri[1]] * b[1] +
+                 m.positions[tri[2]] * b[2];
+        };
+        const auto normal = [&](std::uint32_t t) {
+          const auto& tri = m.triangles[t];
+          return normalize(cross(m.positions[tri[1]] - m.positions[tri[0]],
+                                 m.positions[tri[2]] - m.positions[tri[0]]));
+        };
+        // Texels whose centre a triangle holds: that point.
+        for (std::uint32_t k = c.first; k < c.first + c.count; ++k) {
+          const std::uint32_t t = a.chart_triangles[k];
+          const std::array<Uv, 3>& uv = a.triangle_uv[c.shape][t];
+          for_each_texel(uv, [&](int i, int j) {
+            Texel& x = at(c.shift_x + i, c.shift_y + j);
+            x.chart = int(id);
+            ++x.claims;
+            x.position = point(t, barycentric(uv, {float(i) + 0.5f, float(j) + 0.5f}));
+            x.normal = normal(t);
+            x.material = m.materials.empty() ? 0 : m.materials[t];
+          });
+        }
+        // Texels a triangle touches without holding their centre (along the chart's border, and
+        // all of a part thinner than a texel): the nearest point of the triangles touching them.
+        for (std::uint32_t k = c.first; k < c.first + c.count; ++k) {
+          const std::uint32_t t = a.chart_triangles[k];
+          const std::array<Uv, 3>& uv = a.triangle_uv[c.shape][t];
+          if (!(cross2({uv[1].x - uv[0].x, uv[1].y - uv[0].y},
+                       {uv[2].x - uv[0].x, uv[2].y - uv[0].y}) != 0))
+            continue;
+          for_each_touched(uv, [&](int i, int j) {
+            Texel& x = at(c.shift_x + i, c.shift_y + j);
+            if (x.claims > 0) return;
+            const Uv centre{float(i) + 0.5f, float(j) + 0.5f};
+            const std::array<float, 3> b = nearest(uv, centre);
+            const float px = b[0] * uv[0].x + b[1] * uv[1].x + b[2] * uv[2].x - centre.x;
+            const float py = b[0] * uv[0].y + b[1] * uv[1].y + b[2] * uv[2].y - centre.y;
+            const std::size_t at_k =
+                std::size_t(c.shift_y + j) * std::size_t(a.width) + std::size_t(c.shift_x + i);
+            if (!(px * px + py * py < best[at_k])) return;
+            best[at_k] = px * px + py * py;
+            x.chart = int(id);
+            x.position = point(t, b);
+            x.normal = normal(t);
+            x.material = m.materials.empty() ? 0 : m.materials[t];
+          });
+        }
+        break;
+      }
+      case ChartKind::disk: {
+        const Disk& d = scene.disks[c.shape];
+        for (int j = 0; j < c.height; ++j)
+          for (int i = 0; i < c.width; ++i) {
+            const Vec3 q = c.origin + (c.u * (float(i) + 0.5f) + c.v * (float(j) + 0.5f)) * ts;
+            if (length(q - d.center) > d.radius) continue;
+            Texel& x = at(c.shift_x + i, c.shift_y + j);
+            x.chart = int(id);
+            ++x.claims;
+            x.position = q;
+            x.normal = d.normal;
+            x.material = d.material;
+          }
+        break;
+      }
+      case ChartKind::sphere: {
+        const Sphere& s = scene.spheres[c.shape];
+        for (int j = 0; j < c.height; ++j)
+          for (int i = 0; i < c.width; ++i) {
+            const Vec3 dir = from_octahedral(
+                {(float(i) + 0.5f) / float(c.width), (float(j) + 0.5f) / float(c.height)});
+            Texel& x = at(c.shift_x + i, c.shift_y + j);
+            x.chart = int(id);
+            ++x.claims;
+            x.position = s.center + dir * s.radius;
+            x.normal = dir;
+            x.material = s.material;
+          }
+        break;
+      }
+    }
+  }
+  return out;
+}
+
+Stats stats(const Scene& scene, const Atlas& a, const std::vector<Texel>& texels) {
+  Stats s;
+  s.charts = a.charts.size();
+  for (std::uint32_t mi = 0; mi < scene.meshes.size(); ++mi) {
+    const TriangleMesh& m = scene.meshes[mi];
+    const Topology top = topology(m);
+    for (const auto& [key, tris] : top.edges) {
+      (void)key;
+      for (std::size_t k = 1; k < tris.size(); ++k)
+        if (a.triangle_chart[mi][tris[k]] != a.triangle_chart[mi][tris[0]]) {
+          ++s.seams;
+          break;
+        }
+    }
+  }
+  std::uint64_t all = 0;
+  for (const Texel& t : texels) all += t.chart >= 0;
+  s.density_min = INFINITY;
+  s.density_max = 0;
+  const double texel_area = double(a.texel_size) * a.texel_size;
+  for (const Chart& c : a.charts) {
+    // Charts under a few texels are too coarse to measure a density on.
+    if (c.area < 16 * texel_area) continue;
+    // The chart's area in texels over the surface's: a mesh chart's triangles as projected, a
+    // disk's map keeps areas, a sphere's square holds the whole sphere.
+    double mapped = c.area / texel_area;
+    if (c.kind == ChartKind::mesh) {
+      mapped = 0;
+      for (std::uint32_t k = c.first; k < c.first + c.count; ++k) {
+        const std::array<Uv, 3>& t = a.triangle_uv[c.shape][a.chart_triangles[k]];
+        mapped += 0.5 * std::abs(double(cross2({t[1].x - t[0].x, t[1].y - t[0].y},
+                                               {t[2].x - t[0].x, t[2].y - t[0].y})));
+      }
+    } else if (c.kind == ChartKind::sphere) {
+      mapped = double(c.width) * double(c.height);
+    }
+    const double d = mapped * texel_area / c.area;
+    s.density_min = std::min(s.density_min, d);
+    s.density_max = std::max(s.density_max, d);
+  }
+  if (s.density_max == 0) s.density_min = 0;
+  s.coverage = texels.empty() ? 0 : double(all) / double(texels.size());
+  return s;
+}
+
+}  // namespace penumbra::spaceland::atlas

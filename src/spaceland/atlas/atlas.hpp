@@ -1,0 +1,108 @@
+// A parametrisation of every surface of a 3D scene into one texture atlas, the 2D domain that
+// surface radiance cascades (seed 001 section 2.5.3) and baked light live on. Each surface gets
+// charts, flat pieces mapped to rectangles of texels without overlap:
+// - a disk: one chart, the square around it (texels outside the disk are empty);
+// - a sphere: one chart, its octahedral map (every texel of the square is on the sphere);
+// - a mesh (boxes and quads are meshes): charts grown over neighbouring triangles whose normals
+//   stay within `max_angle` of their seed's, projected on the seed's plane; a triangle that
+//   would overlap one of the chart's there, or share a texel with one at another height, is
+//   left for another chart.
+// The charts are packed on shelves with `gutter` empty texels around each. No UV-atlas library is
+// packaged for Debian 12, hence this one. docs/METHODS.md, "The surface atlas".
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "penumbra/error.hpp"
+#include "penumbra/spaceland/scene.hpp"
+#include "spaceland/ray.hpp"
+
+namespace penumbra::spaceland::atlas {
+
+struct Options {
+  float texel_size = 0;             // world units a texel's side; 0: from `texels`
+  std::uint64_t texels = 1u << 20;  // the surface's texels, about, where texel_size is 0
+  int gutter = 2;                   // empty texels around each chart
+  float max_angle = 45;             // degrees in (0, 80]: a mesh chart's normal cone
+  int max_side = 16384;             // the atlas's largest side, texels
+};
+
+enum class ChartKind { mesh, disk, sphere };
+
+struct Chart {
+  ChartKind kind = ChartKind::mesh;
+  std::uint32_t shape = 0;  // index into the scene's meshes, disks or spheres
+  int object = -1;          // the document's object
+  // A planar chart (mesh, disk) has a frame: the point of frame coordinates (s, t), in texels,
+  // is origin + (s u + t v) texel_size, n = u x v its normal, and frame texel (i, j) is atlas
+  // texel (shift_x + i, shift_y + j). A sphere's frame is its octahedral map, (s, t) in
+  // [0, width]^2.
+  Vec3 origin, u, v, n;
+  int shift_x = 0, shift_y = 0;
+  int x = 0, y = 0;           // its rectangle's corner in the atlas (texels, inside the gutter)
+  int width = 0, height = 0;  // its rectangle, texels
+  std::uint32_t first = 0, count = 0;  // a mesh chart's triangles in Atlas::chart_triangles
+  double area = 0;                     // the surface's area it maps, world units squared
+};
+
+// Continuous atlas coordinates, in texels (texel (i, j) spans [i, i + 1) x [j, j + 1)).
+struct Uv {
+  float x = 0, y = 0;
+};
+
+struct Atlas {
+  int width = 0, height = 0;  // texels
+  float texel_size = 0;       // world units
+  int gutter = 0;
+  std::vector<Chart> charts;
+  std::vector<std::uint32_t> chart_triangles;
+  // Per mesh, per triangle: its chart and its corners' coordinates in the chart's frame.
+  std::vector<std::vector<std::uint32_t>> triangle_chart;
+  std::vector<std::vector<std::array<Uv, 3>>> triangle_uv;
+  // Per disk and per sphere: its chart.
+  std::vector<std::uint32_t> disk_chart, sphere_chart;
+
+  // Where a surface point lies in the atlas (hit.kind, hit.shape, hit.primitive and
+  // hit.position say which point), and its chart.
+  Uv locate(const Scene& scene, const Hit& hit, std::uint32_t& chart) const;
+};
+
+// The scene's charts, packed. Errors: an atlas past `max_side` at this texel size (the message
+// names the size it would need), options out of range.
+Expected<Atlas> make_atlas(const Scene& scene, const Options& o = {});
+
+// What one texel of the atlas holds: the surface point under its centre, or chart -1 (a gutter,
+// a disk's corner, a gap between a chart's triangles).
+struct Texel {
+  int chart = -1;
+  Vec3 position, normal;  // normal: the surface's geometric normal, unit
+  std::uint32_t material = 0;
+  int claims = 0;  // how many triangles or shapes hold its centre: at most 1 in a sound atlas
+};
+
+// Every texel's surface point: where a triangle or shape holds the texel's centre, that point (a
+// centre on the shared edge of two triangles belongs to one of them, by the top-left rule, so
+// no texel has two); where the chart's triangles only touch the texel (along its border, or a
+// part thinner than a texel), the point of theirs nearest the centre.
+std::vector<Texel> rasterise(const Scene& scene, const Atlas& atlas);
+
+// The octahedral map of a unit direction to [0, 1]^2, and back (the sphere's chart).
+Uv octahedral(Vec3 d);
+Vec3 from_octahedral(Uv p);
+
+// What a demanding user asks of a parametrisation: how many charts, how many mesh edges run
+// between two charts (seams), the spread of the texel density over the charts of 16 texels or
+// more (the chart's area in the atlas over the surface's, per texel_size^2: 1 where the map keeps
+// areas, cos(max_angle) at worst on a mesh chart), and the share of the atlas that is covered.
+struct Stats {
+  std::size_t charts = 0;
+  std::size_t seams = 0;
+  double density_min = 0, density_max = 0;
+  double coverage = 0;
+};
+Stats stats(const Scene& scene, const Atlas& atlas, const std::vector<Texel>& texels);
+
+}  // namespace penumbra::spaceland::atlas

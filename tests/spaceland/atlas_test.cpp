@@ -1,8 +1,8 @@
 // The surface atlas (issue 39's charts): every triangle in exactly one chart, no texel held by
 // two surface pieces, gutters between the charts' rectangles, hits that look up a texel whose
-// point is theirs, the octahedral map's round trip, a texel budget kept, and refusals of what
-// does not fit. On a box, a quad, a disk and a sphere, the Cornell box, the bunny and the engine
-// (Debian's models, read in place).
+// point is theirs, the octahedral map's round trip, a texel budget kept, a glTF file's lightmap
+// UVs used, and refusals of what does not fit. On a box, a quad, a disk and a sphere, the Cornell
+// box, the bunny and the engine (Debian's models, read in place).
 #include "spaceland/atlas/atlas.hpp"
 
 #include <gtest/gtest.h>
@@ -245,6 +245,36 @@ TEST(Atlas, TheCornellBoxTheBunnyAndTheEngineAreChartedSoundly) {
     EXPECT_LE(st.density_max, 1.0 + 1e-6) << model.name;
     EXPECT_EQ(share, 1.0) << model.name << ": a hit looked up an empty texel";
   }
+}
+
+// A glTF file's lightmap UVs (TEXCOORD_1) are read and chart the mesh by their islands.
+TEST(Atlas, AGltfFilesLightmapUvsMakeItsCharts) {
+  const std::string file = "/usr/share/assimp/models/glTF2/BoxTexcoords-glTF/boxTexcoords.gltf";
+  ASSERT_TRUE(fs::exists(file)) << file << " is missing: run scripts/install-deps.sh";
+  const std::string doc = R"({"penumbra": 1, "dimensions": 3,
+    "camera": {"position": [3, 3, 3], "look_at": [0, 0, 0], "fov_y": 40, "width": 64, "height": 48},
+    "objects": [{"type": "mesh", "file": ")" +
+                          file + R"("}]})";
+  Expected<Scene> s = parse_scene(doc, "lightmap.json");
+  ASSERT_TRUE(s) << s.error().message;
+  ASSERT_EQ(s->meshes.size(), 1u);
+  const TriangleMesh& m = s->meshes[0];
+  ASSERT_EQ(m.lightmap_uvs.size(), m.positions.size());
+  atlas::Options o;
+  o.texels = 1u << 14;
+  const Atlas a = make_ok(*s, o);
+  const std::vector<atlas::Texel> texels = atlas::rasterise(*s, a);
+  check_sound(*s, a, texels);
+  const atlas::Stats st = atlas::stats(*s, a, texels);
+  std::printf("atlas_test: boxTexcoords: %zu charts from its lightmap UVs of %zu, %zu seams\n",
+              st.lightmap_charts, st.charts, st.seams);
+  EXPECT_EQ(st.lightmap_charts, st.charts);
+  EXPECT_EQ(check_lookups(*s, a, texels, 20), 1.0);
+  // The same mesh without them is charted by its faces.
+  s->meshes[0].lightmap_uvs.clear();
+  const Atlas b = make_ok(*s, o);
+  EXPECT_EQ(atlas::stats(*s, b, atlas::rasterise(*s, b)).lightmap_charts, 0u);
+  EXPECT_EQ(b.charts.size(), 6u);
 }
 
 TEST(Atlas, RefusesWhatDoesNotFit) {

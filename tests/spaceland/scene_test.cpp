@@ -697,6 +697,17 @@ TEST(Scene3dCheck, NamesTheField) {
          s.meshes[0].uvs = {{0, 0}};
        },
        "<code>: meshes[0].uvs: expected none or one per position (3), found 1"},
+      {"LightmapUvsCount",
+       [](Scene& s) {
+         s.meshes[0].lightmap_uvs = {{0, 0}};
+       },
+       "<code>: meshes[0].lightmap_uvs: expected none or one per position (3), found 1"},
+      {"LightmapUvNan",
+       [](Scene& s) {
+         s.meshes[0].lightmap_uvs.assign(3, {0, 0});
+         s.meshes[0].lightmap_uvs[1][0] = std::nanf("");
+       },
+       "<code>: meshes[0].lightmap_uvs[1][0]: expected a finite number, found nan"},
       {"PositionNan", [](Scene& s) { s.meshes[0].positions[2].y = std::nanf(""); },
        "<code>: meshes[0].positions[2][1]: expected a finite number, found nan"},
       {"TextureIndex", [](Scene& s) { s.materials[0].albedo_texture = 0; },
@@ -774,13 +785,14 @@ TEST(Scene3dCheck, BytesCountTheArrays) {
   m.positions.resize(10);
   m.normals.resize(10);
   m.uvs.resize(10);
+  m.lightmap_uvs.resize(10);
   m.triangles.resize(4);
   m.materials.resize(4);
   s.meshes.push_back(m);
   Texture t;
   t.rgb.resize(300);
   s.textures.push_back(t);
-  EXPECT_EQ(scene_bytes(s), 10u * 12 + 10 * 12 + 10 * 8 + 4 * 12 + 4 * 4 + 300 * 4);
+  EXPECT_EQ(scene_bytes(s), 10u * 12 + 10 * 12 + 2 * 10 * 8 + 4 * 12 + 4 * 4 + 300 * 4);
 }
 
 TEST(Scene3dTransform, NormalsStayOrthogonalToTheTransformedSurface) {

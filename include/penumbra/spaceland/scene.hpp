@@ -69,6 +69,9 @@ struct TriangleMesh {
   std::vector<Vec3> positions;
   std::vector<Vec3> normals;              // one per position (unit), or empty: flat triangles
   std::vector<std::array<float, 2>> uvs;  // one per position, or empty
+  // A glTF file's second UV set (TEXCOORD_1, the lightmap UVs artists make), one per position,
+  // or empty: the surface atlas charts the mesh by its islands (src/spaceland/atlas).
+  std::vector<std::array<float, 2>> lightmap_uvs;
   std::vector<std::array<std::uint32_t, 3>> triangles;  // indices into positions
   std::vector<std::uint32_t> materials;  // one per triangle: index into Scene::materials
   int object = -1;                       // index of the document's object

@@ -190,21 +190,30 @@ struct Topology {
   }
 };
 
-Topology topology(const TriangleMesh& m) {
+// With `lightmap`, vertices weld where their lightmap coordinates are the same too: the edges
+// then join the triangles of one lightmap island.
+Topology topology(const TriangleMesh& m, bool lightmap = false) {
   Topology top;
   std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> by_hash;
   top.weld.resize(m.positions.size());
+  const auto same_vertex = [&](std::uint32_t a, std::uint32_t b) {
+    return m.positions[a] == m.positions[b] &&
+           (!lightmap || m.lightmap_uvs[a] == m.lightmap_uvs[b]);
+  };
   for (std::uint32_t k = 0; k < m.positions.size(); ++k) {
     const Vec3 p = m.positions[k];
-    std::uint32_t bits[3];
-    std::memcpy(bits, &p, sizeof bits);
+    std::uint32_t bits[5] = {};
+    std::memcpy(bits, &p, sizeof(Vec3));
+    if (lightmap) std::memcpy(bits + 3, m.lightmap_uvs[k].data(), 2 * sizeof(float));
     const std::uint64_t h = (std::uint64_t(bits[0]) * 0x9E3779B97F4A7C15ull) ^
                             (std::uint64_t(bits[1]) * 0xC2B2AE3D27D4EB4Full) ^
-                            (std::uint64_t(bits[2]) * 0x165667B19E3779F9ull);
+                            (std::uint64_t(bits[2]) * 0x165667B19E3779F9ull) ^
+                            (std::uint64_t(bits[3]) * 0x27D4EB2F165667C5ull) ^
+                            (std::uint64_t(bits[4]) * 0x94D049BB133111EBull);
     std::vector<std::uint32_t>& same = by_hash[h];
     top.weld[k] = k;
     for (std::uint32_t o : same)
-      if (m.positions[o] == p) {
+      if (same_vertex(o, k)) {
         top.weld[k] = o;
         break;
       }
@@ -213,6 +222,92 @@ Topology topology(const TriangleMesh& m) {
   for (std::uint32_t t = 0; t < m.triangles.size(); ++t)
     for (int k = 0; k < 3; ++k) top.edges[top.edge_key(m, t, k)].push_back(t);
   return top;
+}
+
+// A mesh's charts from its lightmap UVs: one per island (triangles joined by edges whose ends
+// share position and lightmap coordinates), its coordinates scaled to the texel size by the
+// island's world area over its UV area. False, and nothing added, where an island has no UV area
+// or overlaps itself (lightmap UVs must be unique; mirrored texture UVs are not).
+bool chart_lightmap(const Scene& scene, std::uint32_t mi, float ts, Atlas& a) {
+  const TriangleMesh& m = scene.meshes[mi];
+  const std::size_t n = m.triangles.size(), charts0 = a.charts.size(),
+                    triangles0 = a.chart_triangles.size();
+  const Topology top = topology(m, true);
+  std::vector<std::uint32_t>& chart_of = a.triangle_chart[mi];
+  std::vector<std::array<Uv, 3>>& uv = a.triangle_uv[mi];
+  chart_of.assign(n, std::uint32_t(-1));
+  uv.assign(n, {});
+  const auto fail = [&] {
+    a.charts.resize(charts0);
+    a.chart_triangles.resize(triangles0);
+    return false;
+  };
+  std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> touching;
+  std::vector<std::uint32_t> members;
+  for (std::uint32_t seed = 0; seed < n; ++seed) {
+    if (chart_of[seed] != std::uint32_t(-1)) continue;
+    const std::uint32_t id = std::uint32_t(a.charts.size());
+    members.assign(1, seed);
+    chart_of[seed] = id;
+    for (std::size_t q = 0; q < members.size(); ++q)
+      for (int k = 0; k < 3; ++k)
+        for (std::uint32_t o : top.edges.at(top.edge_key(m, members[q], k)))
+          if (chart_of[o] == std::uint32_t(-1)) {
+            chart_of[o] = id;
+            members.push_back(o);
+          }
+    Chart c;
+    c.kind = ChartKind::mesh;
+    c.shape = mi;
+    c.object = m.object;
+    c.from_lightmap = true;
+    double uv_area = 0;
+    for (std::uint32_t t : members) {
+      const auto& tri = m.triangles[t];
+      c.area += 0.5 * double(length(cross(m.positions[tri[1]] - m.positions[tri[0]],
+                                          m.positions[tri[2]] - m.positions[tri[0]])));
+      const auto& p0 = m.lightmap_uvs[tri[0]];
+      const auto& p1 = m.lightmap_uvs[tri[1]];
+      const auto& p2 = m.lightmap_uvs[tri[2]];
+      uv_area +=
+          0.5 *
+          std::abs(double(cross2({p1[0] - p0[0], p1[1] - p0[1]}, {p2[0] - p0[0], p2[1] - p0[1]})));
+    }
+    if (!(uv_area > 0)) {
+      if (c.area > 0) return fail();
+      uv_area = 1;  // an island of no area: its corners anywhere
+    }
+    const float scale = float(std::sqrt(c.area / uv_area)) / ts;
+    touching.clear();
+    float x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
+    for (std::uint32_t t : members) {
+      std::array<Uv, 3>& p = uv[t];
+      for (int k = 0; k < 3; ++k) {
+        const auto& l = m.lightmap_uvs[m.triangles[t][std::size_t(k)]];
+        p[std::size_t(k)] = {l[0] * scale, l[1] * scale};
+        x0 = std::min(x0, p[std::size_t(k)].x), x1 = std::max(x1, p[std::size_t(k)].x);
+        y0 = std::min(y0, p[std::size_t(k)].y), y1 = std::max(y1, p[std::size_t(k)].y);
+      }
+      bool free = true;
+      for_each_touched(p, [&](int i, int j) {
+        const auto it = touching.find(cell(i, j));
+        if (it == touching.end()) return;
+        for (std::uint32_t o : it->second) free = free && !overlap(p, uv[o], kOverlap);
+      });
+      if (!free) return fail();
+      for_each_touched(p, [&](int i, int j) { touching[cell(i, j)].push_back(t); });
+    }
+    const int ox = int(std::floor(x0)), oy = int(std::floor(y0));
+    c.width = std::max(1, int(std::ceil(x1)) - ox);
+    c.height = std::max(1, int(std::ceil(y1)) - oy);
+    c.shift_x = -ox;
+    c.shift_y = -oy;
+    c.first = std::uint32_t(a.chart_triangles.size());
+    c.count = std::uint32_t(members.size());
+    a.chart_triangles.insert(a.chart_triangles.end(), members.begin(), members.end());
+    a.charts.push_back(c);
+  }
+  return true;
 }
 
 // Grows one mesh's charts (ChartKind::mesh) and the frame coordinates of its triangles.
@@ -471,7 +566,9 @@ Expected<Atlas> make_atlas(const Scene& scene, const Options& o) {
   const float cos_max = float(std::cos(double(o.max_angle) * kPi / 180));
   a.triangle_chart.resize(scene.meshes.size());
   a.triangle_uv.resize(scene.meshes.size());
-  for (std::uint32_t mi = 0; mi < scene.meshes.size(); ++mi) chart_mesh(scene, mi, ts, cos_max, a);
+  for (std::uint32_t mi = 0; mi < scene.meshes.size(); ++mi)
+    if (scene.meshes[mi].lightmap_uvs.empty() || !chart_lightmap(scene, mi, ts, a))
+      chart_mesh(scene, mi, ts, cos_max, a);
   for (std::uint32_t k = 0; k < scene.disks.size(); ++k) {
     const Disk& d = scene.disks[k];
     Chart c = shape_chart(ChartKind::disk, k, d.object);
@@ -644,6 +741,7 @@ std::vector<Texel> rasterise(const Scene& scene, const Atlas& a) {
 Stats stats(const Scene& scene, const Atlas& a, const std::vector<Texel>& texels) {
   Stats s;
   s.charts = a.charts.size();
+  for (const Chart& c : a.charts) s.lightmap_charts += c.from_lightmap;
   for (std::uint32_t mi = 0; mi < scene.meshes.size(); ++mi) {
     const TriangleMesh& m = scene.meshes[mi];
     const Topology top = topology(m);

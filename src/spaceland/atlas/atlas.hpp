@@ -3,6 +3,8 @@
 // charts, flat pieces mapped to rectangles of texels without overlap:
 // - a disk: one chart, the square around it (texels outside the disk are empty);
 // - a sphere: one chart, its octahedral map (every texel of the square is on the sphere);
+// - a mesh with lightmap UVs (a glTF file's TEXCOORD_1): one chart per island of them, scaled to
+//   the texel size (unless they overlap: then as any mesh);
 // - a mesh (boxes and quads are meshes): charts grown over neighbouring triangles whose normals
 //   stay within `max_angle` of their seed's, projected on the seed's plane; a triangle that
 //   would overlap one of the chart's there, or share a texel with one at another height, is
@@ -45,7 +47,10 @@ struct Chart {
   int x = 0, y = 0;           // its rectangle's corner in the atlas (texels, inside the gutter)
   int width = 0, height = 0;  // its rectangle, texels
   std::uint32_t first = 0, count = 0;  // a mesh chart's triangles in Atlas::chart_triangles
-  double area = 0;                     // the surface's area it maps, world units squared
+  // A mesh chart made from the file's lightmap UVs (an island of them, scaled): its frame's
+  // coordinates are those UVs times a scale, not a projection (origin, u, v, n unused).
+  bool from_lightmap = false;
+  double area = 0;  // the surface's area it maps, world units squared
 };
 
 // Continuous atlas coordinates, in texels (texel (i, j) spans [i, i + 1) x [j, j + 1)).
@@ -99,6 +104,7 @@ Vec3 from_octahedral(Uv p);
 // areas, cos(max_angle) at worst on a mesh chart), and the share of the atlas that is covered.
 struct Stats {
   std::size_t charts = 0;
+  std::size_t lightmap_charts = 0;  // of them, made from lightmap UVs
   std::size_t seams = 0;
   double density_min = 0, density_max = 0;
   double coverage = 0;

@@ -137,19 +137,26 @@ void check_mesh(const std::string& file, const std::string& path, const Triangle
     fail(file, obj,
          "the normal of vertex " + std::to_string(i) + " is not a unit vector: " + format_vec3(v));
   }
-  if (!m.uvs.empty() && m.uvs.size() != n)
-    fail(file, path + ".uvs",
-         "expected none or one per position (" + std::to_string(n) + "), found " +
-             std::to_string(m.uvs.size()));
-  for (std::size_t i = 0; i < m.uvs.size(); ++i) {
-    if (std::isfinite(m.uvs[i][0]) && std::isfinite(m.uvs[i][1])) continue;
-    if (document)
-      fail(file, obj,
-           "the texture coordinates of vertex " + std::to_string(i) + " are not finite: [" +
-               format_number(m.uvs[i][0]) + ", " + format_number(m.uvs[i][1]) + "]");
-    check_float(file, item(item(path + ".uvs", i), 0), m.uvs[i][0], Range::any);
-    check_float(file, item(item(path + ".uvs", i), 1), m.uvs[i][1], Range::any);
-  }
+  // A set of texture coordinates: none or one per position, finite.
+  const auto check_uvs = [&](const std::vector<std::array<float, 2>>& uvs, const char* field,
+                             const char* what) {
+    const std::string at = path + "." + field;
+    if (!uvs.empty() && uvs.size() != n)
+      fail(file, at,
+           "expected none or one per position (" + std::to_string(n) + "), found " +
+               std::to_string(uvs.size()));
+    for (std::size_t i = 0; i < uvs.size(); ++i) {
+      if (std::isfinite(uvs[i][0]) && std::isfinite(uvs[i][1])) continue;
+      if (document)
+        fail(file, obj,
+             std::string("the ") + what + " of vertex " + std::to_string(i) + " are not finite: [" +
+                 format_number(uvs[i][0]) + ", " + format_number(uvs[i][1]) + "]");
+      check_float(file, item(item(at, i), 0), uvs[i][0], Range::any);
+      check_float(file, item(item(at, i), 1), uvs[i][1], Range::any);
+    }
+  };
+  check_uvs(m.uvs, "uvs", "texture coordinates");
+  check_uvs(m.lightmap_uvs, "lightmap_uvs", "lightmap coordinates");
   for (std::size_t t = 0; t < m.triangles.size(); ++t) {
     for (std::uint32_t index : m.triangles[t]) {
       if (index >= n)
@@ -352,7 +359,8 @@ std::uint64_t scene_bytes(const Scene& s) {
   std::uint64_t bytes = 0;
   for (const TriangleMesh& m : s.meshes)
     bytes += m.positions.size() * sizeof(Vec3) + m.normals.size() * sizeof(Vec3) +
-             m.uvs.size() * sizeof(m.uvs[0]) + m.triangles.size() * sizeof(m.triangles[0]) +
+             (m.uvs.size() + m.lightmap_uvs.size()) * sizeof(m.uvs[0]) +
+             m.triangles.size() * sizeof(m.triangles[0]) +
              m.materials.size() * sizeof(std::uint32_t);
   for (const Texture& t : s.textures) bytes += t.rgb.size() * sizeof(float);
   bytes += s.spheres.size() * sizeof(Sphere) + s.disks.size() * sizeof(Disk) +

@@ -328,8 +328,8 @@ struct PrimitivePlan {
   const Instance* instance;
   std::string name;  // "meshes[0].primitives[1]"
   int mode;
-  View positions, normals, uvs, indices;
-  bool has_normals = false, has_uvs = false, has_indices = false;
+  View positions, normals, uvs, lightmap, indices;
+  bool has_normals = false, has_uvs = false, has_lightmap = false, has_indices = false;
   int material = -1;
   std::size_t triangles = 0, vertices = 0;
 };
@@ -350,8 +350,9 @@ class Reader {
         plans.push_back(plan(inst, mesh.primitives[p],
                              at("meshes", std::size_t(inst.mesh)) + "." + at("primitives", p)));
     }
-    bool any_normals = false, any_uvs = false;
-    for (const PrimitivePlan& p : plans) any_normals |= p.has_normals, any_uvs |= p.has_uvs;
+    bool any_normals = false, any_uvs = false, lightmap = !plans.empty();
+    for (const PrimitivePlan& p : plans)
+      any_normals |= p.has_normals, any_uvs |= p.has_uvs, lightmap &= p.has_lightmap;
     std::uint64_t vertices = 0, triangles = 0;
     for (PrimitivePlan& p : plans) {
       p.vertices = any_normals && !p.has_normals ? 3 * p.triangles : p.positions.count;
@@ -359,16 +360,19 @@ class Reader {
       triangles += p.triangles;
     }
     budget_.take(
-        mesh_bytes(vertices, any_normals, any_uvs, triangles),
+        mesh_bytes(vertices, any_normals, any_uvs, triangles) +
+            (lightmap ? vertices * sizeof(std::array<float, 2>) : 0),
         std::to_string(triangles) + " triangles on " + std::to_string(vertices) + " vertices");
     if (vertices > UINT32_MAX) mesh_fail("more than 2^32 vertices");
     TriangleMesh& mesh = out_.mesh;
     mesh.positions.reserve(vertices);
     if (any_normals) mesh.normals.reserve(vertices);
     if (any_uvs) mesh.uvs.reserve(vertices);
+    // Lightmap UVs only where every primitive has them: the atlas charts a mesh by them whole.
+    if (lightmap) mesh.lightmap_uvs.reserve(vertices);
     mesh.triangles.reserve(triangles);
     mesh.materials.reserve(triangles);
-    for (const PrimitivePlan& p : plans) emit(p, any_normals, any_uvs);
+    for (const PrimitivePlan& p : plans) emit(p, any_normals, any_uvs, lightmap);
     if (out_.materials.empty()) out_.materials.push_back(default_material());
     return std::move(out_);
   }
@@ -614,6 +618,14 @@ class Reader {
         p.has_uvs = true;
       }
     }
+    if (attr("TEXCOORD_1") >= 0) {
+      p.lightmap = view(attr("TEXCOORD_1"), name, "TEXCOORD_1", TINYGLTF_TYPE_VEC2,
+                        F{TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE,
+                          TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT},
+                        true);
+      same_count(p.lightmap, "TEXCOORD_1");
+      p.has_lightmap = true;
+    }
     std::size_t corners = p.positions.count;
     if (prim.indices >= 0) {
       p.indices =
@@ -650,7 +662,7 @@ class Reader {
     return t + std::size_t(k);
   }
 
-  void emit(const PrimitivePlan& p, bool any_normals, bool any_uvs) {
+  void emit(const PrimitivePlan& p, bool any_normals, bool any_uvs, bool lightmap) {
     TriangleMesh& mesh = out_.mesh;
     const Affine& world = p.instance->world;
     const std::size_t n = p.positions.count, base = mesh.positions.size();
@@ -674,14 +686,16 @@ class Reader {
                   std::to_string(n) + " vertices)");
       return v;
     };
-    auto uv = [&](std::size_t i) {
-      if (!p.has_uvs) return std::array<float, 2>{0, 0};
-      const std::array<float, 2> t{p.uvs.get(i, 0), p.uvs.get(i, 1)};
+    auto coordinates = [&](const View& v, bool has, std::size_t i) {
+      if (!has) return std::array<float, 2>{0, 0};
+      const std::array<float, 2> t{v.get(i, 0), v.get(i, 1)};
       if (!std::isfinite(t[0]) || !std::isfinite(t[1]))
-        mesh_fail(p.uvs.name + ": texture coordinate " + std::to_string(i) + " (" + num(t[0]) +
-                  ", " + num(t[1]) + ") is not finite");
+        mesh_fail(v.name + ": texture coordinate " + std::to_string(i) + " (" + num(t[0]) + ", " +
+                  num(t[1]) + ") is not finite");
       return t;
     };
+    auto uv = [&](std::size_t i) { return coordinates(p.uvs, p.has_uvs, i); };
+    auto lightmap_uv = [&](std::size_t i) { return coordinates(p.lightmap, p.has_lightmap, i); };
     if (any_normals && !p.has_normals) {
       for (std::size_t t = 0; t < p.triangles; ++t) {
         std::size_t v[3];
@@ -692,6 +706,7 @@ class Reader {
           mesh.positions.push_back(pos[v[k]]);
           mesh.normals.push_back(nrm);
           if (any_uvs) mesh.uvs.push_back(uv(v[k]));
+          if (lightmap) mesh.lightmap_uvs.push_back(lightmap_uv(v[k]));
         }
         mesh.triangles.push_back({first, first + 1, first + 2});
         mesh.materials.push_back(material);
@@ -701,6 +716,7 @@ class Reader {
     for (std::size_t i = 0; i < n; ++i) {
       mesh.positions.push_back(pos[i]);
       if (any_uvs) mesh.uvs.push_back(uv(i));
+      if (lightmap) mesh.lightmap_uvs.push_back(lightmap_uv(i));
       if (!any_normals) continue;
       const Vec3 raw = p.normals.vec3(i);
       const float len = length(raw);

@@ -1,13 +1,13 @@
 #include "spaceland/atlas/atlas.hpp"
 
 #include <algorithm>
-#include <bit>
 #include <cmath>
 #include <cstring>
 #include <numbers>
 #include <queue>
 #include <unordered_map>
 
+#include "core/octahedral.hpp"
 #include "io/json_reader.hpp"
 
 namespace penumbra::spaceland::atlas {
@@ -224,6 +224,27 @@ Topology topology(const TriangleMesh& m, bool lightmap = false) {
   return top;
 }
 
+// Closes a mesh chart: the rectangle of whole frame texels around its triangles (until packed,
+// the frame's texel (ox, oy) is its first), its triangles listed.
+void add_chart(Chart c, const std::vector<std::uint32_t>& members,
+               const std::vector<std::array<Uv, 3>>& uv, Atlas& a) {
+  float x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
+  for (std::uint32_t t : members)
+    for (const Uv& p : uv[t]) {
+      x0 = std::min(x0, p.x), x1 = std::max(x1, p.x);
+      y0 = std::min(y0, p.y), y1 = std::max(y1, p.y);
+    }
+  const int ox = int(std::floor(x0)), oy = int(std::floor(y0));
+  c.width = std::max(1, int(std::ceil(x1)) - ox);
+  c.height = std::max(1, int(std::ceil(y1)) - oy);
+  c.shift_x = -ox;
+  c.shift_y = -oy;
+  c.first = std::uint32_t(a.chart_triangles.size());
+  c.count = std::uint32_t(members.size());
+  a.chart_triangles.insert(a.chart_triangles.end(), members.begin(), members.end());
+  a.charts.push_back(c);
+}
+
 // A mesh's charts from its lightmap UVs: one per island (triangles joined by edges whose ends
 // share position and lightmap coordinates), its coordinates scaled to the texel size by the
 // island's world area over its UV area. False, and nothing added, where an island has no UV area
@@ -279,14 +300,11 @@ bool chart_lightmap(const Scene& scene, std::uint32_t mi, float ts, Atlas& a) {
     }
     const float scale = float(std::sqrt(c.area / uv_area)) / ts;
     touching.clear();
-    float x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
     for (std::uint32_t t : members) {
       std::array<Uv, 3>& p = uv[t];
       for (int k = 0; k < 3; ++k) {
         const auto& l = m.lightmap_uvs[m.triangles[t][std::size_t(k)]];
         p[std::size_t(k)] = {l[0] * scale, l[1] * scale};
-        x0 = std::min(x0, p[std::size_t(k)].x), x1 = std::max(x1, p[std::size_t(k)].x);
-        y0 = std::min(y0, p[std::size_t(k)].y), y1 = std::max(y1, p[std::size_t(k)].y);
       }
       bool free = true;
       for_each_touched(p, [&](int i, int j) {
@@ -297,15 +315,7 @@ bool chart_lightmap(const Scene& scene, std::uint32_t mi, float ts, Atlas& a) {
       if (!free) return fail();
       for_each_touched(p, [&](int i, int j) { touching[cell(i, j)].push_back(t); });
     }
-    const int ox = int(std::floor(x0)), oy = int(std::floor(y0));
-    c.width = std::max(1, int(std::ceil(x1)) - ox);
-    c.height = std::max(1, int(std::ceil(y1)) - oy);
-    c.shift_x = -ox;
-    c.shift_y = -oy;
-    c.first = std::uint32_t(a.chart_triangles.size());
-    c.count = std::uint32_t(members.size());
-    a.chart_triangles.insert(a.chart_triangles.end(), members.begin(), members.end());
-    a.charts.push_back(c);
+    add_chart(c, members, uv, a);
   }
   return true;
 }
@@ -336,6 +346,8 @@ void chart_mesh(const Scene& scene, std::uint32_t mi, float ts, float cos_max, A
   // Per texel cell the chart's triangles touching it, to find those a new one could overlap.
   std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> touching;
   std::vector<std::uint32_t> members;
+  // The heights over their chart's plane of the triangles it holds (height() below).
+  std::vector<std::array<float, 3>> heights(n);
   for (std::uint32_t seed : order) {
     if (chart_of[seed] != std::uint32_t(-1)) continue;
     const auto& st = m.triangles[seed];
@@ -395,6 +407,7 @@ void chart_mesh(const Scene& scene, std::uint32_t mi, float ts, float cos_max, A
         // one that lies at another height there (two parts a texel apart on the chart's plane
         // but not in space: a texel between them would hold a point of one for hits on both).
         const std::array<float, 3> h = height(t);
+        heights[t] = h;
         bool free = true;
         for_each_touched(p, [&](int i, int j) {
           if (!free) return;
@@ -404,7 +417,7 @@ void chart_mesh(const Scene& scene, std::uint32_t mi, float ts, float cos_max, A
           const float here = at_height(p, h, centre);
           for (std::uint32_t o : it->second)
             if (overlap(p, uv[o], kOverlap) ||
-                !(std::abs(at_height(uv[o], height(o), centre) - here) <= kHeight)) {
+                !(std::abs(at_height(uv[o], heights[o], centre) - here) <= kHeight)) {
               free = false;
               return;
             }
@@ -426,24 +439,8 @@ void chart_mesh(const Scene& scene, std::uint32_t mi, float ts, float cos_max, A
         for (std::uint32_t o : top.edges.at(top.edge_key(m, t, k)))
           if (chart_of[o] == std::uint32_t(-1)) take(o);
     }
-    // The rectangle of whole frame texels around the chart's triangles.
-    float x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
-    for (std::uint32_t t : members) {
-      c.area += area[t];
-      for (const Uv& p : uv[t]) {
-        x0 = std::min(x0, p.x), x1 = std::max(x1, p.x);
-        y0 = std::min(y0, p.y), y1 = std::max(y1, p.y);
-      }
-    }
-    const int ox = int(std::floor(x0)), oy = int(std::floor(y0));
-    c.width = std::max(1, int(std::ceil(x1)) - ox);
-    c.height = std::max(1, int(std::ceil(y1)) - oy);
-    c.shift_x = -ox;  // until packed: frame texel ox is the rectangle's first
-    c.shift_y = -oy;
-    c.first = std::uint32_t(a.chart_triangles.size());
-    c.count = std::uint32_t(members.size());
-    a.chart_triangles.insert(a.chart_triangles.end(), members.begin(), members.end());
-    a.charts.push_back(c);
+    for (std::uint32_t t : members) c.area += area[t];
+    add_chart(c, members, uv, a);
   }
 }
 
@@ -512,26 +509,15 @@ Status pack(Atlas& a, int max_side) {
 
 }  // namespace
 
+// The core's equal-area map (core/octahedral.hpp), from [-1, 1]^2 to the chart's [0, 1]^2: a
+// sphere's texels then hold equal areas of it.
 Uv octahedral(Vec3 d) {
-  const float l1 = std::abs(d.x) + std::abs(d.y) + std::abs(d.z);
-  float x = d.x / l1, y = d.y / l1;
-  if (d.z < 0) {
-    const float fx = (1 - std::abs(y)) * (x < 0 ? -1.0f : 1.0f);
-    const float fy = (1 - std::abs(x)) * (y < 0 ? -1.0f : 1.0f);
-    x = fx, y = fy;
-  }
-  return {0.5f * x + 0.5f, 0.5f * y + 0.5f};
+  const std::array<float, 2> e = penumbra::octahedral::encode(d);
+  return {0.5f * e[0] + 0.5f, 0.5f * e[1] + 0.5f};
 }
 
 Vec3 from_octahedral(Uv p) {
-  const float x = 2 * p.x - 1, y = 2 * p.y - 1;
-  Vec3 d{x, y, 1 - std::abs(x) - std::abs(y)};
-  if (d.z < 0) {
-    const float fx = (1 - std::abs(y)) * (x < 0 ? -1.0f : 1.0f);
-    const float fy = (1 - std::abs(x)) * (y < 0 ? -1.0f : 1.0f);
-    d.x = fx, d.y = fy;
-  }
-  return normalize(d);
+  return penumbra::octahedral::decode(2 * double(p.x) - 1, 2 * double(p.y) - 1);
 }
 
 Expected<Atlas> make_atlas(const Scene& scene, const Options& o) {
@@ -658,21 +644,27 @@ std::vector<Texel> rasterise(const Scene& scene, const Atlas& a) {
           return m.positions[tri[0]] * b[0] + m.positions[tri[1]] * b[1] +
                  m.positions[tri[2]] * b[2];
         };
-        const auto normal = [&](std::uint32_t t) {
+        // A triangle's unit normal; false where it has no area (nothing to hold a texel).
+        const auto normal = [&](std::uint32_t t, Vec3& n) {
           const auto& tri = m.triangles[t];
-          return normalize(cross(m.positions[tri[1]] - m.positions[tri[0]],
-                                 m.positions[tri[2]] - m.positions[tri[0]]));
+          const Vec3 cr = cross(m.positions[tri[1]] - m.positions[tri[0]],
+                                m.positions[tri[2]] - m.positions[tri[0]]);
+          if (!(dot(cr, cr) > 0)) return false;
+          n = normalize(cr);
+          return true;
         };
         // Texels whose centre a triangle holds: that point.
         for (std::uint32_t k = c.first; k < c.first + c.count; ++k) {
           const std::uint32_t t = a.chart_triangles[k];
           const std::array<Uv, 3>& uv = a.triangle_uv[c.shape][t];
+          Vec3 n;
+          if (!normal(t, n)) continue;
           for_each_texel(uv, [&](int i, int j) {
             Texel& x = at(c.shift_x + i, c.shift_y + j);
             x.chart = int(id);
             ++x.claims;
             x.position = point(t, barycentric(uv, {float(i) + 0.5f, float(j) + 0.5f}));
-            x.normal = normal(t);
+            x.normal = n;
             x.material = m.materials.empty() ? 0 : m.materials[t];
           });
         }
@@ -681,8 +673,9 @@ std::vector<Texel> rasterise(const Scene& scene, const Atlas& a) {
         for (std::uint32_t k = c.first; k < c.first + c.count; ++k) {
           const std::uint32_t t = a.chart_triangles[k];
           const std::array<Uv, 3>& uv = a.triangle_uv[c.shape][t];
-          if (!(cross2({uv[1].x - uv[0].x, uv[1].y - uv[0].y},
-                       {uv[2].x - uv[0].x, uv[2].y - uv[0].y}) != 0))
+          Vec3 n;
+          if (!normal(t, n) || !(cross2({uv[1].x - uv[0].x, uv[1].y - uv[0].y},
+                                        {uv[2].x - uv[0].x, uv[2].y - uv[0].y}) != 0))
             continue;
           for_each_touched(uv, [&](int i, int j) {
             Texel& x = at(c.shift_x + i, c.shift_y + j);
@@ -697,7 +690,7 @@ std::vector<Texel> rasterise(const Scene& scene, const Atlas& a) {
             best[at_k] = px * px + py * py;
             x.chart = int(id);
             x.position = point(t, b);
-            x.normal = normal(t);
+            x.normal = n;
             x.material = m.materials.empty() ? 0 : m.materials[t];
           });
         }

@@ -2,7 +2,8 @@
 // surface radiance cascades (seed 001 section 2.5.3) and baked light live on. Each surface gets
 // charts, flat pieces mapped to rectangles of texels without overlap:
 // - a disk: one chart, the square around it (texels outside the disk are empty);
-// - a sphere: one chart, its octahedral map (every texel of the square is on the sphere);
+// - a sphere: one chart, its equal-area octahedral map (every texel of the square is on the
+//   sphere, each holding the same area of it);
 // - a mesh with lightmap UVs (a glTF file's TEXCOORD_1): one chart per island of them, scaled to
 //   the texel size (unless they overlap: then as any mesh);
 // - a mesh (boxes and quads are meshes): charts grown over neighbouring triangles whose normals
@@ -94,7 +95,8 @@ struct Texel {
 // part thinner than a texel), the point of theirs nearest the centre.
 std::vector<Texel> rasterise(const Scene& scene, const Atlas& atlas);
 
-// The octahedral map of a unit direction to [0, 1]^2, and back (the sphere's chart).
+// The equal-area octahedral map (core/octahedral.hpp) of a unit direction to [0, 1]^2, and back
+// (the sphere's chart).
 Uv octahedral(Vec3 d);
 Vec3 from_octahedral(Uv p);
 

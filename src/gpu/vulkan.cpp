@@ -8,13 +8,13 @@
 
 #include <algorithm>
 #include <cstring>
+#include <mutex>
 #include <utility>
 
 namespace penumbra::gpu {
 
 // Functions of each level, fetched once.
 #define PENUMBRA_VK_INSTANCE(X)               \
-  X(vkDestroyInstance)                        \
   X(vkEnumeratePhysicalDevices)               \
   X(vkGetPhysicalDeviceProperties)            \
   X(vkGetPhysicalDeviceQueueFamilyProperties) \
@@ -70,9 +70,7 @@ namespace penumbra::gpu {
 #define PENUMBRA_VK_MEMBER(name) PFN_##name name = nullptr;
 
 struct Context::Impl {
-  void* library = nullptr;
   PFN_vkGetInstanceProcAddr vkGetInstanceProcAddr = nullptr;
-  PFN_vkCreateInstance vkCreateInstance = nullptr;
   PENUMBRA_VK_INSTANCE(PENUMBRA_VK_MEMBER)
   PENUMBRA_VK_DEVICE(PENUMBRA_VK_MEMBER)
   VkInstance instance = VK_NULL_HANDLE;
@@ -92,8 +90,7 @@ struct Context::Impl {
       if (command_pool) vkDestroyCommandPool(device, command_pool, nullptr);
       vkDestroyDevice(device, nullptr);
     }
-    if (instance) vkDestroyInstance(instance, nullptr);
-    if (library) dlclose(library);
+    // The instance is the process's (process_instance) and stays.
   }
 };
 
@@ -175,21 +172,39 @@ F load(PFN_vkGetInstanceProcAddr get, VkInstance instance, const char* name) {
 
 }  // namespace
 
-Expected<std::shared_ptr<Context>> Context::create(bool allow_cpu) {
-  std::shared_ptr<Context> c(new Context);
-  c->impl_ = std::make_unique<Impl>();
-  Impl& v = *c->impl_;
-  v.library = dlopen("libvulkan.so.1", RTLD_NOW | RTLD_LOCAL);
-  if (!v.library)
+namespace {
+
+// One Vulkan instance for the whole process, made by the first create() that finds a driver and
+// never destroyed. NVIDIA's driver goes wrong after repeated vkCreateInstance /
+// vkDestroyInstance cycles in one process: on an H200 (driver 580) the test binary's
+// vkCreateInstance answered VK_ERROR_INCOMPATIBLE_DRIVER after some hundred contexts, and the
+// same case alone passed. Devices are still made and destroyed per Context.
+struct ProcessInstance {
+  void* library = nullptr;
+  PFN_vkGetInstanceProcAddr get = nullptr;
+  VkInstance instance = VK_NULL_HANDLE;
+};
+
+Expected<ProcessInstance> process_instance() {
+  static std::mutex mutex;
+  static ProcessInstance* made = nullptr;  // kept for the process's life on purpose
+  std::lock_guard<std::mutex> lock(mutex);
+  if (made) return *made;
+  ProcessInstance p;
+  p.library = dlopen("libvulkan.so.1", RTLD_NOW | RTLD_LOCAL);
+  if (!p.library)
     return Error{
         "Vulkan: cannot load the Vulkan loader libvulkan.so.1 (install libvulkan1 and a "
         "driver, e.g. mesa-vulkan-drivers)"};
-  v.vkGetInstanceProcAddr =
-      reinterpret_cast<PFN_vkGetInstanceProcAddr>(dlsym(v.library, "vkGetInstanceProcAddr"));
-  if (!v.vkGetInstanceProcAddr) return Error{"Vulkan: the loader has no vkGetInstanceProcAddr"};
-  v.vkCreateInstance =
-      load<PFN_vkCreateInstance>(v.vkGetInstanceProcAddr, VK_NULL_HANDLE, "vkCreateInstance");
-  if (!v.vkCreateInstance) return Error{"Vulkan: the loader has no vkCreateInstance"};
+  auto fail = [&](Error e) -> Expected<ProcessInstance> {
+    dlclose(p.library);
+    return e;
+  };
+  p.get = reinterpret_cast<PFN_vkGetInstanceProcAddr>(dlsym(p.library, "vkGetInstanceProcAddr"));
+  if (!p.get) return fail(Error{"Vulkan: the loader has no vkGetInstanceProcAddr"});
+  const auto create_instance =
+      load<PFN_vkCreateInstance>(p.get, VK_NULL_HANDLE, "vkCreateInstance");
+  if (!create_instance) return fail(Error{"Vulkan: the loader has no vkCreateInstance"});
 
   VkApplicationInfo app{};
   app.sType = VK_STRUCTURE_TYPE_APPLICATION_INFO;
@@ -199,12 +214,26 @@ Expected<std::shared_ptr<Context>> Context::create(bool allow_cpu) {
   VkInstanceCreateInfo ici{};
   ici.sType = VK_STRUCTURE_TYPE_INSTANCE_CREATE_INFO;
   ici.pApplicationInfo = &app;
-  const VkResult created = v.vkCreateInstance(&ici, nullptr, &v.instance);
+  const VkResult created = create_instance(&ici, nullptr, &p.instance);
   if (created == VK_ERROR_INCOMPATIBLE_DRIVER)  // what the loader says when it finds no driver
-    return Error{
-        "Vulkan: no Vulkan 1.1 driver found (install your GPU's driver, or "
-        "mesa-vulkan-drivers for lavapipe, the CPU driver)"};
-  if (Status s = check(created, "creating the instance"); !s) return s.error();
+    return fail(
+        Error{"Vulkan: no Vulkan 1.1 driver found (install your GPU's driver, or "
+              "mesa-vulkan-drivers for lavapipe, the CPU driver)"});
+  if (Status s = check(created, "creating the instance"); !s) return fail(s.error());
+  made = new ProcessInstance(p);
+  return p;
+}
+
+}  // namespace
+
+Expected<std::shared_ptr<Context>> Context::create(bool allow_cpu) {
+  std::shared_ptr<Context> c(new Context);
+  c->impl_ = std::make_unique<Impl>();
+  Impl& v = *c->impl_;
+  Expected<ProcessInstance> shared = process_instance();
+  if (!shared) return shared.error();
+  v.vkGetInstanceProcAddr = shared->get;
+  v.instance = shared->instance;
 #define PENUMBRA_VK_LOAD_INSTANCE(name)                                  \
   v.name = load<PFN_##name>(v.vkGetInstanceProcAddr, v.instance, #name); \
   if (!v.name) return Error{"Vulkan: the instance has no " #name};
@@ -244,18 +273,21 @@ Expected<std::shared_ptr<Context>> Context::create(bool allow_cpu) {
     v.vkGetPhysicalDeviceMemoryProperties(d, &mp);
     const VkMemoryPropertyFlags want =
         VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
-    // The host-visible coherent type on the largest heap: a small device-local window (a
-    // 256 MiB BAR without resizable BAR) would hold only small grids. Among equals, cached
-    // memory reads back faster.
+    // The host-visible coherent type for uploads and read-back: cached first, then the
+    // largest heap. Uncached host-visible memory on a discrete GPU is its BAR, device memory
+    // behind PCIe: the CPU reads it at tens of MB/s (on an H200 reading a 2048^2 fluence back
+    // took 2.3 s), and without resizable BAR it is a 256 MiB window that holds only small
+    // grids. Cached system memory reads back at memory speed.
     int type = -1;
     auto heap_of = [&](int i) { return mp.memoryHeaps[mp.memoryTypes[i].heapIndex].size; };
+    auto cached = [&](int i) {
+      return (mp.memoryTypes[i].propertyFlags & VK_MEMORY_PROPERTY_HOST_CACHED_BIT) != 0;
+    };
     for (std::uint32_t i = 0; i < mp.memoryTypeCount; ++i) {
       const VkMemoryPropertyFlags f = mp.memoryTypes[i].propertyFlags;
       if ((f & want) != want) continue;
-      const bool cached = f & VK_MEMORY_PROPERTY_HOST_CACHED_BIT;
-      if (type < 0 || heap_of(int(i)) > heap_of(type) ||
-          (heap_of(int(i)) == heap_of(type) && cached &&
-           !(mp.memoryTypes[type].propertyFlags & VK_MEMORY_PROPERTY_HOST_CACHED_BIT)))
+      if (type < 0 || (cached(int(i)) && !cached(type)) ||
+          (cached(int(i)) == cached(type) && heap_of(int(i)) > heap_of(type)))
         type = int(i);
     }
     if (type < 0) continue;

@@ -3,7 +3,8 @@
 # on hardware"). The GPU machine has none of our Debian libraries and no package registry, so:
 #
 #   here:  bash scripts/gpu-hardware.sh pack    # build/bin's programs and their libraries into
-#                                               # .gpurun/bundle.tar.xz (ignored by git)
+#                                               # .gpurun/bundle.tar.xz, the Vulkan loader's
+#                                               # Debian packages into .gl/ (both untracked)
 #   there: bash scripts/gpu-hardware.sh run     # OUT=folder for the logs (default out/gpu-hw)
 #
 # `run` unpacks the bundle and the Vulkan loader (.gl/*.deb, fetched as the device notes say),
@@ -24,6 +25,11 @@ if [ "$mode" = pack ]; then
     grep -vE '/(libc|libm|libdl|libpthread|librt|ld-linux[^/]*)\.so' |
     while read -r lib; do cp -L "$lib" .gpurun/stage/lib/; done
   cp -L /lib/x86_64-linux-gnu/libvulkan.so.1 .gpurun/stage/lib/
+  # The loader and GL dispatch libraries the NVIDIA driver's ICD loads, unpacked over / there.
+  if ! ls .gl/libvulkan1_*.deb >/dev/null 2>&1; then
+    mkdir -p .gl && (cd .gl && apt-get download libvulkan1 libegl1 libglvnd0 libopengl0 libgl1 \
+      libglx0 libgles2)
+  fi
   tar -C .gpurun/stage -cf - bin lib | xz -T2 -6 >.gpurun/bundle.tar.xz
   rm -rf .gpurun/stage
   ls -la .gpurun/bundle.tar.xz

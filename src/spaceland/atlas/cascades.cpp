@@ -1,0 +1,345 @@
+#include "spaceland/atlas/cascades.hpp"
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <cmath>
+#include <numbers>
+
+#include "core/octahedral.hpp"
+#include "core/parallel.hpp"
+#include "core/timer.hpp"
+#include "spaceland/cascade/levels.hpp"
+#include "spaceland/cascade/radiance.hpp"
+#include "spaceland/cascade/store.hpp"
+#include "spaceland/color.hpp"
+#include "spaceland/sky.hpp"
+#include "spaceland/sun.hpp"
+#include "spaceland/surface.hpp"
+
+namespace penumbra::spaceland::atlas {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+// One cascade's probes: per chart a grid of `spacing`-texel cells over its rectangle, each
+// cell's probe on the covered texel of that chart nearest the cell's centre (none where the
+// cell holds no covered texel).
+struct Probe {
+  Vec3 position, normal;
+  float x = 0, y = 0;  // its texel's centre in the atlas
+  bool valid = false;
+};
+
+struct Grid {
+  int spacing = 1;
+  std::vector<std::uint64_t> base;  // per chart: its first probe
+  std::vector<int> nx, ny;          // per chart: its grid
+  std::vector<Probe> probes;
+};
+
+Grid place(const Atlas& a, const std::vector<Texel>& texels, int spacing) {
+  Grid g;
+  g.spacing = spacing;
+  g.base.resize(a.charts.size());
+  g.nx.resize(a.charts.size());
+  g.ny.resize(a.charts.size());
+  for (std::size_t c = 0; c < a.charts.size(); ++c) {
+    const Chart& ch = a.charts[c];
+    g.base[c] = g.probes.size();
+    g.nx[c] = (ch.width + spacing - 1) / spacing;
+    g.ny[c] = (ch.height + spacing - 1) / spacing;
+    g.probes.resize(g.probes.size() + std::size_t(g.nx[c]) * std::size_t(g.ny[c]));
+  }
+  // A texel the chart only touches holds the chart's nearest point, on its rim: at a room's
+  // corner that point lies on the next wall's plane too, and rays from it along that wall meet
+  // its far side at t ~ 0. Such a probe starts a hundredth of the way towards a neighbour whose
+  // centre the chart holds.
+  auto inside = [&](int x, int y, int c, Vec3 p) {
+    for (int r = 1; r <= 2; ++r)
+      for (int dy = -r; dy <= r; ++dy)
+        for (int dx = -r; dx <= r; ++dx) {
+          const int nx = x + dx, ny = y + dy;
+          if (nx < 0 || ny < 0 || nx >= a.width || ny >= a.height) continue;
+          const Texel& t = texels[std::size_t(ny) * std::size_t(a.width) + std::size_t(nx)];
+          if (t.chart == c && t.claims > 0) return p + (t.position - p) * 0.01f;
+        }
+    return p;
+  };
+  parallel_for(int(a.charts.size()), [&](int c) {
+    const Chart& ch = a.charts[std::size_t(c)];
+    for (int b = 0; b < g.ny[std::size_t(c)]; ++b)
+      for (int i = 0; i < g.nx[std::size_t(c)]; ++i) {
+        const float cx = float(ch.x) + (float(i) + 0.5f) * float(spacing);
+        const float cy = float(ch.y) + (float(b) + 0.5f) * float(spacing);
+        Probe& p = g.probes[g.base[std::size_t(c)] +
+                            std::size_t(b) * std::size_t(g.nx[std::size_t(c)]) + std::size_t(i)];
+        float best = 3e38f;
+        for (int y = ch.y + b * spacing; y < std::min(ch.y + (b + 1) * spacing, ch.y + ch.height);
+             ++y)
+          for (int x = ch.x + i * spacing; x < std::min(ch.x + (i + 1) * spacing, ch.x + ch.width);
+               ++x) {
+            const Texel& t = texels[std::size_t(y) * std::size_t(a.width) + std::size_t(x)];
+            if (t.chart != c) continue;
+            const float dx = float(x) + 0.5f - cx, dy = float(y) + 0.5f - cy;
+            if (dx * dx + dy * dy >= best) continue;
+            best = dx * dx + dy * dy;
+            p = {t.claims > 0 ? t.position : inside(x, y, c, t.position), t.normal, float(x) + 0.5f,
+                 float(y) + 0.5f, true};
+          }
+      }
+  });
+  return g;
+}
+
+// The (up to) four probes of `upper` around atlas point (x, y) of chart c, bilinearly weighted
+// (the valid ones; merge_children normalises over those with light).
+cascade::Corners corners(const Atlas& a, const Grid& upper, std::size_t c, float x, float y) {
+  const Chart& ch = a.charts[c];
+  const float s = float(upper.spacing);
+  const float gx = (x - float(ch.x)) / s - 0.5f, gy = (y - float(ch.y)) / s - 0.5f;
+  const int x0 = int(std::floor(gx)), y0 = int(std::floor(gy));
+  const float fx = gx - float(x0), fy = gy - float(y0);
+  cascade::Corners k;
+  for (int j = 0; j < 2; ++j)
+    for (int i = 0; i < 2; ++i) {
+      const int px = std::clamp(x0 + i, 0, upper.nx[c] - 1);
+      const int py = std::clamp(y0 + j, 0, upper.ny[c] - 1);
+      const float w = (i ? fx : 1 - fx) * (j ? fy : 1 - fy);
+      const std::uint64_t q =
+          upper.base[c] + std::uint64_t(py) * std::uint64_t(upper.nx[c]) + std::uint64_t(px);
+      if (w <= 0 || !upper.probes[q].valid) continue;
+      k.index[std::size_t(k.n)] = q;
+      k.w[std::size_t(k.n)] = w;
+      ++k.n;
+    }
+  return k;
+}
+
+}  // namespace
+
+Rgb Baked::irradiance_at(const Scene& scene, const Hit& hit, Vec3 towards) const {
+  std::uint32_t chart = 0;
+  const Uv uv = atlas.locate(scene, hit, chart);
+  const float gx = uv.x - 0.5f, gy = uv.y - 0.5f;
+  const int x0 = int(std::floor(gx)), y0 = int(std::floor(gy));
+  const float fx = gx - float(x0), fy = gy - float(y0);
+  auto value = [&](std::size_t k) {
+    return dot(texels[k].normal, towards) >= 0 ? front[k] : back[k];
+  };
+  Rgb sum{};
+  float weight = 0;
+  for (int j = 0; j < 2; ++j)
+    for (int i = 0; i < 2; ++i) {
+      const int x = x0 + i, y = y0 + j;
+      if (x < 0 || y < 0 || x >= atlas.width || y >= atlas.height) continue;
+      const std::size_t k = std::size_t(y) * std::size_t(atlas.width) + std::size_t(x);
+      if (texels[k].chart != int(chart)) continue;
+      const float w = (i ? fx : 1 - fx) * (j ? fy : 1 - fy);
+      sum += value(k) * w;
+      weight += w;
+    }
+  if (weight > 0) return sum * (1 / weight);
+  // None of the four is the chart's (a point on a chart's rim): its nearest covered texel, within
+  // the 2.5 texels locate() keeps to.
+  float best = 3e38f;
+  Rgb nearest{};
+  for (int y = y0 - 2; y <= y0 + 3; ++y)
+    for (int x = x0 - 2; x <= x0 + 3; ++x) {
+      if (x < 0 || y < 0 || x >= atlas.width || y >= atlas.height) continue;
+      const std::size_t k = std::size_t(y) * std::size_t(atlas.width) + std::size_t(x);
+      if (texels[k].chart != int(chart)) continue;
+      const float dx = float(x) + 0.5f - uv.x, dy = float(y) + 0.5f - uv.y;
+      if (dx * dx + dy * dy >= best) continue;
+      best = dx * dx + dy * dy;
+      nearest = value(k);
+    }
+  return nearest;
+}
+
+Expected<Baked> bake(const Scene& scene, const RayScene& rays, const Options& atlas_options,
+                     const CascadeOptions& o, std::uint64_t max_bytes, BakeReport& report) {
+  if (o.side0 < 2 || o.side0 > 64 || (o.side0 & (o.side0 - 1)) != 0)
+    return Error{"surface cascades: side0 must be a power of two in [2, 64]"};
+  if (!(o.t0 >= 0) || !std::isfinite(o.t0)) return Error{"surface cascades: t0 must be >= 0"};
+  if (o.cascades < 0 || o.cascades > cascade::kMaxCascades)
+    return Error{"surface cascades: cascades must be in [0, " +
+                 std::to_string(cascade::kMaxCascades) + "]"};
+  if (o.bounces < 1 || o.bounces > 64) return Error{"surface cascades: bounces must be in [1, 64]"};
+  if (o.sun_rays < 1 || o.sun_rays > 256)
+    return Error{"surface cascades: sun_rays must be in [1, 256]"};
+
+  Stopwatch watch;
+  Expected<Atlas> made = make_atlas(scene, atlas_options);
+  if (!made) return made.error();
+  Baked out;
+  out.atlas = std::move(*made);
+  out.texels = rasterise(scene, out.atlas);
+  report.stages.push_back({"atlas", watch.ms()});
+  watch.restart();
+
+  const Atlas& a = out.atlas;
+  cascade::Levels l;
+  l.spacing0 = 1;
+  l.side0 = o.side0;
+  l.spacing_step = 1;
+  l.side_step = 1;
+  l.interval_step = 2;
+  l.t0 = o.t0 > 0 ? o.t0 : 2 * a.texel_size;
+  const Bounds b = scene_bounds(scene);
+  const double reach = double(length(b.hi - b.lo));
+  l.count = o.cascades > 0 ? o.cascades : cascade::count_to_reach(l, reach, cascade::kMaxCascades);
+  report.cascades = l.count;
+  report.t0 = l.t0;
+
+  std::vector<Grid> grids;
+  for (int i = 0; i < l.count; ++i) grids.push_back(place(a, out.texels, l.spacing(i)));
+  // Two stores live at once: the cascade being traced and the one above it.
+  std::uint64_t most = 0;
+  report.probes.clear();
+  report.store_bytes.clear();
+  for (int i = 0; i < l.count; ++i) {
+    std::uint64_t valid = 0;
+    for (const Probe& p : grids[std::size_t(i)].probes) valid += p.valid ? 1 : 0;
+    report.probes.push_back(valid);
+    report.store_bytes.push_back(
+        cascade::RadianceStore::bytes(grids[std::size_t(i)].probes.size(), l.side(i)));
+  }
+  for (int i = 0; i + 1 < l.count; ++i)
+    most =
+        std::max(most, report.store_bytes[std::size_t(i)] + report.store_bytes[std::size_t(i) + 1]);
+  if (l.count == 1) most = report.store_bytes[0];
+  if (most > max_bytes)
+    return Error{"surface cascades: two cascades' stores take " + std::to_string(most >> 20) +
+                 " MiB, more than the " + std::to_string(max_bytes >> 20) +
+                 " MiB allowed; use fewer texels (a larger texel size) or a smaller side0"};
+  report.stages.push_back({"probes", watch.ms()});
+
+  const Background bg(scene);
+  const std::size_t n_texels = out.texels.size();
+  out.front.assign(n_texels, Rgb{});
+  out.back.assign(n_texels, Rgb{});
+  std::vector<Rgb> sun_front(n_texels), sun_back(n_texels);
+  {
+    watch.restart();
+    const SunLight sun(scene, rays, o.sun_rays);
+    std::atomic<std::uint64_t> traced{0};
+    if (sun.on())
+      parallel_for(a.height, [&](int y) {
+        std::uint64_t local = 0;
+        for (int x = 0; x < a.width; ++x) {
+          const std::size_t k = std::size_t(y) * std::size_t(a.width) + std::size_t(x);
+          const Texel& t = out.texels[k];
+          if (t.chart < 0) continue;
+          const Rgb one{1, 1, 1};
+          sun_front[k] =
+              sun.reflected(rays.spawn(t.position, t.normal, t.normal), t.normal, one, local) *
+              float(kPi);
+          sun_back[k] =
+              sun.reflected(rays.spawn(t.position, t.normal, -t.normal), -t.normal, one, local) *
+              float(kPi);
+        }
+        traced.fetch_add(local, std::memory_order_relaxed);
+      });
+    report.rays += traced.load();
+    report.stages.push_back({"sun", watch.ms()});
+  }
+
+  std::vector<std::vector<Vec3>> dirs;
+  for (int i = 0; i < l.count; ++i) dirs.push_back(cascade::direction_map(l, i));
+  cascade::RadianceStore stores[2];
+  for (int bounce = 1; bounce <= o.bounces; ++bounce) {
+    watch.restart();
+    // What a ray meets: the surface's emission and, past the first bounce, the light it reflects
+    // from the last solve (on the side the ray sees).
+    const Baked* last = bounce > 1 ? &out : nullptr;
+    std::vector<Rgb> next_front(n_texels), next_back(n_texels);
+    auto met = [&](Hit& h, Vec3 d) {
+      Rgb l = emission_at(scene, h);
+      if (last) l += albedo_at(scene, h) * last->irradiance_at(scene, h, -d) * float(1 / kPi);
+      return l;
+    };
+    std::atomic<std::uint64_t> traced{0};
+    for (int i = l.count - 1; i >= 0; --i) {
+      const Grid& g = grids[std::size_t(i)];
+      cascade::RadianceStore& store = stores[i & 1];
+      const cascade::RadianceStore& above = stores[(i + 1) & 1];
+      const int side = l.side(i);
+      const std::vector<Vec3>& dir = dirs[std::size_t(i)];
+      store.assign(g.probes.size(), side);
+      const float start = l.interval_start(i), end = l.interval_end(i);
+      const float rest_end = cascade::kInfinity;
+      parallel_for(int(a.charts.size()), [&](int c) {
+        std::uint64_t local = 0;
+        const std::uint64_t first = g.base[std::size_t(c)];
+        const std::uint64_t n =
+            std::uint64_t(g.nx[std::size_t(c)]) * std::uint64_t(g.ny[std::size_t(c)]);
+        for (std::uint64_t q = first; q < first + n; ++q) {
+          const Probe& p = g.probes[q];
+          if (!p.valid) continue;
+          const cascade::Corners k =
+              l.top(i) ? cascade::Corners{}
+                       : corners(a, grids[std::size_t(i) + 1], std::size_t(c), p.x, p.y);
+          Rgb* values = store.probe(q);
+          for (int v = 0; v < side; ++v)
+            for (int u = 0; u < side; ++u) {
+              const Vec3 d = dir[std::size_t(v) * std::size_t(side) + std::size_t(u)];
+              const Vec3 from = rays.spawn(p.position, p.normal, d);
+              // One ray from the probe itself: a hit before the interval starts means its start
+              // lies behind a surface (past a room's wall, for a probe near a corner), so this
+              // direction holds no light here (kNoLight) and the merge below leaves it out,
+              // rather than letting the interval see through the wall.
+              Hit h;
+              Rgb value;
+              ++local;
+              if (rays.intersect(Ray{from, d, 0, l.top(i) ? rest_end : end}, h)) {
+                value = h.t < start ? cascade::kNoLight : met(h, d);
+              } else if (l.top(i)) {
+                value = bg.sky(d);
+              } else if (!cascade::merge_children(above, k, u, v, 2, value)) {
+                // No probe above holds light this way (or none of this chart is there): the rest
+                // of the ray, traced.
+                ++local;
+                value = rays.intersect(Ray{from, d, end, rest_end}, h) ? met(h, d) : bg.sky(d);
+              }
+              values[std::size_t(v) * std::size_t(side) + std::size_t(u)] = value;
+            }
+        }
+        traced.fetch_add(local, std::memory_order_relaxed);
+      });
+      report.stages.push_back(
+          {"bounce " + std::to_string(bounce) + " cascade " + std::to_string(i), watch.ms()});
+      watch.restart();
+    }
+    // Cascade 0's probes are the covered texels: their irradiance on each side.
+    const cascade::RadianceStore& c0 = stores[0];
+    const Grid& g0 = grids[0];
+    const std::vector<Vec3>& d0 = dirs[0];
+    parallel_for(int(a.charts.size()), [&](int c) {
+      const Chart& ch = a.charts[std::size_t(c)];
+      for (int y = ch.y; y < ch.y + ch.height; ++y)
+        for (int x = ch.x; x < ch.x + ch.width; ++x) {
+          const std::size_t k = std::size_t(y) * std::size_t(a.width) + std::size_t(x);
+          const std::uint64_t q = g0.base[std::size_t(c)] +
+                                  std::uint64_t(y - ch.y) * std::uint64_t(g0.nx[std::size_t(c)]) +
+                                  std::uint64_t(x - ch.x);
+          if (!g0.probes[q].valid) continue;
+          // Irradiance over pi is the cosine-weighted mean (the core's normalised weights: a
+          // uniform sky gives pi L on any map).
+          const Vec3 n = g0.probes[q].normal;
+          Rgb f{}, bk{};
+          cascade::cosine_mean(d0, n, c0, q, f);
+          cascade::cosine_mean(d0, -n, c0, q, bk);
+          next_front[k] = f * float(kPi) + sun_front[k];
+          next_back[k] = bk * float(kPi) + sun_back[k];
+        }
+    });
+    out.front.swap(next_front);
+    out.back.swap(next_back);
+    report.rays += traced.load();
+    report.stages.push_back({"bounce " + std::to_string(bounce) + " irradiance", watch.ms()});
+  }
+  return out;
+}
+
+}  // namespace penumbra::spaceland::atlas

@@ -1,0 +1,62 @@
+// Surface radiance cascades (seed 001 section 2.5.3): probes on the atlas's texels, cascade i
+// a probe every 2^i texels of a chart with an octahedral map of (side0 2^i)^2 directions (4x
+// per cascade) and the interval [t0 4^(i-1), t0 4^i], so every cascade holds about the same
+// memory (M_i = M_0). Each interval is traced with Embree from the probe's surface point; a
+// direction that meets nothing takes the mean of its four children at the (up to) four
+// cascade-(i+1) probes of the same chart around it, bilinearly weighted. Cascade 0's probes are
+// the texels: their irradiance, with the sun's, is the baked light. Bounces feed each texel's
+// reflected light back into the next solve. docs/METHODS.md, "Surface radiance cascades".
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "penumbra/error.hpp"
+#include "penumbra/image.hpp"
+#include "penumbra/spaceland/scene.hpp"
+#include "spaceland/atlas/atlas.hpp"
+#include "spaceland/embree/ray_scene.hpp"
+
+namespace penumbra::spaceland::atlas {
+
+struct CascadeOptions {
+  int side0 = 4;     // cascade 0's map side: side0^2 directions over the sphere, half above
+  float t0 = 0;      // cascade 0's interval, world units; 0: two texels
+  int cascades = 0;  // 0: enough that the last nominal interval spans the scene
+  int bounces = 1;   // 1: direct light only
+  int sun_rays = 1;  // shadow rays over the sun's disk per texel (1: towards its centre)
+};
+
+// What a bake derived and cost.
+struct BakeReport {
+  int cascades = 0;
+  float t0 = 0;
+  std::vector<std::uint64_t> probes;       // per cascade: probes placed on a covered texel
+  std::vector<std::uint64_t> store_bytes;  // per cascade: its radiance store (M_i)
+  std::uint64_t rays = 0;
+  std::vector<std::pair<std::string, double>> stages;  // name, milliseconds
+};
+
+// The baked light: per texel of the atlas, the irradiance (sky, emitters, the sun and, past the
+// first bounce, the light the surfaces reflect) on each side of its surface. A probe's map holds
+// the whole sphere of directions, so one set of rays gives both sides: a wall lit from inside a
+// room and seen from outside needs no second bake.
+struct Baked {
+  Atlas atlas;
+  std::vector<Texel> texels;
+  std::vector<Rgb> front, back;  // per texel: the side its normal points to, and the other
+
+  // The irradiance at a surface point on the side `towards` points to (a G-buffer hit's normal
+  // faced to the camera, or minus a ray's direction), from the texels of its chart around it:
+  // bilinear over the covered ones, the nearest covered texel of the chart where none of the
+  // four is.
+  Rgb irradiance_at(const Scene& scene, const Hit& hit, Vec3 towards) const;
+};
+
+// Bakes the scene's light into a new atlas (`atlas_options`). Errors: the atlas's, options out of
+// range, a store larger than `max_bytes`.
+Expected<Baked> bake(const Scene& scene, const RayScene& rays, const Options& atlas_options,
+                     const CascadeOptions& o, std::uint64_t max_bytes, BakeReport& report);
+
+}  // namespace penumbra::spaceland::atlas

@@ -134,6 +134,10 @@ int render_scene_3d(const RenderArgs& a) {
     }
     options.ssrc.interval = int(r0);
   }
+  options.surface = a.surface;
+  if (given("--directions")) options.surface.directions = a.options.rc.directions;
+  if (given("--interval")) options.surface.interval = a.options.rc.interval;
+  if (given("--cascades")) options.surface.cascades = a.options.rc.cascades;
   if (given("--merge")) options.ssrc.merge = a.spwi.merge;
   if (given("--gather")) options.ssrc.gather = a.spwi.gather;
   if (given("--merge-edge")) options.ssrc.merge_edge = a.spwi.merge_edge;

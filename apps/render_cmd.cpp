@@ -469,6 +469,17 @@ std::unique_ptr<RenderCommand> add_render_command(CLI::App& app) {
                      "(1e30: infinitely thick, as horizon-based methods assume)")
         ->check(real_range(0, 1e30))
         ->capture_default_str();
+    render
+        ->add_option("--texel-size", a.surface.texel_size,
+                     "3D surface: the atlas's texel side in world units (0: from --texels)")
+        ->check(real_range(0, 1e30))
+        ->capture_default_str();
+    render
+        ->add_option("--texels", a.surface.texels,
+                     "3D surface: about how many texels the atlas gives the surfaces, where "
+                     "--texel-size is 0")
+        ->check(CLI::Range(std::uint64_t(64), std::uint64_t(1) << 28))
+        ->capture_default_str();
     add_enum_option(render, "--offscreen", a.ssrc.offscreen,
                     {sl::SsrcOffscreen::sky, sl::SsrcOffscreen::world},
                     "3D ssrc: what a ray sees once its march leaves the screen: the sky, or the "

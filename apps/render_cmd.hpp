@@ -29,6 +29,9 @@ struct RenderArgs {
   // 3D ssrc: its own options (--sectors, --march-rays, --thickness); those it shares with spwi
   // and 2D's cascades are copied when given.
   penumbra::spaceland::SsrcOptions ssrc;
+  // 3D surface: its own options (--texel-size, --texels); --directions, --interval and
+  // --cascades are copied when given.
+  penumbra::spaceland::SurfaceOptions surface;
 
   int cache_probe_spacing = penumbra::spaceland::RenderOptions{}.cache_probe_spacing;
   int sun_rays = penumbra::spaceland::RenderOptions{}.sun_rays;

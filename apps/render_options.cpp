@@ -70,7 +70,9 @@ void add_render_options(CLI::App* app, RenderOptions& options, RenderOptionFlags
                         "); in 3D spwi and the grid the square of a power of two (spwi default " +
                         n(spwi.directions) + ", grid " + n(grid.directions) +
                         "), ssrc a power of two up to 256, screen directions (default " +
-                        n(penumbra::spaceland::SsrcOptions{}.directions) + ")")
+                        n(penumbra::spaceland::SsrcOptions{}.directions) +
+                        "), surface the square of a power of two over the sphere (default " +
+                        n(penumbra::spaceland::SurfaceOptions{}.directions) + ")")
         ->check(CLI::Range(1, 1024));
     app->add_option("--branching", rc.branching,
                     "Angular branching per cascade: 2 or 4 (2D); 4 or 16 (3D spwi, default 4)")
@@ -80,8 +82,8 @@ void add_render_options(CLI::App* app, RenderOptions& options, RenderOptionFlags
            "--interval", rc.interval,
            "Cascade-0 interval length t0: cells in 2D (default " + n(rc.interval) +
                "); world units in 3D (default: spwi, four probe spacings at the median depth; "
-               "grid, four probe spacings); whole pixels in 3D ssrc (default four probe "
-               "spacings)")
+               "grid, four probe spacings; surface, two texels); whole pixels in 3D ssrc "
+               "(default four probe spacings)")
         ->check(real_above(0, false));
     app->add_option("--cascades", rc.cascades,
                     "Number of cascades (default 0: enough to reach across the 2D grid or the 3D "
@@ -229,6 +231,11 @@ const std::pair<const char*, const char*> kFlags[] = {
     {"`ssrc.merge_edge`", "--merge-edge"},
     {"`ssrc.gather_edge`", "--gather-edge"},
     {"`ssrc.gather_normal`", "--gather-normal"},
+    {"`surface.texel_size`", "--texel-size"},
+    {"`surface.texels`", "--texels"},
+    {"`surface.directions`", "--directions"},
+    {"`surface.interval`", "--interval"},
+    {"`surface.cascades`", "--cascades"},
     {"`grid.voxel`", "--voxel"},
     {"`grid.levels`", "--levels"},
     {"`cache_probe_spacing`", "--cache-probe-spacing"},

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "io/json_reader.hpp"
+#include "spaceland/atlas/render.hpp"
 #include "spaceland/grid/grid.hpp"
 #include "spaceland/method.hpp"
 #include "spaceland/pt/pt.hpp"
@@ -241,6 +242,42 @@ Expected<ImageRgb> ssrc_solve_gpu(const SolveContext& ctx, const RenderOptions& 
   return ssrc_run(ctx, o, report, used, ssrc::render_gpu);
 }
 
+// ---- surface: surface radiance cascades (seed 001 section 2.5.3) ----
+
+constexpr const char* kSurfaceOptions[] = {"surface.texel_size", "surface.texels",
+                                           "surface.directions", "surface.interval",
+                                           "surface.cascades",   "sun_rays"};
+
+Status surface_check(const RenderOptions& o) {
+  return atlas::check_options(o.surface);
+}
+
+Status surface_check_scene(const Scene& scene) {
+  return atlas::check_scene(scene);
+}
+
+std::uint64_t surface_bytes(const Scene& scene, const RenderOptions& o) {
+  return atlas::working_bytes(scene, o.surface);
+}
+
+void surface_describe(const RenderResult& r, std::vector<Parameter>& p, std::string& line) {
+  const SurfaceOptions& o = r.options.surface;
+  p.push_back({"texel_size", double(o.texel_size)});
+  p.push_back({"texels", std::int64_t(o.texels)});
+  p.push_back({"directions", std::int64_t(o.directions)});
+  p.push_back({"interval", double(o.interval)});
+  p.push_back({"cascades", std::int64_t(o.cascades)});
+  p.push_back({"sun_rays", std::int64_t(r.options.sun_rays)});
+  line = ", " + std::to_string(o.cascades) + " cascades, texel " +
+         io::format_rounded(o.texel_size) + ", Q0 " + std::to_string(o.directions) + ", t0 " +
+         io::format_rounded(o.interval);
+}
+
+Expected<ImageRgb> surface_solve(const SolveContext& ctx, const RenderOptions& o,
+                                 SolveReport& report, RenderOptions& used) {
+  return atlas::render(ctx, o.surface, report, used.surface);
+}
+
 // In the order of the Method enum.
 constexpr MethodEntry kMethods[] = {
     {Method::pt, "pt", "the path tracer",
@@ -260,11 +297,16 @@ constexpr MethodEntry kMethods[] = {
      "by marching the depth buffer with an occlusion bitmask; sees only what is on screen",
      kSsrcOptions, ssrc_bounces_itself, ssrc_check, ssrc_check_scene, ssrc_bytes, ssrc_describe,
      ssrc_solve, ssrc_solve_gpu},
+    {Method::surface, "surface", "the surface radiance cascades",
+     "surface radiance cascades (seed 001 2.5.3): the light baked into a texture atlas of every "
+     "surface by cascades on its texels, the camera's first hits looking it up",
+     kSurfaceOptions, always, surface_check, surface_check_scene, surface_bytes, surface_describe,
+     surface_solve, nullptr},
 };
 constexpr bool in_enum_order() {
   for (std::size_t i = 0; i < std::size(kMethods); ++i)
     if (std::size_t(kMethods[i].method) != i) return false;
-  return std::size(kMethods) == std::size_t(Method::ssrc) + 1;
+  return std::size(kMethods) == std::size_t(Method::surface) + 1;
 }
 static_assert(in_enum_order(), "one entry per Method, indexed by the enum");
 

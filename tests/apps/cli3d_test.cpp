@@ -238,7 +238,7 @@ TEST_F(Cli3d, GridReportsItsVoxelsAndIsRefusedItsOthersOptions) {
   EXPECT_EQ(nlohmann::json::parse(rays.out)["parameters"]["sun_rays"], 4);
   bad = run({"render", scene_, "--method", "pt", "--sun-rays", "4", "-o", out("x.pfm")});
   EXPECT_EQ(bad.status, 2);
-  EXPECT_NE(bad.err.find("--sun-rays applies to --method spwi, grid or ssrc only, not pt"),
+  EXPECT_NE(bad.err.find("--sun-rays applies to --method spwi, grid, ssrc or surface only, not pt"),
             std::string::npos)
       << bad.err;
   for (const char* n : {"0", "1025"}) {
@@ -254,7 +254,8 @@ TEST_F(Cli3d, GridReportsItsVoxelsAndIsRefusedItsOthersOptions) {
       << bad.err;
   // --directions belongs to both.
   bad = run({"render", scene_, "--method", "pt", "--directions", "16", "-o", out("x.pfm")});
-  EXPECT_NE(bad.err.find("applies to --method spwi, grid or ssrc only, not pt"), std::string::npos)
+  EXPECT_NE(bad.err.find("applies to --method spwi, grid, ssrc or surface only, not pt"),
+            std::string::npos)
       << bad.err;
   EXPECT_FALSE(fs::exists(out("x.pfm")));
 }
@@ -293,6 +294,35 @@ TEST_F(Cli3d, SsrcRendersAndReportsItsLayout) {
   EXPECT_NE(thick.err.find("--thickness applies to --method ssrc only, not spwi"),
             std::string::npos)
       << thick.err;
+  EXPECT_FALSE(fs::exists(out("x.pfm")));
+}
+
+// surface bakes the atlas and views it: the report gives the texel size, t0 and cascades it
+// derived and the bake's stages; its own options are refused with another method, and values
+// out of range by their flags.
+TEST_F(Cli3d, SurfaceRendersAndReportsItsAtlas) {
+  const auto r = run({"render", scene_, "--method", "surface", "--texels", "4096", "--directions",
+                      "16", "--bounces", "2", "--json", "-o", out("s.pfm")});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["method"], "surface");
+  const nlohmann::json& p = j["parameters"];
+  EXPECT_EQ(p["texels"], 4096);
+  EXPECT_EQ(p["directions"], 16);
+  EXPECT_GT(p["texel_size"].get<double>(), 0);                                        // derived
+  EXPECT_NEAR(p["interval"].get<double>(), 2 * p["texel_size"].get<double>(), 1e-6);  // derived
+  EXPECT_GE(p["cascades"].get<int>(), 2);
+  EXPECT_TRUE(j["stages"].contains("atlas")) << j["stages"].dump();
+  EXPECT_TRUE(j["stages"].contains("bounce 2 irradiance")) << j["stages"].dump();
+  EXPECT_TRUE(j["stages"].contains("view")) << j["stages"].dump();
+  EXPECT_TRUE(fs::exists(out("s.pfm")));
+  auto bad = run({"render", scene_, "--method", "spwi", "--texels", "4096", "-o", out("x.pfm")});
+  EXPECT_EQ(bad.status, 2);
+  EXPECT_NE(bad.err.find("--texels applies to --method surface only, not spwi"), std::string::npos)
+      << bad.err;
+  bad = run({"render", scene_, "--method", "surface", "--directions", "32", "-o", out("x.pfm")});
+  EXPECT_EQ(bad.status, 2);
+  EXPECT_NE(bad.err.find("--directions"), std::string::npos) << bad.err;
   EXPECT_FALSE(fs::exists(out("x.pfm")));
 }
 

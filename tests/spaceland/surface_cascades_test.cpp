@@ -106,5 +106,24 @@ TEST(SurfaceCascades, FloorUnderASphereLightConvergesWithTheMaps) {
     }
 }
 
+// Through render(): the enclosure seen by the camera at 2 bounces, the same bits on 1 and 2
+// threads; fog refused by the method.
+TEST(SurfaceCascades, RendersTheEnclosureOnAnyThreadCountAndRefusesFog) {
+  const Scene s = furnace(false, 16, 12);
+  RenderOptions o;
+  o.method = Method::surface;
+  o.surface.texels = 4096;
+  o.surface.directions = 16;
+  o.bounces = 2;
+  const ImageRgb img = same_bits_on_one_and_two_threads(s, o);
+  const double want = 1.0 * (1 + 0.6 + 0.36);
+  for (int y = 0; y < img.height(); ++y)
+    for (int x = 0; x < img.width(); ++x) ASSERT_NEAR(img.at(x, y).r, want, 1e-4 * want);
+  const Expected<RenderResult> fog = render(furnace(true, 16, 12), o);
+  ASSERT_FALSE(fog);
+  EXPECT_NE(fog.error().message.find("surface cannot carry fog"), std::string::npos)
+      << fog.error().message;
+}
+
 }  // namespace
 }  // namespace penumbra::spaceland

@@ -16,11 +16,13 @@
 namespace penumbra::spaceland {
 
 enum class Method {
-  pt,    // the reference path tracer: converges to the exact radiance the format defines
-  spwi,  // screen-space probes with world-space intervals (seed 000, seed 001 section 4.5)
-  grid,  // the world-space probe grid (seed 001 section 4.3): radiance cascades over voxels
-  ssrc,  // screen-space radiance cascades (seed 001 section 4.2): probes and intervals on the
-         // screen, filled by marching the depth buffer with an occlusion bitmask
+  pt,       // the reference path tracer: converges to the exact radiance the format defines
+  spwi,     // screen-space probes with world-space intervals (seed 000, seed 001 section 4.5)
+  grid,     // the world-space probe grid (seed 001 section 4.3): radiance cascades over voxels
+  ssrc,     // screen-space radiance cascades (seed 001 section 4.2): probes and intervals on the
+            // screen, filled by marching the depth buffer with an occlusion bitmask
+  surface,  // surface radiance cascades (seed 001 section 2.5.3): the light baked into a texture
+            // atlas of every surface, the camera's first hits looking their texels up
 };
 
 // Where a method runs (--device). Only ssrc has a 3D GPU port: gpu is refused for the others,
@@ -181,6 +183,17 @@ struct SsrcOptions {
   SsrcOffscreen offscreen = SsrcOffscreen::sky;
 };
 
+// Surface radiance cascades (docs/METHODS.md, "Surface radiance cascades"): probes on the
+// texels of an atlas of every surface, cascade i a probe every 2^i texels of a chart with 4^i
+// times cascade 0's directions over the sphere, intervals [t0 4^(i-1), t0 4^i].
+struct SurfaceOptions {
+  float texel_size = 0;             // world units a texel's side (0: from `texels`)
+  std::uint64_t texels = 1u << 16;  // the surfaces' texels, about, where texel_size is 0
+  int directions = 64;              // Q0 over the sphere: the square of a power of two, 4..4096
+  float interval = 0;               // t0, world units (0: two texels)
+  int cascades = 0;                 // 0: until an interval spans the scene
+};
+
 struct RenderOptions {
   Method method = Method::pt;
   Device device = Device::cpu;
@@ -188,6 +201,7 @@ struct RenderOptions {
   SpwiOptions spwi;
   GridOptions grid;
   SsrcOptions ssrc;
+  SurfaceOptions surface;
   Aov aov = Aov::radiance;
   int bounces = 1;  // 1: direct light only; N: N-1 more diffuse bounces
   // The radiance cache that methods not bouncing themselves (spwi) read their later bounces from:

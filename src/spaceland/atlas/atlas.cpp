@@ -520,6 +520,17 @@ Vec3 from_octahedral(Uv p) {
   return penumbra::octahedral::decode(2 * double(p.x) - 1, 2 * double(p.y) - 1);
 }
 
+double surface_area(const Scene& scene) {
+  double total = 0;
+  for (const TriangleMesh& m : scene.meshes)
+    for (const auto& t : m.triangles)
+      total += 0.5 * double(length(cross(m.positions[t[1]] - m.positions[t[0]],
+                                         m.positions[t[2]] - m.positions[t[0]])));
+  for (const Disk& d : scene.disks) total += kPi * double(d.radius) * d.radius;
+  for (const Sphere& s : scene.spheres) total += 4 * kPi * double(s.radius) * s.radius;
+  return total;
+}
+
 Expected<Atlas> make_atlas(const Scene& scene, const Options& o) {
   if (!(o.texel_size >= 0) || !std::isfinite(o.texel_size))
     return Error{"`atlas.texel_size`: expected a size >= 0 (0: from the texel budget), found " +
@@ -535,13 +546,7 @@ Expected<Atlas> make_atlas(const Scene& scene, const Options& o) {
     return Error{"`atlas.max_side`: expected 1..65536 texels, found " + std::to_string(o.max_side)};
   Atlas a;
   a.gutter = o.gutter;
-  double total = 0;
-  for (const TriangleMesh& m : scene.meshes)
-    for (const auto& t : m.triangles)
-      total += 0.5 * double(length(cross(m.positions[t[1]] - m.positions[t[0]],
-                                         m.positions[t[2]] - m.positions[t[0]])));
-  for (const Disk& d : scene.disks) total += kPi * double(d.radius) * d.radius;
-  for (const Sphere& s : scene.spheres) total += 4 * kPi * double(s.radius) * s.radius;
+  const double total = surface_area(scene);
   a.texel_size = o.texel_size > 0 ? o.texel_size : float(std::sqrt(total / double(o.texels)));
   if (!(a.texel_size > 0)) a.texel_size = 1;  // no surface: an empty atlas
   const float ts = a.texel_size;

@@ -76,6 +76,9 @@ struct Atlas {
   Uv locate(const Scene& scene, const Hit& hit, std::uint32_t& chart) const;
 };
 
+// The area of every surface of the scene (world units squared): what a texel budget divides.
+double surface_area(const Scene& scene);
+
 // The scene's charts, packed. Errors: an atlas past `max_side` at this texel size (the message
 // names the size it would need), options out of range.
 Expected<Atlas> make_atlas(const Scene& scene, const Options& o = {});

@@ -118,14 +118,24 @@ cascade::Corners corners(const Atlas& a, const Grid& upper, std::size_t c, float
 
 }  // namespace
 
-Rgb Baked::irradiance_at(const Scene& scene, const Hit& hit, Vec3 towards) const {
+std::uint64_t bake_bytes(std::uint64_t texels, int side0) {
+  // Cascade i has about texels / 4^i probes of 4^i side0^2 directions: each store about cascade
+  // 0's (a chart's partial cells round up: 2x at most), two live at once.
+  return 2 * 2 * cascade::RadianceStore::bytes(texels, side0) +
+         texels * (sizeof(Texel) + 4 * sizeof(Rgb) + 2 * sizeof(Probe));
+}
+
+Rgb Baked::irradiance_at(const Scene& scene, const Hit& hit, Vec3 towards, bool with_sun) const {
   std::uint32_t chart = 0;
   const Uv uv = atlas.locate(scene, hit, chart);
   const float gx = uv.x - 0.5f, gy = uv.y - 0.5f;
   const int x0 = int(std::floor(gx)), y0 = int(std::floor(gy));
   const float fx = gx - float(x0), fy = gy - float(y0);
   auto value = [&](std::size_t k) {
-    return dot(texels[k].normal, towards) >= 0 ? front[k] : back[k];
+    const bool f = dot(texels[k].normal, towards) >= 0;
+    Rgb e = f ? front[k] : back[k];
+    if (with_sun) e += f ? sun_front[k] : sun_back[k];
+    return e;
   };
   Rgb sum{};
   float weight = 0;
@@ -219,7 +229,10 @@ Expected<Baked> bake(const Scene& scene, const RayScene& rays, const Options& at
   const std::size_t n_texels = out.texels.size();
   out.front.assign(n_texels, Rgb{});
   out.back.assign(n_texels, Rgb{});
-  std::vector<Rgb> sun_front(n_texels), sun_back(n_texels);
+  out.sun_front.assign(n_texels, Rgb{});
+  out.sun_back.assign(n_texels, Rgb{});
+  std::vector<Rgb>& sun_front = out.sun_front;
+  std::vector<Rgb>& sun_back = out.sun_back;
   {
     watch.restart();
     const SunLight sun(scene, rays, o.sun_rays);
@@ -330,8 +343,8 @@ Expected<Baked> bake(const Scene& scene, const RayScene& rays, const Options& at
           Rgb f{}, bk{};
           cascade::cosine_mean(d0, n, c0, q, f);
           cascade::cosine_mean(d0, -n, c0, q, bk);
-          next_front[k] = f * float(kPi) + sun_front[k];
-          next_back[k] = bk * float(kPi) + sun_back[k];
+          next_front[k] = f * float(kPi);
+          next_back[k] = bk * float(kPi);
         }
     });
     out.front.swap(next_front);

@@ -38,6 +38,10 @@ struct BakeReport {
   std::vector<std::pair<std::string, double>> stages;  // name, milliseconds
 };
 
+// The working memory a bake of `texels` atlas texels (chart rectangles and gutters included)
+// takes at most: two cascades' stores, the texels and their irradiance.
+std::uint64_t bake_bytes(std::uint64_t texels, int side0);
+
 // The baked light: per texel of the atlas, the irradiance (sky, emitters, the sun and, past the
 // first bounce, the light the surfaces reflect) on each side of its surface. A probe's map holds
 // the whole sphere of directions, so one set of rays gives both sides: a wall lit from inside a
@@ -45,13 +49,16 @@ struct BakeReport {
 struct Baked {
   Atlas atlas;
   std::vector<Texel> texels;
-  std::vector<Rgb> front, back;  // per texel: the side its normal points to, and the other
+  // Per texel, on the side its normal points to and the other: the irradiance from the sky,
+  // the emitters and (past the first bounce) the light the surfaces reflect; and the sun's, kept
+  // apart so that a view can trace the sun per pixel (shadows sharper than a texel).
+  std::vector<Rgb> front, back, sun_front, sun_back;
 
-  // The irradiance at a surface point on the side `towards` points to (a G-buffer hit's normal
-  // faced to the camera, or minus a ray's direction), from the texels of its chart around it:
-  // bilinear over the covered ones, the nearest covered texel of the chart where none of the
-  // four is.
-  Rgb irradiance_at(const Scene& scene, const Hit& hit, Vec3 towards) const;
+  // The irradiance at a surface point on the side `towards` points to (minus the ray's
+  // direction), from the texels of its chart around it: bilinear over the covered ones, the
+  // nearest covered texel of the chart where none of the four is; the sun's share too where
+  // `with_sun`.
+  Rgb irradiance_at(const Scene& scene, const Hit& hit, Vec3 towards, bool with_sun = true) const;
 };
 
 // Bakes the scene's light into a new atlas (`atlas_options`). Errors: the atlas's, options out of

@@ -1,0 +1,28 @@
+// `--method surface`: bake the scene's light into the surface atlas (cascades.hpp), then shade
+// the camera's first hits from it. docs/METHODS.md, "Surface radiance cascades".
+#pragma once
+
+#include <cstdint>
+
+#include "penumbra/error.hpp"
+#include "penumbra/image.hpp"
+#include "penumbra/spaceland/render.hpp"
+#include "spaceland/solve.hpp"
+
+namespace penumbra::spaceland::atlas {
+
+// The options' ranges, fields named as in RenderOptions (`surface.directions`).
+Status check_options(const SurfaceOptions& o);
+// What it cannot carry: fog.
+Status check_scene(const Scene& scene);
+// Its working memory at most: the bake's (bake_bytes) for the texels the atlas will hold, its
+// chart rectangles and gutters counted at 3x the surfaces' texels (measured: 1.4x-3.1x on the
+// Cornell box, the bunny and the engine).
+std::uint64_t working_bytes(const Scene& scene, const SurfaceOptions& o);
+// Bakes, then shades every visible pixel: its emission, plus albedo / pi times the atlas's
+// irradiance there (sky, emitters, bounces) and the sun's shadow rays at the pixel. `used`
+// receives the texel size, interval and cascade count it derived.
+Expected<ImageRgb> render(const SolveContext& ctx, const SurfaceOptions& o, SolveReport& report,
+                          SurfaceOptions& used);
+
+}  // namespace penumbra::spaceland::atlas

@@ -29,6 +29,7 @@ struct Probe {
   Vec3 position, normal;
   float x = 0, y = 0;  // its texel's centre in the atlas
   bool valid = false;
+  std::uint32_t chart = 0;
 };
 
 struct Grid {
@@ -84,8 +85,12 @@ Grid place(const Atlas& a, const std::vector<Texel>& texels, int spacing) {
             const float dx = float(x) + 0.5f - cx, dy = float(y) + 0.5f - cy;
             if (dx * dx + dy * dy >= best) continue;
             best = dx * dx + dy * dy;
-            p = {t.claims > 0 ? t.position : inside(x, y, c, t.position), t.normal, float(x) + 0.5f,
-                 float(y) + 0.5f, true};
+            p = {t.claims > 0 ? t.position : inside(x, y, c, t.position),
+                 t.normal,
+                 float(x) + 0.5f,
+                 float(y) + 0.5f,
+                 true,
+                 std::uint32_t(c)};
           }
       }
   });
@@ -282,17 +287,19 @@ Expected<Baked> bake(const Scene& scene, const RayScene& rays, const Options& at
       store.assign(g.probes.size(), side);
       const float start = l.interval_start(i), end = l.interval_end(i);
       const float rest_end = cascade::kInfinity;
-      parallel_for(int(a.charts.size()), [&](int c) {
+      // In blocks of probes, not per chart: a ground that is one chart would be one task.
+      constexpr std::uint64_t kBlock = 64;
+      const std::uint64_t blocks = (g.probes.size() + kBlock - 1) / kBlock;
+      parallel_for(int(blocks), [&](int block) {
         std::uint64_t local = 0;
-        const std::uint64_t first = g.base[std::size_t(c)];
-        const std::uint64_t n =
-            std::uint64_t(g.nx[std::size_t(c)]) * std::uint64_t(g.ny[std::size_t(c)]);
-        for (std::uint64_t q = first; q < first + n; ++q) {
+        const std::uint64_t first = std::uint64_t(block) * kBlock;
+        const std::uint64_t last = std::min<std::uint64_t>(first + kBlock, g.probes.size());
+        for (std::uint64_t q = first; q < last; ++q) {
           const Probe& p = g.probes[q];
           if (!p.valid) continue;
-          const cascade::Corners k =
-              l.top(i) ? cascade::Corners{}
-                       : corners(a, grids[std::size_t(i) + 1], std::size_t(c), p.x, p.y);
+          const cascade::Corners k = l.top(i)
+                                         ? cascade::Corners{}
+                                         : corners(a, grids[std::size_t(i) + 1], p.chart, p.x, p.y);
           Rgb* values = store.probe(q);
           for (int v = 0; v < side; ++v)
             for (int u = 0; u < side; ++u) {

@@ -1,12 +1,10 @@
 #include "spaceland/atlas/cascades.hpp"
 
 #include <algorithm>
-#include <array>
 #include <atomic>
 #include <cmath>
-#include <numbers>
 
-#include "core/octahedral.hpp"
+#include "core/math.hpp"
 #include "core/parallel.hpp"
 #include "core/timer.hpp"
 #include "spaceland/cascade/levels.hpp"
@@ -19,8 +17,6 @@
 
 namespace penumbra::spaceland::atlas {
 namespace {
-
-constexpr double kPi = std::numbers::pi;
 
 // One cascade's probes: per chart a grid of `spacing`-texel cells over its rectangle, each
 // cell's probe on the covered texel of that chart nearest the cell's centre (none where the
@@ -181,8 +177,6 @@ Expected<Baked> bake(const Scene& scene, const RayScene& rays, const Options& at
     return Error{"surface cascades: cascades must be in [0, " +
                  std::to_string(cascade::kMaxCascades) + "]"};
   if (o.bounces < 1 || o.bounces > 64) return Error{"surface cascades: bounces must be in [1, 64]"};
-  if (o.sun_rays < 1 || o.sun_rays > 256)
-    return Error{"surface cascades: sun_rays must be in [1, 256]"};
 
   Stopwatch watch;
   Expected<Atlas> made = make_atlas(scene, atlas_options);
@@ -224,6 +218,10 @@ Expected<Baked> bake(const Scene& scene, const RayScene& rays, const Options& at
     most =
         std::max(most, report.store_bytes[std::size_t(i)] + report.store_bytes[std::size_t(i) + 1]);
   if (l.count == 1) most = report.store_bytes[0];
+  std::uint64_t probes = 0;
+  for (const Grid& g : grids) probes += g.probes.size();
+  report.memory_bytes =
+      most + probes * sizeof(Probe) + out.texels.size() * (sizeof(Texel) + 4 * sizeof(Rgb));
   if (most > max_bytes)
     return Error{"surface cascades: two cascades' stores take " + std::to_string(most >> 20) +
                  " MiB, more than the " + std::to_string(max_bytes >> 20) +
@@ -236,11 +234,10 @@ Expected<Baked> bake(const Scene& scene, const RayScene& rays, const Options& at
   out.back.assign(n_texels, Rgb{});
   out.sun_front.assign(n_texels, Rgb{});
   out.sun_back.assign(n_texels, Rgb{});
-  std::vector<Rgb>& sun_front = out.sun_front;
-  std::vector<Rgb>& sun_back = out.sun_back;
   {
+    // The sun reaches one side of a texel at most: one shadow ray towards its centre from there.
     watch.restart();
-    const SunLight sun(scene, rays, o.sun_rays);
+    const SunLight sun(scene, rays);
     std::atomic<std::uint64_t> traced{0};
     if (sun.on())
       parallel_for(a.height, [&](int y) {
@@ -248,14 +245,11 @@ Expected<Baked> bake(const Scene& scene, const RayScene& rays, const Options& at
         for (int x = 0; x < a.width; ++x) {
           const std::size_t k = std::size_t(y) * std::size_t(a.width) + std::size_t(x);
           const Texel& t = out.texels[k];
-          if (t.chart < 0) continue;
-          const Rgb one{1, 1, 1};
-          sun_front[k] =
-              sun.reflected(rays.spawn(t.position, t.normal, t.normal), t.normal, one, local) *
-              float(kPi);
-          sun_back[k] =
-              sun.reflected(rays.spawn(t.position, t.normal, -t.normal), -t.normal, one, local) *
-              float(kPi);
+          const float cos_s = dot(t.normal, sun.direction());
+          if (t.chart < 0 || cos_s == 0) continue;
+          const Rgb e =
+              sun.at(rays.spawn(t.position, t.normal, sun.direction()), local) * std::abs(cos_s);
+          (cos_s > 0 ? out.sun_front : out.sun_back)[k] = e;
         }
         traced.fetch_add(local, std::memory_order_relaxed);
       });
@@ -265,7 +259,7 @@ Expected<Baked> bake(const Scene& scene, const RayScene& rays, const Options& at
 
   std::vector<std::vector<Vec3>> dirs;
   for (int i = 0; i < l.count; ++i) dirs.push_back(cascade::direction_map(l, i));
-  cascade::RadianceStore stores[2];
+
   for (int bounce = 1; bounce <= o.bounces; ++bounce) {
     watch.restart();
     // What a ray meets: the surface's emission and, past the first bounce, the light it reflects
@@ -273,66 +267,65 @@ Expected<Baked> bake(const Scene& scene, const RayScene& rays, const Options& at
     const Baked* last = bounce > 1 ? &out : nullptr;
     std::vector<Rgb> next_front(n_texels), next_back(n_texels);
     auto met = [&](Hit& h, Vec3 d) {
-      Rgb l = emission_at(scene, h);
-      if (last) l += albedo_at(scene, h) * last->irradiance_at(scene, h, -d) * float(1 / kPi);
-      return l;
+      Rgb radiance = emission_at(scene, h);
+      if (last)
+        radiance += albedo_at(scene, h) * last->irradiance_at(scene, h, -d) * float(1 / kPi);
+      return radiance;
     };
     std::atomic<std::uint64_t> traced{0};
-    for (int i = l.count - 1; i >= 0; --i) {
-      const Grid& g = grids[std::size_t(i)];
-      cascade::RadianceStore& store = stores[i & 1];
-      const cascade::RadianceStore& above = stores[(i + 1) & 1];
-      const int side = l.side(i);
-      const std::vector<Vec3>& dir = dirs[std::size_t(i)];
-      store.assign(g.probes.size(), side);
-      const float start = l.interval_start(i), end = l.interval_end(i);
-      const float rest_end = cascade::kInfinity;
-      // In blocks of probes, not per chart: a ground that is one chart would be one task.
-      constexpr std::uint64_t kBlock = 64;
-      const std::uint64_t blocks = (g.probes.size() + kBlock - 1) / kBlock;
-      parallel_for(int(blocks), [&](int block) {
-        std::uint64_t local = 0;
-        const std::uint64_t first = std::uint64_t(block) * kBlock;
-        const std::uint64_t last = std::min<std::uint64_t>(first + kBlock, g.probes.size());
-        for (std::uint64_t q = first; q < last; ++q) {
-          const Probe& p = g.probes[q];
-          if (!p.valid) continue;
-          const cascade::Corners k = l.top(i)
-                                         ? cascade::Corners{}
-                                         : corners(a, grids[std::size_t(i) + 1], p.chart, p.x, p.y);
-          Rgb* values = store.probe(q);
-          for (int v = 0; v < side; ++v)
-            for (int u = 0; u < side; ++u) {
-              const Vec3 d = dir[std::size_t(v) * std::size_t(side) + std::size_t(u)];
-              const Vec3 from = rays.spawn(p.position, p.normal, d);
-              // One ray from the probe itself: a hit before the interval starts means its start
-              // lies behind a surface (past a room's wall, for a probe near a corner), so this
-              // direction holds no light here (kNoLight) and the merge below leaves it out,
-              // rather than letting the interval see through the wall.
-              Hit h;
-              Rgb value;
-              ++local;
-              if (rays.intersect(Ray{from, d, 0, l.top(i) ? rest_end : end}, h)) {
-                value = h.t < start ? cascade::kNoLight : met(h, d);
-              } else if (l.top(i)) {
-                value = bg.sky(d);
-              } else if (!cascade::merge_children(above, k, u, v, 2, value)) {
-                // No probe above holds light this way (or none of this chart is there): the rest
-                // of the ray, traced.
-                ++local;
-                value = rays.intersect(Ray{from, d, end, rest_end}, h) ? met(h, d) : bg.sky(d);
-              }
-              values[std::size_t(v) * std::size_t(side) + std::size_t(u)] = value;
+    const cascade::RadianceStore c0 = cascade::top_down(
+        l, [&](int i, const cascade::RadianceStore& above, cascade::RadianceStore& store) {
+          const Grid& g = grids[std::size_t(i)];
+          const int side = l.side(i);
+          const std::vector<Vec3>& dir = dirs[std::size_t(i)];
+          store.assign(g.probes.size(), side);
+          const float start = l.interval_start(i), end = l.interval_end(i);
+          const float rest_end = cascade::kInfinity;
+          // In blocks of probes, not per chart: a ground that is one chart would be one task.
+          constexpr std::uint64_t kBlock = 64;
+          const std::uint64_t blocks = (g.probes.size() + kBlock - 1) / kBlock;
+          parallel_for(int(blocks), [&](int block) {
+            std::uint64_t local = 0;
+            const std::uint64_t first = std::uint64_t(block) * kBlock;
+            const std::uint64_t stop = std::min<std::uint64_t>(first + kBlock, g.probes.size());
+            for (std::uint64_t q = first; q < stop; ++q) {
+              const Probe& p = g.probes[q];
+              if (!p.valid) continue;
+              const cascade::Corners k =
+                  l.top(i) ? cascade::Corners{}
+                           : corners(a, grids[std::size_t(i) + 1], p.chart, p.x, p.y);
+              Rgb* values = store.probe(q);
+              for (int v = 0; v < side; ++v)
+                for (int u = 0; u < side; ++u) {
+                  const Vec3 d = dir[std::size_t(v) * std::size_t(side) + std::size_t(u)];
+                  const Vec3 from = rays.spawn(p.position, p.normal, d);
+                  // One ray from the probe itself: a hit before the interval starts means its start
+                  // lies behind a surface (past a room's wall, for a probe near a corner), so this
+                  // direction holds no light here (kNoLight) and the merge below leaves it out,
+                  // rather than letting the interval see through the wall.
+                  Hit h;
+                  Rgb value;
+                  ++local;
+                  if (rays.intersect(Ray{from, d, 0, l.top(i) ? rest_end : end}, h)) {
+                    value = h.t < start ? cascade::kNoLight : met(h, d);
+                  } else if (l.top(i)) {
+                    value = bg.sky(d);
+                  } else if (!cascade::merge_children(above, k, u, v, 2, value)) {
+                    // No probe above holds light this way (or none of this chart is there): the
+                    // rest of the ray, traced.
+                    ++local;
+                    value = rays.intersect(Ray{from, d, end, rest_end}, h) ? met(h, d) : bg.sky(d);
+                  }
+                  values[std::size_t(v) * std::size_t(side) + std::size_t(u)] = value;
+                }
             }
-        }
-        traced.fetch_add(local, std::memory_order_relaxed);
-      });
-      report.stages.push_back(
-          {"bounce " + std::to_string(bounce) + " cascade " + std::to_string(i), watch.ms()});
-      watch.restart();
-    }
+            traced.fetch_add(local, std::memory_order_relaxed);
+          });
+          report.stages.push_back(
+              {"bounce " + std::to_string(bounce) + " cascade " + std::to_string(i), watch.ms()});
+          watch.restart();
+        });
     // Cascade 0's probes are the covered texels: their irradiance on each side.
-    const cascade::RadianceStore& c0 = stores[0];
     const Grid& g0 = grids[0];
     const std::vector<Vec3>& d0 = dirs[0];
     parallel_for(int(a.charts.size()), [&](int c) {

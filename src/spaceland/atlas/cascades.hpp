@@ -14,6 +14,7 @@
 
 #include "penumbra/error.hpp"
 #include "penumbra/image.hpp"
+#include "penumbra/progress.hpp"
 #include "penumbra/spaceland/scene.hpp"
 #include "spaceland/atlas/atlas.hpp"
 #include "spaceland/embree/ray_scene.hpp"
@@ -25,7 +26,6 @@ struct CascadeOptions {
   float t0 = 0;      // cascade 0's interval, world units; 0: two texels
   int cascades = 0;  // 0: enough that the last nominal interval spans the scene
   int bounces = 1;   // 1: direct light only
-  int sun_rays = 1;  // shadow rays over the sun's disk per texel (1: towards its centre)
 };
 
 // What a bake derived and cost.
@@ -35,7 +35,9 @@ struct BakeReport {
   std::vector<std::uint64_t> probes;       // per cascade: probes placed on a covered texel
   std::vector<std::uint64_t> store_bytes;  // per cascade: its radiance store (M_i)
   std::uint64_t rays = 0;
-  std::vector<std::pair<std::string, double>> stages;  // name, milliseconds
+  // What it held at most: two cascades' stores at once, the probes, the texels and their light.
+  std::uint64_t memory_bytes = 0;
+  std::vector<StageTime> stages;
 };
 
 // The working memory a bake of `texels` atlas texels (chart rectangles and gutters included)

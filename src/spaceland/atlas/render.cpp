@@ -3,6 +3,7 @@
 #include <cmath>
 #include <string>
 
+#include "core/math.hpp"
 #include "core/timer.hpp"
 #include "io/json_reader.hpp"
 #include "spaceland/atlas/cascades.hpp"
@@ -13,8 +14,6 @@
 
 namespace penumbra::spaceland::atlas {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 // The side of an equal-area map holding `directions` directions; 0 where it is no square of a
 // power of two in range.
@@ -64,19 +63,13 @@ Expected<ImageRgb> render(const SolveContext& ctx, const SurfaceOptions& o, Solv
   co.t0 = o.interval;
   co.cascades = o.cascades;
   co.bounces = ctx.bounces;
-  co.sun_rays = 1;
+
   BakeReport bake_report;
   Expected<Baked> baked = bake(ctx.scene, ctx.rays, ao, co, ctx.max_memory, bake_report);
   if (!baked) return baked.error();
-  for (const auto& [name, ms] : bake_report.stages) report.stages.push_back({name, ms});
+  report.stages.insert(report.stages.end(), bake_report.stages.begin(), bake_report.stages.end());
   report.rays += bake_report.rays;
-  std::uint64_t stores = 0;
-  for (std::size_t i = 0; i + 1 < bake_report.store_bytes.size(); ++i)
-    stores = std::max(stores, bake_report.store_bytes[i] + bake_report.store_bytes[i + 1]);
-  if (bake_report.store_bytes.size() == 1) stores = bake_report.store_bytes[0];
-  const std::uint64_t texels =
-      std::uint64_t(baked->atlas.width) * std::uint64_t(baked->atlas.height);
-  report.memory_bytes += stores + texels * (sizeof(Texel) + 4 * sizeof(Rgb));
+  report.memory_bytes += bake_report.memory_bytes;
   used.texel_size = baked->atlas.texel_size;
   used.interval = bake_report.t0;
   used.cascades = bake_report.cascades;

@@ -1,5 +1,5 @@
 // penumbra: the command line. A thin front end over libpenumbra; each subcommand lives in its
-// own file (render_cmd, compare_cmd, quality_cmd, paint_cmd).
+// own file (render_cmd, compare_cmd, quality_cmd, paint_cmd, bake_cmd).
 // Exit codes: 0 success, 1 bad input or runtime failure, 2 usage error.
 #include <CLI/CLI.hpp>
 #include <algorithm>
@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "bake_cmd.hpp"
 #include "compare_cmd.hpp"
 #include "paint_cmd.hpp"
 #include "penumbra/penumbra.hpp"
@@ -85,6 +86,7 @@ int main(int argc, char** argv) {
   const std::unique_ptr<CompareCommand> compare = add_compare_command(app);
   const std::unique_ptr<QualityCommand> quality = add_quality_command(app);
   const std::unique_ptr<PaintCommand> paint = add_paint_command(app);
+  const std::unique_ptr<BakeCommand> bake = add_bake_command(app);
 
   try {
     app.parse(argc, argv);
@@ -99,5 +101,6 @@ int main(int argc, char** argv) {
   if (compare->parsed()) return run_compare(compare->args);
   if (quality->parsed()) return run_quality(quality->args);
   if (paint->parsed()) return run_paint(paint->args);
+  if (bake->parsed()) return run_bake(bake->args);
   return kUsage;
 }

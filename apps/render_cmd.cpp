@@ -480,6 +480,9 @@ std::unique_ptr<RenderCommand> add_render_command(CLI::App& app) {
                      "--texel-size is 0")
         ->check(CLI::Range(std::uint64_t(64), std::uint64_t(1) << 28))
         ->capture_default_str();
+    render->add_option("--atlas", a.surface.atlas,
+                       "3D surface: view from this atlas (made by `penumbra bake` for the same "
+                       "scene and --bounces) instead of baking: no cascade is traced");
     add_enum_option(render, "--offscreen", a.ssrc.offscreen,
                     {sl::SsrcOffscreen::sky, sl::SsrcOffscreen::world},
                     "3D ssrc: what a ray sees once its march leaves the screen: the sky, or the "

@@ -2,6 +2,7 @@
 // Error naming the file; writers go through a temporary file so a target is never half-written.
 #include "io/image_io.hpp"
 
+#include <Imath/half.h>
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
@@ -39,6 +40,7 @@
 #include <utility>
 #include <vector>
 
+#include "io/json_reader.hpp"
 #include "io/path_util.hpp"
 #include "penumbra/io.hpp"
 
@@ -684,6 +686,113 @@ Expected<StagedFile> stage_exr(const std::string& path, const ImageRgb& image,
   }
   return stage(
       path, [&](std::FILE* f) { return write_bytes(f, out.bytes().data(), out.bytes().size()); });
+}
+
+const std::string* ExrChannels::attribute(const std::string& name) const {
+  for (const auto& [key, value] : attributes)
+    if (key == name) return &value;
+  return nullptr;
+}
+
+const ExrChannel* ExrChannels::channel(const std::string& name) const {
+  for (const ExrChannel& c : channels)
+    if (c.name == name) return &c;
+  return nullptr;
+}
+
+Expected<StagedFile> stage_exr_channels(const std::string& path, const ExrChannels& image) {
+  if (Status s = check_writable_size(path, image.width, image.height); !s) return s.error();
+  const std::size_t n = std::size_t(image.width) * std::size_t(image.height);
+  if (image.channels.empty()) return fail(path, "cannot write an EXR without channels");
+  for (const ExrChannel& c : image.channels)
+    if (c.values.size() != n)
+      return fail(path, "channel '" + c.name + "' holds " + std::to_string(c.values.size()) +
+                            " values, expected " + std::to_string(n));
+  MemoryOStream out(path.c_str());
+  try {
+    Imf::Header header(image.width, image.height);
+    header.compression() = Imf::ZIP_COMPRESSION;
+    for (const auto& [key, value] : image.attributes)
+      header.insert(key, Imf::StringAttribute(value));
+    Imf::FrameBuffer fb;
+    // OpenEXR writes a channel from a slice of its own type: half channels from a converted copy.
+    std::vector<std::vector<half>> halves;
+    for (const ExrChannel& c : image.channels)
+      if (c.half) halves.emplace_back(c.values.begin(), c.values.end());
+    std::size_t next_half = 0;
+    for (const ExrChannel& c : image.channels) {
+      header.channels().insert(c.name, Imf::Channel(c.half ? Imf::HALF : Imf::FLOAT));
+      if (c.half) {
+        char* base = reinterpret_cast<char*>(halves[next_half++].data());
+        fb.insert(c.name, Imf::Slice(Imf::HALF, base, sizeof(half),
+                                     sizeof(half) * std::size_t(image.width)));
+        continue;
+      }
+      char* base = reinterpret_cast<char*>(const_cast<float*>(c.values.data()));
+      fb.insert(c.name, Imf::Slice(Imf::FLOAT, base, sizeof(float),
+                                   sizeof(float) * std::size_t(image.width)));
+    }
+    Imf::OutputFile file(out, header);
+    file.setFrameBuffer(fb);
+    file.writePixels(image.height);
+  } catch (const std::exception& e) {
+    return fail(path, std::string("cannot encode EXR: ") + e.what());
+  } catch (...) {
+    return fail(path, "cannot encode EXR: unknown error");
+  }
+  return stage(
+      path, [&](std::FILE* f) { return write_bytes(f, out.bytes().data(), out.bytes().size()); });
+}
+
+Expected<ExrChannels> read_exr_channels(const std::string& path, std::uint64_t max_bytes,
+                                        const std::function<bool(const std::string&)>& want) {
+  if (auto f = open_for_reading(path); !f) return f.error();
+  try {
+    if (Status s = check_exr_header(path, {}); !s) return s.error();
+    Imf::InputFile file(path.c_str());
+    const Imath::Box2i dw = file.header().dataWindow();
+    const long long width = box_width(dw), height = box_height(dw);
+    if (Status s = check_size(path, width, height, {}); !s) return s.error();
+    const Imf::ChannelList& list = file.header().channels();
+    std::size_t count = 0;
+    for (auto it = list.begin(); it != list.end(); ++it) {
+      if (it.channel().xSampling != 1 || it.channel().ySampling != 1)
+        return fail(path, "subsampled channel '" + std::string(it.name()) + "' is not supported");
+      if (!want || want(it.name())) ++count;
+    }
+    const double bytes = double(width) * double(height) * double(count) * sizeof(float);
+    if (max_bytes > 0 && bytes > double(max_bytes))
+      return fail(path, "reading its " + std::to_string(count) + " channels of " +
+                            std::to_string(width) + "x" + std::to_string(height) + " takes " +
+                            format_mib(std::uint64_t(bytes)) + ", more than the memory limit of " +
+                            format_mib(max_bytes));
+    if (!file.isComplete()) return fail(path, "truncated or damaged EXR (pixel data missing)");
+
+    ExrChannels img;
+    img.width = int(width);
+    img.height = int(height);
+    for (auto it = file.header().begin(); it != file.header().end(); ++it)
+      if (const auto* a = dynamic_cast<const Imf::StringAttribute*>(&it.attribute()))
+        img.attributes.emplace_back(it.name(), a->value());
+    Imf::FrameBuffer fb;
+    img.channels.reserve(count);
+    for (auto it = list.begin(); it != list.end(); ++it) {
+      if (want && !want(it.name())) continue;
+      ExrChannel& c = img.channels.emplace_back();
+      c.name = it.name();
+      c.half = it.channel().type == Imf::HALF;
+      c.values.resize(std::size_t(width) * std::size_t(height));
+      fb.insert(c.name, Imf::Slice::Make(Imf::FLOAT, c.values.data(), dw, sizeof(float),
+                                         sizeof(float) * std::size_t(width)));
+    }
+    file.setFrameBuffer(fb);
+    file.readPixels(dw.min.y, dw.max.y);
+    return img;
+  } catch (const std::exception& e) {
+    return fail(path, std::string("cannot read EXR: ") + e.what());
+  } catch (...) {
+    return fail(path, "cannot read EXR: unknown error");
+  }
 }
 
 Expected<StagedFile> stage_png8(const std::string& path, int width, int height,

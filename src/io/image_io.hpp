@@ -47,6 +47,28 @@ Expected<StagedFile> stage_pfm(const std::string& path, const ImageRgb& image);
 // image holds: "2d fluence", "3d radiance", "3d depth", ...), which image_world reads back.
 Expected<StagedFile> stage_exr(const std::string& path, const ImageRgb& image,
                                const std::string& world = "");
+// An EXR of named channels of one size (each FLOAT or HALF in the file, floats in memory, planar),
+// with string attributes in its header: what a baked atlas is written as.
+struct ExrChannel {
+  std::string name;
+  bool half = false;          // stored as 16-bit floats (writing; reading reports the file's)
+  std::vector<float> values;  // width * height, row 0 at the top
+};
+struct ExrChannels {
+  int width = 0, height = 0;
+  std::vector<ExrChannel> channels;
+  std::vector<std::pair<std::string, std::string>> attributes;  // string attributes only
+  // The attribute's value, or null.
+  const std::string* attribute(const std::string& name) const;
+  // The channel, or null.
+  const ExrChannel* channel(const std::string& name) const;
+};
+Expected<StagedFile> stage_exr_channels(const std::string& path, const ExrChannels& image);
+// Reads every string attribute, and the channels `want` names (all where it is empty). Refused
+// before decoding: a file that is no EXR, is truncated, has subsampled channels, or whose wanted
+// channels would take more than `max_bytes` as floats (0: no limit). Messages name the file.
+Expected<ExrChannels> read_exr_channels(const std::string& path, std::uint64_t max_bytes = 0,
+                                        const std::function<bool(const std::string&)>& want = {});
 // What a Penumbra EXR says it holds (stage_exr's `world`); "" for an EXR without it, another
 // format (a PFM cannot say) or a file that cannot be read.
 std::string image_world(const std::string& path);

@@ -244,9 +244,13 @@ Expected<ImageRgb> ssrc_solve_gpu(const SolveContext& ctx, const RenderOptions& 
 
 // ---- surface: surface radiance cascades (seed 001 section 2.5.3) ----
 
-constexpr const char* kSurfaceOptions[] = {"surface.texel_size", "surface.texels",
-                                           "surface.directions", "surface.interval",
-                                           "surface.cascades",   "sun_rays"};
+constexpr const char* kSurfaceOptions[] = {"surface.texel_size",
+                                           "surface.texels",
+                                           "surface.directions",
+                                           "surface.interval",
+                                           "surface.cascades",
+                                           "surface.atlas",
+                                           "sun_rays"};
 
 Status surface_check(const RenderOptions& o) {
   return atlas::check_options(o.surface);
@@ -268,9 +272,10 @@ void surface_describe(const RenderResult& r, std::vector<Parameter>& p, std::str
   p.push_back({"interval", double(o.interval)});
   p.push_back({"cascades", std::int64_t(o.cascades)});
   p.push_back({"sun_rays", std::int64_t(r.options.sun_rays)});
-  line = ", " + std::to_string(o.cascades) + " cascades, texel " +
-         io::format_rounded(o.texel_size) + ", Q0 " + std::to_string(o.directions) + ", t0 " +
-         io::format_rounded(o.interval);
+  if (!o.atlas.empty()) p.push_back({"atlas", o.atlas});
+  line = (o.atlas.empty() ? std::string() : ", from " + o.atlas) + ", " +
+         std::to_string(o.cascades) + " cascades, texel " + io::format_rounded(o.texel_size) +
+         ", Q0 " + std::to_string(o.directions) + ", t0 " + io::format_rounded(o.interval);
 }
 
 Expected<ImageRgb> surface_solve(const SolveContext& ctx, const RenderOptions& o,

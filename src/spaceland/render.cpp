@@ -11,6 +11,7 @@
 
 #include "core/timer.hpp"
 #include "io/json_reader.hpp"
+#include "spaceland/atlas/render.hpp"
 #include "spaceland/brightness.hpp"
 #include "spaceland/embree/ray_scene.hpp"
 #include "spaceland/gbuffer.hpp"
@@ -215,11 +216,13 @@ namespace {
 // The method's image: the radiance cache first where it needs one, then its solve.
 // `room`: the memory limit less what is held already (the scene, the BVH, the pixel buffers),
 // which the method's own refusals (the grid's cascades, the radiance cache) are held to.
-Status solve(const Plan& plan, const Scene& scene, const RayScene& rays, const GBuffer& g,
-             std::uint64_t room, RenderResult& result) {
+Status solve(const Plan& plan, const Scene& scene, const Scene& given, const RayScene& rays,
+             const GBuffer& g, std::uint64_t room, RenderResult& result) {
   const RenderOptions& o = plan.options;
   const MethodEntry& m = entry(o.method);
   SolveContext ctx{scene, rays, g, o.bounces, room, o.sun_rays};
+  ctx.given = &given;
+  ctx.light_exponent = plan.light_exponent;
   ctx.progress = &o.progress;
   ctx.cancel = o.cancel;
   std::optional<RadianceCache> cache;
@@ -301,7 +304,8 @@ Expected<RenderResult> render(const Scene& scene, const RenderOptions& options) 
       const std::uint64_t held =
           result.memory_bytes + scene_bytes(scene) * (k ? 2 : 1);  // the copy, where dimmed
       const std::uint64_t room = options.max_memory - std::min(options.max_memory, held);
-      if (Status s = solve(*plan, k ? lit : scene, *rays, g, room, result); !s) return s.error();
+      if (Status s = solve(*plan, k ? lit : scene, scene, *rays, g, room, result); !s)
+        return s.error();
       if (k) {
         float* p = result.radiance.data();
         for (std::size_t i = 0; i < result.radiance.size(); ++i) {
@@ -323,6 +327,45 @@ Expected<RenderResult> render(const Scene& scene, const RenderOptions& options) 
     }
     result.time_ms = total.ms();
     if (Status s = check_finite(result.radiance, options.aov); !s) return s.error();
+    return result;
+  });
+}
+
+Expected<BakeResult> bake(const Scene& scene, const RenderOptions& options, const std::string& path,
+                          bool radiance) {
+  RenderOptions o = options;
+  o.method = Method::surface;
+  o.aov = Aov::radiance;
+  if (!o.surface.atlas.empty())
+    return Error{"`surface.atlas`: a bake makes an atlas; it reads none (found \"" +
+                 o.surface.atlas + "\")"};
+  Expected<Plan> plan = make_plan(scene, o);
+  if (!plan) return plan.error();
+  // The BVH and the bake; no camera image.
+  const std::uint64_t held = scene_bytes(scene) * (plan->light_exponent ? 2 : 1);
+  const std::uint64_t need =
+      held + RayScene::estimate_bytes(scene) + atlas::working_bytes(scene, o.surface, radiance);
+  if (need > o.max_memory)
+    return Error{"the bake needs about " + io::format_mib(need) +
+                 " of memory (the scene, the ray tracer's BVH, the atlas's cascades" +
+                 (radiance ? std::string(" and its radiance per direction") : "") +
+                 "), more than the `max_memory` limit of " + io::format_mib(o.max_memory) +
+                 "; use fewer texels"};
+  tbb::task_arena arena(o.threads > 0 ? o.threads : tbb::task_arena::automatic);
+  return arena.execute([&]() -> Expected<BakeResult> {
+    Stopwatch total, stage;
+    BakeResult result;
+    Expected<RayScene> rays = RayScene::build(scene, o.max_memory);
+    if (!rays) return rays.error();
+    result.stages.push_back({"build BVH", stage.ms()});
+    const int k = plan->light_exponent;
+    const Scene lit = k ? dimmed(scene, k) : Scene{};
+    const std::uint64_t used = rays->bytes() + scene_bytes(scene) * (k ? 2 : 1);
+    atlas::FileBake fb{k ? lit : scene, scene, *rays, o.surface, o.bounces, k, radiance};
+    fb.max_bytes = o.max_memory - std::min(o.max_memory, used);
+    if (Status s = atlas::bake_file(fb, path, result); !s) return s.error();
+    result.memory_bytes += rays->bytes();
+    result.time_ms = total.ms();
     return result;
   });
 }

@@ -26,6 +26,10 @@ struct SolveContext {
   int bounces = 1;  // 1: direct light only
   std::uint64_t max_memory = 0;
   int sun_rays = 16;  // RenderOptions::sun_rays
+  // The scene as given, where `scene` is its dimmed copy (light at 2^-light_exponent, scaled back
+  // after the solve; spaceland/brightness.hpp): what a file made for the scene is checked against.
+  const Scene* given = nullptr;
+  int light_exponent = 0;
   // Later bounces' light at the surfaces, for a method that does not follow them itself (the
   // dispatcher builds it when bounces > 1); null otherwise.
   const RadianceCache* cache = nullptr;

@@ -326,6 +326,70 @@ TEST_F(Cli3d, SurfaceRendersAndReportsItsAtlas) {
   EXPECT_FALSE(fs::exists(out("x.pfm")));
 }
 
+// `penumbra bake` writes the atlas; `render --atlas` views it without tracing a cascade, with
+// the pixels of a bake-and-view; an atlas of another scene or of other bounces, and an atlas
+// given to another method, are refused with nothing written.
+TEST_F(Cli3d, BakeWritesAnAtlasThatRenderViews) {
+  auto r =
+      run({"bake", scene_, "-o", out("a.exr"), "--texels", "4096", "--directions", "16", "--json"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["scene_hash"].get<std::string>().size(), 16u);
+  EXPECT_GT(j["atlas"]["width"].get<int>(), 0);
+  EXPECT_GT(j["atlas"]["covered_texels"].get<int>(), 3000);
+  EXPECT_TRUE(j["atlas"]["radiance"].get<bool>());
+  EXPECT_GE(j["cascades"].size(), 2u);
+  EXPECT_EQ(j["parameters"]["directions"], 16);
+  EXPECT_TRUE(j["stages"].contains("write")) << j["stages"].dump();
+  EXPECT_EQ(j["file_bytes"].get<std::uint64_t>(), fs::file_size(out("a.exr")));
+
+  r = run({"render", scene_, "--method", "surface", "--atlas", out("a.exr"), "--json", "-o",
+           out("v.pfm")});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json v = nlohmann::json::parse(r.out);
+  EXPECT_TRUE(v["stages"].contains("read atlas")) << v["stages"].dump();
+  EXPECT_FALSE(v["stages"].contains("bounce 1 cascade 0")) << v["stages"].dump();
+  EXPECT_EQ(v["parameters"]["atlas"], out("a.exr"));
+  r = run({"render", scene_, "--method", "surface", "--texels", "4096", "--directions", "16", "-o",
+           out("f.pfm")});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(penumbra::testing::slurp(out("v.pfm")), penumbra::testing::slurp(out("f.pfm")));
+
+  // Text mode names what it wrote.
+  r = run({"bake", scene_, "-o", out("b.exr"), "--texels", "1024", "--directions", "4", "--bounces",
+           "2", "--no-radiance"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("wrote " + out("b.exr")), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("with the radiance per direction"), std::string::npos) << r.out;
+
+  // Refusals, nothing written.
+  std::string text = kScene3d;
+  text.replace(text.find("[4, 3, 2]"), 9, "[4, 3, 3]");
+  const std::string other = tmp_.write("other.json", text);
+  r = run({"render", other, "--method", "surface", "--atlas", out("a.exr"), "-o", out("x.pfm")});
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find(out("a.exr") + ": baked for another scene"), std::string::npos) << r.err;
+  r = run({"render", scene_, "--method", "surface", "--atlas", out("b.exr"), "-o", out("x.pfm")});
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("pass --bounces 2"), std::string::npos) << r.err;
+  r = run({"render", scene_, "--method", "spwi", "--atlas", out("a.exr"), "-o", out("x.pfm")});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("--atlas applies to --method surface only"), std::string::npos) << r.err;
+  r = run(
+      {"render", scene_, "--method", "surface", "--atlas", out("none.exr"), "-o", out("x.pfm")});
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find(out("none.exr")), std::string::npos) << r.err;
+  r = run({"bake", scene_, "-o", out("x.png")});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("an atlas is written as .exr"), std::string::npos) << r.err;
+  r = run({"bake", scene_, "-o", out("x.exr"), "--directions", "32"});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("--directions"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out("x.pfm")));
+  EXPECT_FALSE(fs::exists(out("x.png")));
+  EXPECT_FALSE(fs::exists(out("x.exr")));
+}
+
 // ssrc runs on the GPU (lavapipe in CI): the report names the device and times its stages; the
 // other 3D methods still refuse it by name.
 TEST_F(Cli3d, SsrcRendersOnTheGpuAndReportsTheDevice) {

@@ -192,6 +192,9 @@ struct SurfaceOptions {
   int directions = 64;              // Q0 over the sphere: the square of a power of two, 4..4096
   float interval = 0;               // t0, world units (0: two texels)
   int cascades = 0;                 // 0: until an interval spans the scene
+  // A baked atlas to view from (bake() below, `penumbra bake`), made for this scene with the
+  // same bounces: no cascade is traced and the options above come from the file. "": bake now.
+  std::string atlas;
 };
 
 struct RenderOptions {
@@ -258,6 +261,30 @@ Status check_memory(const Scene& scene, const RenderOptions& options);
 // invalid or the memory estimate exceeds options.max_memory; never returns a value that is not
 // finite (except the depth of a miss).
 Expected<RenderResult> render(const Scene& scene, const RenderOptions& options);
+
+// What bake() made and cost.
+struct BakeResult {
+  SurfaceOptions used;        // the texel size, t0 and cascades it derived
+  int width = 0, height = 0;  // the atlas, texels
+  std::size_t charts = 0;     // of them made from the file's lightmap UVs:
+  std::size_t lightmap_charts = 0;
+  std::uint64_t covered = 0;                       // texels on a surface
+  std::uint64_t scene_hash = 0;                    // what a view checks the atlas against
+  bool radiance = false;                           // cascade 0's radiance per direction written
+  std::vector<std::uint64_t> probes, store_bytes;  // per cascade: probes placed, store (M_i)
+  std::vector<StageTime> stages;   // in the order they ran (the file's writing last)
+  double time_ms = 0;              // the whole bake, the file's writing included
+  std::uint64_t memory_bytes = 0;  // peak working memory (BVH, stores, texels; not the scene)
+  std::uint64_t rays = 0;
+  std::uint64_t file_bytes = 0;
+};
+
+// Bakes the scene's light into its surface atlas (options.surface, bounces, threads, max_memory)
+// and writes it to `path` (an EXR; docs/METHODS.md, "The atlas file"), atomically, with cascade
+// 0's radiance per direction where `radiance` (what glossy queries read; Q0 channels of RGB).
+// Refused up front, like render(): options out of range, fog, too little memory.
+Expected<BakeResult> bake(const Scene& scene, const RenderOptions& options, const std::string& path,
+                          bool radiance = true);
 
 struct MethodInfo {
   Method method;

@@ -222,6 +222,8 @@ Expected<Baked> bake(const Scene& scene, const RayScene& rays, const Options& at
   for (const Grid& g : grids) probes += g.probes.size();
   report.memory_bytes =
       most + probes * sizeof(Probe) + out.texels.size() * (sizeof(Texel) + 4 * sizeof(Rgb));
+  if (o.keep_radiance)
+    report.memory_bytes += cascade::RadianceStore::bytes(out.texels.size(), o.side0);
   if (most > max_bytes)
     return Error{"surface cascades: two cascades' stores take " + std::to_string(most >> 20) +
                  " MiB, more than the " + std::to_string(max_bytes >> 20) +
@@ -349,6 +351,23 @@ Expected<Baked> bake(const Scene& scene, const RayScene& rays, const Options& at
     });
     out.front.swap(next_front);
     out.back.swap(next_back);
+    if (o.keep_radiance && bounce == o.bounces) {
+      const std::size_t nd = std::size_t(o.side0) * std::size_t(o.side0);
+      out.side0 = o.side0;
+      out.radiance.assign(n_texels * nd, Rgb{});
+      parallel_for(int(a.charts.size()), [&](int c) {
+        const Chart& ch = a.charts[std::size_t(c)];
+        for (int y = ch.y; y < ch.y + ch.height; ++y)
+          for (int x = ch.x; x < ch.x + ch.width; ++x) {
+            const std::uint64_t q = g0.base[std::size_t(c)] +
+                                    std::uint64_t(y - ch.y) * std::uint64_t(g0.nx[std::size_t(c)]) +
+                                    std::uint64_t(x - ch.x);
+            if (!g0.probes[q].valid) continue;
+            const std::size_t k = std::size_t(y) * std::size_t(a.width) + std::size_t(x);
+            std::copy_n(c0.probe(q), nd, out.radiance.data() + k * nd);
+          }
+      });
+    }
     report.rays += traced.load();
     report.stages.push_back({"bounce " + std::to_string(bounce) + " irradiance", watch.ms()});
   }

@@ -26,6 +26,9 @@ struct CascadeOptions {
   float t0 = 0;      // cascade 0's interval, world units; 0: two texels
   int cascades = 0;  // 0: enough that the last nominal interval spans the scene
   int bounces = 1;   // 1: direct light only
+  // Keep cascade 0's radiance per texel (Baked::radiance): the directional data an atlas file
+  // holds for glossy queries, at the cost of one more cascade-0 store.
+  bool keep_radiance = false;
 };
 
 // What a bake derived and cost.
@@ -55,6 +58,12 @@ struct Baked {
   // the emitters and (past the first bounce) the light the surfaces reflect; and the sun's, kept
   // apart so that a view can trace the sun per pixel (shadows sharper than a texel).
   std::vector<Rgb> front, back, sun_front, sun_back;
+  // Where the bake kept it (CascadeOptions::keep_radiance): per texel, the last solve's radiance
+  // arriving from each direction of cascade 0's side0 x side0 equal-area octahedral map of the
+  // sphere (cascade::direction_map, index v side0 + u), sun excluded; zero on uncovered texels.
+  // Empty otherwise.
+  int side0 = 0;
+  std::vector<Rgb> radiance;
 
   // The irradiance at a surface point on the side `towards` points to (minus the ray's
   // direction), from the texels of its chart around it: bilinear over the covered ones, the

@@ -1,12 +1,17 @@
 #include "spaceland/atlas/render.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <string>
+#include <vector>
 
 #include "core/math.hpp"
 #include "core/timer.hpp"
 #include "io/json_reader.hpp"
 #include "spaceland/atlas/cascades.hpp"
+#include "spaceland/atlas/file.hpp"
+#include "spaceland/cascade/store.hpp"
 #include "spaceland/color.hpp"
 #include "spaceland/shade.hpp"
 #include "spaceland/sun.hpp"
@@ -47,32 +52,119 @@ Status check_scene(const Scene& scene) {
   return refuse_fog(scene, "surface", "--method grid or pt");
 }
 
-std::uint64_t working_bytes(const Scene& scene, const SurfaceOptions& o) {
+std::uint64_t working_bytes(const Scene& scene, const SurfaceOptions& o, bool radiance) {
+  if (!o.atlas.empty()) return 0;
   double texels = double(o.texels);
   if (o.texel_size > 0) texels = surface_area(scene) / (double(o.texel_size) * o.texel_size);
-  return bake_bytes(std::uint64_t(std::min(3 * texels, 1e15)), side_of(o.directions));
+  texels = std::min(3 * texels, 1e15);
+  std::uint64_t bytes = bake_bytes(std::uint64_t(texels), side_of(o.directions));
+  // The bake's per-texel copy, the file's planar floats and its encoding: three of them.
+  if (radiance)
+    bytes += 3 * cascade::RadianceStore::bytes(std::uint64_t(texels), side_of(o.directions));
+  return bytes;
 }
 
-Expected<ImageRgb> render(const SolveContext& ctx, const SurfaceOptions& o, SolveReport& report,
-                          SurfaceOptions& used) {
+namespace {
+
+Options atlas_options(const SurfaceOptions& o) {
   Options ao;
   ao.texel_size = o.texel_size;
   ao.texels = o.texels;
+  return ao;
+}
+
+CascadeOptions cascade_options(const SurfaceOptions& o, int bounces) {
   CascadeOptions co;
   co.side0 = side_of(o.directions);
   co.t0 = o.interval;
   co.cascades = o.cascades;
-  co.bounces = ctx.bounces;
+  co.bounces = bounces;
+  return co;
+}
 
-  BakeReport bake_report;
-  Expected<Baked> baked = bake(ctx.scene, ctx.rays, ao, co, ctx.max_memory, bake_report);
+// Every value of the baked light times 2^k (exact: powers of two move exponents only).
+void scale(Baked& b, int k) {
+  if (k == 0) return;
+  for (std::vector<Rgb>* v : {&b.front, &b.back, &b.sun_front, &b.sun_back, &b.radiance})
+    for (Rgb& x : *v) x = {std::ldexp(x.r, k), std::ldexp(x.g, k), std::ldexp(x.b, k)};
+}
+
+}  // namespace
+
+Status bake_file(const FileBake& b, const std::string& path, BakeResult& result) {
+  CascadeOptions co = cascade_options(b.o, b.bounces);
+  co.keep_radiance = b.radiance;
+  BakeReport report;
+  Expected<Baked> baked = bake(b.scene, b.rays, atlas_options(b.o), co, b.max_bytes, report);
   if (!baked) return baked.error();
-  report.stages.insert(report.stages.end(), bake_report.stages.begin(), bake_report.stages.end());
-  report.rays += bake_report.rays;
-  report.memory_bytes += bake_report.memory_bytes;
-  used.texel_size = baked->atlas.texel_size;
-  used.interval = bake_report.t0;
-  used.cascades = bake_report.cascades;
+  scale(*baked, b.light_exponent);
+  Record r;
+  r.scene_hash = scene_hash(b.given);
+  r.texel_size = baked->atlas.texel_size;
+  r.gutter = baked->atlas.gutter;
+  r.max_angle = Options{}.max_angle;
+  r.directions = b.o.directions;
+  r.interval = report.t0;
+  r.cascades = report.cascades;
+  r.bounces = b.bounces;
+  Stopwatch watch;
+  if (Status s = write_atlas(path, *baked, r); !s) return s;
+  report.stages.push_back({"write", watch.ms()});
+
+  result.used = b.o;
+  result.used.texel_size = r.texel_size;
+  result.used.interval = r.interval;
+  result.used.cascades = r.cascades;
+  result.width = baked->atlas.width;
+  result.height = baked->atlas.height;
+  result.charts = baked->atlas.charts.size();
+  for (const Chart& c : baked->atlas.charts) result.lightmap_charts += c.from_lightmap ? 1 : 0;
+  for (const Texel& t : baked->texels) result.covered += t.chart >= 0 ? 1 : 0;
+  result.scene_hash = r.scene_hash;
+  result.radiance = baked->side0 > 0;
+  result.probes = report.probes;
+  result.store_bytes = report.store_bytes;
+  result.stages.insert(result.stages.end(), report.stages.begin(), report.stages.end());
+  result.memory_bytes += report.memory_bytes;
+  result.rays += report.rays;
+  std::error_code ec;
+  result.file_bytes = std::uint64_t(std::filesystem::file_size(path, ec));
+  return {};
+}
+
+Expected<ImageRgb> render(const SolveContext& ctx, const SurfaceOptions& o, SolveReport& report,
+                          SurfaceOptions& used) {
+  Expected<Baked> baked = Error{""};
+  if (o.atlas.empty()) {
+    BakeReport bake_report;
+    baked = bake(ctx.scene, ctx.rays, atlas_options(o), cascade_options(o, ctx.bounces),
+                 ctx.max_memory, bake_report);
+    if (!baked) return baked.error();
+    report.stages.insert(report.stages.end(), bake_report.stages.begin(), bake_report.stages.end());
+    report.rays += bake_report.rays;
+    report.memory_bytes += bake_report.memory_bytes;
+    used.texel_size = baked->atlas.texel_size;
+    used.interval = bake_report.t0;
+    used.cascades = bake_report.cascades;
+  } else {
+    Stopwatch watch;
+    Record r;
+    baked = read_atlas(o.atlas, ctx.given ? *ctx.given : ctx.scene, ctx.max_memory, r, false);
+    if (!baked) return baked.error();
+    if (r.bounces != ctx.bounces)
+      return Error{o.atlas + ": baked with " + std::to_string(r.bounces) +
+                   " bounce(s), asked for " + std::to_string(ctx.bounces) + ": pass --bounces " +
+                   std::to_string(r.bounces) + " or bake it again"};
+    // The file holds the light at its true scale; the view runs at the dimmed scene's.
+    scale(*baked, -ctx.light_exponent);
+    report.stages.push_back({"read atlas", watch.ms()});
+    report.memory_bytes += baked->texels.size() * (sizeof(Texel) + 4 * sizeof(Rgb)) +
+                           baked->radiance.size() * sizeof(Rgb);
+    used.texel_size = r.texel_size;
+    used.directions = r.directions;
+    used.interval = r.interval;
+    used.cascades = r.cascades;
+  }
 
   Stopwatch watch;
   const Background bg(ctx.scene);

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <filesystem>
 #include <limits>
+#include <tuple>
 
 #include "core/octahedral.hpp"
 #include "io/image_io.hpp"
@@ -78,24 +79,31 @@ TEST(AtlasFile, AViewFromTheFileGivesTheBakesPixelsFromEveryCamera) {
   }
 }
 
-// A scene brighter than the methods compute with is baked dimmed and written at its true scale:
-// the view from the file still gives the bake-and-view's bits.
-TEST(AtlasFile, ABrightSceneRoundTripsAtItsTrueScale) {
+// A scene brighter than the methods compute with is baked dimmed, and the file holds the light
+// at that scale and says so (its irradiance, pi times the radiance, might pass a float at its
+// true scale: a sky of 2e38): the view from the file still gives the bake-and-view's bits.
+TEST(AtlasFile, ABrightSceneRoundTripsThroughItsDimmedScale) {
   Dir dir;
   Scene s = lamp_over_floor();
   s.materials.back().emission = {3e35f, 3e35f, 3e35f};
-  const RenderOptions o = surface(1024, 16);
-  bake_ok(s, o, dir.file("bright.exr"));
-  atlas::Record r;
-  Expected<atlas::Baked> b =
-      atlas::read_atlas(dir.file("bright.exr"), s, std::uint64_t(1) << 32, r);
-  ASSERT_TRUE(b) << b.error().message;
-  float most = 0;
-  for (const Rgb& e : b->front) most = std::max(most, e.g);
-  EXPECT_GT(most, 1e34f);  // not the dimmed light
-  RenderOptions view = o;
-  view.surface.atlas = dir.file("bright.exr");
-  EXPECT_TRUE(same_bits(render_ok(s, o).radiance, render_ok(s, view).radiance));
+  Scene sky;
+  sky.camera = s.camera;
+  add_floor(sky, 2, {0, 0, 0});
+  sky.sky.zenith = sky.sky.horizon = sky.sky.ground = {2e38f, 2e38f, 2e38f};
+  for (const Scene& scene : {s, sky}) {
+    const RenderOptions o = surface(1024, 16);
+    bake_ok(scene, o, dir.file("bright.exr"));
+    atlas::Record r;
+    Expected<atlas::Baked> b =
+        atlas::read_atlas(dir.file("bright.exr"), scene, std::uint64_t(1) << 32, r);
+    ASSERT_TRUE(b) << b.error().message;
+    EXPECT_GT(r.light_exponent, 0);
+    RenderOptions view = o;
+    view.surface.atlas = dir.file("bright.exr");
+    const Expected<RenderResult> seen = render(scene, view);
+    ASSERT_TRUE(seen) << seen.error().message;
+    EXPECT_TRUE(same_bits(render_ok(scene, o).radiance, seen->radiance));
+  }
 }
 
 // Le (1 + a + a^2 + a^3) at 3 bounces at every pixel from cameras the bake never knew (the bake has
@@ -264,6 +272,48 @@ TEST(AtlasFile, RefusesAForeignDamagedOrMismatchedAtlas) {
   staged = io::stage_exr_channels(missing, *img);
   ASSERT_TRUE(staged && io::publish(*staged));
   refused(s, missing, 1, "no channel 'sun.back.B'");
+  img = io::read_exr_channels(good);
+  ASSERT_TRUE(img);
+  img->channels.erase(std::remove_if(img->channels.begin(), img->channels.end(),
+                                     [](const io::ExrChannel& c) { return c.name == "chart"; }),
+                      img->channels.end());
+  staged = io::stage_exr_channels(missing, *img);
+  ASSERT_TRUE(staged && io::publish(*staged));
+  refused(s, missing, 1, "no channel 'chart'");
+  // A radiance channel short of Q0's.
+  img = io::read_exr_channels(good);
+  ASSERT_TRUE(img);
+  img->channels.erase(
+      std::remove_if(img->channels.begin(), img->channels.end(),
+                     [](const io::ExrChannel& c) { return c.name == "radiance.15.B"; }),
+      img->channels.end());
+  staged = io::stage_exr_channels(missing, *img);
+  ASSERT_TRUE(staged && io::publish(*staged));
+  atlas::Record record;
+  const Expected<atlas::Baked> short_of =
+      atlas::read_atlas(missing, s, std::uint64_t(1) << 32, record);
+  ASSERT_FALSE(short_of);
+  EXPECT_NE(short_of.error().message.find("47 radiance channels, expected 48"), std::string::npos)
+      << short_of.error().message;
+  // A chart list of the wrong types, a record out of range.
+  for (const auto& [key, from, to, words] :
+       {std::tuple<std::string, std::string, std::string, std::string>{
+            "penumbra.charts",
+            "\"height\":", "\"height\":\"x\",\"h\":", "are not the ones this build makes"},
+        {"penumbra.charts", "[{", "[7,{", "a chart is no object"},
+        {"penumbra.record", "\"directions\":16", "\"directions\":2147483647",
+         "record is damaged"}}) {
+    img = io::read_exr_channels(good);
+    ASSERT_TRUE(img);
+    for (auto& [name, value] : img->attributes)
+      if (name == key) {
+        ASSERT_NE(value.find(from), std::string::npos) << value;
+        value.replace(value.find(from), from.size(), to);
+      }
+    staged = io::stage_exr_channels(missing, *img);
+    ASSERT_TRUE(staged && io::publish(*staged));
+    refused(s, missing, 1, words);
+  }
   // A bake refuses a path to read and a scene with fog, writing nothing.
   RenderOptions both = o;
   both.surface.atlas = good;

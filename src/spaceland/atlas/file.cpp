@@ -123,7 +123,7 @@ Status write_atlas(const std::string& path, const Baked& b, const Record& r) {
   nlohmann::json record = {{"texel_size", r.texel_size}, {"gutter", r.gutter},
                            {"max_angle", r.max_angle},   {"directions", r.directions},
                            {"interval", r.interval},     {"cascades", r.cascades},
-                           {"bounces", r.bounces}};
+                           {"bounces", r.bounces},       {"light_exponent", r.light_exponent}};
   nlohmann::json charts = nlohmann::json::array();
   for (const Chart& c : a.charts)
     charts.push_back({{"kind", kind_name(c.kind)},
@@ -184,8 +184,10 @@ Status write_atlas(const std::string& path, const Baked& b, const Record& r) {
 
 Expected<Baked> read_atlas(const std::string& path, const Scene& scene, std::uint64_t max_bytes,
                            Record& r, bool radiance) {
+  // Half the limit for the decoded channels: beside them the rebuilt charts, the texels and their
+  // light (about as much again; with the radiance, its per-texel copy as much as its channels).
   Expected<io::ExrChannels> file = io::read_exr_channels(
-      path, max_bytes,
+      path, max_bytes / 2,
       [&](const std::string& name) { return radiance || !name.starts_with("radiance."); });
   if (!file) return file.error();
   const io::ExrChannels& img = *file;
@@ -199,21 +201,12 @@ Expected<Baked> read_atlas(const std::string& path, const Scene& scene, std::uin
     return damaged(path, "an atlas of version " + (version ? *version : std::string("?")) +
                              ", this build reads version " + std::to_string(kVersion) +
                              "; bake it again");
-  const std::string* hash = img.attribute("penumbra.scene_hash");
-  const std::uint64_t ours = scene_hash(scene);
-  if (!hash || *hash != hex(ours))
-    return damaged(path, "baked for another scene (its scene hash " +
-                             (hash ? *hash : std::string("is missing")) + ", " + scene.source +
-                             "'s " + hex(ours) + ": the geometry, materials, sky or sun differ); " +
-                             "bake it again with `penumbra bake " + scene.source + " -o " + path +
-                             "`");
   const std::string* rec = img.attribute("penumbra.record");
   const std::string* chart_list = img.attribute("penumbra.charts");
   if (!rec || !chart_list) return damaged(path, "the atlas's header lacks its record or charts");
   nlohmann::json charts;
   try {
     const nlohmann::json j = nlohmann::json::parse(*rec);
-    r.scene_hash = ours;
     r.texel_size = j.at("texel_size").get<float>();
     r.gutter = j.at("gutter").get<int>();
     r.max_angle = j.at("max_angle").get<float>();
@@ -221,11 +214,32 @@ Expected<Baked> read_atlas(const std::string& path, const Scene& scene, std::uin
     r.interval = j.at("interval").get<float>();
     r.cascades = j.at("cascades").get<int>();
     r.bounces = j.at("bounces").get<int>();
+    r.light_exponent = j.at("light_exponent").get<int>();
     charts = nlohmann::json::parse(*chart_list);
     if (!charts.is_array()) throw std::runtime_error("the chart list is no array");
+    for (const nlohmann::json& c : charts)
+      if (!c.is_object() || !c.at("kind").is_string())
+        throw std::runtime_error("a chart is no object with a kind");
   } catch (const std::exception& e) {
     return damaged(path, std::string("the atlas's header is damaged: ") + e.what());
   }
+  int side0 = 0;
+  for (int side = 2; side <= 64; side *= 2)
+    if (side * side == r.directions) side0 = side;
+  if (side0 == 0 || !(r.texel_size > 0) || !std::isfinite(r.texel_size) || r.bounces < 1 ||
+      r.bounces > 64 || r.light_exponent < 0 || r.light_exponent > 512)
+    return damaged(path, "the atlas's record is damaged: " + *rec);
+  const std::string* hash = img.attribute("penumbra.scene_hash");
+  const std::uint64_t ours = scene_hash(scene);
+  if (!hash || *hash != hex(ours))
+    return damaged(path, "baked for another scene (its scene hash " +
+                             (hash ? *hash : std::string("is missing")) + ", " + scene.source +
+                             "'s " + hex(ours) +
+                             ": the geometry, materials, sky or sun differ); bake one for it: "
+                             "penumbra bake " +
+                             scene.source + " -o ATLAS.exr --bounces " + std::to_string(r.bounces) +
+                             " --directions " + std::to_string(r.directions));
+  r.scene_hash = ours;
 
   Options ao;
   ao.texel_size = r.texel_size;
@@ -237,12 +251,16 @@ Expected<Baked> read_atlas(const std::string& path, const Scene& scene, std::uin
   out.atlas = std::move(*made);
   const Atlas& a = out.atlas;
   bool same = a.width == img.width && a.height == img.height && charts.size() == a.charts.size();
-  for (std::size_t c = 0; same && c < a.charts.size(); ++c) {
-    const Chart& ch = a.charts[c];
-    const nlohmann::json& f = charts[c];
-    same = f.value("kind", "") == kind_name(ch.kind) && f.value("shape", -1) == int(ch.shape) &&
-           f.value("x", -1) == ch.x && f.value("y", -1) == ch.y &&
-           f.value("width", -1) == ch.width && f.value("height", -1) == ch.height;
+  try {
+    for (std::size_t c = 0; same && c < a.charts.size(); ++c) {
+      const Chart& ch = a.charts[c];
+      const nlohmann::json& f = charts[c];
+      same = f.value("kind", "") == kind_name(ch.kind) && f.value("shape", -1) == int(ch.shape) &&
+             f.value("x", -1) == ch.x && f.value("y", -1) == ch.y &&
+             f.value("width", -1) == ch.width && f.value("height", -1) == ch.height;
+    }
+  } catch (const std::exception&) {
+    same = false;  // a field of another type
   }
   if (!same)
     return damaged(path, "its charts (" + std::to_string(charts.size()) + ", " +
@@ -251,14 +269,15 @@ Expected<Baked> read_atlas(const std::string& path, const Scene& scene, std::uin
                              std::to_string(a.charts.size()) + ", " + std::to_string(a.width) +
                              "x" + std::to_string(a.height) + "); bake it again");
   out.texels = rasterise(scene, a);
-  if (const io::ExrChannel* ch = img.channel("chart"))
-    for (std::size_t k = 0; k < ch->values.size(); ++k)
-      if (ch->values[k] != float(out.texels[k].chart))
-        return damaged(path, "texel (" + std::to_string(k % std::size_t(a.width)) + ", " +
-                                 std::to_string(k / std::size_t(a.width)) + ") lies on chart " +
-                                 std::to_string(ch->values[k]) + " in the file but on chart " +
-                                 std::to_string(out.texels[k].chart) +
-                                 " as this build rasterises the scene; bake it again");
+  const io::ExrChannel* ch = img.channel("chart");
+  if (!ch) return damaged(path, "the atlas has no channel 'chart'");
+  for (std::size_t k = 0; k < ch->values.size(); ++k)
+    if (ch->values[k] != float(out.texels[k].chart))
+      return damaged(path, "texel (" + std::to_string(k % std::size_t(a.width)) + ", " +
+                               std::to_string(k / std::size_t(a.width)) + ") lies on chart " +
+                               std::to_string(ch->values[k]) + " in the file but on chart " +
+                               std::to_string(out.texels[k].chart) +
+                               " as this build rasterises the scene; bake it again");
 
   const std::size_t n = std::size_t(a.width) * std::size_t(a.height);
   // A value that cannot be light (negative, not finite) is damage, named where it lies.
@@ -285,11 +304,15 @@ Expected<Baked> read_atlas(const std::string& path, const Scene& scene, std::uin
       if (Status s = take(channel(layer_names[l][0], layer_names[l][1], c), *layers[l], c); !s)
         return s.error();
   // The directional data, where the file has it (one side0^2 map per texel).
-  if (img.channel("radiance.0.R")) {
-    int side = 0;
-    while (side * side < r.directions) ++side;
-    const std::size_t nd = std::size_t(side) * std::size_t(side);
-    out.side0 = side;
+  std::size_t radiance_channels = 0;
+  for (const io::ExrChannel& c : img.channels) radiance_channels += c.name.starts_with("radiance.");
+  if (radiance_channels > 0) {
+    const std::size_t nd = std::size_t(side0) * std::size_t(side0);
+    if (radiance_channels != 3 * nd)
+      return damaged(path, "the atlas has " + std::to_string(radiance_channels) +
+                               " radiance channels, expected " + std::to_string(3 * nd) +
+                               " for Q0 " + std::to_string(r.directions));
+    out.side0 = side0;
     out.radiance.resize(n * nd);
     std::vector<Rgb> one;
     for (std::size_t d = 0; d < nd; ++d)

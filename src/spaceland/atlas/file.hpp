@@ -25,6 +25,10 @@ struct Record {
   float interval = 0;  // t0, world units
   int cascades = 0;
   int bounces = 1;
+  // The light is stored at 2^-light_exponent of its true scale: a scene brighter than the
+  // methods compute with is baked dimmed (spaceland/brightness.hpp), and its irradiance, up to pi
+  // times its radiance, might not fit a float at its true scale.
+  int light_exponent = 0;
 };
 
 // A hash (64-bit FNV-1a) of what the baked light depends on: the geometry (positions, normals,

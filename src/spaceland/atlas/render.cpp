@@ -58,9 +58,9 @@ std::uint64_t working_bytes(const Scene& scene, const SurfaceOptions& o, bool ra
   if (o.texel_size > 0) texels = surface_area(scene) / (double(o.texel_size) * o.texel_size);
   texels = std::min(3 * texels, 1e15);
   std::uint64_t bytes = bake_bytes(std::uint64_t(texels), side_of(o.directions));
-  // The bake's per-texel copy, the file's planar floats and its encoding: three of them.
+  // The bake's per-texel copy, the file's planar floats, their half copy and the encoding.
   if (radiance)
-    bytes += 3 * cascade::RadianceStore::bytes(std::uint64_t(texels), side_of(o.directions));
+    bytes += 4 * cascade::RadianceStore::bytes(std::uint64_t(texels), side_of(o.directions));
   return bytes;
 }
 
@@ -97,8 +97,8 @@ Status bake_file(const FileBake& b, const std::string& path, BakeResult& result)
   BakeReport report;
   Expected<Baked> baked = bake(b.scene, b.rays, atlas_options(b.o), co, b.max_bytes, report);
   if (!baked) return baked.error();
-  scale(*baked, b.light_exponent);
   Record r;
+  r.light_exponent = b.light_exponent;
   r.scene_hash = scene_hash(b.given);
   r.texel_size = baked->atlas.texel_size;
   r.gutter = baked->atlas.gutter;
@@ -155,8 +155,8 @@ Expected<ImageRgb> render(const SolveContext& ctx, const SurfaceOptions& o, Solv
       return Error{o.atlas + ": baked with " + std::to_string(r.bounces) +
                    " bounce(s), asked for " + std::to_string(ctx.bounces) + ": pass --bounces " +
                    std::to_string(r.bounces) + " or bake it again"};
-    // The file holds the light at its true scale; the view runs at the dimmed scene's.
-    scale(*baked, -ctx.light_exponent);
+    // The file holds the light at 2^-k of its scale; the view runs at 2^-light_exponent.
+    scale(*baked, r.light_exponent - ctx.light_exponent);
     report.stages.push_back({"read atlas", watch.ms()});
     report.memory_bytes += baked->texels.size() * (sizeof(Texel) + 4 * sizeof(Rgb)) +
                            baked->radiance.size() * sizeof(Rgb);

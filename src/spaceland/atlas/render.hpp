@@ -23,8 +23,8 @@ Status check_scene(const Scene& scene);
 // view from, nothing here (reading it is held to the memory left, from its header).
 std::uint64_t working_bytes(const Scene& scene, const SurfaceOptions& o, bool radiance = false);
 // A bake for `penumbra bake`: `scene` is what the cascades trace (a dimmed copy of `given` where
-// light_exponent > 0: the file holds the light at its true scale), `given` what the file's hash
-// is of.
+// light_exponent > 0: the file holds the light at that scale and says so), `given` what the file's
+// hash is of.
 struct FileBake {
   const Scene& scene;
   const Scene& given;

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <limits>
 #include <tuple>
@@ -129,7 +130,7 @@ TEST(AtlasFile, EnclosureFromTheFileIsExactFromSeveralCameras) {
 }
 
 // The floor under the sphere light, seen through the file's atlas from above and from oblique
-// eyes, reflects a Le (r/d)^2 cos(theta) to the error of the bake in memory (0.243 at these
+// eyes, reflects a Le (r/d)^2 cos(theta) to the error of the bake in memory (0.170 at these
 // texels and maps, surface_cascades_test).
 TEST(AtlasFile, FloorUnderASphereLightFromTheFile) {
   Dir dir;
@@ -159,7 +160,10 @@ TEST(AtlasFile, FloorUnderASphereLightFromTheFile) {
         ++n;
       }
     ASSERT_GT(n, 200);
-    EXPECT_LT(std::sqrt(sum2 / n) / (sum / n), 0.30) << eye.x << " " << eye.y << " " << eye.z;
+    const double e = std::sqrt(sum2 / n) / (sum / n);
+    std::printf("atlas_file_test: floor from (%g, %g, %g): rel. RMSE %.4g\n", eye.x, eye.y, eye.z,
+                e);
+    EXPECT_LT(e, 0.20) << eye.x << " " << eye.y << " " << eye.z;
   }
 }
 

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <random>
 
 #include "spaceland/atlas/cascades.hpp"
@@ -88,14 +89,19 @@ double sphere_light_floor_error(int texels, int side0, atlas::BakeReport& report
 }
 
 // The light's 0.07 sr at the floor's middle is a few of cascade 0's cells, so the error is the
-// cells' (no sphere-light footprints yet): measured 0.243 / 0.105 at 4096 texels with side0 4 / 8,
-// 0.222 / 0.085 at 16384. Finer maps and texels must bring it down.
+// cells' (no sphere-light footprints yet): measured 0.170 at 4096 texels with side0 4 and 0.069
+// at 16384 with side0 8 (0.243 and 0.085 before the gather at cascade 1's directions). Finer maps
+// and texels must bring it down.
 TEST(SurfaceCascades, FloorUnderASphereLightConvergesWithTheMaps) {
   atlas::BakeReport coarse_report, fine_report;
   const double coarse = sphere_light_floor_error(1 << 12, 4, coarse_report);
   const double fine = sphere_light_floor_error(1 << 14, 8, fine_report);
-  EXPECT_LT(coarse, 0.30);
-  EXPECT_LT(fine, 0.10);
+  std::printf(
+      "surface_cascades_test: floor under a sphere light, rel. RMSE %.4g (side0 4, 4096 "
+      "texels), %.4g (side0 8, 16384)\n",
+      coarse, fine);
+  EXPECT_LT(coarse, 0.20);
+  EXPECT_LT(fine, 0.08);
   EXPECT_LT(fine, 0.5 * coarse);
   // M_i = M_0: every cascade's store within 2x of cascade 0's (the probes per cascade fall 4x
   // as the directions grow 4x; a chart's partial cells round up).

@@ -1,7 +1,8 @@
 // Writes the fuzzers' generated seeds, so no binary seed lives in git (scripts/fuzz.sh):
 //   penumbra_fuzz_seeds <dir>
 // <dir>/image: tiny PFM, EXR (one per compression) and PNG (8- and 16-bit) files;
-// <dir>/layers: 8x8 layer images and <dir>/scene: a scene that names them, for fuzz_scene.
+// <dir>/layers: 8x8 layer images and <dir>/scene: a scene that names them, for fuzz_scene;
+// <dir>/atlas: atlases baked for atlas_scene.hpp's scene, for fuzz_atlas.
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
@@ -16,8 +17,10 @@
 #include <tuple>
 #include <vector>
 
+#include "atlas_scene.hpp"
 #include "io/image_io.hpp"
 #include "penumbra/flatland/scene.hpp"
+#include "penumbra/spaceland/render.hpp"
 
 namespace {
 
@@ -118,5 +121,19 @@ int main(int argc, char** argv) {
   const std::string text =
       scene_json(d, {"layers/rgb16.png", "layers/grey16.png", "layers/rgb.pfm", 2}, "fuzz seed");
   std::ofstream(dir / "scene" / "layers.json") << text;
+
+  // Two small atlases (the fuzzer's inputs stop at 16 KiB): 64 texels, Q0 4.
+  fs::create_directories(dir / "atlas");
+  namespace sl = penumbra::spaceland;
+  sl::RenderOptions o;
+  o.method = sl::Method::surface;
+  o.surface.texels = 64;
+  o.surface.directions = 4;
+  for (const bool radiance : {false, true}) {
+    const auto baked =
+        sl::bake(atlas_fuzz_scene(), o,
+                 (dir / "atlas" / (radiance ? "radiance.exr" : "plain.exr")).string(), radiance);
+    good = good && ok(baked ? Status() : Status(baked.error()));
+  }
   return good ? 0 : 1;
 }

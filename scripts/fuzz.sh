@@ -4,14 +4,14 @@
 # the timeout or memory over the limit fails the script; the input is kept under
 # <build>/fuzz-work/artifacts/ (re-run it with: <build>/bin/<target> <file>).
 #   scripts/fuzz.sh [seconds per target]
-# Environment: FUZZ_BUILD (build-fuzz), JOBS (nproc), WERROR (OFF), FUZZ_TARGETS (all five).
+# Environment: FUZZ_BUILD (build-fuzz), JOBS (nproc), WERROR (OFF), FUZZ_TARGETS (all six).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$PWD
 seconds=${1:-60}
 build=${FUZZ_BUILD:-build-fuzz}
 jobs=${JOBS:-$(nproc)}
-targets=(${FUZZ_TARGETS:-fuzz_scene fuzz_image fuzz_strokes fuzz_scene3d fuzz_mesh})
+targets=(${FUZZ_TARGETS:-fuzz_scene fuzz_image fuzz_strokes fuzz_scene3d fuzz_mesh fuzz_atlas})
 
 if ! command -v clang++-14 >/dev/null; then
   echo "fuzz.sh: clang++-14 is missing (scripts/install-deps.sh installs it)" >&2
@@ -41,8 +41,10 @@ printf '%s' '{"size": [16, 8], "strokes": [{"tool": "erase", "radius": 1, "point
 # examples' layers and the tiny generated ones.
 mkdir -p "$work/layers"
 cp "$root"/scenes/layers/* "$work/gen/layers/"* "$work/layers/"
-rm -rf "$work/seeds/image"
+rm -rf "$work/seeds/image" "$work/seeds/atlas"
 cp -r "$work/gen/image" "$work/seeds/image"
+# Atlases baked for fuzz/atlas_scene.hpp's scene, with and without the radiance per direction.
+cp -r "$work/gen/atlas" "$work/seeds/atlas"
 # 3D: the example scenes (their meshes are Debian's, by absolute path), and mesh files behind
 # the byte that picks their format (0 .obj, 1 .gltf, 2 .glb).
 rm -rf "$work/seeds/scene3d" "$work/seeds/mesh"

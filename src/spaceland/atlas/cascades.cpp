@@ -117,6 +117,22 @@ cascade::Corners corners(const Atlas& a, const Grid& upper, std::size_t c, float
   return k;
 }
 
+// f(k, q) for every covered texel k of the atlas and its cascade-0 probe q (a probe per texel),
+// a chart per task.
+template <class F>
+void for_each_texel_probe(const Atlas& a, const Grid& g0, F&& f) {
+  parallel_for(int(a.charts.size()), [&](int c) {
+    const Chart& ch = a.charts[std::size_t(c)];
+    for (int y = ch.y; y < ch.y + ch.height; ++y)
+      for (int x = ch.x; x < ch.x + ch.width; ++x) {
+        const std::uint64_t q = g0.base[std::size_t(c)] +
+                                std::uint64_t(y - ch.y) * std::uint64_t(g0.nx[std::size_t(c)]) +
+                                std::uint64_t(x - ch.x);
+        if (g0.probes[q].valid) f(std::size_t(y) * std::size_t(a.width) + std::size_t(x), q);
+      }
+  });
+}
+
 // Every covered texel's irradiance on each side from cascade 0 (store, side0 x side0 cells) at
 // cascade 1's directions (dirs1, 2 side0 on a side): a cell whose ray was merged gives each of its
 // 2x2 children the bilinear mean of the upper probes' child (those with light; the cell's own
@@ -128,54 +144,45 @@ void fine_gather(const Atlas& a, const Grid& g0, const Grid& g1, const std::vect
                  std::vector<Rgb>& front, std::vector<Rgb>& back) {
   const std::size_t nd0 = std::size_t(side0) * std::size_t(side0);
   const std::size_t side1 = 2 * std::size_t(side0);
-  parallel_for(int(a.charts.size()), [&](int c) {
-    const Chart& ch = a.charts[std::size_t(c)];
-    for (int y = ch.y; y < ch.y + ch.height; ++y)
-      for (int x = ch.x; x < ch.x + ch.width; ++x) {
-        const std::uint64_t q = g0.base[std::size_t(c)] +
-                                std::uint64_t(y - ch.y) * std::uint64_t(g0.nx[std::size_t(c)]) +
-                                std::uint64_t(x - ch.x);
-        const Probe& p = g0.probes[q];
-        if (!p.valid) continue;
-        const cascade::Corners k = corners(a, g1, p.chart, p.x, p.y);
-        const Rgb* values = store.probe(q);
-        Rgb f{}, b{};
-        float wf = 0, wb = 0;
-        for (int v = 0; v < side0; ++v)
-          for (int u = 0; u < side0; ++u) {
-            const std::size_t d = std::size_t(v) * std::size_t(side0) + std::size_t(u);
-            const Rgb& cell = values[d];
-            for (int dv = 0; dv < 2; ++dv)
-              for (int du = 0; du < 2; ++du) {
-                const std::size_t child = (2 * std::size_t(v) + std::size_t(dv)) * side1 +
-                                          2 * std::size_t(u) + std::size_t(du);
-                Rgb l = cell;
-                if (merged[q * nd0 + d]) {
-                  Rgb sum{};
-                  float w = 0;
-                  for (int j = 0; j < k.n; ++j) {
-                    const Rgb& r = above.probe(k.index[std::size_t(j)])[child];
-                    if (!cascade::holds_light(r)) continue;
-                    sum += r * k.w[std::size_t(j)];
-                    w += k.w[std::size_t(j)];
-                  }
-                  if (w > 0) l = sum * (1 / w);
-                }
-                if (!cascade::holds_light(l)) continue;
-                const float cos_t = dot(p.normal, dirs1[child]);
-                if (cos_t > 0) {
-                  f += l * cos_t;
-                  wf += cos_t;
-                } else if (cos_t < 0) {
-                  b += l * -cos_t;
-                  wb -= cos_t;
-                }
+  for_each_texel_probe(a, g0, [&](std::size_t t, std::uint64_t q) {
+    const Probe& p = g0.probes[q];
+    const cascade::Corners k = corners(a, g1, p.chart, p.x, p.y);
+    const Rgb* values = store.probe(q);
+    Rgb f{}, b{};
+    float wf = 0, wb = 0;
+    for (int v = 0; v < side0; ++v)
+      for (int u = 0; u < side0; ++u) {
+        const std::size_t d = std::size_t(v) * std::size_t(side0) + std::size_t(u);
+        const Rgb& cell = values[d];
+        for (int dv = 0; dv < 2; ++dv)
+          for (int du = 0; du < 2; ++du) {
+            const std::size_t child = (2 * std::size_t(v) + std::size_t(dv)) * side1 +
+                                      2 * std::size_t(u) + std::size_t(du);
+            Rgb l = cell;
+            if (merged[q * nd0 + d]) {
+              Rgb sum{};
+              float w = 0;
+              for (int j = 0; j < k.n; ++j) {
+                const Rgb& r = above.probe(k.index[std::size_t(j)])[child];
+                if (!cascade::holds_light(r)) continue;
+                sum += r * k.w[std::size_t(j)];
+                w += k.w[std::size_t(j)];
               }
+              if (w > 0) l = sum * (1 / w);
+            }
+            if (!cascade::holds_light(l)) continue;
+            const float cos_t = dot(p.normal, dirs1[child]);
+            if (cos_t > 0) {
+              f += l * cos_t;
+              wf += cos_t;
+            } else if (cos_t < 0) {
+              b += l * -cos_t;
+              wb -= cos_t;
+            }
           }
-        const std::size_t t = std::size_t(y) * std::size_t(a.width) + std::size_t(x);
-        front[t] = wf > 0 ? f * float(kPi / wf) : Rgb{};
-        back[t] = wb > 0 ? b * float(kPi / wb) : Rgb{};
       }
+    front[t] = wf > 0 ? f * float(kPi / wf) : Rgb{};
+    back[t] = wb > 0 ? b * float(kPi / wb) : Rgb{};
   });
 }
 
@@ -409,24 +416,15 @@ Expected<Baked> bake(const Scene& scene, const RayScene& rays, const Options& at
     const Grid& g0 = grids[0];
     const std::vector<Vec3>& d0 = dirs[0];
     if (!gathered)
-      parallel_for(int(a.charts.size()), [&](int c) {
-        const Chart& ch = a.charts[std::size_t(c)];
-        for (int y = ch.y; y < ch.y + ch.height; ++y)
-          for (int x = ch.x; x < ch.x + ch.width; ++x) {
-            const std::size_t k = std::size_t(y) * std::size_t(a.width) + std::size_t(x);
-            const std::uint64_t q = g0.base[std::size_t(c)] +
-                                    std::uint64_t(y - ch.y) * std::uint64_t(g0.nx[std::size_t(c)]) +
-                                    std::uint64_t(x - ch.x);
-            if (!g0.probes[q].valid) continue;
-            // Irradiance over pi is the cosine-weighted mean (the core's normalised weights: a
-            // uniform sky gives pi L on any map).
-            const Vec3 n = g0.probes[q].normal;
-            Rgb f{}, bk{};
-            cascade::cosine_mean(d0, n, c0, q, f);
-            cascade::cosine_mean(d0, -n, c0, q, bk);
-            next_front[k] = f * float(kPi);
-            next_back[k] = bk * float(kPi);
-          }
+      for_each_texel_probe(a, g0, [&](std::size_t k, std::uint64_t q) {
+        // Irradiance over pi is the cosine-weighted mean (the core's normalised weights: a
+        // uniform sky gives pi L on any map).
+        const Vec3 n = g0.probes[q].normal;
+        Rgb f{}, bk{};
+        cascade::cosine_mean(d0, n, c0, q, f);
+        cascade::cosine_mean(d0, -n, c0, q, bk);
+        next_front[k] = f * float(kPi);
+        next_back[k] = bk * float(kPi);
       });
     out.front.swap(next_front);
     out.back.swap(next_back);
@@ -434,17 +432,8 @@ Expected<Baked> bake(const Scene& scene, const RayScene& rays, const Options& at
       const std::size_t nd = std::size_t(o.side0) * std::size_t(o.side0);
       out.side0 = o.side0;
       out.radiance.assign(n_texels * nd, Rgb{});
-      parallel_for(int(a.charts.size()), [&](int c) {
-        const Chart& ch = a.charts[std::size_t(c)];
-        for (int y = ch.y; y < ch.y + ch.height; ++y)
-          for (int x = ch.x; x < ch.x + ch.width; ++x) {
-            const std::uint64_t q = g0.base[std::size_t(c)] +
-                                    std::uint64_t(y - ch.y) * std::uint64_t(g0.nx[std::size_t(c)]) +
-                                    std::uint64_t(x - ch.x);
-            if (!g0.probes[q].valid) continue;
-            const std::size_t k = std::size_t(y) * std::size_t(a.width) + std::size_t(x);
-            std::copy_n(c0.probe(q), nd, out.radiance.data() + k * nd);
-          }
+      for_each_texel_probe(a, g0, [&](std::size_t k, std::uint64_t q) {
+        std::copy_n(c0.probe(q), nd, out.radiance.data() + k * nd);
       });
     }
     report.rays += traced.load();

@@ -744,8 +744,10 @@ Expected<StagedFile> stage_exr_channels(const std::string& path, const ExrChanne
       path, [&](std::FILE* f) { return write_bytes(f, out.bytes().data(), out.bytes().size()); });
 }
 
-Expected<ExrChannels> read_exr_channels(const std::string& path, std::uint64_t max_bytes,
-                                        const std::function<bool(const std::string&)>& want) {
+Expected<ExrChannels> read_exr_channels(
+    const std::string& path, std::uint64_t max_bytes,
+    const std::function<bool(const std::string&)>& want,
+    const std::function<Status(const ExrChannels&)>& check_header) {
   if (auto f = open_for_reading(path); !f) return f.error();
   try {
     if (Status s = check_exr_header(path, {}); !s) return s.error();
@@ -753,6 +755,14 @@ Expected<ExrChannels> read_exr_channels(const std::string& path, std::uint64_t m
     const Imath::Box2i dw = file.header().dataWindow();
     const long long width = box_width(dw), height = box_height(dw);
     if (Status s = check_size(path, width, height, {}); !s) return s.error();
+    ExrChannels img;
+    img.width = int(width);
+    img.height = int(height);
+    for (auto it = file.header().begin(); it != file.header().end(); ++it)
+      if (const auto* a = dynamic_cast<const Imf::StringAttribute*>(&it.attribute()))
+        img.attributes.emplace_back(it.name(), a->value());
+    if (check_header)
+      if (Status s = check_header(img); !s) return s.error();
     const Imf::ChannelList& list = file.header().channels();
     std::size_t count = 0;
     for (auto it = list.begin(); it != list.end(); ++it) {
@@ -768,12 +778,6 @@ Expected<ExrChannels> read_exr_channels(const std::string& path, std::uint64_t m
                             format_mib(max_bytes));
     if (!file.isComplete()) return fail(path, "truncated or damaged EXR (pixel data missing)");
 
-    ExrChannels img;
-    img.width = int(width);
-    img.height = int(height);
-    for (auto it = file.header().begin(); it != file.header().end(); ++it)
-      if (const auto* a = dynamic_cast<const Imf::StringAttribute*>(&it.attribute()))
-        img.attributes.emplace_back(it.name(), a->value());
     Imf::FrameBuffer fb;
     img.channels.reserve(count);
     for (auto it = list.begin(); it != list.end(); ++it) {

@@ -67,8 +67,12 @@ Expected<StagedFile> stage_exr_channels(const std::string& path, const ExrChanne
 // Reads every string attribute, and the channels `want` names (all where it is empty). Refused
 // before decoding: a file that is no EXR, is truncated, has subsampled channels, or whose wanted
 // channels would take more than `max_bytes` as floats (0: no limit). Messages name the file.
-Expected<ExrChannels> read_exr_channels(const std::string& path, std::uint64_t max_bytes = 0,
-                                        const std::function<bool(const std::string&)>& want = {});
+// `check_header`, where given, sees the attributes (and the size, no channel yet) before any pixel
+// is decoded; an error from it is returned as it is.
+Expected<ExrChannels> read_exr_channels(
+    const std::string& path, std::uint64_t max_bytes = 0,
+    const std::function<bool(const std::string&)>& want = {},
+    const std::function<Status(const ExrChannels&)>& check_header = {});
 // What a Penumbra EXR says it holds (stage_exr's `world`); "" for an EXR without it, another
 // format (a PFM cannot say) or a file that cannot be read.
 std::string image_world(const std::string& path);

@@ -1,5 +1,6 @@
 #include "spaceland/atlas/file.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -183,68 +184,81 @@ Status write_atlas(const std::string& path, const Baked& b, const Record& r) {
 }
 
 Expected<Baked> read_atlas(const std::string& path, const Scene& scene, std::uint64_t max_bytes,
-                           Record& r, bool radiance) {
+                           Record& r, bool radiance, int bounces) {
+  nlohmann::json charts;
+  int side0 = 0;
+  // The header first, before any pixel is decoded: what the file is, for which scene and bounces.
+  auto check_header = [&](const io::ExrChannels& img) -> Status {
+    const std::string* world = img.attribute("penumbra");
+    if (!world || *world != kWorld)
+      return damaged(path, "not a Penumbra surface atlas (its header's `penumbra` attribute is " +
+                               (world ? "'" + *world + "'" : std::string("missing")) +
+                               "); make one with `penumbra bake`");
+    const std::string* version = img.attribute("penumbra.version");
+    if (!version || *version != std::to_string(kVersion))
+      return damaged(path, "an atlas of version " + (version ? *version : std::string("?")) +
+                               ", this build reads version " + std::to_string(kVersion) +
+                               "; bake it again");
+    const std::string* rec = img.attribute("penumbra.record");
+    const std::string* chart_list = img.attribute("penumbra.charts");
+    if (!rec || !chart_list) return damaged(path, "the atlas's header lacks its record or charts");
+    try {
+      const nlohmann::json j = nlohmann::json::parse(*rec);
+      r.texel_size = j.at("texel_size").get<float>();
+      r.gutter = j.at("gutter").get<int>();
+      r.max_angle = j.at("max_angle").get<float>();
+      r.directions = j.at("directions").get<int>();
+      r.interval = j.at("interval").get<float>();
+      r.cascades = j.at("cascades").get<int>();
+      r.bounces = j.at("bounces").get<int>();
+      r.light_exponent = j.at("light_exponent").get<int>();
+      charts = nlohmann::json::parse(*chart_list);
+      if (!charts.is_array()) throw std::runtime_error("the chart list is no array");
+      for (const nlohmann::json& c : charts)
+        if (!c.is_object() || !c.at("kind").is_string())
+          throw std::runtime_error("a chart is no object with a kind");
+    } catch (const std::exception& e) {
+      return damaged(path, std::string("the atlas's header is damaged: ") + e.what());
+    }
+    for (int side = 2; side <= 64; side *= 2)
+      if (side * side == r.directions) side0 = side;
+    if (side0 == 0 || !(r.texel_size > 0) || !std::isfinite(r.texel_size) || r.bounces < 1 ||
+        r.bounces > 64 || r.light_exponent < 0 || r.light_exponent > 512)
+      return damaged(path, "the atlas's record is damaged: " + *rec);
+    const std::string* hash = img.attribute("penumbra.scene_hash");
+    const std::uint64_t ours = scene_hash(scene);
+    if (!hash || *hash != hex(ours))
+      return damaged(path, "baked for another scene (its scene hash " +
+                               (hash ? *hash : std::string("is missing")) + ", " + scene.source +
+                               "'s " + hex(ours) +
+                               ": the geometry, materials, sky or sun differ); bake one for it: "
+                               "penumbra bake " +
+                               scene.source + " -o ATLAS.exr --bounces " +
+                               std::to_string(r.bounces) + " --directions " +
+                               std::to_string(r.directions));
+    r.scene_hash = ours;
+    if (bounces > 0 && r.bounces != bounces)
+      return damaged(path, "baked with " + std::to_string(r.bounces) + " bounce(s), asked for " +
+                               std::to_string(bounces) + ": pass --bounces " +
+                               std::to_string(r.bounces) + " or bake it again");
+    return {};
+  };
   // Half the limit for the decoded channels: beside them the rebuilt charts, the texels and their
   // light (about as much again; with the radiance, its per-texel copy as much as its channels).
   Expected<io::ExrChannels> file = io::read_exr_channels(
       path, max_bytes / 2,
-      [&](const std::string& name) { return radiance || !name.starts_with("radiance."); });
+      [&](const std::string& name) { return radiance || !name.starts_with("radiance."); },
+      check_header);
   if (!file) return file.error();
   const io::ExrChannels& img = *file;
-  const std::string* world = img.attribute("penumbra");
-  if (!world || *world != kWorld)
-    return damaged(path, "not a Penumbra surface atlas (its header's `penumbra` attribute is " +
-                             (world ? "'" + *world + "'" : std::string("missing")) +
-                             "); make one with `penumbra bake`");
-  const std::string* version = img.attribute("penumbra.version");
-  if (!version || *version != std::to_string(kVersion))
-    return damaged(path, "an atlas of version " + (version ? *version : std::string("?")) +
-                             ", this build reads version " + std::to_string(kVersion) +
-                             "; bake it again");
-  const std::string* rec = img.attribute("penumbra.record");
-  const std::string* chart_list = img.attribute("penumbra.charts");
-  if (!rec || !chart_list) return damaged(path, "the atlas's header lacks its record or charts");
-  nlohmann::json charts;
-  try {
-    const nlohmann::json j = nlohmann::json::parse(*rec);
-    r.texel_size = j.at("texel_size").get<float>();
-    r.gutter = j.at("gutter").get<int>();
-    r.max_angle = j.at("max_angle").get<float>();
-    r.directions = j.at("directions").get<int>();
-    r.interval = j.at("interval").get<float>();
-    r.cascades = j.at("cascades").get<int>();
-    r.bounces = j.at("bounces").get<int>();
-    r.light_exponent = j.at("light_exponent").get<int>();
-    charts = nlohmann::json::parse(*chart_list);
-    if (!charts.is_array()) throw std::runtime_error("the chart list is no array");
-    for (const nlohmann::json& c : charts)
-      if (!c.is_object() || !c.at("kind").is_string())
-        throw std::runtime_error("a chart is no object with a kind");
-  } catch (const std::exception& e) {
-    return damaged(path, std::string("the atlas's header is damaged: ") + e.what());
-  }
-  int side0 = 0;
-  for (int side = 2; side <= 64; side *= 2)
-    if (side * side == r.directions) side0 = side;
-  if (side0 == 0 || !(r.texel_size > 0) || !std::isfinite(r.texel_size) || r.bounces < 1 ||
-      r.bounces > 64 || r.light_exponent < 0 || r.light_exponent > 512)
-    return damaged(path, "the atlas's record is damaged: " + *rec);
-  const std::string* hash = img.attribute("penumbra.scene_hash");
-  const std::uint64_t ours = scene_hash(scene);
-  if (!hash || *hash != hex(ours))
-    return damaged(path, "baked for another scene (its scene hash " +
-                             (hash ? *hash : std::string("is missing")) + ", " + scene.source +
-                             "'s " + hex(ours) +
-                             ": the geometry, materials, sky or sun differ); bake one for it: "
-                             "penumbra bake " +
-                             scene.source + " -o ATLAS.exr --bounces " + std::to_string(r.bounces) +
-                             " --directions " + std::to_string(r.directions));
-  r.scene_hash = ours;
 
   Options ao;
   ao.texel_size = r.texel_size;
   ao.gutter = r.gutter;
   ao.max_angle = r.max_angle;
+  // The atlas has the file's size: one that would not fit it is refused before it is built (a
+  // damaged texel size would otherwise grow millions of texels).
+  ao.max_side = std::max(img.width, img.height);
   Expected<Atlas> made = make_atlas(scene, ao);
   if (!made) return damaged(path, "its charts cannot be rebuilt: " + made.error().message);
   Baked out;

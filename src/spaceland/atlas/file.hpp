@@ -44,7 +44,9 @@ Status write_atlas(const std::string& path, const Baked& baked, const Record& re
 // damaged or truncated, was baked for another scene (hash), or its charts are not the ones this
 // build makes for the scene; or if decoding it would take more than `max_bytes`.
 // Without `radiance`, the directions' channels are not decoded (a view needs the irradiance).
+// With `bounces` > 0, an atlas baked with other bounces is refused too. The header is checked
+// before any pixel is decoded.
 Expected<Baked> read_atlas(const std::string& path, const Scene& scene, std::uint64_t max_bytes,
-                           Record& record, bool radiance = true);
+                           Record& record, bool radiance = true, int bounces = 0);
 
 }  // namespace penumbra::spaceland::atlas

@@ -149,12 +149,9 @@ Expected<ImageRgb> render(const SolveContext& ctx, const SurfaceOptions& o, Solv
   } else {
     Stopwatch watch;
     Record r;
-    baked = read_atlas(o.atlas, ctx.given ? *ctx.given : ctx.scene, ctx.max_memory, r, false);
+    baked = read_atlas(o.atlas, ctx.given ? *ctx.given : ctx.scene, ctx.max_memory, r, false,
+                       ctx.bounces);
     if (!baked) return baked.error();
-    if (r.bounces != ctx.bounces)
-      return Error{o.atlas + ": baked with " + std::to_string(r.bounces) +
-                   " bounce(s), asked for " + std::to_string(ctx.bounces) + ": pass --bounces " +
-                   std::to_string(r.bounces) + " or bake it again"};
     // The file holds the light at 2^-k of its scale; the view runs at 2^-light_exponent.
     scale(*baked, r.light_exponent - ctx.light_exponent);
     report.stages.push_back({"read atlas", watch.ms()});

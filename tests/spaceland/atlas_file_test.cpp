@@ -250,6 +250,17 @@ TEST(AtlasFile, RefusesAForeignDamagedOrMismatchedAtlas) {
   const std::string bytes = penumbra::testing::slurp(good);
   const std::string cut = dir.write("cut.exr", bytes.substr(0, bytes.size() / 2));
   refused(s, cut, 1, "EXR");
+  // An attribute claiming more bytes than the file holds (OpenEXR would allocate them first: a
+  // 2.4 KB file asked for 1.6 GB), and a channel list that does not end where its size says.
+  {
+    std::string damaged = bytes;
+    const std::string key = std::string("penumbra.record") + '\0' + "string" + '\0';
+    const std::size_t at = damaged.find(key);
+    ASSERT_NE(at, std::string::npos);
+    damaged.replace(at + key.size(), 4, std::string("\x00\x00\x02\x64", 4));
+    refused(s, dir.write("huge.exr", damaged), 1,
+            "damaged EXR header (attribute 'penumbra.record' claims 1677852672 bytes");
+  }
   // A value that cannot be light.
   Expected<io::ExrChannels> img = io::read_exr_channels(good);
   ASSERT_TRUE(img);

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "analysis/text.hpp"
+#include "core/fnv.hpp"
 
 namespace penumbra::study {
 
@@ -397,18 +398,14 @@ ImageRgb8 to_png_plot(const std::vector<Row>& rows, const std::string& title) {
 }
 
 std::uint64_t scene_hash(const Scene& scene) {
-  std::uint64_t h = 1469598103934665603ull;  // FNV-1a
-  auto bytes = [&](const void* p, std::size_t n) {
-    const unsigned char* c = static_cast<const unsigned char*>(p);
-    for (std::size_t i = 0; i < n; ++i) h = (h ^ c[i]) * 1099511628211ull;
-  };
-  bytes(&scene.width, sizeof scene.width);
-  bytes(&scene.height, sizeof scene.height);
-  bytes(&scene.environment, sizeof scene.environment);
-  bytes(scene.emission.data(), scene.emission.size() * sizeof(float));
-  bytes(scene.opacity.data(), scene.opacity.size() * sizeof(float));
-  bytes(scene.albedo.data(), scene.albedo.size() * sizeof(float));
-  return h;
+  Fnv1a f;
+  f.bytes(&scene.width, sizeof scene.width);
+  f.bytes(&scene.height, sizeof scene.height);
+  f.bytes(&scene.environment, sizeof scene.environment);
+  f.bytes(scene.emission.data(), scene.emission.size() * sizeof(float));
+  f.bytes(scene.opacity.data(), scene.opacity.size() * sizeof(float));
+  f.bytes(scene.albedo.data(), scene.albedo.size() * sizeof(float));
+  return f.h;
 }
 
 }  // namespace penumbra::study

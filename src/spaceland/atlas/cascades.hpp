@@ -31,6 +31,14 @@ struct CascadeOptions {
   bool keep_radiance = false;
 };
 
+// The side of an equal-area map holding `directions` directions; 0 where it is no square of a
+// power of two in [2, 64].
+inline int side_of(int directions) {
+  for (int side = 2; side <= 64; side *= 2)
+    if (side * side == directions) return side;
+  return 0;
+}
+
 // What a bake derived and cost.
 struct BakeReport {
   int cascades = 0;

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "core/fnv.hpp"
 #include "io/image_io.hpp"
 
 namespace penumbra::spaceland::atlas {
@@ -16,24 +17,6 @@ namespace {
 constexpr const char* kWorld = "3d surface atlas";  // the "penumbra" attribute
 constexpr int kVersion = 1;
 constexpr float kHalfMax = 65504;  // the largest finite 16-bit float
-
-// 64-bit FNV-1a over the bytes it is fed.
-struct Fnv {
-  std::uint64_t h = 1469598103934665603ull;
-  void bytes(const void* p, std::size_t n) {
-    const auto* c = static_cast<const unsigned char*>(p);
-    for (std::size_t i = 0; i < n; ++i) h = (h ^ c[i]) * 1099511628211ull;
-  }
-  template <class T>
-  void value(const T& v) {
-    bytes(&v, sizeof v);
-  }
-  template <class T>
-  void array(const std::vector<T>& v) {
-    value(v.size());
-    if (!v.empty()) bytes(v.data(), v.size() * sizeof(T));
-  }
-};
 
 const char* kind_name(ChartKind k) {
   return k == ChartKind::disk ? "disk" : k == ChartKind::sphere ? "sphere" : "mesh";
@@ -45,9 +28,14 @@ std::string hex(std::uint64_t v) {
   return text;
 }
 
-// The channels of a side: "irradiance.front.R", ...
-std::string channel(const char* layer, const char* side, int c) {
-  return std::string(layer) + "." + side + "." + "RGB"[c];
+// The baked light's layers, each three channels ("irradiance.front.R", ...), and where they lie in
+// Baked, in the same order.
+constexpr const char* kLayers[] = {"irradiance.front", "irradiance.back", "sun.front", "sun.back"};
+constexpr std::vector<Rgb> Baked::*kLayerOf[] = {&Baked::front, &Baked::back, &Baked::sun_front,
+                                                 &Baked::sun_back};
+
+std::string channel(const char* layer, int c) {
+  return std::string(layer) + "." + "RGB"[c];
 }
 
 float& part(Rgb& v, int c) {
@@ -64,7 +52,7 @@ Error damaged(const std::string& path, const std::string& what) {
 }  // namespace
 
 std::uint64_t scene_hash(const Scene& s) {
-  Fnv f;
+  Fnv1a f;
   f.value(s.sky.zenith);
   f.value(s.sky.horizon);
   f.value(s.sky.ground);
@@ -154,15 +142,12 @@ Status write_atlas(const std::string& path, const Baked& b, const Record& r) {
     c.values.resize(n);
     for (std::size_t k = 0; k < n; ++k) c.values[k] = float(b.texels[k].chart);
   }
-  const std::vector<Rgb>* layers[] = {&b.front, &b.back, &b.sun_front, &b.sun_back};
-  const char* layer_names[][2] = {
-      {"irradiance", "front"}, {"irradiance", "back"}, {"sun", "front"}, {"sun", "back"}};
   for (int l = 0; l < 4; ++l)
     for (int c = 0; c < 3; ++c) {
       io::ExrChannel& ch = img.channels.emplace_back();
-      ch.name = channel(layer_names[l][0], layer_names[l][1], c);
+      ch.name = channel(kLayers[l], c);
       ch.values.resize(n);
-      for (std::size_t k = 0; k < n; ++k) ch.values[k] = part((*layers[l])[k], c);
+      for (std::size_t k = 0; k < n; ++k) ch.values[k] = part((b.*kLayerOf[l])[k], c);
     }
   if (b.side0 > 0) {
     const std::size_t nd = std::size_t(b.side0) * std::size_t(b.side0);
@@ -220,8 +205,7 @@ Expected<Baked> read_atlas(const std::string& path, const Scene& scene, std::uin
     } catch (const std::exception& e) {
       return damaged(path, std::string("the atlas's header is damaged: ") + e.what());
     }
-    for (int side = 2; side <= 64; side *= 2)
-      if (side * side == r.directions) side0 = side;
+    side0 = side_of(r.directions);
     if (side0 == 0 || !(r.texel_size > 0) || !std::isfinite(r.texel_size) || r.bounces < 1 ||
         r.bounces > 64 || r.light_exponent < 0 || r.light_exponent > 512)
       return damaged(path, "the atlas's record is damaged: " + *rec);
@@ -310,13 +294,9 @@ Expected<Baked> read_atlas(const std::string& path, const Scene& scene, std::uin
     }
     return {};
   };
-  std::vector<Rgb>* layers[] = {&out.front, &out.back, &out.sun_front, &out.sun_back};
-  const char* layer_names[][2] = {
-      {"irradiance", "front"}, {"irradiance", "back"}, {"sun", "front"}, {"sun", "back"}};
   for (int l = 0; l < 4; ++l)
     for (int c = 0; c < 3; ++c)
-      if (Status s = take(channel(layer_names[l][0], layer_names[l][1], c), *layers[l], c); !s)
-        return s.error();
+      if (Status s = take(channel(kLayers[l], c), out.*kLayerOf[l], c); !s) return s.error();
   // The directional data, where the file has it (one side0^2 map per texel).
   std::size_t radiance_channels = 0;
   for (const io::ExrChannel& c : img.channels) radiance_channels += c.name.starts_with("radiance.");

@@ -18,17 +18,6 @@
 #include "spaceland/surface.hpp"
 
 namespace penumbra::spaceland::atlas {
-namespace {
-
-// The side of an equal-area map holding `directions` directions; 0 where it is no square of a
-// power of two in range.
-int side_of(int directions) {
-  for (int side = 2; side <= 64; side *= 2)
-    if (side * side == directions) return side;
-  return 0;
-}
-
-}  // namespace
 
 Status check_options(const SurfaceOptions& o) {
   if (!(o.texel_size >= 0) || !std::isfinite(o.texel_size))

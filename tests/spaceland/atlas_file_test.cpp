@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <limits>
 #include <tuple>
 
@@ -261,52 +262,41 @@ TEST(AtlasFile, RefusesAForeignDamagedOrMismatchedAtlas) {
     refused(s, dir.write("huge.exr", damaged), 1,
             "damaged EXR header (attribute 'penumbra.record' claims 1677852672 bytes");
   }
+  // The good file read, changed by `change`, written as `name`: its path.
+  auto altered = [&](const std::string& name, const std::function<void(io::ExrChannels&)>& change) {
+    Expected<io::ExrChannels> img = io::read_exr_channels(good);
+    EXPECT_TRUE(img);
+    if (!img) return std::string();
+    change(*img);
+    const std::string path = dir.file(name);
+    Expected<io::StagedFile> staged = io::stage_exr_channels(path, *img);
+    EXPECT_TRUE(staged && io::publish(*staged));
+    return path;
+  };
+  auto without = [&](const std::string& channel) {
+    return altered("missing.exr", [&](io::ExrChannels& img) {
+      std::erase_if(img.channels, [&](const io::ExrChannel& c) { return c.name == channel; });
+    });
+  };
   // A value that cannot be light.
-  Expected<io::ExrChannels> img = io::read_exr_channels(good);
-  ASSERT_TRUE(img);
-  for (io::ExrChannel& c : img->channels)
-    if (c.name == "irradiance.front.G") {
-      for (std::size_t k = 0; k < c.values.size(); ++k)
-        if (c.values[k] > 0) {
-          c.values[k] = std::numeric_limits<float>::quiet_NaN();
-          break;
-        }
-    }
-  const std::string nan = dir.file("nan.exr");
-  Expected<io::StagedFile> staged = io::stage_exr_channels(nan, *img);
-  ASSERT_TRUE(staged && io::publish(*staged));
+  const std::string nan = altered("nan.exr", [](io::ExrChannels& img) {
+    for (io::ExrChannel& c : img.channels)
+      if (c.name == "irradiance.front.G") {
+        for (std::size_t k = 0; k < c.values.size(); ++k)
+          if (c.values[k] > 0) {
+            c.values[k] = std::numeric_limits<float>::quiet_NaN();
+            break;
+          }
+      }
+  });
   refused(s, nan, 1, "channel 'irradiance.front.G' holds nan");
   // A channel missing.
-  img = io::read_exr_channels(good);
-  ASSERT_TRUE(img);
-  img->channels.erase(
-      std::remove_if(img->channels.begin(), img->channels.end(),
-                     [](const io::ExrChannel& c) { return c.name == "sun.back.B"; }),
-      img->channels.end());
-  const std::string missing = dir.file("missing.exr");
-  staged = io::stage_exr_channels(missing, *img);
-  ASSERT_TRUE(staged && io::publish(*staged));
-  refused(s, missing, 1, "no channel 'sun.back.B'");
-  img = io::read_exr_channels(good);
-  ASSERT_TRUE(img);
-  img->channels.erase(std::remove_if(img->channels.begin(), img->channels.end(),
-                                     [](const io::ExrChannel& c) { return c.name == "chart"; }),
-                      img->channels.end());
-  staged = io::stage_exr_channels(missing, *img);
-  ASSERT_TRUE(staged && io::publish(*staged));
-  refused(s, missing, 1, "no channel 'chart'");
+  refused(s, without("sun.back.B"), 1, "no channel 'sun.back.B'");
+  refused(s, without("chart"), 1, "no channel 'chart'");
   // A radiance channel short of Q0's.
-  img = io::read_exr_channels(good);
-  ASSERT_TRUE(img);
-  img->channels.erase(
-      std::remove_if(img->channels.begin(), img->channels.end(),
-                     [](const io::ExrChannel& c) { return c.name == "radiance.15.B"; }),
-      img->channels.end());
-  staged = io::stage_exr_channels(missing, *img);
-  ASSERT_TRUE(staged && io::publish(*staged));
   atlas::Record record;
   const Expected<atlas::Baked> short_of =
-      atlas::read_atlas(missing, s, std::uint64_t(1) << 32, record);
+      atlas::read_atlas(without("radiance.15.B"), s, std::uint64_t(1) << 32, record);
   ASSERT_FALSE(short_of);
   EXPECT_NE(short_of.error().message.find("47 radiance channels, expected 48"), std::string::npos)
       << short_of.error().message;
@@ -318,16 +308,14 @@ TEST(AtlasFile, RefusesAForeignDamagedOrMismatchedAtlas) {
         {"penumbra.charts", "[{", "[7,{", "a chart is no object"},
         {"penumbra.record", "\"directions\":16", "\"directions\":2147483647",
          "record is damaged"}}) {
-    img = io::read_exr_channels(good);
-    ASSERT_TRUE(img);
-    for (auto& [name, value] : img->attributes)
-      if (name == key) {
-        ASSERT_NE(value.find(from), std::string::npos) << value;
-        value.replace(value.find(from), from.size(), to);
-      }
-    staged = io::stage_exr_channels(missing, *img);
-    ASSERT_TRUE(staged && io::publish(*staged));
-    refused(s, missing, 1, words);
+    const std::string header = altered("header.exr", [&](io::ExrChannels& img) {
+      for (auto& [name, value] : img.attributes)
+        if (name == key) {
+          ASSERT_NE(value.find(from), std::string::npos) << value;
+          value.replace(value.find(from), from.size(), to);
+        }
+    });
+    refused(s, header, 1, words);
   }
   // A bake refuses a path to read and a scene with fog, writing nothing.
   RenderOptions both = o;

@@ -1,5 +1,6 @@
 // penumbra: the command line. A thin front end over libpenumbra; each subcommand lives in its
-// own file (render_cmd, compare_cmd, quality_cmd, paint_cmd, bake_cmd).
+// own file (render_cmd, compare_cmd, quality_cmd, paint_cmd, bake_cmd,
+// field_cmd).
 // Exit codes: 0 success, 1 bad input or runtime failure, 2 usage error.
 #include <CLI/CLI.hpp>
 #include <algorithm>
@@ -10,6 +11,7 @@
 
 #include "bake_cmd.hpp"
 #include "compare_cmd.hpp"
+#include "field_cmd.hpp"
 #include "paint_cmd.hpp"
 #include "penumbra/penumbra.hpp"
 #include "quality_cmd.hpp"
@@ -87,6 +89,7 @@ int main(int argc, char** argv) {
   const std::unique_ptr<QualityCommand> quality = add_quality_command(app);
   const std::unique_ptr<PaintCommand> paint = add_paint_command(app);
   const std::unique_ptr<BakeCommand> bake = add_bake_command(app);
+  const std::unique_ptr<FieldCommand> field = add_field_command(app);
 
   try {
     app.parse(argc, argv);
@@ -102,5 +105,6 @@ int main(int argc, char** argv) {
   if (quality->parsed()) return run_quality(quality->args);
   if (paint->parsed()) return run_paint(paint->args);
   if (bake->parsed()) return run_bake(bake->args);
+  if (field->parsed()) return run_field(field->args);
   return kUsage;
 }

@@ -14,6 +14,7 @@
 #include "penumbra/image.hpp"
 #include "penumbra/io.hpp"
 #include "penumbra/progress.hpp"
+#include "penumbra/spaceland/field.hpp"
 #include "penumbra/spaceland/io.hpp"
 #include "penumbra/spaceland/render.hpp"
 #include "penumbra/spaceland/scene.hpp"

@@ -749,3 +749,52 @@ TEST_F(Cli3d, InterruptWritesTheSamplesSoFarAndATimeLimitStops) {
 }
 
 }  // namespace
+
+// `penumbra field`: the direct radiance field renderer bakes a window's cascades and views them
+// from the scene's camera and turned ones, each against the path tracer where asked; a bad
+// window or too little memory is refused with nothing written.
+TEST_F(Cli3d, FieldViewsAWindowFromTurnedCamerasAgainstThePathTracer) {
+  const std::string window = "-1.5,-0.5,1.5,0,2.5,0,3,0,0";  // cross(u, v) = -z: the scene
+  auto r = run({"field", scene_, "--window", window, "-o", out("f.png"), "--texels", "8", "--spp",
+                "2", "--views", "2", "--reference", "4", "--json"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["probes_u"], 7);  // 2.5 / (3 / 8), rounded
+  EXPECT_EQ(j["probes_v"], 8);
+  EXPECT_GE(j["parameters"]["cascades"].get<int>(), 2);
+  EXPECT_TRUE(j["parameters"]["lead_in"].get<bool>());
+  ASSERT_EQ(j["views"].size(), 2u);
+  for (const auto& v : j["views"]) {
+    EXPECT_GT(v["window_pixels"].get<int>(), 50);
+    EXPECT_TRUE(std::isfinite(v["relative_rmse"].get<double>()));
+  }
+  for (const char* f : {"f.png", "f.reference.png", "f.view1.png", "f.view1.reference.png"})
+    EXPECT_TRUE(fs::exists(out(f))) << f;
+
+  // Text mode names each view.
+  r = run({"field", scene_, "--window", window, "-o", out("g.pfm"), "--texels", "4", "--spp", "1",
+           "--no-lead-in"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("view 0:"), std::string::npos) << r.out;
+  const penumbra::Expected<penumbra::ImageRgb> g = penumbra::read_rgb_image(out("g.pfm"));
+  ASSERT_TRUE(g);
+  EXPECT_EQ(g->width(), 16);
+
+  fs::remove_all(tmp_.root() / "out");
+  fs::create_directories(tmp_.root() / "out");
+  r = run({"field", scene_, "--window", "1,2,3", "-o", out("x.png")});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("--window: expected 9 comma-separated numbers"), std::string::npos) << r.err;
+  r = run({"field", scene_, "--window", "0,0,0,1,0,0,1,1,0", "-o", out("x.png")});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("--window: expected a rectangle"), std::string::npos) << r.err;
+  r = run({"field", scene_, "--window", window, "--directions", "8", "-o", out("x.png")});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("--directions"), std::string::npos) << r.err;
+  r = run({"field", scene_, "--window", window, "--max-memory", "64K", "-o", out("x.png")});
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("working memory"), std::string::npos) << r.err;
+  r = run({"field", scene_, "--window", window, "-o", out("x.txt")});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_TRUE(out_empty());
+}

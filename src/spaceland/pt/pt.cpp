@@ -38,10 +38,8 @@ float mis(float a, float b) {
 struct Context {
   const Scene& scene;
   const RayScene& rays;
-  const GBuffer& g;
   const Lights& lights;
   const Media& media;
-  Vec3 camera;
   int bounces;
 };
 
@@ -108,24 +106,25 @@ Rgb direct(const Context& ctx, const Vertex& v, const LightSample& ls, std::uint
   return f * ls.radiance * tr * (w / ls.pdf);
 }
 
-// One sample of the radiance arriving at the camera through pixel k.
-Rgb trace(const Context& ctx, std::size_t k, std::uint32_t pixel_seed, std::uint32_t sample,
-          std::vector<MediumPiece>& pieces, std::uint64_t& rays) {
+// One sample of the radiance arriving at `origin` along -dir, from the ray's first stretch
+// [0, t_end] (its first hit `hit` where `found`, within it) and the paths that scatter there: the
+// camera's ray through a pixel (t_end infinite), or one interval of a radiance field, where a
+// stretch that ends in empty space adds no sky (the next interval holds what lies past it).
+Rgb trace(const Context& ctx, Vec3 origin, Vec3 dir, Hit hit, bool found, float t_end,
+          std::uint32_t pixel_seed, std::uint32_t sample, std::vector<MediumPiece>& pieces,
+          std::uint64_t& rays) {
   auto point = [&](int vertex, Pair pair) {
     return sobol::sample_2d(sample, pixel_seed, std::uint32_t(vertex) * kPairs + pair);
   };
   Rgb L{}, beta{1, 1, 1};
-  Vec3 origin = ctx.camera, dir = ctx.g.directions[k];
-  Hit hit = ctx.g.hits[k];
-  bool found = ctx.g.found[k] != 0;
   float prev_pdf = 0;  // density the direction sampler gave to `dir` (0 from the camera)
   Vec3 prev_p = origin;
   for (int scatters = 0;; ++scatters) {
     Vertex v;
     bool scattered_in_fog = false;
     if (!ctx.media.empty()) {
-      const float t_end = found ? hit.t : kInf;
-      ctx.media.pieces(Ray{origin, dir, 0, t_end}, t_end, pieces);
+      const float t_stop = found ? hit.t : t_end;
+      ctx.media.pieces(Ray{origin, dir, 0, t_stop}, t_stop, pieces);
       if (!pieces.empty()) {
         L += beta * Media::emitted(pieces);
         if (scatters < ctx.bounces) {
@@ -138,11 +137,12 @@ Rgb trace(const Context& ctx, std::size_t k, std::uint32_t pixel_seed, std::uint
             v.p = origin + dir * ff.t;
           }
         } else {
-          beta *= ctx.media.transmittance(Ray{origin, dir, 0, kInf}, t_end);
+          beta *= ctx.media.transmittance(Ray{origin, dir, 0, kInf}, t_stop);
         }
       }
     }
     if (!scattered_in_fog) {
+      if (!found && t_end < kInf) break;  // the stretch ends before anything: no sky from it
       if (!found) {
         const Background& bg = ctx.lights.background();
         L += beta * bg.sky(dir);
@@ -195,6 +195,7 @@ Rgb trace(const Context& ctx, std::size_t k, std::uint32_t pixel_seed, std::uint
     ++rays;
     found = ctx.rays.intersect(Ray{origin, dir, 0, kInf}, hit);
     if (found) face_towards(hit, dir);
+    t_end = kInf;  // past the first vertex, every ray runs to its hit or the sky
     if (is_black(beta)) break;
   }
   return L;
@@ -202,13 +203,47 @@ Rgb trace(const Context& ctx, std::size_t k, std::uint32_t pixel_seed, std::uint
 
 }  // namespace
 
+SegmentTracer::SegmentTracer(const Scene& scene, const RayScene& rays, int bounces)
+    : scene_(scene), rays_(rays), lights_(scene), media_(scene), bounces_(bounces) {}
+
+Segment SegmentTracer::trace(Vec3 origin, Vec3 dir, float t_end, float lead, std::uint32_t seed,
+                             std::uint32_t sample, std::vector<MediumPiece>& pieces,
+                             std::uint64_t& rays) const {
+  const Context ctx{scene_, rays_, lights_, media_, bounces_};
+  Segment s;
+  Hit hit;
+  if (lead > 0) {
+    // A surface in the lead-in is the stretch's, opaque: the light leaving it towards the origin,
+    // with no fog before it (the stretches below hold that).
+    const Vec3 back = origin - dir * lead;
+    ++rays;
+    if (rays_.intersect(Ray{back, dir, 0, lead}, hit)) {
+      face_towards(hit, dir);
+      const Vec3 at = back + dir * hit.t;
+      hit.t = 0;
+      s.radiance = pt::trace(ctx, at, dir, hit, true, t_end, seed, sample, pieces, rays);
+      return s;
+    }
+  }
+  ++rays;
+  const bool found = rays_.intersect(Ray{origin, dir, 0, t_end}, hit);
+  if (found) face_towards(hit, dir);
+  s.radiance = pt::trace(ctx, origin, dir, hit, found, t_end, seed, sample, pieces, rays);
+  if (!found) {
+    s.transmittance =
+        media_.empty() ? Rgb{1, 1, 1} : media_.transmittance(Ray{origin, dir, 0, kInf}, t_end);
+  }
+  return s;
+}
+
 ImageRgb render(const SolveContext& in, const PtOptions& pt, SolveReport& report) {
   Stopwatch stage;
   const Scene& scene = in.scene;
   const GBuffer& g = in.g;
   const Lights lights(scene);
   const Media media(scene);
-  const Context ctx{scene, in.rays, g, lights, media, scene.camera.position, in.bounces};
+  const Context ctx{scene, in.rays, lights, media, in.bounces};
+  const Vec3 camera = scene.camera.position;
   const int w = g.width, h = g.height;
   const std::size_t n = std::size_t(w) * h;
   std::vector<double> sum(n * 3, 0.0);
@@ -240,7 +275,8 @@ ImageRgb render(const SolveContext& in, const PtOptions& pt, SolveReport& report
         const std::uint32_t pixel_seed = sobol::hash((std::uint64_t(seed) << 32) | k);
         double acc[3] = {sum[3 * k], sum[3 * k + 1], sum[3 * k + 2]};
         for (std::uint32_t s = s0; s < s1; ++s) {
-          const Rgb c = trace(ctx, k, pixel_seed, s, pieces, local_rays);
+          const Rgb c = trace(ctx, camera, g.directions[k], g.hits[k], g.found[k] != 0, kInf,
+                              pixel_seed, s, pieces, local_rays);
           // A sample that is not finite would poison the pixel; none is expected (every
           // division is guarded), and tests check that images stay finite.
           if (!std::isfinite(c.r) || !std::isfinite(c.g) || !std::isfinite(c.b)) continue;

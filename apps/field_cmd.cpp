@@ -12,6 +12,7 @@
 #include "parse.hpp"
 #include "penumbra/penumbra.hpp"
 #include "penumbra/spaceland/field.hpp"
+#include "render_options.hpp"
 
 namespace {
 
@@ -73,6 +74,29 @@ std::string as_flag(const std::string& message) {
   const std::size_t end = message.find('`', 1);
   if (message.empty() || message[0] != '`' || end == std::string::npos) return message;
   return "--" + message.substr(1, end - 1) + message.substr(end + 1);
+}
+
+// The covered pixels with no emitter seen within one pixel: a lamp's edge, seen through the
+// field at the resolution of the cascade that holds it, differs there by its whole emission.
+std::vector<std::uint8_t> away_from_emitters(const std::vector<std::uint8_t>& covered,
+                                             const std::vector<std::uint8_t>& emitter, int w,
+                                             int h) {
+  std::vector<std::uint8_t> out(covered);
+  if (emitter.size() != out.size()) return out;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const std::size_t k = std::size_t(y) * std::size_t(w) + std::size_t(x);
+      for (int dy = -1; dy <= 1 && out[k]; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const int u = x + dx, v = y + dy;
+          if (u >= 0 && u < w && v >= 0 && v < h &&
+              emitter[std::size_t(v) * std::size_t(w) + std::size_t(u)]) {
+            out[k] = 0;
+            break;
+          }
+        }
+    }
+  return out;
 }
 
 // "view.png" -> "view.<tag>.png".
@@ -139,6 +163,10 @@ std::unique_ptr<FieldCommand> add_field_command(CLI::App& app) {
                    "as .reference) and print the field's error against it (0: none)")
       ->check(CLI::Range(0, 1 << 20))
       ->capture_default_str();
+  field->add_option("--width", a.width, "The views' width (the camera's fov_y is kept)")
+      ->check(CLI::Range(1, sl::kMaxImageSide));
+  field->add_option("--height", a.height, "The views' height")
+      ->check(CLI::Range(1, sl::kMaxImageSide));
   field->add_option("--threads", f.threads, "Worker threads (0: all cores)")
       ->check(CLI::Range(0, 1024))
       ->capture_default_str();
@@ -173,14 +201,26 @@ int run_field(const FieldArgs& a) {
   }
 
   penumbra::Expected<sl::Scene> scene = sl::load_scene(a.scene, {o.max_memory});
-  if (!scene) return fail(kFailure, scene.error().message);
+  if (!scene) return fail(kFailure, with_flags(scene.error().message));
+  // --width and --height replace the camera's image size; fov_y stays.
+  if (a.width > 0) scene->camera.width = a.width;
+  if (a.height > 0) scene->camera.height = a.height;
+  // Every view (and its reference) is held until the files are written: refused up front.
+  const std::uint64_t pixels = std::uint64_t(scene->camera.width) * scene->camera.height;
+  const std::uint64_t views_bytes =
+      std::uint64_t(a.views) * (a.reference > 0 ? 2 : 1) * pixels * (3 * sizeof(float) + 1);
+  if (views_bytes + sl::estimate_field_memory(*scene, o) > o.max_memory)
+    return fail(kFailure,
+                a.scene + ": the field and its views need " +
+                    std::to_string((views_bytes + sl::estimate_field_memory(*scene, o)) >> 20) +
+                    " MiB of working memory, over the --max-memory limit");
   penumbra::Expected<sl::RadianceField> field = sl::RadianceField::bake(*scene, o);
-  if (!field) return fail(kFailure, a.scene + ": " + field.error().message);
+  if (!field) return fail(kFailure, a.scene + ": " + with_flags(field.error().message));
 
   struct Shown {
     sl::FieldView view, reference;
-    penumbra::ErrorMetrics error;
-    bool compared = false;
+    penumbra::ErrorMetrics error, lit;  // over the window's pixels; those seeing no emitter
+    bool compared = false, lit_compared = false;
   };
   std::vector<Shown> shown(std::size_t(a.views));
   for (int k = 0; k < a.views; ++k) {
@@ -196,6 +236,13 @@ int run_field(const FieldArgs& a) {
               penumbra::compare_images(s.view.radiance, s.reference.radiance, &s.view.covered)) {
         s.error = *e;
         s.compared = true;
+      }
+      const std::vector<std::uint8_t> lit =
+          away_from_emitters(s.view.covered, s.reference.sees_emitter, camera.width, camera.height);
+      if (penumbra::Expected<penumbra::ErrorMetrics> e =
+              penumbra::compare_images(s.view.radiance, s.reference.radiance, &lit)) {
+        s.lit = *e;
+        s.lit_compared = true;
       }
     }
   }
@@ -234,6 +281,7 @@ int run_field(const FieldArgs& a) {
         v["bias"] = s.error.bias;
         v["reference_mean"] = s.error.reference_mean;
       }
+      if (s.lit_compared) v["relative_rmse_without_emitters"] = s.lit.relative_rmse;
       views.push_back(v);
     }
     nlohmann::ordered_json j = {{"scene", a.scene},
@@ -271,6 +319,7 @@ int run_field(const FieldArgs& a) {
       if (s.compared)
         std::printf(", relative RMSE %.4f against the path tracer (%d spp, %.1f ms)",
                     s.error.relative_rmse, a.reference, s.reference.time_ms);
+      if (s.lit_compared) std::printf(", %.4f away from emitters", s.lit.relative_rmse);
       std::printf(" -> %s\n", paths[std::size_t(k * (a.reference > 0 ? 2 : 1))].c_str());
     }
   }

@@ -15,6 +15,7 @@ class App;
 
 struct FieldArgs {
   std::string scene, output, window;
+  int width = 0, height = 0;  // > 0: the views' size instead of the scene camera's
   penumbra::spaceland::FieldOptions field;
   int views = 1;
   int reference = 0;  // path-traced samples a pixel of each view's truth; 0: none

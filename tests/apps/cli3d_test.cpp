@@ -767,6 +767,7 @@ TEST_F(Cli3d, FieldViewsAWindowFromTurnedCamerasAgainstThePathTracer) {
   for (const auto& v : j["views"]) {
     EXPECT_GT(v["window_pixels"].get<int>(), 50);
     EXPECT_TRUE(std::isfinite(v["relative_rmse"].get<double>()));
+    EXPECT_TRUE(std::isfinite(v["relative_rmse_without_emitters"].get<double>()));
   }
   for (const char* f : {"f.png", "f.reference.png", "f.view1.png", "f.view1.reference.png"})
     EXPECT_TRUE(fs::exists(out(f))) << f;

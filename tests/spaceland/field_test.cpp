@@ -172,6 +172,7 @@ TEST(RadianceField, ReferenceViewIsThePathTracerFromTheWindow) {
     if (r->covered[k]) {
       ++n;
       EXPECT_NEAR(r->radiance.data()[3 * k] / want, 1.0, 0.03);
+      EXPECT_EQ(r->sees_emitter[k], 1);  // every wall emits
     }
   EXPECT_GT(n, 100u);
   EXPECT_GT(r->rays, 0u);

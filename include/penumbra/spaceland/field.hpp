@@ -56,6 +56,8 @@ struct FieldView {
   std::vector<std::uint8_t> covered;  // 1 where the pixel sees the window, row by row
   double time_ms = 0;
   std::uint64_t rays = 0;  // a reference view's path-traced rays (a field view traces none)
+  // A reference view's: 1 where the pixel's ray, from the window, first meets an emitter.
+  std::vector<std::uint8_t> sees_emitter;
 };
 
 class RadianceField {

@@ -22,6 +22,7 @@
 #include "spaceland/color.hpp"
 #include "spaceland/embree/ray_scene.hpp"
 #include "spaceland/pt/pt.hpp"
+#include "spaceland/surface.hpp"
 
 namespace penumbra::spaceland {
 
@@ -452,8 +453,12 @@ Expected<FieldView> reference_view(const Scene& in, const Window& window, const 
   FieldView v;
   v.radiance = ImageRgb(camera.width, camera.height);
   float* out = v.radiance.data();
+  v.sees_emitter.assign(std::size_t(camera.width) * std::size_t(camera.height), 0);
   for_each_window_pixel(
       Frame(window), camera, threads, v.covered, [&](std::size_t px, Vec3 p, Vec3 d, float, float) {
+        Hit first;
+        if (rays->intersect(Ray{p, d, 0, kInf}, first))
+          v.sees_emitter[px] = !is_black(emission_at(scene, first));
         const std::uint32_t pixel_seed = sobol::hash((std::uint64_t(base) << 32) | px);
         std::vector<MediumPiece> pieces;
         std::uint64_t local = 0;

@@ -125,6 +125,31 @@ TEST(RadianceField, AbsorbingFogGivesBeerLambertThroughTheIntervals) {
   EXPECT_LT(worst, 0.06);
 }
 
+// A small emitting quad (Le 1) far behind a window, off its axis: the field holds it in its
+// direction and nowhere else, from a one-probe window (every cascade's probe on the window's
+// centre) and from a window of 5 x 5 probes (cascades of 3, 2 and 1 probes a side).
+TEST(RadianceField, AnEmitterIsSeenInItsDirectionOnly) {
+  Scene s;
+  s.camera = camera({0, 0, -1}, {0, 0, 0}, 8, 8);
+  add_quad(s, {0.75f, 0.25f, 3}, {0, 0.5f, 0}, {0.5f, 0, 0},
+           add_material(s, {0, 0, 0}, {1, 1, 1}));
+  for (int texels : {1, 5}) {
+    FieldOptions o = small(Window{{-0.05f, -0.05f, 0}, {0.1f, 0, 0}, {0, 0.1f, 0}}, 1, 16);
+    o.texels = texels;
+    o.directions = 1024;
+    Expected<RadianceField> f = RadianceField::bake(s, o);
+    ASSERT_TRUE(f) << f.error().message;
+    EXPECT_GE(f->options().cascades, 3);
+    for (float st : {0.2f, 0.5f, 0.9f}) {
+      // The quad spans 9 degrees; these look 1-2 degrees inside its edges, or far outside.
+      EXPECT_NEAR(f->radiance(st, st, normalize(Vec3{1, 0.5f, 3})).r, 1.0f, 0.02f) << texels;
+      EXPECT_NEAR(f->radiance(st, st, normalize(Vec3{1.15f, 0.62f, 3})).r, 1.0f, 0.02f) << texels;
+      for (Vec3 d : {Vec3{-1, 0.5f, 3}, Vec3{1, -0.5f, 3}, Vec3{0.5f, 1, 3}, Vec3{0, 0, 1}})
+        EXPECT_EQ(f->radiance(st, st, normalize(d)).r, 0.0f) << texels;
+    }
+  }
+}
+
 TEST(RadianceField, SameBitsOnOneAndTwoThreads) {
   const Scene s = furnace(true, 8, 6);
   FieldOptions o = small(furnace_window(), 2, 4);

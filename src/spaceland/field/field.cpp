@@ -85,15 +85,19 @@ Taps taps(float c, int n) {
   return {std::clamp(i, 0, n - 1), std::clamp(i + 1, 0, n - 1), f - fl};
 }
 
+// One direction of one probe: the interval's radiance and its transmittance.
+struct Cell {
+  Rgb L{}, T{};
+};
+
 struct Cascade {
   int nu = 0, nv = 0, side = 0;
-  float spacing = 0;  // cascade-0 texels between its probes
   float start = 0, end = 0;
   // Where its lead-in begins: the interval below's start (docs/METHODS.md, "The direct radiance
   // field"): a surface between there and `start` is this interval's, opaque.
   float lead_from = 0;
-  std::vector<Rgb> L,
-      T;  // per probe (row by row), per direction (row by row): radiance, transmittance
+  // Per probe (row by row), per direction (row by row): a view reads a cell's two together.
+  std::vector<Cell> cells;
 };
 
 }  // namespace
@@ -112,8 +116,8 @@ struct RadianceField::Impl {
   // (a, b): 2 x 2 probes times 2 x 2 directions.
   void lookup(int i, float s, float t, float a, float b, Rgb& L, Rgb& T) const {
     const Cascade& k = c[std::size_t(i)];
-    const Taps x = taps(s * float(nu0) / k.spacing, k.nu);
-    const Taps y = taps(t * float(nv0) / k.spacing, k.nv);
+    const Taps x = taps(s * float(k.nu), k.nu);
+    const Taps y = taps(t * float(k.nv), k.nv);
     const Taps da = taps((a + 1) * 0.5f * float(k.side), k.side);
     const Taps db = taps((b + 1) * 0.5f * float(k.side), k.side);
     const std::size_t q = std::size_t(k.side) * std::size_t(k.side);
@@ -134,8 +138,8 @@ struct RadianceField::Impl {
             if (w == 0) continue;
             const std::size_t at =
                 probe * q + std::size_t(vb[jb]) * std::size_t(k.side) + std::size_t(ua[ja]);
-            L += k.L[at] * w;
-            T += k.T[at] * w;
+            L += k.cells[at].L * w;
+            T += k.cells[at].T * w;
           }
       }
   }
@@ -223,7 +227,6 @@ std::vector<Cascade> plan(const Scene& scene, const FieldOptions& o, int& nu0, i
     k.nu = (nu0 + step - 1) / step;
     k.nv = (nv0 + step - 1) / step;
     k.side = l.side(i);
-    k.spacing = float(step);
     k.start = l.interval_start(i);
     k.lead_from = o.lead_in && i > 0 ? l.interval_start(i - 1) : k.start;
     k.end = l.interval_end(i);
@@ -291,8 +294,7 @@ Expected<RadianceField> RadianceField::bake(const Scene& in, const FieldOptions&
     Cascade& c = impl->c[i];
     const std::size_t q = std::size_t(c.side) * std::size_t(c.side);
     const std::size_t cells = std::size_t(c.nu) * std::size_t(c.nv) * q;
-    c.L.assign(cells, Rgb{});
-    c.T.assign(cells, Rgb{});
+    c.cells.assign(cells, Cell{});
     impl->memory += cascade_bytes(c);
     const std::uint32_t cascade_seed = sobol::hash((std::uint64_t(base) << 32) | i);
     const float length = c.end - c.start;
@@ -303,9 +305,10 @@ Expected<RadianceField> RadianceField::bake(const Scene& in, const FieldOptions&
         const std::size_t probe = std::size_t(row) / std::size_t(c.side);
         const int vb = row % c.side;
         const int px = int(probe % std::size_t(c.nu)), py = int(probe / std::size_t(c.nu));
-        // The probe sits at the centre of its 2^i x 2^i block of cascade-0 texels.
-        const Vec3 p = f.at((float(px) + 0.5f) * c.spacing / float(impl->nu0),
-                            (float(py) + 0.5f) * c.spacing / float(impl->nv0));
+        // Cascade i's ceil(n0 / 2^i) probes a side split the window evenly (2^i texels apart
+        // where 2^i divides n0), each at the centre of its part, so that every probe stands on
+        // the window and reading needs no other layout.
+        const Vec3 p = f.at((float(px) + 0.5f) / float(c.nu), (float(py) + 0.5f) / float(c.nv));
         std::vector<MediumPiece> pieces;
         std::uint64_t local = 0;
         for (int ua = 0; ua < c.side; ++ua) {
@@ -331,8 +334,8 @@ Expected<RadianceField> RadianceField::bake(const Scene& in, const FieldOptions&
             sum[5] += g.transmittance.b;
           }
           const double inv = 1.0 / o.spp;
-          c.L[at] = Rgb{float(sum[0] * inv), float(sum[1] * inv), float(sum[2] * inv)};
-          c.T[at] = Rgb{float(sum[3] * inv), float(sum[4] * inv), float(sum[5] * inv)};
+          c.cells[at] = Cell{Rgb{float(sum[0] * inv), float(sum[1] * inv), float(sum[2] * inv)},
+                             Rgb{float(sum[3] * inv), float(sum[4] * inv), float(sum[5] * inv)}};
         }
         ray_count.fetch_add(local, std::memory_order_relaxed);
       });
@@ -436,7 +439,7 @@ Expected<FieldView> reference_view(const Scene& in, const Window& window, const 
   if (!k) return k.error();
   const std::uint64_t pixels = std::uint64_t(camera.width) * std::uint64_t(camera.height);
   const std::uint64_t need =
-      RayScene::estimate_bytes(in) + pixels * (sizeof(Rgb) + 1) + (*k > 0 ? scene_bytes(in) : 0);
+      RayScene::estimate_bytes(in) + pixels * (sizeof(Rgb) + 2) + (*k > 0 ? scene_bytes(in) : 0);
   if (need > max_memory)
     return Error{"the reference view needs " + std::to_string(need >> 20) +
                  " MiB of working memory, over the limit of " + std::to_string(max_memory >> 20) +

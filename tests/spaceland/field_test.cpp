@@ -131,12 +131,12 @@ TEST(RadianceField, AbsorbingFogGivesBeerLambertThroughTheIntervals) {
 TEST(RadianceField, AnEmitterIsSeenInItsDirectionOnly) {
   Scene s;
   s.camera = camera({0, 0, -1}, {0, 0, 0}, 8, 8);
-  add_quad(s, {0.75f, 0.25f, 3}, {0, 0.5f, 0}, {0.5f, 0, 0},
-           add_material(s, {0, 0, 0}, {1, 1, 1}));
+  add_quad(s, {0.75f, 0.25f, 3}, {0, 0.5f, 0}, {0.5f, 0, 0}, add_material(s, {0, 0, 0}, {1, 1, 1}));
   for (int texels : {1, 5}) {
     FieldOptions o = small(Window{{-0.05f, -0.05f, 0}, {0.1f, 0, 0}, {0, 0.1f, 0}}, 1, 16);
     o.texels = texels;
     o.directions = 1024;
+    o.cascades = 4;  // a one-probe window would otherwise derive one cascade
     Expected<RadianceField> f = RadianceField::bake(s, o);
     ASSERT_TRUE(f) << f.error().message;
     EXPECT_GE(f->options().cascades, 3);
@@ -178,6 +178,18 @@ TEST(RadianceField, EveryCascadeHoldsTheSameMemory) {
   ASSERT_EQ(m.size(), 4u);
   for (std::uint64_t b : m) EXPECT_EQ(b, m[0]);
   EXPECT_EQ(m[0], 16u * 16u * 16u * 2 * sizeof(Rgb));
+}
+
+// A window far smaller than the scene derives cascades only until one probe spans it: past that
+// a cascade would add directions alone, at 4x the memory each.
+TEST(RadianceField, ASmallWindowStopsAtOneProbe) {
+  const Scene s = furnace(false, 8, 6);
+  FieldOptions o = small(Window{{0, 0, 0.2f}, {1e-3f, 0, 0}, {0, 1e-3f, 0}}, 1, 1);
+  Expected<RadianceField> f = RadianceField::bake(s, o);
+  ASSERT_TRUE(f) << f.error().message;
+  EXPECT_EQ(f->options().cascades, 4);  // 8, 4, 2 and 1 probes a side
+  const std::vector<std::uint64_t> m = f->store_bytes();
+  for (std::uint64_t b : m) EXPECT_EQ(b, m[0]);
 }
 
 // The reference is the path tracer from where each pixel crosses the window: the enclosure's
@@ -231,6 +243,9 @@ TEST(RadianceField, RefusesBadOptionsNamingThem) {
   o = small(w, 1, 1);
   o.max_memory = 1 << 10;
   refused(o, "working memory");
+  o = small(w, 1, 1);
+  o.cascades = 12;  // a top map of 4 x 2^11 a side
+  refused(o, "4096 a side");
   // The estimate is what the bake holds: stores, ray tracer, scene.
   o = small(w, 1, 1);
   EXPECT_GT(estimate_field_memory(s, o), 0u);

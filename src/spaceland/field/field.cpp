@@ -159,6 +159,17 @@ struct RadianceField::Impl {
   }
 };
 
+namespace {
+
+// The most cascades whose top map stays within 4096 a side (16.7 M directions a probe).
+int most_cascades(int side0) {
+  int n = 1;
+  while (n < cascade::kMaxCascades && (side0 << n) <= 4096) ++n;
+  return n;
+}
+
+}  // namespace
+
 Status check_field_options(const FieldOptions& o) {
   const Window& w = o.window;
   const auto finite = [](Vec3 p) {
@@ -179,8 +190,11 @@ Status check_field_options(const FieldOptions& o) {
                  std::to_string(o.directions)};
   if (!(o.interval >= 0) || !std::isfinite(o.interval))
     return Error{"`interval`: expected a finite value >= 0"};
-  if (o.cascades < 0 || o.cascades > cascade::kMaxCascades)
-    return Error{"`cascades`: expected 0.." + std::to_string(cascade::kMaxCascades) + ", found " +
+  if (const int most = most_cascades(atlas::side_of(o.directions));
+      atlas::side_of(o.directions) && (o.cascades < 0 || o.cascades > most))
+    return Error{"`cascades`: expected 0.." + std::to_string(most) + " at " +
+                 std::to_string(o.directions) +
+                 " directions (the top cascade's map at most 4096 a side), found " +
                  std::to_string(o.cascades)};
   if (o.spp < 1 || o.spp > 1 << 20)
     return Error{"`spp`: expected 1..1048576, found " + std::to_string(o.spp)};
@@ -218,7 +232,14 @@ std::vector<Cascade> plan(const Scene& scene, const FieldOptions& o, int& nu0, i
         reach = std::max(reach, std::sqrt(dot(gap, gap)));
       }
   }
-  l.count = o.cascades > 0 ? o.cascades : cascade::count_to_reach(l, reach, cascade::kMaxCascades);
+  // Past the cascade whose one probe spans the window, a cascade could only add directions, at
+  // 4x the memory and rays each: the derived count stops there (the top interval runs on to
+  // infinity anyway), so a small window's bake stays M_0 a cascade whatever the scene's size.
+  int single = 1;
+  while ((1 << (single - 1)) < std::max(nu0, nv0)) ++single;
+  l.count = o.cascades > 0
+                ? o.cascades
+                : cascade::count_to_reach(l, reach, std::min(single, most_cascades(l.side0)));
   t0 = l.t0;
   std::vector<Cascade> out(std::size_t(l.count));
   for (int i = 0; i < l.count; ++i) {

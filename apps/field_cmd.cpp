@@ -207,13 +207,17 @@ int run_field(const FieldArgs& a) {
   if (a.height > 0) scene->camera.height = a.height;
   // Every view (and its reference) is held until the files are written: refused up front.
   const std::uint64_t pixels = std::uint64_t(scene->camera.width) * scene->camera.height;
+  // A view: its image and coverage; a reference also marks the emitters, and the comparison
+  // makes one more mask.
   const std::uint64_t views_bytes =
-      std::uint64_t(a.views) * (a.reference > 0 ? 2 : 1) * pixels * (3 * sizeof(float) + 1);
-  if (views_bytes + sl::estimate_field_memory(*scene, o) > o.max_memory)
-    return fail(kFailure,
-                a.scene + ": the field and its views need " +
-                    std::to_string((views_bytes + sl::estimate_field_memory(*scene, o)) >> 20) +
-                    " MiB of working memory, over the --max-memory limit");
+      std::uint64_t(a.views) * pixels *
+      ((3 * sizeof(float) + 1) + (a.reference > 0 ? 3 * sizeof(float) + 3 : 0));
+  const std::uint64_t need =
+      views_bytes + sl::estimate_field_memory(*scene, o) + sl::scene_bytes(*scene);
+  if (need > o.max_memory)
+    return fail(kFailure, a.scene + ": the field, the scene and the views need " +
+                              std::to_string(need >> 20) +
+                              " MiB of working memory, over the --max-memory limit");
   penumbra::Expected<sl::RadianceField> field = sl::RadianceField::bake(*scene, o);
   if (!field) return fail(kFailure, a.scene + ": " + with_flags(field.error().message));
 
@@ -226,7 +230,11 @@ int run_field(const FieldArgs& a) {
   for (int k = 0; k < a.views; ++k) {
     Shown& s = shown[std::size_t(k)];
     const sl::Camera camera = view_camera(scene->camera, o.window, k);
-    s.view = field->view(camera, o.threads);
+    penumbra::Expected<sl::FieldView> view = field->view(camera, o.threads);
+    if (!view)
+      return fail(kFailure, a.scene + ": view " + std::to_string(k) + ": " +
+                                with_flags(view.error().message));
+    s.view = std::move(*view);
     if (a.reference > 0) {
       penumbra::Expected<sl::FieldView> ref = sl::reference_view(
           *scene, o.window, camera, a.reference, o.bounces, o.seed + 1, o.threads, o.max_memory);

@@ -71,10 +71,12 @@ class RadianceField {
   RadianceField& operator=(RadianceField&&) noexcept;
   ~RadianceField();
 
-  // The field seen through the camera (its width and height): no ray is traced.
-  FieldView view(const Camera& camera, int threads = 0) const;
-  // The light the field holds at window point (s, t) from direction `towards` (pointing behind
-  // the window, unit length; one pointing in front reads the grazing directions).
+  // The field seen through the camera (its width and height): no ray is traced. Refused: a
+  // camera the format would refuse (its size 1..kMaxImageSide, finite, fov_y in (0, 180)).
+  Expected<FieldView> view(const Camera& camera, int threads = 0) const;
+  // The light the field holds at window point (s, t) (clamped to [0, 1]) from direction
+  // `towards` (pointing behind the window, unit length; one pointing in front reads the
+  // horizon's directions); black for values that are not finite.
   Rgb radiance(float s, float t, Vec3 towards) const;
 
   // What the bake derived and cost.

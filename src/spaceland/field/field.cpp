@@ -35,12 +35,14 @@ struct Frame {
   Vec3 corner, x, y, n;
   float len_u = 0, len_v = 0;
 
-  explicit Frame(const Window& w)
-      : corner(w.corner),
-        x(normalize(w.u)),
-        y(normalize(w.v)),
-        len_u(length(w.u)),
-        len_v(length(w.v)) {
+  // In double: an edge of 1e-23 squares to nothing in float (check_field_options bounds them).
+  explicit Frame(const Window& w) : corner(w.corner) {
+    const D3 u = d3(w.u), v = d3(w.v);
+    const double lu = std::sqrt(dot(u, u)), lv = std::sqrt(dot(v, v));
+    len_u = float(lu);
+    len_v = float(lv);
+    x = f3((1 / lu) * u);
+    y = f3((1 / lv) * v);
     n = normalize(cross(x, y));
   }
   Vec3 at(float s, float t) const { return corner + x * (s * len_u) + y * (t * len_v); }
@@ -65,7 +67,8 @@ struct Frame {
 std::array<float, 2> hemi_encode(Vec3 local) {
   local.z = std::max(local.z, 0.0f);  // a direction in front of the window reads the horizon
   const float len = length(local);
-  const std::array<float, 2> e = octahedral::encode(len > 0 ? local / len : Vec3{0, 0, 1});
+  // Straight out of the window (-n) has no nearest horizon direction: it reads one of them.
+  const std::array<float, 2> e = octahedral::encode(len > 0 ? local / len : Vec3{1, 0, 0});
   return {std::clamp(e[0] + e[1], -1.0f, 1.0f), std::clamp(e[0] - e[1], -1.0f, 1.0f)};
 }
 
@@ -177,10 +180,15 @@ Status check_field_options(const FieldOptions& o) {
   };
   if (!finite(w.corner) || !finite(w.u) || !finite(w.v))
     return Error{"`window`: expected finite numbers"};
+  // Its corners within the format's coordinates (Embree's ray origins, squared distances).
+  for (const Vec3 p : {w.corner, w.corner + w.u, w.corner + w.v, w.corner + w.u + w.v})
+    if (!finite(p) || std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}) > kMaxCoordinate)
+      return Error{"`window`: its corners must lie within +-" + std::to_string(kMaxCoordinate) +
+                   " on each axis"};
   const D3 u = d3(w.u), v = d3(w.v);
   const double lu = std::sqrt(dot(u, u)), lv = std::sqrt(dot(v, v));
-  if (!(lu > 0) || !(lv > 0) || !std::isfinite(lu * lv))
-    return Error{"`window`: its edges u and v must have a non-zero, finite length"};
+  if (!(lu >= 1e-30) || !(lv >= 1e-30))
+    return Error{"`window`: its edges u and v must be at least 1e-30 long"};
   if (std::abs(dot(u, v)) > 1e-4 * lu * lv)
     return Error{"`window`: expected a rectangle, its edges u and v at right angles"};
   if (o.texels < 1 || o.texels > 4096)
@@ -188,8 +196,9 @@ Status check_field_options(const FieldOptions& o) {
   if (atlas::side_of(o.directions) == 0)
     return Error{"`directions`: expected 4, 16, 64, 256, 1024 or 4096, found " +
                  std::to_string(o.directions)};
-  if (!(o.interval >= 0) || !std::isfinite(o.interval))
-    return Error{"`interval`: expected a finite value >= 0"};
+  if (!(o.interval >= 0) || !(o.interval <= kMaxCoordinate))
+    return Error{"`interval`: expected 0.." + std::to_string(kMaxCoordinate) + ", found " +
+                 std::to_string(o.interval)};
   if (const int most = most_cascades(atlas::side_of(o.directions));
       atlas::side_of(o.directions) && (o.cascades < 0 || o.cascades > most))
     return Error{"`cascades`: expected 0.." + std::to_string(most) + " at " +
@@ -220,23 +229,29 @@ std::vector<Cascade> plan(const Scene& scene, const FieldOptions& o, int& nu0, i
   l.side_step = 1;
   l.interval_step = 2;
   l.t0 = o.interval > 0 ? o.interval : 2 * texel;
-  // The intervals reach from the window to the farthest corner of the scene.
-  const Bounds b = scene_bounds(scene);
+  // The intervals reach from the window to the farthest corner of the surfaces and fog boxes.
   double reach = 0;
-  for (int k = 0; k < 8; ++k) {
-    const Vec3 corner{(k & 1) ? b.hi.x : b.lo.x, (k & 2) ? b.hi.y : b.lo.y,
-                      (k & 4) ? b.hi.z : b.lo.z};
+  auto reach_to = [&](Vec3 corner) {
     for (float s : {0.0f, 1.0f})
       for (float t : {0.0f, 1.0f}) {
         const D3 gap = d3(corner) - d3(f.at(s, t));
         reach = std::max(reach, std::sqrt(dot(gap, gap)));
       }
-  }
-  // Past the cascade whose one probe spans the window, a cascade could only add directions, at
-  // 4x the memory and rays each: the derived count stops there (the top interval runs on to
-  // infinity anyway), so a small window's bake stays M_0 a cascade whatever the scene's size.
+  };
+  const Bounds b = scene_bounds(scene);
+  for (int k = 0; k < 8; ++k)
+    reach_to({(k & 1) ? b.hi.x : b.lo.x, (k & 2) ? b.hi.y : b.lo.y, (k & 4) ? b.hi.z : b.lo.z});
+  for (const Medium& m : scene.media)
+    for (int k = 0; k < 8; ++k)
+      reach_to(m.center + m.axes[0] * ((k & 1) ? m.half_size.x : -m.half_size.x) +
+               m.axes[1] * ((k & 2) ? m.half_size.y : -m.half_size.y) +
+               m.axes[2] * ((k & 4) ? m.half_size.z : -m.half_size.z));
+  // Past the cascade whose probes span the window's shorter side in one, a cascade would halve
+  // the probes along one side only while it quadruples the directions: the derived count stops
+  // there (the top interval runs on to infinity anyway), so the cascades keep M_i = M_0 (up to
+  // rounding the probe counts up) whatever the scene's size.
   int single = 1;
-  while ((1 << (single - 1)) < std::max(nu0, nv0)) ++single;
+  while ((1 << (single - 1)) < std::min(nu0, nv0)) ++single;
   l.count = o.cascades > 0
                 ? o.cascades
                 : cascade::count_to_reach(l, reach, std::min(single, most_cascades(l.side0)));
@@ -296,6 +311,10 @@ Expected<RadianceField> RadianceField::bake(const Scene& in, const FieldOptions&
   impl->c = plan(in, o, impl->nu0, impl->nv0, t0);
   impl->o.interval = t0;
   impl->o.cascades = int(impl->c.size());
+  if (!(impl->c.back().start <= kMaxCoordinate))
+    return Error{"`interval`: the top cascade would start " + std::to_string(impl->c.back().start) +
+                 " from the window, past the coordinates' limit of " +
+                 std::to_string(kMaxCoordinate) + " (a smaller interval or fewer cascades)"};
 
   const Scene dim = *k > 0 ? dimmed(in, *k) : Scene{};
   const Scene& scene = *k > 0 ? dim : in;
@@ -401,7 +420,24 @@ void for_each_window_pixel(const Frame& f, const Camera& camera, int threads,
 
 }  // namespace
 
-FieldView RadianceField::view(const Camera& camera, int threads) const {
+namespace {
+
+Status check_camera(const Camera& c) {
+  if (c.width < 1 || c.height < 1 || c.width > kMaxImageSide || c.height > kMaxImageSide)
+    return Error{"`camera`: width and height must be 1.." + std::to_string(kMaxImageSide)};
+  for (const Vec3 p : {c.position, c.look_at, c.up})
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+      return Error{"`camera`: expected finite numbers"};
+  if (!(c.fov_y > 0 && c.fov_y < 180)) return Error{"`camera.fov_y`: expected (0, 180) degrees"};
+  return {};
+}
+
+}  // namespace
+
+Expected<FieldView> RadianceField::view(const Camera& camera, int threads) const {
+  if (Status s = check_camera(camera); !s) return s.error();
+  if (threads < 0 || threads > 1024)
+    return Error{"`threads`: expected 0..1024, found " + std::to_string(threads)};
   Stopwatch watch;
   FieldView v;
   v.radiance = ImageRgb(camera.width, camera.height);
@@ -415,7 +451,8 @@ FieldView RadianceField::view(const Camera& camera, int threads) const {
 }
 
 Rgb RadianceField::radiance(float s, float t, Vec3 towards) const {
-  return impl_->radiance(s, t, towards);
+  if (!std::isfinite(s + t) || !std::isfinite(towards.x + towards.y + towards.z)) return {};
+  return impl_->radiance(std::clamp(s, 0.0f, 1.0f), std::clamp(t, 0.0f, 1.0f), towards);
 }
 
 const FieldOptions& RadianceField::options() const {
@@ -455,7 +492,7 @@ Expected<FieldView> reference_view(const Scene& in, const Window& window, const 
   o.threads = threads;
   if (Status s = check_field_options(o); !s) return s.error();
   if (Status s = check_scene(in); !s) return s.error();
-  if (camera.width < 1 || camera.height < 1) return Error{"`camera`: expected a non-empty image"};
+  if (Status s = check_camera(camera); !s) return s.error();
   Expected<int> k = light_exponent(in, bounces);
   if (!k) return k.error();
   const std::uint64_t pixels = std::uint64_t(camera.width) * std::uint64_t(camera.height);

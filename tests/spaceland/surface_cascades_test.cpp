@@ -133,3 +133,68 @@ TEST(SurfaceCascades, RendersTheEnclosureOnAnyThreadCountAndRefusesFog) {
 
 }  // namespace
 }  // namespace penumbra::spaceland
+
+namespace penumbra::spaceland {
+namespace {
+
+using namespace penumbra::spaceland::testing;
+
+// Bilinear reading across seams (issue 39): a floor made of two quads that meet along x = 0 is
+// two charts with a seam where the surface goes on flat. Under a sphere light the irradiance
+// read within a texel of the seam follows the closed form pi Le (r/d)^2 cos(theta) as well as
+// it does elsewhere; seam links join the two charts there, and none is made along a box's
+// edges (a crease is no continuation).
+TEST(SurfaceCascades, SeamsWhereTheSurfaceGoesOnAreReadAcross) {
+  Scene s;
+  const std::uint32_t grey = add_material(s, {0.5f, 0.5f, 0.5f});
+  add_quad(s, {-2, 0, -2}, {0, 0, 4}, {2, 0, 0}, grey);          // x in [-2, 0], facing up
+  add_quad(s, {0, 0, -2}, {0, 0, 4}, {2, 0, 0}, grey);           // x in [0, 2]
+  add_box(s, {-1.5f, 0.4f, -1.5f}, {-1.2f, 0.7f, -1.2f}, grey);  // in the air: edges only
+  const Vec3 light{0.13f, 1.1f, 0.21f};
+  const float r = 0.2f, le = 20;
+  add_sphere(s, light, r, add_material(s, {0, 0, 0}, {le, le, le}));
+  s.camera = camera({0, 3, -3}, {0, 0, 0}, 8, 8);
+  Expected<RayScene> rays = RayScene::build(s);
+  ASSERT_TRUE(rays);
+  atlas::Options ao;
+  ao.texels = 16384;
+  atlas::CascadeOptions co;
+  co.side0 = 8;
+  atlas::BakeReport report;
+  atlas::Baked b = bake_ok(s, *rays, ao, co, report);
+  const atlas::Baked plain = b;
+  atlas::link_seams(s, *rays, b);
+  // Links join the floor's two charts along x = 0 and nothing else: no box edge is linked.
+  ASSERT_FALSE(b.seams.empty());
+  for (const atlas::Baked::SeamLink& l : b.seams) {
+    EXPECT_EQ(b.atlas.charts[l.from].kind, atlas::ChartKind::mesh);
+    EXPECT_LT(b.atlas.charts[l.from].shape, 2u) << "a box face linked";
+    EXPECT_LT(b.atlas.charts[l.chart].shape, 2u) << "linked to a box face";
+    EXPECT_NE(b.atlas.charts[l.from].shape, b.atlas.charts[l.chart].shape);
+  }
+  // The irradiance along the seam (x within a texel of 0) against the closed form.
+  const float ts = b.atlas.texel_size;
+  auto error = [&](const atlas::Baked& baked, float x0, float x1) {
+    double se = 0, sw = 0;
+    for (int i = 0; i <= 40; ++i)
+      for (int j = 0; j <= 20; ++j) {
+        const Vec3 p{x0 + (x1 - x0) * float(j) / 20, 0, -0.8f + 1.6f * float(i) / 40};
+        Hit h;
+        if (!rays->intersect(Ray{p + Vec3{0, 0.5f, 0}, {0, -1, 0}, 0, 1}, h)) continue;
+        const Vec3 to = light - p;
+        const double d = length(to), want = kPi * le * (r / d) * (r / d) * (to.y / d);
+        const double got = baked.irradiance_at(s, h, {0, 1, 0}).g;
+        se += (got - want) * (got - want);
+        sw += want * want;
+      }
+    return std::sqrt(se / sw);
+  };
+  const double at_seam = error(b, -ts, ts), at_seam_plain = error(plain, -ts, ts);
+  const double away = error(b, 0.3f, 0.3f + 2 * ts);
+  // Measured: 0.061 at the seam, 0.065 without the links, 0.089 on a stretch nearer the light.
+  EXPECT_LT(at_seam, 1.5 * away + 0.005);
+  EXPECT_LT(at_seam, 0.97 * at_seam_plain);
+}
+
+}  // namespace
+}  // namespace penumbra::spaceland

@@ -195,20 +195,12 @@ std::uint64_t bake_bytes(std::uint64_t texels, int side0) {
          texels * (sizeof(Texel) + 4 * sizeof(Rgb) + 2 * sizeof(Probe));
 }
 
-Rgb Baked::irradiance_at(const Scene& scene, const Hit& hit, Vec3 towards, bool with_sun) const {
-  std::uint32_t chart = 0;
-  const Uv uv = atlas.locate(scene, hit, chart);
+Rgb Baked::within(std::uint32_t chart, Uv uv, Vec3 towards, bool with_sun, float& weight) const {
   const float gx = uv.x - 0.5f, gy = uv.y - 0.5f;
   const int x0 = int(std::floor(gx)), y0 = int(std::floor(gy));
   const float fx = gx - float(x0), fy = gy - float(y0);
-  auto value = [&](std::size_t k) {
-    const bool f = dot(texels[k].normal, towards) >= 0;
-    Rgb e = f ? front[k] : back[k];
-    if (with_sun) e += f ? sun_front[k] : sun_back[k];
-    return e;
-  };
   Rgb sum{};
-  float weight = 0;
+  weight = 0;
   for (int j = 0; j < 2; ++j)
     for (int i = 0; i < 2; ++i) {
       const int x = x0 + i, y = y0 + j;
@@ -216,8 +208,51 @@ Rgb Baked::irradiance_at(const Scene& scene, const Hit& hit, Vec3 towards, bool 
       const std::size_t k = std::size_t(y) * std::size_t(atlas.width) + std::size_t(x);
       if (texels[k].chart != int(chart)) continue;
       const float w = (i ? fx : 1 - fx) * (j ? fy : 1 - fy);
-      sum += value(k) * w;
+      sum += light(k, towards, with_sun) * w;
       weight += w;
+    }
+  return sum;
+}
+
+Rgb Baked::light(std::size_t k, Vec3 towards, bool with_sun) const {
+  const bool f = dot(texels[k].normal, towards) >= 0;
+  Rgb e = f ? front[k] : back[k];
+  if (with_sun) e += f ? sun_front[k] : sun_back[k];
+  return e;
+}
+
+Rgb Baked::irradiance_at(const Scene& scene, const Hit& hit, Vec3 towards, bool with_sun) const {
+  std::uint32_t chart = 0;
+  const Uv uv = atlas.locate(scene, hit, chart);
+  const float gx = uv.x - 0.5f, gy = uv.y - 0.5f;
+  const int x0 = int(std::floor(gx)), y0 = int(std::floor(gy));
+  const float fx = gx - float(x0), fy = gy - float(y0);
+  auto value = [&](std::size_t k) { return light(k, towards, with_sun); };
+  Rgb sum{};
+  float weight = 0;
+  for (int j = 0; j < 2; ++j)
+    for (int i = 0; i < 2; ++i) {
+      const int x = x0 + i, y = y0 + j;
+      if (x < 0 || y < 0 || x >= atlas.width || y >= atlas.height) continue;
+      const std::size_t k = std::size_t(y) * std::size_t(atlas.width) + std::size_t(x);
+      const float w = (i ? fx : 1 - fx) * (j ? fy : 1 - fy);
+      if (texels[k].chart == int(chart)) {
+        sum += value(k) * w;
+        weight += w;
+        continue;
+      }
+      // Past the rim: the light where the surface goes on, read in its own chart.
+      if (seams.empty() || texels[k].chart >= 0 || !(w > 0)) continue;
+      const auto link =
+          std::lower_bound(seams.begin(), seams.end(), std::uint32_t(k),
+                           [](const SeamLink& l, std::uint32_t key) { return l.texel < key; });
+      if (link == seams.end() || link->texel != k || link->from != chart) continue;
+      float there = 0;
+      const Rgb e = within(link->chart, link->uv, towards, with_sun, there);
+      if (there > 0) {
+        sum += e * (w / there);
+        weight += w;
+      }
     }
   if (weight > 0) return sum * (1 / weight);
   // None of the four is the chart's (a point on a chart's rim): its nearest covered texel, within
@@ -235,6 +270,50 @@ Rgb Baked::irradiance_at(const Scene& scene, const Hit& hit, Vec3 towards, bool 
       nearest = value(k);
     }
   return nearest;
+}
+
+void link_seams(const Scene& scene, const RayScene& rays, Baked& b) {
+  const Atlas& a = b.atlas;
+  const float ts = a.texel_size;
+  const float cos_max = std::cos(45.0f * float(kPi) / 180);
+  std::vector<std::vector<Baked::SeamLink>> per_chart(a.charts.size());
+  parallel_for(int(a.charts.size()), [&](int id) {
+    const Chart& c = a.charts[std::size_t(id)];
+    const bool planar =
+        c.kind == ChartKind::disk || (c.kind == ChartKind::mesh && !c.from_lightmap);
+    if (!planar) return;
+    for (int y = std::max(0, c.y - 1); y < std::min(a.height, c.y + c.height + 1); ++y)
+      for (int x = std::max(0, c.x - 1); x < std::min(a.width, c.x + c.width + 1); ++x) {
+        const std::size_t k = std::size_t(y) * std::size_t(a.width) + std::size_t(x);
+        if (b.texels[k].chart >= 0) continue;
+        // The chart's covered texel beside it (the first of the 8): its normal, its side.
+        int rim = -1;
+        for (int dy = -1; dy <= 1 && rim < 0; ++dy)
+          for (int dx = -1; dx <= 1 && rim < 0; ++dx) {
+            const int u = x + dx, v = y + dy;
+            if ((dx || dy) && u >= 0 && v >= 0 && u < a.width && v < a.height &&
+                b.texels[std::size_t(v) * std::size_t(a.width) + std::size_t(u)].chart == id)
+              rim = v * a.width + u;
+          }
+        if (rim < 0) continue;
+        const Vec3 n = b.texels[std::size_t(rim)].normal;
+        // The empty texel's centre on the chart's plane, extended past its rim.
+        const float s = float(x - c.shift_x) + 0.5f, t = float(y - c.shift_y) + 0.5f;
+        const Vec3 q = c.origin + (c.u * s + c.v * t) * ts;
+        const float reach = 1.5f * ts;
+        Hit h;
+        if (!rays.intersect(Ray{q + n * reach, -n, 0, 2 * reach}, h)) continue;
+        if (dot(h.geometric_normal, n) < cos_max) continue;  // a crease, or a back face
+        std::uint32_t chart = 0;
+        const Uv uv = a.locate(scene, h, chart);
+        if (int(chart) == id) continue;
+        per_chart[std::size_t(id)].push_back({std::uint32_t(k), std::uint32_t(id), chart, uv});
+      }
+  });
+  b.seams.clear();
+  for (const auto& links : per_chart) b.seams.insert(b.seams.end(), links.begin(), links.end());
+  std::sort(b.seams.begin(), b.seams.end(),
+            [](const Baked::SeamLink& l, const Baked::SeamLink& r) { return l.texel < r.texel; });
 }
 
 Expected<Baked> bake(const Scene& scene, const RayScene& rays, const Options& atlas_options,

@@ -73,12 +73,37 @@ struct Baked {
   int side0 = 0;
   std::vector<Rgb> radiance;
 
+  // Where a chart's rim runs on into another chart over a smooth surface (link_seams): per
+  // empty texel beside a planar chart's covered ones, the point of the surface that continues
+  // the chart's plane there, in its own chart. Sorted by texel; empty: no lookup leaves its chart.
+  struct SeamLink {
+    std::uint32_t texel = 0;  // the empty texel, index y * width + x
+    std::uint32_t from = 0;   // the chart beside it
+    std::uint32_t chart = 0;  // where the surface continues, and its atlas coordinates there
+    Uv uv;
+  };
+  std::vector<SeamLink> seams;
+
   // The irradiance at a surface point on the side `towards` points to (minus the ray's
-  // direction), from the texels of its chart around it: bilinear over the covered ones, the
-  // nearest covered texel of the chart where none of the four is; the sun's share too where
+  // direction), from the texels around it: bilinear over the covered ones of its chart and, past
+  // its rim where a seam link continues it, over the other chart's light there; the nearest
+  // covered texel of the chart where none of the four counts; the sun's share too where
   // `with_sun`.
   Rgb irradiance_at(const Scene& scene, const Hit& hit, Vec3 towards, bool with_sun = true) const;
+
+ private:
+  // Bilinear over the covered texels of `chart` around uv; weight 0 where none of the four is.
+  Rgb within(std::uint32_t chart, Uv uv, Vec3 towards, bool with_sun, float& weight) const;
+  // Texel k's light on the side `towards` points to.
+  Rgb light(std::size_t k, Vec3 towards, bool with_sun) const;
 };
+
+// Links the empty texels along every planar chart's rim (mesh charts not made from lightmap UVs,
+// disks) to the surface that continues the chart there: the point a short ray along the rim
+// texel's normal meets within 1.5 texels of the chart's plane extended, on another chart, facing
+// within 45 degrees of the rim's normal (a crease, such as a box's edge, is no continuation).
+// docs/METHODS.md, "Across seams".
+void link_seams(const Scene& scene, const RayScene& rays, Baked& baked);
 
 // Bakes the scene's light into a new atlas (`atlas_options`). Errors: the atlas's, options out of
 // range, a store larger than `max_bytes`.

@@ -153,6 +153,9 @@ Expected<ImageRgb> render(const SolveContext& ctx, const SurfaceOptions& o, Solv
   }
 
   Stopwatch watch;
+  link_seams(ctx.scene, ctx.rays, *baked);
+  report.stages.push_back({"seams", watch.ms()});
+  watch.restart();
   const Background bg(ctx.scene);
   const SunLight sun(ctx.scene, ctx.rays, ctx.sun_rays);
   ImageRgb img = shade_pixels(

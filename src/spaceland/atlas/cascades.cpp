@@ -195,24 +195,25 @@ std::uint64_t bake_bytes(std::uint64_t texels, int side0) {
          texels * (sizeof(Texel) + 4 * sizeof(Rgb) + 2 * sizeof(Probe));
 }
 
-Rgb Baked::within(std::uint32_t chart, Uv uv, Vec3 towards, bool with_sun, float& weight) const {
+namespace {
+
+// Calls f(k, w) for each of the (up to) four texels of the atlas around uv, with its bilinear
+// weight.
+template <class F>
+void for_each_tap(const Atlas& a, Uv uv, F&& f) {
   const float gx = uv.x - 0.5f, gy = uv.y - 0.5f;
   const int x0 = int(std::floor(gx)), y0 = int(std::floor(gy));
   const float fx = gx - float(x0), fy = gy - float(y0);
-  Rgb sum{};
-  weight = 0;
   for (int j = 0; j < 2; ++j)
     for (int i = 0; i < 2; ++i) {
       const int x = x0 + i, y = y0 + j;
-      if (x < 0 || y < 0 || x >= atlas.width || y >= atlas.height) continue;
-      const std::size_t k = std::size_t(y) * std::size_t(atlas.width) + std::size_t(x);
-      if (texels[k].chart != int(chart)) continue;
-      const float w = (i ? fx : 1 - fx) * (j ? fy : 1 - fy);
-      sum += light(k, towards, with_sun) * w;
-      weight += w;
+      if (x < 0 || y < 0 || x >= a.width || y >= a.height) continue;
+      f(std::size_t(y) * std::size_t(a.width) + std::size_t(x),
+        (i ? fx : 1 - fx) * (j ? fy : 1 - fy));
     }
-  return sum;
 }
+
+}  // namespace
 
 Rgb Baked::light(std::size_t k, Vec3 towards, bool with_sun) const {
   const bool f = dot(texels[k].normal, towards) >= 0;
@@ -221,42 +222,41 @@ Rgb Baked::light(std::size_t k, Vec3 towards, bool with_sun) const {
   return e;
 }
 
+Rgb Baked::within(std::uint32_t chart, Uv uv, Vec3 towards, bool with_sun, float& weight) const {
+  Rgb sum{};
+  weight = 0;
+  for_each_tap(atlas, uv, [&](std::size_t k, float w) {
+    if (texels[k].chart != int(chart)) return;
+    sum += light(k, towards, with_sun) * w;
+    weight += w;
+  });
+  return sum;
+}
+
 Rgb Baked::irradiance_at(const Scene& scene, const Hit& hit, Vec3 towards, bool with_sun) const {
   std::uint32_t chart = 0;
   const Uv uv = atlas.locate(scene, hit, chart);
-  const float gx = uv.x - 0.5f, gy = uv.y - 0.5f;
-  const int x0 = int(std::floor(gx)), y0 = int(std::floor(gy));
-  const float fx = gx - float(x0), fy = gy - float(y0);
-  auto value = [&](std::size_t k) { return light(k, towards, with_sun); };
-  Rgb sum{};
   float weight = 0;
-  for (int j = 0; j < 2; ++j)
-    for (int i = 0; i < 2; ++i) {
-      const int x = x0 + i, y = y0 + j;
-      if (x < 0 || y < 0 || x >= atlas.width || y >= atlas.height) continue;
-      const std::size_t k = std::size_t(y) * std::size_t(atlas.width) + std::size_t(x);
-      const float w = (i ? fx : 1 - fx) * (j ? fy : 1 - fy);
-      if (texels[k].chart == int(chart)) {
-        sum += value(k) * w;
-        weight += w;
-        continue;
-      }
-      // Past the rim: the light where the surface goes on, read in its own chart.
-      if (seams.empty() || texels[k].chart >= 0 || !(w > 0)) continue;
+  Rgb sum = within(chart, uv, towards, with_sun, weight);
+  // Past the rim: the light where the surface goes on, read in its own chart.
+  if (!seams.empty())
+    for_each_tap(atlas, uv, [&](std::size_t k, float w) {
+      if (texels[k].chart >= 0 || !(w > 0)) return;
       const auto link =
           std::lower_bound(seams.begin(), seams.end(), std::uint32_t(k),
                            [](const SeamLink& l, std::uint32_t key) { return l.texel < key; });
-      if (link == seams.end() || link->texel != k || link->from != chart) continue;
+      if (link == seams.end() || link->texel != k || link->from != chart) return;
       float there = 0;
       const Rgb e = within(link->chart, link->uv, towards, with_sun, there);
       if (there > 0) {
         sum += e * (w / there);
         weight += w;
       }
-    }
+    });
   if (weight > 0) return sum * (1 / weight);
-  // None of the four is the chart's (a point on a chart's rim): its nearest covered texel, within
+  // None of the four counts (a point on a chart's rim): its chart's nearest covered texel, within
   // the 2.5 texels locate() keeps to.
+  const int x0 = int(std::floor(uv.x - 0.5f)), y0 = int(std::floor(uv.y - 0.5f));
   float best = 3e38f;
   Rgb nearest{};
   for (int y = y0 - 2; y <= y0 + 3; ++y)
@@ -267,7 +267,7 @@ Rgb Baked::irradiance_at(const Scene& scene, const Hit& hit, Vec3 towards, bool 
       const float dx = float(x) + 0.5f - uv.x, dy = float(y) + 0.5f - uv.y;
       if (dx * dx + dy * dy >= best) continue;
       best = dx * dx + dy * dy;
-      nearest = value(k);
+      nearest = light(k, towards, with_sun);
     }
   return nearest;
 }

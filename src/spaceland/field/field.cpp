@@ -15,6 +15,7 @@
 #include "core/parallel.hpp"
 #include "core/sobol.hpp"
 #include "core/timer.hpp"
+#include "io/json_reader.hpp"
 #include "spaceland/atlas/cascades.hpp"
 #include "spaceland/brightness.hpp"
 #include "spaceland/camera.hpp"
@@ -22,6 +23,7 @@
 #include "spaceland/color.hpp"
 #include "spaceland/embree/ray_scene.hpp"
 #include "spaceland/pt/pt.hpp"
+#include "spaceland/scene/check.hpp"
 #include "spaceland/surface.hpp"
 
 namespace penumbra::spaceland {
@@ -182,7 +184,7 @@ Status check_field_options(const FieldOptions& o) {
     return Error{"`window`: expected finite numbers"};
   // Its corners within the format's coordinates (Embree's ray origins, squared distances).
   for (const Vec3 p : {w.corner, w.corner + w.u, w.corner + w.v, w.corner + w.u + w.v})
-    if (!finite(p) || std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}) > kMaxCoordinate)
+    if (!inside_world(p))
       return Error{"`window`: its corners must lie within +-" + std::to_string(kMaxCoordinate) +
                    " on each axis"};
   const D3 u = d3(w.u), v = d3(w.v);
@@ -277,14 +279,24 @@ std::uint64_t cascade_bytes(const Cascade& k) {
 
 }  // namespace
 
+namespace {
+
+// What a bake of these cascades holds: the ray tracer, every store, and a dimmed copy of the
+// scene where its light is scaled (exponent > 0).
+std::uint64_t held_bytes(const Scene& scene, const std::vector<Cascade>& cascades, int exponent) {
+  std::uint64_t bytes = RayScene::estimate_bytes(scene) + (exponent > 0 ? scene_bytes(scene) : 0);
+  for (const Cascade& k : cascades) bytes += cascade_bytes(k);
+  return bytes;
+}
+
+}  // namespace
+
 std::uint64_t estimate_field_memory(const Scene& scene, const FieldOptions& o) {
   if (!check_field_options(o)) return 0;
   int nu0 = 0, nv0 = 0;
   float t0 = 0;
-  std::uint64_t bytes = RayScene::estimate_bytes(scene);
-  for (const Cascade& k : plan(scene, o, nu0, nv0, t0)) bytes += cascade_bytes(k);
-  if (Expected<int> e = light_exponent(scene, o.bounces); e && *e > 0) bytes += scene_bytes(scene);
-  return bytes;
+  const Expected<int> e = light_exponent(scene, o.bounces);
+  return held_bytes(scene, plan(scene, o, nu0, nv0, t0), e ? *e : 0);
 }
 
 RadianceField::RadianceField(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
@@ -297,11 +309,6 @@ Expected<RadianceField> RadianceField::bake(const Scene& in, const FieldOptions&
   if (Status s = check_scene(in); !s) return s.error();
   Expected<int> k = light_exponent(in, o.bounces);
   if (!k) return k.error();
-  const std::uint64_t need = estimate_field_memory(in, o) + scene_bytes(in);
-  if (need > o.max_memory)
-    return Error{"the radiance field needs " + std::to_string(need >> 20) +
-                 " MiB of working memory, over the limit of " + std::to_string(o.max_memory >> 20) +
-                 " MiB (fewer texels, directions or cascades need less)"};
   Stopwatch total;
   auto impl = std::make_unique<Impl>();
   impl->o = o;
@@ -309,6 +316,11 @@ Expected<RadianceField> RadianceField::bake(const Scene& in, const FieldOptions&
   impl->light_exponent = *k;
   float t0 = 0;
   impl->c = plan(in, o, impl->nu0, impl->nv0, t0);
+  const std::uint64_t need = held_bytes(in, impl->c, *k) + scene_bytes(in);
+  if (need > o.max_memory)
+    return Error{"the radiance field needs " + std::to_string(need >> 20) +
+                 " MiB of working memory, over the limit of " + std::to_string(o.max_memory >> 20) +
+                 " MiB (fewer texels, directions or cascades need less)"};
   impl->o.interval = t0;
   impl->o.cascades = int(impl->c.size());
   if (!(impl->c.back().start <= kMaxCoordinate))
@@ -322,7 +334,7 @@ Expected<RadianceField> RadianceField::bake(const Scene& in, const FieldOptions&
   Expected<RayScene> rays = RayScene::build(scene, o.max_memory);
   if (!rays) return rays.error();
   impl->stages.push_back({"ray tracer", watch.ms()});
-  impl->memory = RayScene::estimate_bytes(scene) + (*k > 0 ? scene_bytes(scene) : 0);
+  impl->memory = held_bytes(scene, impl->c, *k);
 
   const pt::SegmentTracer tracer(scene, *rays, o.bounces);
   const std::uint32_t base = sobol::hash(o.seed);
@@ -335,7 +347,6 @@ Expected<RadianceField> RadianceField::bake(const Scene& in, const FieldOptions&
     const std::size_t q = std::size_t(c.side) * std::size_t(c.side);
     const std::size_t cells = std::size_t(c.nu) * std::size_t(c.nv) * q;
     c.cells.assign(cells, Cell{});
-    impl->memory += cascade_bytes(c);
     const std::uint32_t cascade_seed = sobol::hash((std::uint64_t(base) << 32) | i);
     const float length = c.end - c.start;
     // Blocks of one probe's row of directions: enough tasks for the top cascade's few probes.
@@ -422,20 +433,20 @@ void for_each_window_pixel(const Frame& f, const Camera& camera, int threads,
 
 namespace {
 
-Status check_camera(const Camera& c) {
-  if (c.width < 1 || c.height < 1 || c.width > kMaxImageSide || c.height > kMaxImageSide)
-    return Error{"`camera`: width and height must be 1.." + std::to_string(kMaxImageSide)};
-  for (const Vec3 p : {c.position, c.look_at, c.up})
-    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
-      return Error{"`camera`: expected finite numbers"};
-  if (!(c.fov_y > 0 && c.fov_y < 180)) return Error{"`camera.fov_y`: expected (0, 180) degrees"};
+// The format's camera rules (check_camera), as a Status.
+Status camera_ok(const Camera& c) {
+  try {
+    check_camera("camera", c);
+  } catch (const io::JsonFailure& f) {
+    return Error{f.message};
+  }
   return {};
 }
 
 }  // namespace
 
 Expected<FieldView> RadianceField::view(const Camera& camera, int threads) const {
-  if (Status s = check_camera(camera); !s) return s.error();
+  if (Status s = camera_ok(camera); !s) return s.error();
   if (threads < 0 || threads > 1024)
     return Error{"`threads`: expected 0..1024, found " + std::to_string(threads)};
   Stopwatch watch;
@@ -492,7 +503,7 @@ Expected<FieldView> reference_view(const Scene& in, const Window& window, const 
   o.threads = threads;
   if (Status s = check_field_options(o); !s) return s.error();
   if (Status s = check_scene(in); !s) return s.error();
-  if (Status s = check_camera(camera); !s) return s.error();
+  if (Status s = camera_ok(camera); !s) return s.error();
   Expected<int> k = light_exponent(in, bounces);
   if (!k) return k.error();
   const std::uint64_t pixels = std::uint64_t(camera.width) * std::uint64_t(camera.height);

@@ -48,6 +48,11 @@ std::unique_ptr<BakeCommand> add_bake_command(CLI::App& app) {
                    "About how many texels the atlas gives the surfaces, where --texel-size is 0")
       ->check(CLI::Range(std::uint64_t(64), std::uint64_t(1) << 28))
       ->capture_default_str();
+  bake->add_option("--refine", a.surface.refine,
+                   "Texels up to 2^N times finer towards the lights, under 1/16 of the distance "
+                   "to the nearest (0: one texel size)")
+      ->check(CLI::Range(0, 10))
+      ->capture_default_str();
   bake->add_option("--directions", a.surface.directions,
                    "Q0: cascade 0's directions over the sphere (4, 16, 64, ... 4096)")
       ->capture_default_str();
@@ -119,6 +124,7 @@ int run_bake(const BakeArgs& a) {
                                 {"parameters",
                                  {{"texel_size", r->used.texel_size},
                                   {"texels", r->used.texels},
+                                  {"refine", r->used.refine},
                                   {"directions", r->used.directions},
                                   {"interval", r->used.interval},
                                   {"cascades", r->used.cascades},
@@ -136,10 +142,12 @@ int run_bake(const BakeArgs& a) {
   } else if (!a.quiet) {
     std::printf(
         "penumbra %s: %s (3D) baked: %dx%d atlas, %zu charts (%zu from lightmap UVs), %llu "
-        "texels on surfaces; texel %g, Q0 %d, t0 %g, %d cascades, %d bounce(s)\n",
+        "texels on surfaces; texel %g (down to 1/%d towards the lights), Q0 %d, t0 %g, %d "
+        "cascades, %d bounce(s)\n",
         penumbra::kVersion, a.scene.c_str(), r->width, r->height, r->charts, r->lightmap_charts,
-        static_cast<unsigned long long>(r->covered), double(r->used.texel_size), r->used.directions,
-        double(r->used.interval), r->used.cascades, options.bounces);
+        static_cast<unsigned long long>(r->covered), double(r->used.texel_size),
+        1 << r->used.refine, r->used.directions, double(r->used.interval), r->used.cascades,
+        options.bounces);
     std::printf("  %-24s %9.1f ms\n", "load scene", load_ms);
     for (const sl::StageTime& s : r->stages)
       std::printf("  %-24s %9.1f ms\n", s.name.c_str(), s.ms);

@@ -480,6 +480,12 @@ std::unique_ptr<RenderCommand> add_render_command(CLI::App& app) {
                      "--texel-size is 0")
         ->check(CLI::Range(std::uint64_t(64), std::uint64_t(1) << 28))
         ->capture_default_str();
+    render
+        ->add_option("--refine", a.surface.refine,
+                     "3D surface: texels up to 2^N times finer towards the lights, under 1/16 of "
+                     "the distance to the nearest (0: one texel size)")
+        ->check(CLI::Range(0, 10))
+        ->capture_default_str();
     render->add_option("--atlas", a.surface.atlas,
                        "3D surface: view from this atlas (made by `penumbra bake` for the same "
                        "scene and --bounces) instead of baking: no cascade is traced");

@@ -233,6 +233,7 @@ const std::pair<const char*, const char*> kFlags[] = {
     {"`ssrc.gather_normal`", "--gather-normal"},
     {"`surface.texel_size`", "--texel-size"},
     {"`surface.texels`", "--texels"},
+    {"`surface.refine`", "--refine"},
     {"`surface.atlas`", "--atlas"},
     {"`surface.directions`", "--directions"},
     {"`surface.interval`", "--interval"},

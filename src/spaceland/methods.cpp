@@ -244,13 +244,9 @@ Expected<ImageRgb> ssrc_solve_gpu(const SolveContext& ctx, const RenderOptions& 
 
 // ---- surface: surface radiance cascades (seed 001 section 2.5.3) ----
 
-constexpr const char* kSurfaceOptions[] = {"surface.texel_size",
-                                           "surface.texels",
-                                           "surface.directions",
-                                           "surface.interval",
-                                           "surface.cascades",
-                                           "surface.atlas",
-                                           "sun_rays"};
+constexpr const char* kSurfaceOptions[] = {
+    "surface.texel_size", "surface.texels",   "surface.refine", "surface.directions",
+    "surface.interval",   "surface.cascades", "surface.atlas",  "sun_rays"};
 
 Status surface_check(const RenderOptions& o) {
   return atlas::check_options(o.surface);
@@ -268,6 +264,7 @@ void surface_describe(const RenderResult& r, std::vector<Parameter>& p, std::str
   const SurfaceOptions& o = r.options.surface;
   p.push_back({"texel_size", double(o.texel_size)});
   p.push_back({"texels", std::int64_t(o.texels)});
+  p.push_back({"refine", std::int64_t(o.refine)});
   p.push_back({"directions", std::int64_t(o.directions)});
   p.push_back({"interval", double(o.interval)});
   p.push_back({"cascades", std::int64_t(o.cascades)});

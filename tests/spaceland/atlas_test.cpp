@@ -40,20 +40,24 @@ Scene load_ok(const fs::path& path) {
 
 // What every atlas must hold.
 void check_sound(const Scene& s, const Atlas& a, const std::vector<atlas::Texel>& texels) {
-  // Every triangle in exactly one chart, and that chart's list holds it.
+  // Every triangle in exactly one chart, and that chart's list holds it; or, in a chart split
+  // into tiles, in the tiles it meets.
   for (std::uint32_t mi = 0; mi < s.meshes.size(); ++mi) {
-    std::vector<int> listed(s.meshes[mi].triangles.size(), 0);
+    std::vector<int> listed(s.meshes[mi].triangles.size(), 0), tiled = listed;
     for (std::uint32_t c = 0; c < a.charts.size(); ++c) {
       const atlas::Chart& ch = a.charts[c];
       if (ch.kind != ChartKind::mesh || ch.shape != mi) continue;
       for (std::uint32_t k = ch.first; k < ch.first + ch.count; ++k) {
         const std::uint32_t t = a.chart_triangles[k];
-        ++listed[t];
-        EXPECT_EQ(a.triangle_chart[mi][t], c);
+        ++(ch.tile ? tiled : listed)[t];
+        if (ch.tile)
+          EXPECT_NE(a.triangle_chart[mi][t] & Atlas::kSplit, 0u);
+        else
+          EXPECT_EQ(a.triangle_chart[mi][t], c);
       }
     }
     for (std::size_t t = 0; t < listed.size(); ++t)
-      ASSERT_EQ(listed[t], 1) << "mesh " << mi << " triangle " << t;
+      ASSERT_EQ(listed[t] + (tiled[t] > 0), 1) << "mesh " << mi << " triangle " << t;
   }
   // The charts' rectangles, each with its gutter on every side, do not overlap and lie in the
   // atlas.
@@ -275,6 +279,75 @@ TEST(Atlas, AGltfFilesLightmapUvsMakeItsCharts) {
   const Atlas b = make_ok(*s, o);
   EXPECT_EQ(atlas::stats(*s, b, atlas::rasterise(*s, b)).lightmap_charts, 0u);
   EXPECT_EQ(b.charts.size(), 6u);
+}
+
+// Texels finer towards a light: a small light low over a quad ground (two triangles), by a disk
+// ground beside it, with a box. The grounds are split into tiles whose texels are under 1/16 of
+// their distance to the light, of the atlas's texel far from it; the atlas stays sound, every
+// point looks up its own surface, and a budget is kept within 2x. With refine 0 there is one
+// texel size and no tile.
+TEST(Atlas, TexelsFinerTowardsALightAreTilesThatStaySound) {
+  Scene s;
+  const std::uint32_t grey = add_material(s, {0.5f, 0.5f, 0.5f});
+  add_quad(s, {-20, 0, -20}, {0, 0, 40}, {40, 0, 0}, grey);
+  add_floor(s, 10, {0.5f, 0.5f, 0.5f});
+  s.disks.back().center = {10, 0.3f, -5};
+  add_box(s, {-0.5f, 0, -0.5f}, {0.5f, 0.5f, 0.5f}, grey);
+  const Vec3 light{-1, 0.5f, -5};
+  add_sphere(s, light, 0.05f, add_material(s, {}, {10, 10, 10}));
+  atlas::Options o;
+  o.texels = 1 << 16;
+  o.refine = 6;
+  const Atlas a = make_ok(s, o);
+  EXPECT_GE(a.refine, 4);
+  const std::vector<atlas::Texel> texels = atlas::rasterise(s, a);
+  check_sound(s, a, texels);
+  EXPECT_GT(check_lookups(s, a, texels, 400), 0.95);
+  std::uint64_t covered = 0;
+  for (const atlas::Texel& t : texels) covered += t.chart >= 0;
+  EXPECT_LT(covered, 2u * o.texels);
+  EXPECT_GT(covered, o.texels / 2);
+  // The texel of the chart where a point of a ground lies.
+  const auto texel_at = [&](Vec3 p, ShapeKind kind) {
+    Hit h;
+    h.kind = kind;
+    h.shape = 0;
+    h.position = p;
+    std::uint32_t chart = 0;
+    if (kind == ShapeKind::triangle)  // the quad's triangle that holds it
+      h.primitive = p.z - (-20) >= p.x - (-20) ? 0 : 1;
+    a.locate(s, h, chart);
+    return a.charts[chart].texel_size;
+  };
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> u(-1, 1);
+  for (int k = 0; k < 2000; ++k) {
+    const bool disk = k % 2;
+    const Vec3 p = disk ? Vec3{10 + 7 * u(rng), 0.3f, -5 + 7 * u(rng)}
+                        : Vec3{19.9f * u(rng), 0, 19.9f * u(rng)};
+    const float d = std::max(0.05f, length(p - light));
+    EXPECT_LE(texel_at(p, disk ? ShapeKind::disk : ShapeKind::triangle),
+              std::max(d / 16, a.texel_size / 64) * 1.0001f)
+        << p.x << ", " << p.y << ", " << p.z;
+  }
+  std::printf("atlas_test: texel %g; under the light %g, the quad's far corner %g, disk %g\n",
+              a.texel_size, texel_at({-1, 0, -5}, ShapeKind::triangle),
+              texel_at({19, 0, 19}, ShapeKind::triangle),
+              texel_at({19, 0.3f, -5}, ShapeKind::disk));
+  EXPECT_LE(texel_at({-1, 0, -5}, ShapeKind::triangle), a.texel_size / 8);
+  EXPECT_EQ(texel_at({19, 0, 19}, ShapeKind::triangle), a.texel_size);
+  EXPECT_EQ(texel_at({19, 0.3f, -5}, ShapeKind::disk), a.texel_size);
+  int tiles = 0;
+  for (const atlas::Chart& c : a.charts) tiles += c.tile;
+  EXPECT_GT(tiles, 8);
+
+  o.refine = 0;
+  const Atlas even = make_ok(s, o);
+  for (const atlas::Chart& c : even.charts) {
+    EXPECT_FALSE(c.tile);
+    EXPECT_EQ(c.texel_size, even.texel_size);
+  }
+  EXPECT_LT(even.texel_size, a.texel_size);
 }
 
 TEST(Atlas, RefusesWhatDoesNotFit) {

@@ -58,17 +58,21 @@ TEST(SurfaceCascades, EmittingEnclosureIsExactAtEveryBounce) {
 
 // A sphere light (radius 0.3, Le 30) 1 over a floor of radius 2 (albedo 0.5): the floor within
 // 1.5 of the point under the light reflects a Le (r/d)^2 cos(theta).
-double sphere_light_floor_error(int texels, int side0, atlas::BakeReport& report) {
+double sphere_light_floor_error(int texels, int side0, atlas::BakeReport& report,
+                                float floor_radius = 2, int refine = 0,
+                                atlas::Baked* kept = nullptr) {
   Scene s;
-  add_floor(s, 2, {0.5f, 0.5f, 0.5f});
+  add_floor(s, floor_radius, {0.5f, 0.5f, 0.5f});
   const Sphere light = add_sphere(s, {0.2f, 1, -0.1f}, 0.3f, add_material(s, {}, {30, 30, 30}));
   Expected<RayScene> rays = RayScene::build(s);
   EXPECT_TRUE(rays);
   atlas::Options ao;
   ao.texels = std::uint64_t(texels);
+  ao.refine = refine;
   atlas::CascadeOptions co;
   co.side0 = side0;
   const atlas::Baked b = bake_ok(s, *rays, ao, co, report);
+  if (kept) *kept = b;
   double sum2 = 0, sum = 0;
   int n = 0;
   for (float z = -1.5f; z <= 1.5f; z += 0.05f)
@@ -110,6 +114,37 @@ TEST(SurfaceCascades, FloorUnderASphereLightConvergesWithTheMaps) {
       EXPECT_LE(r->store_bytes[i], 2 * r->store_bytes[0]) << "cascade " << i;
       EXPECT_GE(2 * r->store_bytes[i], r->store_bytes[0]) << "cascade " << i;
     }
+}
+
+// A small light over a ground 15 times wider than the one above: a budget spread evenly over it
+// gives the light's pool texels as wide as the light is high; texels finer towards the light
+// (Options::refine) hold it with the same budget.
+TEST(SurfaceCascades, TexelsFinerTowardsALightHoldItsPoolOnAWideGround) {
+  atlas::BakeReport even_report, refined_report;
+  atlas::Baked refined_bake;
+  const double even = sphere_light_floor_error(1 << 14, 8, even_report, 30);
+  const double refined = sphere_light_floor_error(1 << 14, 8, refined_report, 30, 6, &refined_bake);
+  std::printf(
+      "surface_cascades_test: a sphere light over a floor of radius 30, rel. RMSE %.4g with one "
+      "texel size, %.4g refined\n",
+      even, refined);
+  EXPECT_LT(refined, 0.25 * even);
+  EXPECT_LT(refined, 0.15);
+  // The atlas's rectangles within twice the budget (the disk's square holds pi/4 of its texels
+  // uniform, all of them near the light: 2.5x the texels on the surface at most); the texel under
+  // the light at least 8 times finer than the ground's.
+  const atlas::Atlas& a = refined_bake.atlas;
+  std::uint64_t covered = 0;
+  for (const atlas::Texel& t : refined_bake.texels) covered += t.chart >= 0;
+  EXPECT_LT(covered, 5u << 13);
+  float finest = a.texel_size;
+  int tiles = 0;
+  for (const atlas::Chart& c : a.charts) {
+    finest = std::min(finest, c.texel_size);
+    tiles += c.tile;
+  }
+  EXPECT_LE(finest, a.texel_size / 8);
+  EXPECT_GT(tiles, 4);
 }
 
 // Through render(): the enclosure seen by the camera at 2 bounces, the same bits on 1 and 2

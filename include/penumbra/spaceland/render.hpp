@@ -189,9 +189,12 @@ struct SsrcOptions {
 struct SurfaceOptions {
   float texel_size = 0;             // world units a texel's side (0: from `texels`)
   std::uint64_t texels = 1u << 16;  // the surfaces' texels, about, where texel_size is 0
-  int directions = 64;              // Q0 over the sphere: the square of a power of two, 4..4096
-  float interval = 0;               // t0, world units (0: two texels)
-  int cascades = 0;                 // 0: until an interval spans the scene
+  // Texels up to 2^refine times finer towards the lights: under 1/16 of the distance to the
+  // nearest (0: one texel size). The coarsest texel grows to keep about `texels`.
+  int refine = 6;
+  int directions = 64;  // Q0 over the sphere: the square of a power of two, 4..4096
+  float interval = 0;   // t0, world units (0: two texels)
+  int cascades = 0;     // 0: until an interval spans the scene
   // A baked atlas to view from (bake() below, `penumbra bake`), made for this scene with the
   // same bounces: no cascade is traced and the options above come from the file. "": bake now.
   std::string atlas;

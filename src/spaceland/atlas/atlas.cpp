@@ -507,6 +507,193 @@ Status pack(Atlas& a, int max_side) {
   return {};
 }
 
+// Texels per unit of distance to the nearest light, at least, where Options::refine allows.
+constexpr double kLightTexels = 16;
+// A tile's side, in its own texels, past which a quadtree node whose texels are refined is split
+// (the finest tiles are 64 of their texels across: 2 texels of gutter each side cost 13%).
+constexpr int kTile = 64;
+
+// The refinement level (Options::refine) of a piece of surface whose nearest point lies d from
+// the nearest light (from its centre, and no nearer than its radius: by a large light the light
+// changes over its size): its texel at most d / kLightTexels, halving the atlas's texel (ts) as
+// often as that takes. A light's irradiance changes over distances like the distance to it.
+struct Density {
+  std::vector<DensityLight> lights;
+  int refine = 0;
+  float ts = 0;
+
+  int level_of(double d) const {
+    if (!(d > 0)) return refine;
+    const double finer = double(ts) * kLightTexels / d;
+    if (!(finer > 1)) return 0;
+    return std::min(refine, int(std::ceil(std::log2(finer))));
+  }
+  // Frame rectangle [x0, x1] x [y0, y1] (texels of size ts) of a plane (origin, u, v): the level
+  // at its point nearest a light.
+  int level(Vec3 origin, Vec3 u, Vec3 v, float x0, float y0, float x1, float y1) const {
+    double best = INFINITY;
+    for (const DensityLight& l : lights) {
+      const Vec3 d = l.centre - origin;
+      const float a = std::clamp(dot(d, u) / ts, x0, x1), b = std::clamp(dot(d, v) / ts, y0, y1);
+      best = std::min(best, std::max(double(l.radius),
+                                     double(length(l.centre - (origin + (u * a + v * b) * ts)))));
+    }
+    return level_of(best);
+  }
+};
+
+// Whether a mesh triangle's frame box meets the rectangle [x0, x1) x [y0, y1).
+bool box_meets(const std::array<Uv, 3>& t, float x0, float y0, float x1, float y1) {
+  const float lx = std::min({t[0].x, t[1].x, t[2].x}), hx = std::max({t[0].x, t[1].x, t[2].x});
+  const float ly = std::min({t[0].y, t[1].y, t[2].y}), hy = std::max({t[0].y, t[1].y, t[2].y});
+  return lx < x1 && hx > x0 && ly < y1 && hy > y0;
+}
+
+// Refines the texels of every chart (Density): a chart whose level is the same all over keeps
+// its shape at that level's texel; a planar one over which it changes is split into tiles, the
+// leaves of a quadtree over its frame (Atlas::splits). Charts are renumbered.
+void refine_charts(const Scene& scene, const Density& den, Atlas& a) {
+  const float ts = a.texel_size;
+  std::vector<Chart> old;
+  old.swap(a.charts);
+  std::vector<std::uint32_t> old_triangles;
+  old_triangles.swap(a.chart_triangles);
+  std::vector<std::uint32_t> members, inside;
+  const auto emits = [&](std::uint32_t material) {
+    const Rgb& e = scene.materials[material].emission;
+    return e.r > 0 || e.g > 0 || e.b > 0;
+  };
+  for (Chart c : old) {
+    const std::uint32_t id = std::uint32_t(a.charts.size());
+    members.clear();
+    if (c.kind == ChartKind::mesh)
+      members.assign(old_triangles.begin() + c.first, old_triangles.begin() + c.first + c.count);
+    // A light's own surface is not refined: what it sends is its emission, not its texels'.
+    bool light = true;
+    if (c.kind == ChartKind::mesh) {
+      const TriangleMesh& m = scene.meshes[c.shape];
+      for (std::uint32_t t : members)
+        light = light && emits(m.materials.empty() ? 0 : m.materials[t]);
+    } else {
+      light = emits(c.kind == ChartKind::disk ? scene.disks[c.shape].material
+                                              : scene.spheres[c.shape].material);
+    }
+    if (c.kind == ChartKind::sphere) {
+      const Sphere& sp = scene.spheres[c.shape];
+      double best = INFINITY;
+      for (const DensityLight& l : den.lights)
+        best = std::min(
+            best, std::max(double(l.radius), double(length(l.centre - sp.center)) - sp.radius));
+      c.level = light ? 0 : den.level_of(best);
+      c.texel_size = std::ldexp(ts, -c.level);
+      c.width = c.height = std::max(2, int(std::ceil(std::sqrt(c.area) / c.texel_size)));
+      a.sphere_chart[c.shape] = id;
+      a.charts.push_back(c);
+      continue;
+    }
+    // The chart's frame rectangle [ox, ox + width) x [oy, oy + height), texels.
+    const int ox = -c.shift_x, oy = -c.shift_y;
+    int level = 0;
+    if (c.kind == ChartKind::mesh && c.from_lightmap) {
+      // No plane: from the triangles' corners and centres.
+      const TriangleMesh& m = scene.meshes[c.shape];
+      double best = INFINITY;
+      for (const DensityLight& l : den.lights)
+        for (std::uint32_t t : members) {
+          const auto& tri = m.triangles[t];
+          const Vec3 p0 = m.positions[tri[0]], p1 = m.positions[tri[1]], p2 = m.positions[tri[2]];
+          for (Vec3 p : {p0, p1, p2, (p0 + p1 + p2) * (1.0f / 3)})
+            best = std::min(best, std::max(double(l.radius), double(length(l.centre - p))));
+        }
+      level = den.level_of(best);
+    } else {
+      level = den.level(c.origin, c.u, c.v, float(ox), float(oy), float(ox + c.width),
+                        float(oy + c.height));
+    }
+    if (light) level = 0;
+    const bool planar = !(c.kind == ChartKind::mesh && c.from_lightmap);
+    if (!planar || level == 0 ||
+        (std::int64_t(std::max(c.width, c.height)) << level) <= std::int64_t(kTile)) {
+      // One texel size over the chart.
+      c.level = level;
+      c.texel_size = std::ldexp(ts, -level);
+      if (c.kind == ChartKind::disk) {
+        const Disk& d = scene.disks[c.shape];
+        c.width = c.height = std::max(1, int(std::ceil(2 * double(d.radius) / c.texel_size)));
+        c.origin = d.center - (c.u + c.v) * (0.5f * float(c.width) * c.texel_size);
+        a.disk_chart[c.shape] = id;
+        a.charts.push_back(c);
+        continue;
+      }
+      const float f = std::ldexp(1.0f, level);
+      for (std::uint32_t t : members) {
+        for (Uv& p : a.triangle_uv[c.shape][t]) p = {p.x * f, p.y * f};
+        a.triangle_chart[c.shape][t] = id;
+      }
+      add_chart(c, members, a.triangle_uv[c.shape], a);
+      continue;
+    }
+    // Split: a quadtree over the frame from a square of a power of two texels.
+    const std::uint32_t k = std::uint32_t(a.splits.size());
+    a.splits.push_back({c.origin, c.u, c.v, std::uint32_t(a.nodes.size())});
+    int side = 1;
+    while (side < std::max(c.width, c.height)) side *= 2;
+    a.nodes.push_back({ox, oy, side});
+    const int x_end = ox + c.width, y_end = oy + c.height;
+    const auto split = [&](auto& self, std::size_t i) -> void {
+      const Node n = a.nodes[i];
+      const int x1 = std::min(n.x + n.side, x_end), y1 = std::min(n.y + n.side, y_end);
+      if (x1 <= n.x || y1 <= n.y) return;  // past the chart's rectangle
+      const int lv = den.level(c.origin, c.u, c.v, float(n.x), float(n.y), float(x1), float(y1));
+      if (lv > 0 && n.side > 1 && (std::int64_t(n.side) << lv) > std::int64_t(kTile)) {
+        const int half = n.side / 2;
+        const std::size_t child = a.nodes.size();
+        a.nodes[i].child = int(child);
+        for (int q = 0; q < 4; ++q)
+          a.nodes.push_back({n.x + (q & 1) * half, n.y + (q >> 1) * half, half});
+        for (int q = 0; q < 4; ++q) self(self, child + std::size_t(q));
+        return;
+      }
+      // A leaf: a tile where the surface meets it.
+      inside.clear();
+      if (c.kind == ChartKind::mesh) {
+        for (std::uint32_t t : members)
+          if (box_meets(a.triangle_uv[c.shape][t], float(n.x), float(n.y), float(x1), float(y1)))
+            inside.push_back(t);
+        if (inside.empty()) return;
+      } else {
+        // The disk's centre is the middle of its square; a texel's margin for rounding.
+        const float r = scene.disks[c.shape].radius / ts + 1;
+        const float cx = 0.5f * float(c.width), cy = 0.5f * float(c.height);
+        const float dx = cx - std::clamp(cx, float(n.x), float(x1));
+        const float dy = cy - std::clamp(cy, float(n.y), float(y1));
+        if (dx * dx + dy * dy >= r * r) return;
+      }
+      Chart t = c;
+      t.tile = true;
+      t.tile_x = n.x;
+      t.tile_y = n.y;
+      t.level = lv;
+      t.texel_size = std::ldexp(ts, -lv);
+      t.origin = c.origin + (c.u * float(n.x) + c.v * float(n.y)) * ts;
+      t.width = (x1 - n.x) << lv;
+      t.height = (y1 - n.y) << lv;
+      t.shift_x = t.shift_y = 0;
+      t.area = 0;
+      t.first = std::uint32_t(a.chart_triangles.size());
+      t.count = std::uint32_t(inside.size());
+      a.chart_triangles.insert(a.chart_triangles.end(), inside.begin(), inside.end());
+      a.nodes[i].chart = int(a.charts.size());
+      a.charts.push_back(t);
+    };
+    split(split, a.splits.back().root);
+    if (c.kind == ChartKind::disk)
+      a.disk_chart[c.shape] = Atlas::kSplit | k;
+    else
+      for (std::uint32_t t : members) a.triangle_chart[c.shape][t] = Atlas::kSplit | k;
+  }
+}
+
 }  // namespace
 
 // The core's equal-area map (core/octahedral.hpp), from [-1, 1]^2 to the chart's [0, 1]^2: a
@@ -531,27 +718,44 @@ double surface_area(const Scene& scene) {
   return total;
 }
 
-Expected<Atlas> make_atlas(const Scene& scene, const Options& o) {
-  if (!(o.texel_size >= 0) || !std::isfinite(o.texel_size))
-    return Error{"`atlas.texel_size`: expected a size >= 0 (0: from the texel budget), found " +
-                 io::format_number(o.texel_size)};
-  if (o.texel_size == 0 && o.texels < 1)
-    return Error{"`atlas.texels`: expected a budget of at least one texel"};
-  if (o.gutter < 0 || o.gutter > 64)
-    return Error{"`atlas.gutter`: expected 0..64 texels, found " + std::to_string(o.gutter)};
-  if (!(o.max_angle > 0 && o.max_angle <= 80))
-    return Error{"`atlas.max_angle`: expected degrees in (0, 80], found " +
-                 io::format_number(o.max_angle)};
-  if (o.max_side < 1 || o.max_side > 65536)
-    return Error{"`atlas.max_side`: expected 1..65536 texels, found " + std::to_string(o.max_side)};
+std::vector<DensityLight> density_lights(const Scene& scene) {
+  std::vector<DensityLight> out;
+  const auto emits = [&](std::uint32_t material) {
+    const Rgb& e = scene.materials[material].emission;
+    return e.r > 0 || e.g > 0 || e.b > 0;
+  };
+  for (const Sphere& sp : scene.spheres)
+    if (emits(sp.material)) out.push_back({sp.center, sp.radius});
+  for (const Disk& d : scene.disks)
+    if (emits(d.material)) out.push_back({d.center, d.radius});
+  for (const TriangleMesh& m : scene.meshes) {
+    // The middle of the box around its emitting triangles.
+    Vec3 lo{INFINITY, INFINITY, INFINITY}, hi{-INFINITY, -INFINITY, -INFINITY};
+    for (std::size_t t = 0; t < m.triangles.size(); ++t)
+      if (emits(m.materials.empty() ? 0 : m.materials[t]))
+        for (std::uint32_t v : m.triangles[t]) {
+          lo = min(lo, m.positions[v]);
+          hi = max(hi, m.positions[v]);
+        }
+    if (lo.x <= hi.x) out.push_back({(lo + hi) * 0.5f, 0.5f * length(hi - lo)});
+  }
+  for (const Medium& md : scene.media)
+    if (md.emission.r > 0 || md.emission.g > 0 || md.emission.b > 0)
+      out.push_back({md.center, length(md.half_size)});
+  return out;
+}
+
+namespace {
+
+// The charts at texel size ts (refined where den.refine > 0), not yet packed; `plain` and
+// `refined`: the texels of their rectangles before and after refining.
+Expected<Atlas> chart_all(const Scene& scene, const Options& o, float ts, const Density& den,
+                          double& plain, double& refined) {
   Atlas a;
   a.gutter = o.gutter;
-  const double total = surface_area(scene);
-  a.texel_size = o.texel_size > 0 ? o.texel_size : float(std::sqrt(total / double(o.texels)));
-  if (!(a.texel_size > 0)) a.texel_size = 1;  // no surface: an empty atlas
-  const float ts = a.texel_size;
+  a.texel_size = ts;
   // Refused before any chart is grown: the surface alone would pass the atlas's texels.
-  const double need = total / (double(ts) * ts);
+  const double need = surface_area(scene) / (double(ts) * ts);
   if (need > double(o.max_side) * o.max_side)
     return too_large("about " + io::format_number(need) + " texels", ts, o.max_side);
   const float cos_max = float(std::cos(double(o.max_angle) * kPi / 180));
@@ -587,8 +791,101 @@ Expected<Atlas> make_atlas(const Scene& scene, const Options& o) {
     a.sphere_chart.push_back(std::uint32_t(a.charts.size()));
     a.charts.push_back(c);
   }
-  if (Status st = pack(a, o.max_side); !st) return st.error();
+  const auto texels = [&] {
+    double n = 0;
+    for (const Chart& c : a.charts) n += double(c.width) * double(c.height);
+    return n;
+  };
+  plain = texels();
+  for (Chart& c : a.charts) c.texel_size = ts;
+  if (den.refine > 0 && !den.lights.empty()) {
+    Density here = den;
+    here.ts = ts;
+    refine_charts(scene, here, a);
+  }
+  refined = texels();
   return a;
+}
+
+}  // namespace
+
+Expected<Atlas> make_atlas(const Scene& scene, const Options& o) {
+  if (!(o.texel_size >= 0) || !std::isfinite(o.texel_size))
+    return Error{"`atlas.texel_size`: expected a size >= 0 (0: from the texel budget), found " +
+                 io::format_number(o.texel_size)};
+  if (o.texel_size == 0 && o.texels < 1)
+    return Error{"`atlas.texels`: expected a budget of at least one texel"};
+  if (o.gutter < 0 || o.gutter > 64)
+    return Error{"`atlas.gutter`: expected 0..64 texels, found " + std::to_string(o.gutter)};
+  if (!(o.max_angle > 0 && o.max_angle <= 80))
+    return Error{"`atlas.max_angle`: expected degrees in (0, 80], found " +
+                 io::format_number(o.max_angle)};
+  if (o.max_side < 1 || o.max_side > 65536)
+    return Error{"`atlas.max_side`: expected 1..65536 texels, found " + std::to_string(o.max_side)};
+  if (o.refine < 0 || o.refine > 10)
+    return Error{"`atlas.refine`: expected 0..10 levels, found " + std::to_string(o.refine)};
+  const double total = surface_area(scene);
+  float ts = o.texel_size > 0 ? o.texel_size : float(std::sqrt(total / double(o.texels)));
+  if (!(ts > 0)) ts = 1;  // no surface: an empty atlas
+  Density den;
+  den.refine = o.refine;
+  if (o.refine > 0) den.lights = density_lights(scene);
+  double plain = 0, refined = 0;
+  Expected<Atlas> a = chart_all(scene, o, ts, den, plain, refined);
+  // A budget holds the refined texels: the coarsest texel grows by the ratio's square root, twice
+  // at most (the larger texel is refined a little further). Where the lights' texels alone pass
+  // twice the budget (they do not shrink as the coarsest texel grows), one level less.
+  const double budget = plain;
+  const float ts0 = ts;
+  while (a && o.texel_size == 0 && refined > 1.05 * budget) {
+    for (int pass = 0; pass < 2 && a && refined > 1.05 * budget; ++pass) {
+      ts *= float(std::sqrt(refined / budget));
+      a = chart_all(scene, o, ts, den, plain, refined);
+    }
+    if (!a || refined <= 2 * budget || den.refine == 0) break;
+    --den.refine;
+    ts = ts0;
+    a = chart_all(scene, o, ts, den, plain, refined);
+  }
+  if (!a) return a.error();
+  a->refine = den.refine;
+  if (Status st = pack(*a, o.max_side); !st) return st.error();
+  return a;
+}
+
+Uv Atlas::in_tile(std::uint32_t k, Uv p, std::uint32_t& chart) const {
+  int id = tile_at(k, p);
+  if (id < 0) {
+    // Rounding past every tile (a hit on the rim of an empty leaf): the split's first tile, far
+    // off its texels, which lookups answer with its nearest covered texel or nothing.
+    id = nodes[splits[k].root].chart;
+    for (std::size_t i = splits[k].root; id < 0 && i < nodes.size(); ++i) id = nodes[i].chart;
+  }
+  chart = std::uint32_t(id);
+  const Chart& c = charts[chart];
+  return {float(c.shift_x) + p.x, float(c.shift_y) + p.y};
+}
+
+int Atlas::tile_at(std::uint32_t k, Uv& p) const {
+  const Node* n = &nodes[splits[k].root];
+  while (n->child >= 0) {
+    const int half = n->side / 2;
+    const int q = (p.x >= float(n->x + half) ? 1 : 0) + (p.y >= float(n->y + half) ? 2 : 0);
+    n = &nodes[std::size_t(n->child + q)];
+  }
+  if (n->chart < 0) return -1;
+  const Chart& c = charts[std::size_t(n->chart)];
+  const float f = std::ldexp(1.0f, c.level);
+  p = {(p.x - float(c.tile_x)) * f, (p.y - float(c.tile_y)) * f};
+  return n->chart;
+}
+
+std::array<Uv, 3> Atlas::chart_uv(const Chart& c, std::uint32_t t) const {
+  std::array<Uv, 3> uv = triangle_uv[c.shape][t];
+  if (!c.tile) return uv;
+  const float f = std::ldexp(1.0f, c.level);
+  for (Uv& p : uv) p = {(p.x - float(c.tile_x)) * f, (p.y - float(c.tile_y)) * f};
+  return uv;
 }
 
 Uv Atlas::locate(const Scene& scene, const Hit& hit, std::uint32_t& chart) const {
@@ -601,15 +898,20 @@ Uv Atlas::locate(const Scene& scene, const Hit& hit, std::uint32_t& chart) const
     }
     case ShapeKind::disk: {
       chart = disk_chart[hit.shape];
+      if (chart & kSplit) {
+        const Split& sp = splits[chart & ~kSplit];
+        const Vec3 d = hit.position - sp.origin;
+        Uv p{dot(d, sp.u) / texel_size, dot(d, sp.v) / texel_size};
+        return in_tile(chart & ~kSplit, p, chart);
+      }
       const Chart& c = charts[chart];
       const Vec3 d = hit.position - c.origin;
-      return {float(c.shift_x) + dot(d, c.u) / texel_size,
-              float(c.shift_y) + dot(d, c.v) / texel_size};
+      return {float(c.shift_x) + dot(d, c.u) / c.texel_size,
+              float(c.shift_y) + dot(d, c.v) / c.texel_size};
     }
     default: {
       const TriangleMesh& m = scene.meshes[hit.shape];
       chart = triangle_chart[hit.shape][hit.primitive];
-      const Chart& c = charts[chart];
       const auto& t = m.triangles[hit.primitive];
       const std::array<Uv, 3>& uv = triangle_uv[hit.shape][hit.primitive];
       // Barycentric coordinates of the point in the triangle's plane.
@@ -625,15 +927,16 @@ Uv Atlas::locate(const Scene& scene, const Hit& hit, std::uint32_t& chart) const
         b2 = (d11 * d2 - d12 * d1) / den;
       }
       const float b0 = 1 - b1 - b2;
-      return {float(c.shift_x) + b0 * uv[0].x + b1 * uv[1].x + b2 * uv[2].x,
-              float(c.shift_y) + b0 * uv[0].y + b1 * uv[1].y + b2 * uv[2].y};
+      Uv p{b0 * uv[0].x + b1 * uv[1].x + b2 * uv[2].x, b0 * uv[0].y + b1 * uv[1].y + b2 * uv[2].y};
+      if (chart & kSplit) return in_tile(chart & ~kSplit, p, chart);
+      const Chart& c = charts[chart];
+      return {float(c.shift_x) + p.x, float(c.shift_y) + p.y};
     }
   }
 }
 
 std::vector<Texel> rasterise(const Scene& scene, const Atlas& a) {
   std::vector<Texel> out(std::size_t(a.width) * std::size_t(a.height));
-  const float ts = a.texel_size;
   const auto at = [&](int x, int y) -> Texel& {
     return out[std::size_t(y) * std::size_t(a.width) + std::size_t(x)];
   };
@@ -658,13 +961,19 @@ std::vector<Texel> rasterise(const Scene& scene, const Atlas& a) {
           n = normalize(cr);
           return true;
         };
+        // Within the chart's rectangle (a tile's triangles run on past it).
+        const auto mine = [&](int i, int j) {
+          const int x = c.shift_x + i - c.x, y = c.shift_y + j - c.y;
+          return x >= 0 && y >= 0 && x < c.width && y < c.height;
+        };
         // Texels whose centre a triangle holds: that point.
         for (std::uint32_t k = c.first; k < c.first + c.count; ++k) {
           const std::uint32_t t = a.chart_triangles[k];
-          const std::array<Uv, 3>& uv = a.triangle_uv[c.shape][t];
+          const std::array<Uv, 3> uv = a.chart_uv(c, t);
           Vec3 n;
           if (!normal(t, n)) continue;
           for_each_texel(uv, [&](int i, int j) {
+            if (!mine(i, j)) return;
             Texel& x = at(c.shift_x + i, c.shift_y + j);
             x.chart = int(id);
             ++x.claims;
@@ -677,12 +986,13 @@ std::vector<Texel> rasterise(const Scene& scene, const Atlas& a) {
         // all of a part thinner than a texel): the nearest point of the triangles touching them.
         for (std::uint32_t k = c.first; k < c.first + c.count; ++k) {
           const std::uint32_t t = a.chart_triangles[k];
-          const std::array<Uv, 3>& uv = a.triangle_uv[c.shape][t];
+          const std::array<Uv, 3> uv = a.chart_uv(c, t);
           Vec3 n;
           if (!normal(t, n) || !(cross2({uv[1].x - uv[0].x, uv[1].y - uv[0].y},
                                         {uv[2].x - uv[0].x, uv[2].y - uv[0].y}) != 0))
             continue;
           for_each_touched(uv, [&](int i, int j) {
+            if (!mine(i, j)) return;
             Texel& x = at(c.shift_x + i, c.shift_y + j);
             if (x.claims > 0) return;
             const Uv centre{float(i) + 0.5f, float(j) + 0.5f};
@@ -705,7 +1015,8 @@ std::vector<Texel> rasterise(const Scene& scene, const Atlas& a) {
         const Disk& d = scene.disks[c.shape];
         for (int j = 0; j < c.height; ++j)
           for (int i = 0; i < c.width; ++i) {
-            const Vec3 q = c.origin + (c.u * (float(i) + 0.5f) + c.v * (float(j) + 0.5f)) * ts;
+            const Vec3 q =
+                c.origin + (c.u * (float(i) + 0.5f) + c.v * (float(j) + 0.5f)) * c.texel_size;
             if (length(q - d.center) > d.radius) continue;
             Texel& x = at(c.shift_x + i, c.shift_y + j);
             x.chart = int(id);
@@ -756,8 +1067,8 @@ Stats stats(const Scene& scene, const Atlas& a, const std::vector<Texel>& texels
   for (const Texel& t : texels) all += t.chart >= 0;
   s.density_min = INFINITY;
   s.density_max = 0;
-  const double texel_area = double(a.texel_size) * a.texel_size;
   for (const Chart& c : a.charts) {
+    const double texel_area = double(c.texel_size) * c.texel_size;
     // Charts under a few texels are too coarse to measure a density on.
     if (c.area < 16 * texel_area) continue;
     // The chart's area in texels over the surface's: a mesh chart's triangles as projected, a
@@ -766,7 +1077,7 @@ Stats stats(const Scene& scene, const Atlas& a, const std::vector<Texel>& texels
     if (c.kind == ChartKind::mesh) {
       mapped = 0;
       for (std::uint32_t k = c.first; k < c.first + c.count; ++k) {
-        const std::array<Uv, 3>& t = a.triangle_uv[c.shape][a.chart_triangles[k]];
+        const std::array<Uv, 3> t = a.chart_uv(c, a.chart_triangles[k]);
         mapped += 0.5 * std::abs(double(cross2({t[1].x - t[0].x, t[1].y - t[0].y},
                                                {t[2].x - t[0].x, t[2].y - t[0].y})));
       }

@@ -10,8 +10,15 @@
 //   stay within `max_angle` of their seed's, projected on the seed's plane; a triangle that
 //   would overlap one of the chart's there, or share a texel with one at another height, is
 //   left for another chart.
-// The charts are packed on shelves with `gutter` empty texels around each. No UV-atlas library is
-// packaged for Debian 12, hence this one. docs/METHODS.md, "The surface atlas".
+// Texels are finer towards the lights (`refine`): a chart's texel is the atlas's halved until it
+// is under 1/16 of the distance from the chart's nearest point to a light (its centre, no nearer
+// than its radius: by a large light the light changes over the light's size), `refine` times at
+// most (a light's own surface is not refined); a planar chart over which that changes is split into
+// square tiles, each a chart of its own texel size (a quadtree over the chart's frame). A light's
+// irradiance varies over distances like the distance to it, so such texels spend a budget where the
+// light changes, and a ground of any size around a small light costs texels growing with the log of
+// its size. The charts are packed on shelves with `gutter` empty texels around each. No UV-atlas
+// library is packaged for Debian 12, hence this one. docs/METHODS.md, "The surface atlas".
 #pragma once
 
 #include <array>
@@ -31,9 +38,21 @@ struct Options {
   int gutter = 2;                   // empty texels around each chart
   float max_angle = 45;             // degrees in (0, 80]: a mesh chart's normal cone
   int max_side = 16384;             // the atlas's largest side, texels
+  // Texels up to 2^refine times finer towards the lights (0: one texel size). With a budget
+  // (`texels`), the coarsest texel grows so that the atlas holds about as many texels.
+  int refine = 0;
 };
 
 enum class ChartKind { mesh, disk, sphere };
+
+// The lights that texels grow finer towards (Options::refine): every emitting sphere and disk,
+// the box around a mesh's emitting triangles and an emitting fog box, as a centre and the radius
+// of a sphere about it that holds it.
+struct DensityLight {
+  Vec3 centre;
+  float radius = 0;
+};
+std::vector<DensityLight> density_lights(const Scene& scene);
 
 struct Chart {
   ChartKind kind = ChartKind::mesh;
@@ -51,7 +70,23 @@ struct Chart {
   // A mesh chart made from the file's lightmap UVs (an island of them, scaled): its frame's
   // coordinates are those UVs times a scale, not a projection (origin, u, v, n unused).
   bool from_lightmap = false;
-  double area = 0;  // the surface's area it maps, world units squared
+  double area = 0;  // the surface's area it maps, world units squared (0: a tile's, unmeasured)
+  // Its texel: the atlas's texel_size / 2^level (Options::refine).
+  float texel_size = 0;
+  int level = 0;
+  // A tile of a split planar chart (Atlas::nodes): its corner in the split chart's frame, in the
+  // atlas's texels; its triangles' Atlas::triangle_uv are in that frame.
+  bool tile = false;
+  int tile_x = 0, tile_y = 0;
+};
+
+// A node of the quadtree that splits a planar chart into tiles, in that chart's frame (the
+// atlas's texels): a leaf is a tile (chart) or nothing (no surface there); an inner node's
+// children are nodes child..child+3 (x then y, low half first).
+struct Node {
+  int x = 0, y = 0, side = 0;
+  int child = -1;
+  int chart = -1;
 };
 
 // Continuous atlas coordinates, in texels (texel (i, j) spans [i, i + 1) x [j, j + 1)).
@@ -61,15 +96,33 @@ struct Uv {
 
 struct Atlas {
   int width = 0, height = 0;  // texels
-  float texel_size = 0;       // world units
+  float texel_size = 0;       // world units: the coarsest texel (a chart's may be finer)
+  int refine = 0;             // the levels Options::refine made (fewer where the budget asked)
   int gutter = 0;
   std::vector<Chart> charts;
   std::vector<std::uint32_t> chart_triangles;
-  // Per mesh, per triangle: its chart and its corners' coordinates in the chart's frame.
+  // Per mesh, per triangle: its chart (kSplit | k: split chart k, Atlas::splits) and its corners'
+  // coordinates in the chart's frame.
+  static constexpr std::uint32_t kSplit = 0x80000000u;
   std::vector<std::vector<std::uint32_t>> triangle_chart;
   std::vector<std::vector<std::array<Uv, 3>>> triangle_uv;
-  // Per disk and per sphere: its chart.
+  // Per disk and per sphere: its chart (a disk's may be kSplit | k).
   std::vector<std::uint32_t> disk_chart, sphere_chart;
+  // A planar chart split into tiles: its frame (the point of frame coordinates (s, t) is origin +
+  // (s u + t v) texel_size) and its quadtree's root in `nodes`.
+  struct Split {
+    Vec3 origin, u, v;
+    std::uint32_t root = 0;
+  };
+  std::vector<Split> splits;
+  std::vector<Node> nodes;
+
+  // The tile of split chart k that holds frame point p (-1: none), and p in the tile's frame.
+  int tile_at(std::uint32_t k, Uv& p) const;
+  // In split chart k, frame point p's tile (chart) and atlas coordinates.
+  Uv in_tile(std::uint32_t k, Uv p, std::uint32_t& chart) const;
+  // A mesh chart's triangle t: its corners in the chart's own frame (a tile's, for a tile).
+  std::array<Uv, 3> chart_uv(const Chart& c, std::uint32_t t) const;
 
   // Where a surface point lies in the atlas (hit.kind, hit.shape, hit.primitive and
   // hit.position say which point), and its chart.

@@ -274,7 +274,6 @@ Rgb Baked::irradiance_at(const Scene& scene, const Hit& hit, Vec3 towards, bool 
 
 void link_seams(const Scene& scene, const RayScene& rays, Baked& b) {
   const Atlas& a = b.atlas;
-  const float ts = a.texel_size;
   const float cos_max = std::cos(45.0f * float(kPi) / 180);
   std::vector<std::vector<Baked::SeamLink>> per_chart(a.charts.size());
   parallel_for(int(a.charts.size()), [&](int id) {
@@ -299,8 +298,8 @@ void link_seams(const Scene& scene, const RayScene& rays, Baked& b) {
         const Vec3 n = b.texels[std::size_t(rim)].normal;
         // The empty texel's centre on the chart's plane, extended past its rim.
         const float s = float(x - c.shift_x) + 0.5f, t = float(y - c.shift_y) + 0.5f;
-        const Vec3 q = c.origin + (c.u * s + c.v * t) * ts;
-        const float reach = 1.5f * ts;
+        const Vec3 q = c.origin + (c.u * s + c.v * t) * c.texel_size;
+        const float reach = 1.5f * c.texel_size;
         Hit h;
         if (!rays.intersect(Ray{q + n * reach, -n, 0, 2 * reach}, h)) continue;
         if (dot(h.geometric_normal, n) < cos_max) continue;  // a crease, or a back face
@@ -437,7 +436,7 @@ Expected<Baked> bake(const Scene& scene, const RayScene& rays, const Options& at
           const int side = l.side(i);
           const std::vector<Vec3>& dir = dirs[std::size_t(i)];
           store.assign(g.probes.size(), side);
-          const float start = l.interval_start(i), end = l.interval_end(i);
+          const float start_i = l.interval_start(i), end_i = l.interval_end(i);
           const float rest_end = cascade::kInfinity;
           // In blocks of probes, not per chart: a ground that is one chart would be one task.
           constexpr std::uint64_t kBlock = 64;
@@ -449,6 +448,10 @@ Expected<Baked> bake(const Scene& scene, const RayScene& rays, const Options& at
             for (std::uint64_t q = first; q < stop; ++q) {
               const Probe& p = g.probes[q];
               if (!p.valid) continue;
+              // Intervals in the chart's texels: a chart refined towards a light (Options::refine)
+              // has its cascades' probes and intervals closer alike (the penumbra condition).
+              const float scale = std::ldexp(1.0f, -a.charts[p.chart].level);
+              const float start = scale * start_i, end = scale * end_i;
               const cascade::Corners k =
                   l.top(i) ? cascade::Corners{}
                            : corners(a, grids[std::size_t(i) + 1], p.chart, p.x, p.y);

@@ -109,10 +109,15 @@ Status write_atlas(const std::string& path, const Baked& b, const Record& r) {
   img.width = a.width;
   img.height = a.height;
   const std::size_t n = std::size_t(a.width) * std::size_t(a.height);
-  nlohmann::json record = {{"texel_size", r.texel_size}, {"gutter", r.gutter},
-                           {"max_angle", r.max_angle},   {"directions", r.directions},
-                           {"interval", r.interval},     {"cascades", r.cascades},
-                           {"bounces", r.bounces},       {"light_exponent", r.light_exponent}};
+  nlohmann::json record = {{"texel_size", r.texel_size},
+                           {"gutter", r.gutter},
+                           {"refine", r.refine},
+                           {"max_angle", r.max_angle},
+                           {"directions", r.directions},
+                           {"interval", r.interval},
+                           {"cascades", r.cascades},
+                           {"bounces", r.bounces},
+                           {"light_exponent", r.light_exponent}};
   nlohmann::json charts = nlohmann::json::array();
   for (const Chart& c : a.charts)
     charts.push_back({{"kind", kind_name(c.kind)},
@@ -191,6 +196,7 @@ Expected<Baked> read_atlas(const std::string& path, const Scene& scene, std::uin
       const nlohmann::json j = nlohmann::json::parse(*rec);
       r.texel_size = j.at("texel_size").get<float>();
       r.gutter = j.at("gutter").get<int>();
+      r.refine = j.value("refine", 0);
       r.max_angle = j.at("max_angle").get<float>();
       r.directions = j.at("directions").get<int>();
       r.interval = j.at("interval").get<float>();
@@ -207,7 +213,8 @@ Expected<Baked> read_atlas(const std::string& path, const Scene& scene, std::uin
     }
     side0 = side_of(r.directions);
     if (side0 == 0 || !(r.texel_size > 0) || !std::isfinite(r.texel_size) || r.bounces < 1 ||
-        r.bounces > 64 || r.light_exponent < 0 || r.light_exponent > 512)
+        r.bounces > 64 || r.refine < 0 || r.refine > 10 || r.light_exponent < 0 ||
+        r.light_exponent > 512)
       return damaged(path, "the atlas's record is damaged: " + *rec);
     const std::string* hash = img.attribute("penumbra.scene_hash");
     const std::uint64_t ours = scene_hash(scene);
@@ -239,6 +246,7 @@ Expected<Baked> read_atlas(const std::string& path, const Scene& scene, std::uin
   Options ao;
   ao.texel_size = r.texel_size;
   ao.gutter = r.gutter;
+  ao.refine = r.refine;
   ao.max_angle = r.max_angle;
   // The atlas has the file's size: one that would not fit it is refused before it is built (a
   // damaged texel size would otherwise grow millions of texels).

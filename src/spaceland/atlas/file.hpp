@@ -20,6 +20,7 @@ struct Record {
   std::uint64_t scene_hash = 0;
   float texel_size = 0;  // world units
   int gutter = 2;
+  int refine = 0;  // Options::refine (absent from files before it: 0)
   float max_angle = 45;
   int directions = 0;  // Q0
   float interval = 0;  // t0, world units

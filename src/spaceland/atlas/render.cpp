@@ -32,6 +32,8 @@ Status check_options(const SurfaceOptions& o) {
   if (!(o.interval >= 0) || !std::isfinite(o.interval))
     return Error{"`surface.interval`: expected a length >= 0 (0: two texels), found " +
                  io::format_number(o.interval)};
+  if (o.refine < 0 || o.refine > 10)
+    return Error{"`surface.refine`: expected 0..10 levels, found " + std::to_string(o.refine)};
   if (o.cascades < 0 || o.cascades > 12)
     return Error{"`surface.cascades`: expected 0..12, found " + std::to_string(o.cascades)};
   return {};
@@ -59,6 +61,7 @@ Options atlas_options(const SurfaceOptions& o) {
   Options ao;
   ao.texel_size = o.texel_size;
   ao.texels = o.texels;
+  ao.refine = o.refine;
   return ao;
 }
 
@@ -91,6 +94,7 @@ Status bake_file(const FileBake& b, const std::string& path, BakeResult& result)
   r.scene_hash = scene_hash(b.given);
   r.texel_size = baked->atlas.texel_size;
   r.gutter = baked->atlas.gutter;
+  r.refine = baked->atlas.refine;
   r.max_angle = Options{}.max_angle;
   r.directions = b.o.directions;
   r.interval = report.t0;
@@ -102,6 +106,7 @@ Status bake_file(const FileBake& b, const std::string& path, BakeResult& result)
 
   result.used = b.o;
   result.used.texel_size = r.texel_size;
+  result.used.refine = r.refine;
   result.used.interval = r.interval;
   result.used.cascades = r.cascades;
   result.width = baked->atlas.width;
@@ -133,6 +138,7 @@ Expected<ImageRgb> render(const SolveContext& ctx, const SurfaceOptions& o, Solv
     report.rays += bake_report.rays;
     report.memory_bytes += bake_report.memory_bytes;
     used.texel_size = baked->atlas.texel_size;
+    used.refine = baked->atlas.refine;
     used.interval = bake_report.t0;
     used.cascades = bake_report.cascades;
   } else {
@@ -147,6 +153,7 @@ Expected<ImageRgb> render(const SolveContext& ctx, const SurfaceOptions& o, Solv
     report.memory_bytes += baked->texels.size() * (sizeof(Texel) + 4 * sizeof(Rgb)) +
                            baked->radiance.size() * sizeof(Rgb);
     used.texel_size = r.texel_size;
+    used.refine = r.refine;
     used.directions = r.directions;
     used.interval = r.interval;
     used.cascades = r.cascades;

@@ -1,13 +1,15 @@
 #!/usr/bin/env bash
 # The scene family study (docs/QUALITY.md, "The scene family"): writes the random scenes of
 # penumbra_scene_family into BUILD/quality-family, path traces each at 1 and 2 bounces (cached),
-# renders it with SPWI and the probe grid at their defaults, and writes each render's relative
+# renders it with SPWI, the probe grid and the surface cascades at their defaults (METHODS, a
+# space-separated list in the environment, picks some of them), and writes each render's relative
 # RMSE against the reference and its time into OUT/family.md, with the median and the worst per
 # method and bounce count, and montages of the worst (OUT/worst_*.png). The reference's own error
 # is estimated from a second one of another seed: their relative RMSE over sqrt 2.
 #   bash scripts/quality-family.sh BUILD OUT [COUNT] [REFERENCE_SPP]
 set -euo pipefail
 build=$1 out=$2 count=${3:-4} spp=${4:-1024}
+methods=${METHODS:-spwi grid surface}
 bin=$build/bin
 cache=$build/quality-cache/family
 work=$build/quality-family
@@ -34,7 +36,7 @@ for scene in "$work"/scenes/*.json; do
         -o "$twin" -q
     fi
     own=$("$bin/penumbra" compare "$twin" "$ref" --radiance --json | value relative_rmse)
-    for method in spwi grid; do
+    for method in $methods; do
       img=$work/renders/${name}_b${bounces}_${method}.pfm
       ms=$("$bin/penumbra" render "$scene" --method "$method" --bounces "$bounces" -o "$img" \
         --json | value time_ms)
@@ -53,7 +55,7 @@ done
   echo
   echo "| method | bounces | scenes | median | worst (scene) |"
   echo "| --- | ---: | ---: | ---: | --- |"
-  for method in spwi grid; do
+  for method in $methods; do
     for bounces in 1 2; do
       awk -v m="$method" -v b="$bounces" '$3 == m && $2 == b { print $4, $1 }' "$rows" | sort -g |
         awk -v m="$method" -v b="$bounces" '
@@ -65,7 +67,7 @@ done
     done
   done
 } > "$out/family.md"
-for method in spwi grid; do
+for method in $methods; do
   for bounces in 1 2; do
     worst=$(awk -v m="$method" -v b="$bounces" '$3 == m && $2 == b { print $4, $1 }' "$rows" |
       sort -g | tail -1 | cut -d' ' -f2)

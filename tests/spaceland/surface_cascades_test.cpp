@@ -147,6 +147,45 @@ TEST(SurfaceCascades, TexelsFinerTowardsALightHoldItsPoolOnAWideGround) {
   EXPECT_GT(tiles, 4);
 }
 
+// A small lamp over a wide ground gets a chart of 2x2 texels, whose normals lie across most
+// viewers' lines of sight: each texel read must give the side the viewer sees (its outside), not
+// the side its own normal faces towards the viewer (the inside, lit by the lamp itself: the lamp
+// was seen at up to 1.7x its emission). Seen from around, it shines at its emission plus the
+// little the dark ground sends it.
+TEST(SurfaceCascades, ASmallLampOfFewTexelsShinesAtItsEmission) {
+  Scene s;
+  add_floor(s, 50, {0.5f, 0.5f, 0.5f});
+  const float le = 100;
+  const Sphere lamp =
+      add_sphere(s, {0, 1, 0}, 0.1f, add_material(s, {0.8f, 0.8f, 0.8f}, {le, le, le}));
+  Expected<RayScene> rays = RayScene::build(s);
+  ASSERT_TRUE(rays);
+  atlas::Options ao;
+  ao.texels = 1 << 12;
+  atlas::CascadeOptions co;
+  atlas::BakeReport report;
+  const atlas::Baked b = bake_ok(s, *rays, ao, co, report);
+  const atlas::Chart& c = b.atlas.charts[b.atlas.sphere_chart[0]];
+  EXPECT_LE(c.width, 4) << "the lamp should take few texels here";
+  std::mt19937 rng(5);
+  std::normal_distribution<float> n01;
+  double worst = 0;
+  for (int k = 0; k < 200; ++k) {
+    // From 3 away in a random direction above the ground, at a random point of the lamp's disk.
+    Vec3 dir{n01(rng), std::abs(n01(rng)), n01(rng)};
+    dir = normalize(dir);
+    const Vec3 from = lamp.center + dir * 3;
+    Vec3 t, u;
+    orthonormal_basis(dir, t, u);
+    const Vec3 aim = lamp.center + (t * n01(rng) + u * n01(rng)) * 0.03f;
+    const Rgb l = seen(s, *rays, b, from, normalize(aim - from));
+    worst = std::max(worst, std::abs(double(l.g) / le - 1));
+  }
+  std::printf("surface_cascades_test: a lamp of %dx%d texels, worst |seen / Le - 1| %.4g\n",
+              c.width, c.height, worst);
+  EXPECT_LT(worst, 0.02);
+}
+
 // Through render(): the enclosure seen by the camera at 2 bounces, the same bits on 1 and 2
 // threads; fog refused by the method.
 TEST(SurfaceCascades, RendersTheEnclosureOnAnyThreadCountAndRefusesFog) {

@@ -215,19 +215,18 @@ void for_each_tap(const Atlas& a, Uv uv, F&& f) {
 
 }  // namespace
 
-Rgb Baked::light(std::size_t k, Vec3 towards, bool with_sun) const {
-  const bool f = dot(texels[k].normal, towards) >= 0;
+Rgb Baked::light(std::size_t k, bool f, bool with_sun) const {
   Rgb e = f ? front[k] : back[k];
   if (with_sun) e += f ? sun_front[k] : sun_back[k];
   return e;
 }
 
-Rgb Baked::within(std::uint32_t chart, Uv uv, Vec3 towards, bool with_sun, float& weight) const {
+Rgb Baked::within(std::uint32_t chart, Uv uv, bool front, bool with_sun, float& weight) const {
   Rgb sum{};
   weight = 0;
   for_each_tap(atlas, uv, [&](std::size_t k, float w) {
     if (texels[k].chart != int(chart)) return;
-    sum += light(k, towards, with_sun) * w;
+    sum += light(k, front, with_sun) * w;
     weight += w;
   });
   return sum;
@@ -236,8 +235,14 @@ Rgb Baked::within(std::uint32_t chart, Uv uv, Vec3 towards, bool with_sun, float
 Rgb Baked::irradiance_at(const Scene& scene, const Hit& hit, Vec3 towards, bool with_sun) const {
   std::uint32_t chart = 0;
   const Uv uv = atlas.locate(scene, hit, chart);
+  // The side is the hit's, read from every texel: a chart's normals (and a linked chart's) face
+  // one way, within 45 degrees on a mesh and outwards on a sphere, so a texel's front is the
+  // hit's. Deciding it from each texel's own normal failed where few texels span a curved
+  // surface: a small lamp's sphere of 2x2 texels, whose normals lie across the viewer's line,
+  // read some texels' insides and shone at up to 1.7x its emission.
+  const bool front = dot(hit.geometric_normal, towards) >= 0;
   float weight = 0;
-  Rgb sum = within(chart, uv, towards, with_sun, weight);
+  Rgb sum = within(chart, uv, front, with_sun, weight);
   // Past the rim: the light where the surface goes on, read in its own chart.
   if (!seams.empty())
     for_each_tap(atlas, uv, [&](std::size_t k, float w) {
@@ -247,7 +252,7 @@ Rgb Baked::irradiance_at(const Scene& scene, const Hit& hit, Vec3 towards, bool 
                            [](const SeamLink& l, std::uint32_t key) { return l.texel < key; });
       if (link == seams.end() || link->texel != k || link->from != chart) return;
       float there = 0;
-      const Rgb e = within(link->chart, link->uv, towards, with_sun, there);
+      const Rgb e = within(link->chart, link->uv, front, with_sun, there);
       if (there > 0) {
         sum += e * (w / there);
         weight += w;
@@ -267,7 +272,7 @@ Rgb Baked::irradiance_at(const Scene& scene, const Hit& hit, Vec3 towards, bool 
       const float dx = float(x) + 0.5f - uv.x, dy = float(y) + 0.5f - uv.y;
       if (dx * dx + dy * dy >= best) continue;
       best = dx * dx + dy * dy;
-      nearest = light(k, towards, with_sun);
+      nearest = light(k, front, with_sun);
     }
   return nearest;
 }

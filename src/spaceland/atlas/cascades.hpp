@@ -93,9 +93,9 @@ struct Baked {
 
  private:
   // Bilinear over the covered texels of `chart` around uv; weight 0 where none of the four is.
-  Rgb within(std::uint32_t chart, Uv uv, Vec3 towards, bool with_sun, float& weight) const;
-  // Texel k's light on the side `towards` points to.
-  Rgb light(std::size_t k, Vec3 towards, bool with_sun) const;
+  Rgb within(std::uint32_t chart, Uv uv, bool front, bool with_sun, float& weight) const;
+  // Texel k's light on the side its normal points to (front) or the other.
+  Rgb light(std::size_t k, bool front, bool with_sun) const;
 };
 
 // Links the empty texels along every planar chart's rim (mesh charts not made from lightmap UVs,

@@ -138,10 +138,14 @@ Expected<std::vector<unsigned char>> read_all(const std::string& path) {
 // stb_image sizes a PNG's buffers from its header, before reading the pixel data, and in int.
 // So, before stb sees it: the filtered rows the header promises must fit in what the file can
 // hold (deflate expands at most 1032 times), and both they and the decoded pixels must fit in
-// an int (a 16-bit RGBA image of 16384^2 overflows stb's sizes). stbi_info has checked that the
-// file starts with a whole IHDR chunk: bit depth at byte 24, colour type at byte 25.
+// an int (a 16-bit RGBA image of 16384^2 overflows stb's sizes). The bit depth is at byte 24 and
+// the colour type at byte 25, in the IHDR chunk, which must be whole (33 bytes with the
+// signature): stbi_info reads zeros past the end of a file cut inside it and accepts it.
 Status check_png_data_size(const std::string& path, const std::vector<unsigned char>& file, int w,
                            int h, int out_channels, bool sixteen) {
+  if (file.size() < 33)
+    return fail(path, "truncated PNG (" + std::to_string(file.size()) +
+                          " bytes: its IHDR chunk ends at byte 33)");
   const unsigned bit_depth = file[24], colour_type = file[25];
   unsigned samples = 1;  // grey (0) and palette (3)
   if (colour_type == 2) samples = 3;

@@ -397,7 +397,12 @@ Status check_exr_attribute_sizes(const std::string& path) {
     if (type == "preview") {
       std::uint32_t w = 0, h = 0;
       if (!u32(w) || !u32(h)) return fail(path, "damaged EXR header (the preview's size)");
-      value = 4 * static_cast<long long>(w) * static_cast<long long>(h);
+      // Two 32-bit sizes: their product fits 64 unsigned bits, four times it may not.
+      const unsigned long long pixels = static_cast<unsigned long long>(w) * h;
+      constexpr long long kMost = std::numeric_limits<long long>::max();
+      value = pixels > static_cast<unsigned long long>(kMost / 4)
+                  ? kMost
+                  : 4 * static_cast<long long>(pixels);
     }
     if (type == "stringvector" && value >= 0 && value <= left()) {
       // Strings of their own 32-bit sizes, read until the value's size is used up.

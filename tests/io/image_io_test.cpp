@@ -407,6 +407,33 @@ TEST_F(ImageIo, PngCutInsideItsHeaderIsRefused) {
   }
 }
 
+// An EXR header whose preview claims a size whose byte count passes 64 bits (a signed overflow,
+// undefined behaviour, before it was checked against the file). Found by fuzz_image in this
+// form (docs/RELIABILITY.md); refused as a damaged header.
+TEST_F(ImageIo, ExrPreviewOfAnImpossibleSizeIsRefused) {
+  const std::string b64 =
+      "di8xAQIAAABjaGFubmVscwBjaGxpc3QAAAcAAABsaW5lT3JkZXI/AHByZXZpZXcAAQAAAAB5cGl4ZWNvcHJldmll"
+      "aW9uAGYSbG9hdABpwA==";
+  const std::string table = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  Bytes bytes;
+  unsigned bits = 0;
+  int have = 0;
+  for (char c : b64) {
+    if (c == '=') break;
+    bits = (bits << 6) | unsigned(table.find(c));
+    have += 6;
+    if (have >= 8) {
+      have -= 8;
+      bytes.push_back(static_cast<unsigned char>((bits >> have) & 0xffu));
+    }
+  }
+  const std::string p = path("preview.exr");
+  write_bytes(p, bytes);
+  auto r = io::read_image(p);
+  ASSERT_FALSE(r.ok());
+  EXPECT_TRUE(starts_with(r.error().message, p + ": ")) << r.error().message;
+}
+
 TEST_F(ImageIo, Png8RoundTripKeepsValues) {
   const std::vector<unsigned char> rgb = {0,   1,   2,  127, 128, 129,  // row 0
                                           254, 255, 17, 200, 64,  3};   // row 1

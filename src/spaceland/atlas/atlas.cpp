@@ -9,6 +9,7 @@
 
 #include "core/octahedral.hpp"
 #include "io/json_reader.hpp"
+#include "spaceland/color.hpp"
 
 namespace penumbra::spaceland::atlas {
 
@@ -509,6 +510,11 @@ Status pack(Atlas& a, int max_side) {
 
 // Texels per unit of distance to the nearest light, at least, where Options::refine allows.
 constexpr double kLightTexels = 16;
+// Whether surfaces of this material emit.
+bool emits(const Scene& scene, std::uint32_t material) {
+  return !is_black(scene.materials[material].emission);
+}
+
 // A tile's side, in its own texels, past which a quadtree node whose texels are refined is split
 // (the finest tiles are 64 of their texels across: 2 texels of gutter each side cost 13%).
 constexpr int kTile = 64;
@@ -559,10 +565,6 @@ void refine_charts(const Scene& scene, const Density& den, Atlas& a) {
   std::vector<std::uint32_t> old_triangles;
   old_triangles.swap(a.chart_triangles);
   std::vector<std::uint32_t> members, inside;
-  const auto emits = [&](std::uint32_t material) {
-    const Rgb& e = scene.materials[material].emission;
-    return e.r > 0 || e.g > 0 || e.b > 0;
-  };
   for (Chart c : old) {
     const std::uint32_t id = std::uint32_t(a.charts.size());
     members.clear();
@@ -573,10 +575,10 @@ void refine_charts(const Scene& scene, const Density& den, Atlas& a) {
     if (c.kind == ChartKind::mesh) {
       const TriangleMesh& m = scene.meshes[c.shape];
       for (std::uint32_t t : members)
-        light = light && emits(m.materials.empty() ? 0 : m.materials[t]);
+        light = light && emits(scene, m.materials.empty() ? 0 : m.materials[t]);
     } else {
-      light = emits(c.kind == ChartKind::disk ? scene.disks[c.shape].material
-                                              : scene.spheres[c.shape].material);
+      light = emits(scene, c.kind == ChartKind::disk ? scene.disks[c.shape].material
+                                                     : scene.spheres[c.shape].material);
     }
     if (c.kind == ChartKind::sphere) {
       const Sphere& sp = scene.spheres[c.shape];
@@ -720,19 +722,15 @@ double surface_area(const Scene& scene) {
 
 std::vector<DensityLight> density_lights(const Scene& scene) {
   std::vector<DensityLight> out;
-  const auto emits = [&](std::uint32_t material) {
-    const Rgb& e = scene.materials[material].emission;
-    return e.r > 0 || e.g > 0 || e.b > 0;
-  };
   for (const Sphere& sp : scene.spheres)
-    if (emits(sp.material)) out.push_back({sp.center, sp.radius});
+    if (emits(scene, sp.material)) out.push_back({sp.center, sp.radius});
   for (const Disk& d : scene.disks)
-    if (emits(d.material)) out.push_back({d.center, d.radius});
+    if (emits(scene, d.material)) out.push_back({d.center, d.radius});
   for (const TriangleMesh& m : scene.meshes) {
     // The middle of the box around its emitting triangles.
     Vec3 lo{INFINITY, INFINITY, INFINITY}, hi{-INFINITY, -INFINITY, -INFINITY};
     for (std::size_t t = 0; t < m.triangles.size(); ++t)
-      if (emits(m.materials.empty() ? 0 : m.materials[t]))
+      if (emits(scene, m.materials.empty() ? 0 : m.materials[t]))
         for (std::uint32_t v : m.triangles[t]) {
           lo = min(lo, m.positions[v]);
           hi = max(hi, m.positions[v]);
@@ -740,8 +738,7 @@ std::vector<DensityLight> density_lights(const Scene& scene) {
     if (lo.x <= hi.x) out.push_back({(lo + hi) * 0.5f, 0.5f * length(hi - lo)});
   }
   for (const Medium& md : scene.media)
-    if (md.emission.r > 0 || md.emission.g > 0 || md.emission.b > 0)
-      out.push_back({md.center, length(md.half_size)});
+    if (!is_black(md.emission)) out.push_back({md.center, length(md.half_size)});
   return out;
 }
 

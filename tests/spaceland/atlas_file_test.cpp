@@ -152,7 +152,7 @@ TEST(AtlasFile, FloorUnderASphereLightFromTheFile) {
         const Vec3 d = normalize(Vec3{x, 0, z} - eye);
         Hit h;
         if (!rays->intersect(Ray{eye, d}, h) || h.kind != ShapeKind::disk) continue;
-        const Rgb l = albedo_at(s, h) * b->irradiance_at(s, h, -d) * float(1 / kPi);
+        const Rgb l = albedo_at(s, h) * b->irradiance_at(s, *rays, h, -d) * float(1 / kPi);
         const double dx = light.x - h.position.x, dy = light.y, dz = light.z - h.position.z;
         const double d2 = dx * dx + dy * dy + dz * dz;
         const double want = 0.5 * 30 * 0.09 / d2 * (dy / std::sqrt(d2));
@@ -189,9 +189,12 @@ TEST(AtlasFile, HoldsCascadeZerosRadiancePerDirection) {
     ++covered;
     // Inside the room (the normal's side): the walls; outside: nothing (no sky).
     const Vec3 n = b->texels[k].normal;
+    // The map lies in the chart's direction frame.
+    const atlas::DirectionFrame f =
+        atlas::direction_frame(b->atlas.charts[std::size_t(b->texels[k].chart)]);
     for (int d = 0; d < 16; ++d) {
       const Rgb v = b->radiance[k * 16 + std::size_t(d)];
-      const float c = dot(dirs[std::size_t(d)], n);
+      const float c = dot(f.to_world(dirs[std::size_t(d)]), n);
       if (std::abs(c) < 0.05f) continue;
       ASSERT_NEAR(v.r, c > 0 ? 1.6 : 0, 2e-3) << k << " " << d;
       ASSERT_NEAR(v.b, c > 0 ? 0.4 : 0, 1e-3) << k << " " << d;

@@ -203,9 +203,10 @@ const Ladder kLadders[] = {
      kSurfaceRungs,
      // With texels finer towards the lights (the default): they refine the coarsest rung only
      // (1024 texels: 0.171, 0.207, 0.210 against 0.174, 0.187, 0.219 with one texel size); the
-     // finer rungs' texels are already under 1/16 of the distance to the light.
+     // finer rungs' texels are already under 1/16 of the distance to the light. Walls across a
+     // chart and the charts' direction frames moved the two rooms' from 0.2097, 0.142, 0.08085.
      0.85,
-     {{{0.1713, 0.08478, 0.05402}, {0.2073, 0.09516, 0.05046}, {0.2097, 0.142, 0.08085}}}},
+     {{{0.1713, 0.08478, 0.05401}, {0.2073, 0.09516, 0.05046}, {0.2017, 0.1429, 0.08077}}}},
 };
 
 bool has_ladder(const std::string& method) {

@@ -1090,4 +1090,14 @@ Stats stats(const Scene& scene, const Atlas& a, const std::vector<Texel>& texels
   return s;
 }
 
+DirectionFrame direction_frame(const Chart& c) {
+  if (c.kind == ChartKind::sphere || c.from_lightmap) return {};
+  // The tangent from the normal alone, so that charts in one plane (two meshes of a floor, a
+  // seam's two sides) lay their maps alike; a fixed axis picked with a margin, so that rounding
+  // in a normal never turns it.
+  const Vec3 e = std::abs(c.n.z) > 0.9f ? Vec3{1, 0, 0} : Vec3{0, 0, 1};
+  const Vec3 y = normalize(cross(e, c.n));
+  return {c.n, y, cross(c.n, y)};
+}
+
 }  // namespace penumbra::spaceland::atlas

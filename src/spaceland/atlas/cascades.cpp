@@ -23,6 +23,7 @@ namespace {
 // cell holds no covered texel).
 struct Probe {
   Vec3 position, normal;
+  Vec3 local;  // the normal in its chart's direction frame (direction_frame), where its maps lie
   float x = 0, y = 0;  // its texel's centre in the atlas
   bool valid = false;
   std::uint32_t chart = 0;
@@ -65,6 +66,7 @@ Grid place(const Atlas& a, const std::vector<Texel>& texels, int spacing) {
   };
   parallel_for(int(a.charts.size()), [&](int c) {
     const Chart& ch = a.charts[std::size_t(c)];
+    const DirectionFrame frame = direction_frame(ch);
     for (int b = 0; b < g.ny[std::size_t(c)]; ++b)
       for (int i = 0; i < g.nx[std::size_t(c)]; ++i) {
         const float cx = float(ch.x) + (float(i) + 0.5f) * float(spacing);
@@ -83,6 +85,7 @@ Grid place(const Atlas& a, const std::vector<Texel>& texels, int spacing) {
             best = dx * dx + dy * dy;
             p = {t.claims > 0 ? t.position : inside(x, y, c, t.position),
                  t.normal,
+                 frame.to_local(t.normal),
                  float(x) + 0.5f,
                  float(y) + 0.5f,
                  true,
@@ -94,8 +97,10 @@ Grid place(const Atlas& a, const std::vector<Texel>& texels, int spacing) {
 }
 
 // The (up to) four probes of `upper` around atlas point (x, y) of chart c, bilinearly weighted
-// (the valid ones; merge_children normalises over those with light).
-cascade::Corners corners(const Atlas& a, const Grid& upper, std::size_t c, float x, float y) {
+// (the valid ones of those `seen` holds, bit j * 2 + i for corner (i, j); merge_children
+// normalises over those with light).
+cascade::Corners corners(const Atlas& a, const Grid& upper, std::size_t c, float x, float y,
+                         unsigned seen = 0xF) {
   const Chart& ch = a.charts[c];
   const float s = float(upper.spacing);
   const float gx = (x - float(ch.x)) / s - 0.5f, gy = (y - float(ch.y)) / s - 0.5f;
@@ -104,6 +109,7 @@ cascade::Corners corners(const Atlas& a, const Grid& upper, std::size_t c, float
   cascade::Corners k;
   for (int j = 0; j < 2; ++j)
     for (int i = 0; i < 2; ++i) {
+      if (!(seen >> (j * 2 + i) & 1u)) continue;
       const int px = std::clamp(x0 + i, 0, upper.nx[c] - 1);
       const int py = std::clamp(y0 + j, 0, upper.ny[c] - 1);
       const float w = (i ? fx : 1 - fx) * (j ? fy : 1 - fy);
@@ -115,6 +121,62 @@ cascade::Corners corners(const Atlas& a, const Grid& upper, std::size_t c, float
       ++k.n;
     }
   return k;
+}
+
+// How far off a flat chart the rays that look for walls run, in its texels: under any wall
+// that stands on it, over the surface's own rounding.
+constexpr float kWallLift = 1.0f / 20;
+
+bool planar(const Chart& c) {
+  return c.kind == ChartKind::disk || (c.kind == ChartKind::mesh && !c.from_lightmap);
+}
+
+// Whether a probe or texel of chart c with this normal lies on its flat part (on a curved one a
+// chord between two points runs under the surface).
+bool flat(const Chart& c, Vec3 normal) {
+  return planar(c) && std::abs(dot(normal, c.n)) >= 0.9999f;
+}
+
+// Per probe of `lower`, which of its four corners in `upper` (corners()) it sees along its
+// surface: bits 0-3 on the side its normal points to, 4-7 on the other. A probe by a room's wall
+// on a floor that runs on under it has corners past the wall, whose rays see outdoors: merged
+// in, they would bring the sky into the room along its walls (every direction in which the
+// probe's own short interval meets nothing). A wall between them hides a corner on both sides;
+// a probe off a flat part sees all of them.
+std::vector<std::uint8_t> seen_corners(const Atlas& a, const RayScene& rays, const Grid& lower,
+                                       const Grid& upper) {
+  std::vector<std::uint8_t> seen(lower.probes.size(), 0xFF);
+  parallel_for(int(lower.probes.size() + 255) / 256, [&](int block) {
+    const std::size_t stop = std::min(lower.probes.size(), std::size_t(block + 1) * 256);
+    for (std::size_t q = std::size_t(block) * 256; q < stop; ++q) {
+      const Probe& p = lower.probes[q];
+      const Chart& c = a.charts[p.chart];
+      if (!p.valid || !flat(c, p.normal)) continue;
+      const float s = float(upper.spacing);
+      const float gx = (p.x - float(c.x)) / s - 0.5f, gy = (p.y - float(c.y)) / s - 0.5f;
+      const int x0 = int(std::floor(gx)), y0 = int(std::floor(gy));
+      std::uint8_t bits = 0;
+      for (int j = 0; j < 2; ++j)
+        for (int i = 0; i < 2; ++i) {
+          const int px = std::clamp(x0 + i, 0, upper.nx[p.chart] - 1);
+          const int py = std::clamp(y0 + j, 0, upper.ny[p.chart] - 1);
+          const Probe& u =
+              upper
+                  .probes[upper.base[p.chart] +
+                          std::uint64_t(py) * std::uint64_t(upper.nx[p.chart]) + std::uint64_t(px)];
+          const unsigned bit = unsigned(j * 2 + i);
+          if (!u.valid) continue;
+          for (int side = 0; side < 2; ++side) {
+            const Vec3 lift = p.normal * ((side ? -kWallLift : kWallLift) * c.texel_size);
+            const Vec3 from = p.position + lift;
+            if (!rays.occluded(Ray{from, u.position + lift - from, 0, 1}))
+              bits = std::uint8_t(bits | 1u << (bit + 4 * unsigned(side)));
+          }
+        }
+      seen[q] = bits;
+    }
+  });
+  return seen;
 }
 
 // f(k, q) for every covered texel k of the atlas and its cascade-0 probe q (a probe per texel),
@@ -133,20 +195,62 @@ void for_each_texel_probe(const Atlas& a, const Grid& g0, F&& f) {
   });
 }
 
+// Whether direction d leaves a surface of normal n on the side whose cosine is `cos` (a
+// direction in the plane counts as the front's, where spawn() starts it).
+bool same_side(Vec3 n, Vec3 d, float cos) {
+  return (dot(n, d) >= 0) == (cos >= 0);
+}
+
+// A lower probe's ray that met nothing in its interval, merged (seed 001 eq. 13-14) with the
+// upper probes' children of its cell on the side of the surface it left from (`cos`, its
+// cosine): a cell across the plane of a thin wall has children on both sides, and those on the
+// far side were traced from there (outdoors, for a room's wall). False where none holds light.
+bool merge_side(const cascade::RadianceStore& above, const Grid& upper, const cascade::Corners& k,
+                const std::vector<Vec3>& dirs_above, Vec3 n, float cos, int u, int v, Rgb& out) {
+  const std::size_t side = std::size_t(above.side());
+  Rgb sum{};
+  float weight = 0;
+  for (int j = 0; j < k.n; ++j) {
+    const std::uint64_t q = k.index[std::size_t(j)];
+    const Rgb* probe = above.probe(q);
+    const Vec3 nu = upper.probes[q].local;
+    Rgb mean{};
+    int count = 0;
+    for (int dv = 0; dv < 2; ++dv)
+      for (int du = 0; du < 2; ++du) {
+        const std::size_t c = std::size_t(2 * v + dv) * side + std::size_t(2 * u + du);
+        if (!cascade::holds_light(probe[c]) || !same_side(n, dirs_above[c], cos) ||
+            !same_side(nu, dirs_above[c], cos))
+          continue;
+        mean += probe[c];
+        ++count;
+      }
+    if (count == 0) continue;
+    const float w = k.w[std::size_t(j)];
+    sum += mean * (w / float(count));
+    weight += w;
+  }
+  if (!(weight > 0)) return false;
+  out = sum * (1 / weight);
+  return true;
+}
+
 // Every covered texel's irradiance on each side from cascade 0 (store, side0 x side0 cells) at
 // cascade 1's directions (dirs1, 2 side0 on a side): a cell whose ray was merged gives each of its
 // 2x2 children the bilinear mean of the upper probes' child (those with light; the cell's own
 // value where none has), a cell whose ray met a surface its value, each weighted by its own
 // cosine.
-void fine_gather(const Atlas& a, const Grid& g0, const Grid& g1, const std::vector<Vec3>& dirs1,
-                 int side0, const cascade::RadianceStore& store,
+void fine_gather(const Atlas& a, const Grid& g0, const Grid& g1,
+                 const std::vector<std::uint8_t>& seen, const std::vector<Vec3>& dirs0,
+                 const std::vector<Vec3>& dirs1, int side0, const cascade::RadianceStore& store,
                  const cascade::RadianceStore& above, const std::vector<std::uint8_t>& merged,
                  std::vector<Rgb>& front, std::vector<Rgb>& back) {
   const std::size_t nd0 = std::size_t(side0) * std::size_t(side0);
   const std::size_t side1 = 2 * std::size_t(side0);
   for_each_texel_probe(a, g0, [&](std::size_t t, std::uint64_t q) {
     const Probe& p = g0.probes[q];
-    const cascade::Corners k = corners(a, g1, p.chart, p.x, p.y);
+    const cascade::Corners kf = corners(a, g1, p.chart, p.x, p.y, seen[q] & 0xFu);
+    const cascade::Corners kb = corners(a, g1, p.chart, p.x, p.y, unsigned(seen[q]) >> 4);
     const Rgb* values = store.probe(q);
     Rgb f{}, b{};
     float wf = 0, wb = 0;
@@ -154,24 +258,31 @@ void fine_gather(const Atlas& a, const Grid& g0, const Grid& g1, const std::vect
       for (int u = 0; u < side0; ++u) {
         const std::size_t d = std::size_t(v) * std::size_t(side0) + std::size_t(u);
         const Rgb& cell = values[d];
+        // The side of the surface the cell's own ray left from: its value is light on that side
+        // only (a cell across the surface's plane, on a thin wall, holds no light for the other).
+        const float cell_cos = dot(p.local, dirs0[d]);
         for (int dv = 0; dv < 2; ++dv)
           for (int du = 0; du < 2; ++du) {
             const std::size_t child = (2 * std::size_t(v) + std::size_t(dv)) * side1 +
                                       2 * std::size_t(u) + std::size_t(du);
-            Rgb l = cell;
+            const float cos_t = dot(p.local, dirs1[child]);
+            if (cos_t == 0) continue;
+            Rgb l = (cos_t > 0) == (cell_cos >= 0) ? cell : cascade::kNoLight;
+            const cascade::Corners& k = cos_t > 0 ? kf : kb;
             if (merged[q * nd0 + d]) {
               Rgb sum{};
               float w = 0;
               for (int j = 0; j < k.n; ++j) {
                 const Rgb& r = above.probe(k.index[std::size_t(j)])[child];
-                if (!cascade::holds_light(r)) continue;
+                if (!cascade::holds_light(r) ||
+                    !same_side(g1.probes[k.index[std::size_t(j)]].local, dirs1[child], cos_t))
+                  continue;
                 sum += r * k.w[std::size_t(j)];
                 w += k.w[std::size_t(j)];
               }
               if (w > 0) l = sum * (1 / w);
             }
             if (!cascade::holds_light(l)) continue;
-            const float cos_t = dot(p.normal, dirs1[child]);
             if (cos_t > 0) {
               f += l * cos_t;
               wf += cos_t;
@@ -221,18 +332,31 @@ Rgb Baked::light(std::size_t k, bool f, bool with_sun) const {
   return e;
 }
 
-Rgb Baked::within(std::uint32_t chart, Uv uv, bool front, bool with_sun, float& weight) const {
+template <class Keep>
+Rgb Baked::within(std::uint32_t chart, Uv uv, bool front, bool with_sun, float& weight,
+                  Keep&& keep) const {
   Rgb sum{};
   weight = 0;
   for_each_tap(atlas, uv, [&](std::size_t k, float w) {
-    if (texels[k].chart != int(chart)) return;
+    if (texels[k].chart != int(chart) || !keep(k)) return;
     sum += light(k, front, with_sun) * w;
     weight += w;
   });
   return sum;
 }
 
-Rgb Baked::irradiance_at(const Scene& scene, const Hit& hit, Vec3 towards, bool with_sun) const {
+namespace {
+
+// The centre of atlas texel (x, y) on planar chart c's plane, extended past its rim.
+Vec3 plane_point(const Chart& c, int x, int y) {
+  const float s = float(x - c.shift_x) + 0.5f, t = float(y - c.shift_y) + 0.5f;
+  return c.origin + (c.u * s + c.v * t) * c.texel_size;
+}
+
+}  // namespace
+
+Rgb Baked::irradiance_at(const Scene& scene, const RayScene& rays, const Hit& hit, Vec3 towards,
+                         bool with_sun) const {
   std::uint32_t chart = 0;
   const Uv uv = atlas.locate(scene, hit, chart);
   // The side is the hit's, read from every texel: a chart's normals (and a linked chart's) face
@@ -241,8 +365,21 @@ Rgb Baked::irradiance_at(const Scene& scene, const Hit& hit, Vec3 towards, bool 
   // surface: a small lamp's sphere of 2x2 texels, whose normals lie across the viewer's line,
   // read some texels' insides and shone at up to 1.7x its emission.
   const bool front = dot(hit.geometric_normal, towards) >= 0;
+  // By a wall: only the texels whose centre this point sees along the surface (a floor's texel
+  // past a room's wall sees the sun; one under it, the wall's inside).
+  bool near = false;
+  if (!walled.empty())
+    for_each_tap(atlas, uv, [&](std::size_t k, float) {
+      near = near || (texels[k].chart == int(chart) && walled[k]);
+    });
+  const Chart& c = atlas.charts[chart];
+  const Vec3 lift =
+      (front ? hit.geometric_normal : -hit.geometric_normal) * (kWallLift * c.texel_size);
+  const Vec3 from = hit.position + lift;
+  auto sees = [&](Vec3 centre) { return !rays.occluded(Ray{from, centre + lift - from, 0, 1}); };
+  auto keep = [&](std::size_t k) { return !near || sees(texels[k].position); };
   float weight = 0;
-  Rgb sum = within(chart, uv, front, with_sun, weight);
+  Rgb sum = within(chart, uv, front, with_sun, weight, keep);
   // Past the rim: the light where the surface goes on, read in its own chart.
   if (!seams.empty())
     for_each_tap(atlas, uv, [&](std::size_t k, float w) {
@@ -251,30 +388,42 @@ Rgb Baked::irradiance_at(const Scene& scene, const Hit& hit, Vec3 towards, bool 
           std::lower_bound(seams.begin(), seams.end(), std::uint32_t(k),
                            [](const SeamLink& l, std::uint32_t key) { return l.texel < key; });
       if (link == seams.end() || link->texel != k || link->from != chart) return;
+      if (near && planar(c) &&
+          !sees(
+              plane_point(c, int(k % std::size_t(atlas.width)), int(k / std::size_t(atlas.width)))))
+        return;
       float there = 0;
-      const Rgb e = within(link->chart, link->uv, front, with_sun, there);
+      const Rgb e =
+          within(link->chart, link->uv, front, with_sun, there, [](std::size_t) { return true; });
       if (there > 0) {
         sum += e * (w / there);
         weight += w;
       }
     });
   if (weight > 0) return sum * (1 / weight);
-  // None of the four counts (a point on a chart's rim): its chart's nearest covered texel, within
-  // the 2.5 texels locate() keeps to.
+  // None of the four counts (a point on a chart's rim, or walled off): its chart's nearest
+  // covered texel it sees, within the 2.5 texels locate() keeps to; the nearest one where it
+  // sees none.
   const int x0 = int(std::floor(uv.x - 0.5f)), y0 = int(std::floor(uv.y - 0.5f));
-  float best = 3e38f;
-  Rgb nearest{};
+  float best = 3e38f, best_seen = 3e38f;
+  Rgb nearest{}, nearest_seen{};
   for (int y = y0 - 2; y <= y0 + 3; ++y)
     for (int x = x0 - 2; x <= x0 + 3; ++x) {
       if (x < 0 || y < 0 || x >= atlas.width || y >= atlas.height) continue;
       const std::size_t k = std::size_t(y) * std::size_t(atlas.width) + std::size_t(x);
       if (texels[k].chart != int(chart)) continue;
       const float dx = float(x) + 0.5f - uv.x, dy = float(y) + 0.5f - uv.y;
-      if (dx * dx + dy * dy >= best) continue;
-      best = dx * dx + dy * dy;
-      nearest = light(k, front, with_sun);
+      const float d2 = dx * dx + dy * dy;
+      if (d2 < best) {
+        best = d2;
+        nearest = light(k, front, with_sun);
+      }
+      if (near && d2 < best_seen && sees(texels[k].position)) {
+        best_seen = d2;
+        nearest_seen = light(k, front, with_sun);
+      }
     }
-  return nearest;
+  return best_seen < 3e38f ? nearest_seen : nearest;
 }
 
 void link_seams(const Scene& scene, const RayScene& rays, Baked& b) {
@@ -283,9 +432,7 @@ void link_seams(const Scene& scene, const RayScene& rays, Baked& b) {
   std::vector<std::vector<Baked::SeamLink>> per_chart(a.charts.size());
   parallel_for(int(a.charts.size()), [&](int id) {
     const Chart& c = a.charts[std::size_t(id)];
-    const bool planar =
-        c.kind == ChartKind::disk || (c.kind == ChartKind::mesh && !c.from_lightmap);
-    if (!planar) return;
+    if (!planar(c)) return;
     for (int y = std::max(0, c.y - 1); y < std::min(a.height, c.y + c.height + 1); ++y)
       for (int x = std::max(0, c.x - 1); x < std::min(a.width, c.x + c.width + 1); ++x) {
         const std::size_t k = std::size_t(y) * std::size_t(a.width) + std::size_t(x);
@@ -302,8 +449,7 @@ void link_seams(const Scene& scene, const RayScene& rays, Baked& b) {
         if (rim < 0) continue;
         const Vec3 n = b.texels[std::size_t(rim)].normal;
         // The empty texel's centre on the chart's plane, extended past its rim.
-        const float s = float(x - c.shift_x) + 0.5f, t = float(y - c.shift_y) + 0.5f;
-        const Vec3 q = c.origin + (c.u * s + c.v * t) * c.texel_size;
+        const Vec3 q = plane_point(c, x, y);
         const float reach = 1.5f * c.texel_size;
         Hit h;
         if (!rays.intersect(Ray{q + n * reach, -n, 0, 2 * reach}, h)) continue;
@@ -318,6 +464,33 @@ void link_seams(const Scene& scene, const RayScene& rays, Baked& b) {
   for (const auto& links : per_chart) b.seams.insert(b.seams.end(), links.begin(), links.end());
   std::sort(b.seams.begin(), b.seams.end(),
             [](const Baked::SeamLink& l, const Baked::SeamLink& r) { return l.texel < r.texel; });
+}
+
+void mark_walls(const RayScene& rays, Baked& b) {
+  const Atlas& a = b.atlas;
+  b.walled.assign(b.texels.size(), 0);
+  std::atomic<bool> any{false};
+  parallel_for(a.height, [&](int y) {
+    for (int x = 0; x < a.width; ++x) {
+      const std::size_t k = std::size_t(y) * std::size_t(a.width) + std::size_t(x);
+      const Texel& t = b.texels[k];
+      if (t.chart < 0) continue;
+      const Chart& c = a.charts[std::size_t(t.chart)];
+      // A flat part: a curved surface's own chord would pass under it.
+      if (!flat(c, t.normal)) continue;
+      for (const float side : {1.0f, -1.0f}) {
+        const Vec3 lift = t.normal * (side * kWallLift * c.texel_size);
+        const Vec3 from = t.position + lift;
+        for (int dy = -1; dy <= 1 && !b.walled[k]; ++dy)
+          for (int dx = -1; dx <= 1 && !b.walled[k]; ++dx)
+            if ((dx || dy) &&
+                rays.occluded(Ray{from, plane_point(c, x + dx, y + dy) + lift - from, 0, 1}))
+              b.walled[k] = 1;
+      }
+      if (b.walled[k]) any.store(true, std::memory_order_relaxed);
+    }
+  });
+  if (!any.load()) b.walled.clear();
 }
 
 Expected<Baked> bake(const Scene& scene, const RayScene& rays, const Options& atlas_options,
@@ -381,6 +554,13 @@ Expected<Baked> bake(const Scene& scene, const RayScene& rays, const Options& at
                  " MiB, more than the " + std::to_string(max_bytes >> 20) +
                  " MiB allowed; use fewer texels (a larger texel size) or a smaller side0"};
   report.stages.push_back({"probes", watch.ms()});
+  // The walls that merges and the lookups of light reflected past the first bounce keep to.
+  watch.restart();
+  mark_walls(rays, out);
+  std::vector<std::vector<std::uint8_t>> seen;
+  for (int i = 0; i + 1 < l.count; ++i)
+    seen.push_back(seen_corners(a, rays, grids[std::size_t(i)], grids[std::size_t(i) + 1]));
+  report.stages.push_back({"walls", watch.ms()});
 
   const Background bg(scene);
   const std::size_t n_texels = out.texels.size();
@@ -413,6 +593,8 @@ Expected<Baked> bake(const Scene& scene, const RayScene& rays, const Options& at
 
   std::vector<std::vector<Vec3>> dirs;
   for (int i = 0; i < l.count; ++i) dirs.push_back(cascade::direction_map(l, i));
+  std::vector<DirectionFrame> frames;
+  for (const Chart& c : a.charts) frames.push_back(direction_frame(c));
 
   for (int bounce = 1; bounce <= o.bounces; ++bounce) {
     watch.restart();
@@ -423,7 +605,7 @@ Expected<Baked> bake(const Scene& scene, const RayScene& rays, const Options& at
     auto met = [&](Hit& h, Vec3 d) {
       Rgb radiance = emission_at(scene, h);
       if (last)
-        radiance += albedo_at(scene, h) * last->irradiance_at(scene, h, -d) * float(1 / kPi);
+        radiance += albedo_at(scene, h) * last->irradiance_at(scene, rays, h, -d) * float(1 / kPi);
       return radiance;
     };
     std::atomic<std::uint64_t> traced{0};
@@ -457,13 +639,25 @@ Expected<Baked> bake(const Scene& scene, const RayScene& rays, const Options& at
               // has its cascades' probes and intervals closer alike (the penumbra condition).
               const float scale = std::ldexp(1.0f, -a.charts[p.chart].level);
               const float start = scale * start_i, end = scale * end_i;
-              const cascade::Corners k =
+              const DirectionFrame& frame = frames[p.chart];
+              // The corners above it that it sees, on each side.
+              const unsigned bits = l.top(i) ? 0 : seen[std::size_t(i)][q];
+              const cascade::Corners kf =
                   l.top(i) ? cascade::Corners{}
-                           : corners(a, grids[std::size_t(i) + 1], p.chart, p.x, p.y);
+                           : corners(a, grids[std::size_t(i) + 1], p.chart, p.x, p.y, bits & 0xF);
+              const cascade::Corners kb =
+                  l.top(i) ? cascade::Corners{}
+                           : corners(a, grids[std::size_t(i) + 1], p.chart, p.x, p.y, bits >> 4);
               Rgb* values = store.probe(q);
               for (int v = 0; v < side; ++v)
                 for (int u = 0; u < side; ++u) {
-                  const Vec3 d = dir[std::size_t(v) * std::size_t(side) + std::size_t(u)];
+                  // The map lies in the chart's frame (no cell of a flat chart's across its
+                  // plane); the ray in the world's.
+                  const Vec3 dl = dir[std::size_t(v) * std::size_t(side) + std::size_t(u)];
+                  const Vec3 d = frame.to_world(dl);
+                  // Its side of the surface (a direction in the plane counts as the front's,
+                  // where spawn() starts it).
+                  const float cos = dot(dl, p.local);
                   const Vec3 from = rays.spawn(p.position, p.normal, d);
                   // One ray from the probe itself: a hit before the interval starts means its start
                   // lies behind a surface (past a room's wall, for a probe near a corner), so this
@@ -476,7 +670,8 @@ Expected<Baked> bake(const Scene& scene, const RayScene& rays, const Options& at
                     value = h.t < start ? cascade::kNoLight : met(h, d);
                   } else if (l.top(i)) {
                     value = bg.sky(d);
-                  } else if (cascade::merge_children(above, k, u, v, 2, value)) {
+                  } else if (merge_side(above, grids[std::size_t(i) + 1], cos >= 0 ? kf : kb,
+                                        dirs[std::size_t(i) + 1], p.local, cos, u, v, value)) {
                     if (fine && i == 0)
                       merged0[q * nd0 + std::size_t(v) * std::size_t(side) + std::size_t(u)] = 1;
                   } else {
@@ -491,8 +686,8 @@ Expected<Baked> bake(const Scene& scene, const RayScene& rays, const Options& at
             traced.fetch_add(local, std::memory_order_relaxed);
           });
           if (fine && i == 0) {
-            fine_gather(a, g, grids[1], dirs[1], side, store, above, merged0, next_front,
-                        next_back);
+            fine_gather(a, g, grids[1], seen[0], dirs[0], dirs[1], side, store, above, merged0,
+                        next_front, next_back);
             gathered = true;
           }
           report.stages.push_back(
@@ -506,7 +701,7 @@ Expected<Baked> bake(const Scene& scene, const RayScene& rays, const Options& at
       for_each_texel_probe(a, g0, [&](std::size_t k, std::uint64_t q) {
         // Irradiance over pi is the cosine-weighted mean (the core's normalised weights: a
         // uniform sky gives pi L on any map).
-        const Vec3 n = g0.probes[q].normal;
+        const Vec3 n = g0.probes[q].local;
         Rgb f{}, bk{};
         cascade::cosine_mean(d0, n, c0, q, f);
         cascade::cosine_mean(d0, -n, c0, q, bk);

@@ -1,9 +1,11 @@
 // Surface radiance cascades (seed 001 section 2.5.3): probes on the atlas's texels, cascade i
 // a probe every 2^i texels of a chart with an octahedral map of (side0 2^i)^2 directions (4x
-// per cascade) and the interval [t0 4^(i-1), t0 4^i], so every cascade holds about the same
-// memory (M_i = M_0). Each interval is traced with Embree from the probe's surface point; a
-// direction that meets nothing takes the mean of its four children at the (up to) four
-// cascade-(i+1) probes of the same chart around it, bilinearly weighted. Cascade 0's probes are
+// per cascade, laid in the chart's direction frame) and the interval [t0 4^(i-1), t0 4^i], so
+// every cascade holds about the same memory (M_i = M_0). Each interval is traced with Embree from
+// the probe's surface point, on the side of the surface its direction leaves from; a direction
+// that meets nothing takes the mean of its children on that side at the (up to) four
+// cascade-(i+1) probes of the same chart around it that it sees along the surface, bilinearly
+// weighted (a wall standing on a floor that runs under it parts them). Cascade 0's probes are
 // the texels: their irradiance, with the sun's, is the baked light. Bounces feed each texel's
 // reflected light back into the next solve. docs/METHODS.md, "Surface radiance cascades".
 #pragma once
@@ -68,8 +70,8 @@ struct Baked {
   std::vector<Rgb> front, back, sun_front, sun_back;
   // Where the bake kept it (CascadeOptions::keep_radiance): per texel, the last solve's radiance
   // arriving from each direction of cascade 0's side0 x side0 equal-area octahedral map of the
-  // sphere (cascade::direction_map, index v side0 + u), sun excluded; zero on uncovered texels.
-  // Empty otherwise.
+  // sphere (cascade::direction_map, index v side0 + u) in its chart's direction frame
+  // (direction_frame), sun excluded; zero on uncovered texels. Empty otherwise.
   int side0 = 0;
   std::vector<Rgb> radiance;
 
@@ -83,17 +85,27 @@ struct Baked {
     Uv uv;
   };
   std::vector<SeamLink> seams;
+  // Per texel (mark_walls): 1 where the flat chart it lies on runs on under a surface within a
+  // texel of it (a wall standing on a floor that passes under it, a box on the ground), so the
+  // texels around it may lie on either side; a lookup near one keeps to the texels it sees.
+  // Empty: none marked.
+  std::vector<std::uint8_t> walled;
 
   // The irradiance at a surface point on the side `towards` points to (minus the ray's
   // direction), from the texels around it: bilinear over the covered ones of its chart and, past
   // its rim where a seam link continues it, over the other chart's light there; the nearest
   // covered texel of the chart where none of the four counts; the sun's share too where
-  // `with_sun`.
-  Rgb irradiance_at(const Scene& scene, const Hit& hit, Vec3 towards, bool with_sun = true) const;
+  // `with_sun`. Where one of the four is walled, only those whose centre the point sees along
+  // the surface count (one short ray each), so that light from past a wall does not bleed in.
+  Rgb irradiance_at(const Scene& scene, const RayScene& rays, const Hit& hit, Vec3 towards,
+                    bool with_sun = true) const;
 
  private:
-  // Bilinear over the covered texels of `chart` around uv; weight 0 where none of the four is.
-  Rgb within(std::uint32_t chart, Uv uv, bool front, bool with_sun, float& weight) const;
+  // Bilinear over the covered texels of `chart` around uv that `keep(k)`; weight 0 where none
+  // of the four is.
+  template <class Keep>
+  Rgb within(std::uint32_t chart, Uv uv, bool front, bool with_sun, float& weight,
+             Keep&& keep) const;
   // Texel k's light on the side its normal points to (front) or the other.
   Rgb light(std::size_t k, bool front, bool with_sun) const;
 };
@@ -104,6 +116,12 @@ struct Baked {
 // within 45 degrees of the rim's normal (a crease, such as a box's edge, is no continuation).
 // docs/METHODS.md, "Across seams".
 void link_seams(const Scene& scene, const RayScene& rays, Baked& baked);
+
+// Marks the walled texels (Baked::walled): those of a flat part of a planar chart from whose
+// centre, lifted a twentieth of a texel off the surface on either side, a ray to one of its
+// eight neighbours' centres (on the chart's plane extended, past its rim too) meets a surface.
+// docs/METHODS.md, "Walls across a chart".
+void mark_walls(const RayScene& rays, Baked& baked);
 
 // Bakes the scene's light into a new atlas (`atlas_options`). Errors: the atlas's, options out of
 // range, a store larger than `max_bytes`.

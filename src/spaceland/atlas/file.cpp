@@ -15,7 +15,8 @@ namespace penumbra::spaceland::atlas {
 namespace {
 
 constexpr const char* kWorld = "3d surface atlas";  // the "penumbra" attribute
-constexpr int kVersion = 1;
+// 2: radiance.K in each chart's direction frame (1: the world's), and the chart list gives it.
+constexpr int kVersion = 2;
 constexpr float kHalfMax = 65504;  // the largest finite 16-bit float
 
 const char* kind_name(ChartKind k) {
@@ -119,7 +120,8 @@ Status write_atlas(const std::string& path, const Baked& b, const Record& r) {
                            {"bounces", r.bounces},
                            {"light_exponent", r.light_exponent}};
   nlohmann::json charts = nlohmann::json::array();
-  for (const Chart& c : a.charts)
+  for (const Chart& c : a.charts) {
+    const DirectionFrame f = direction_frame(c);
     charts.push_back({{"kind", kind_name(c.kind)},
                       {"shape", c.shape},
                       {"object", c.object},
@@ -127,7 +129,9 @@ Status write_atlas(const std::string& path, const Baked& b, const Record& r) {
                       {"y", c.y},
                       {"width", c.width},
                       {"height", c.height},
-                      {"lightmap", c.from_lightmap}});
+                      {"lightmap", c.from_lightmap},
+                      {"frame", {f.x.x, f.x.y, f.x.z, f.y.x, f.y.y, f.y.z, f.z.x, f.z.y, f.z.z}}});
+  }
   img.attributes = {{"penumbra", kWorld},
                     {"penumbra.version", std::to_string(kVersion)},
                     {"penumbra.scene_hash", hex(r.scene_hash)},
@@ -139,7 +143,9 @@ Status write_atlas(const std::string& path, const Baked& b, const Record& r) {
          "radiance.K.{R,G,B}: the radiance arriving from direction K = v * " +
              std::to_string(b.side0) + " + u, the centre of cell (u, v) of the " +
              std::to_string(b.side0) + "x" + std::to_string(b.side0) +
-             " equal-area octahedral map of the sphere (world space), sun excluded"});
+             " equal-area octahedral map of the sphere in the texel's chart's direction frame "
+             "(penumbra.charts[c].frame: the map's x, y and z axes in the world), sun "
+             "excluded"});
 
   {
     io::ExrChannel& c = img.channels.emplace_back();

@@ -162,13 +162,19 @@ Expected<ImageRgb> render(const SolveContext& ctx, const SurfaceOptions& o, Solv
   Stopwatch watch;
   link_seams(ctx.scene, ctx.rays, *baked);
   report.stages.push_back({"seams", watch.ms()});
+  if (!o.atlas.empty()) {
+    // A bake marked them; a file does not hold them.
+    watch.restart();
+    mark_walls(ctx.rays, *baked);
+    report.stages.push_back({"walls", watch.ms()});
+  }
   watch.restart();
   const Background bg(ctx.scene);
   const SunLight sun(ctx.scene, ctx.rays, ctx.sun_rays);
   ImageRgb img = shade_pixels(
       ctx.g, bg, report.rays, [&](int, int, std::size_t k, const Hit& h, std::uint64_t& local) {
         const Rgb albedo = albedo_at(ctx.scene, h);
-        const Rgb e = baked->irradiance_at(ctx.scene, h, -ctx.g.directions[k], false);
+        const Rgb e = baked->irradiance_at(ctx.scene, ctx.rays, h, -ctx.g.directions[k], false);
         return emission_at(ctx.scene, h) + albedo * e * float(1 / kPi) +
                sun.reflected(h, albedo, local);
       });

@@ -131,10 +131,16 @@ bool planar(const Chart& c) {
   return c.kind == ChartKind::disk || (c.kind == ChartKind::mesh && !c.from_lightmap);
 }
 
-// Whether a probe or texel of chart c with this normal lies on its flat part (on a curved one a
-// chord between two points runs under the surface).
-bool flat(const Chart& c, Vec3 normal) {
-  return planar(c) && std::abs(dot(normal, c.n)) >= 0.9999f;
+// Per chart, whether it is flat: planar with every covered texel's normal its plane's. Walls are
+// looked for on flat charts only: on a curved one (a mesh chart spans up to 45 degrees of normals)
+// a chord between two of its points runs under the surface and would meet the chart itself.
+std::vector<std::uint8_t> flat_charts(const Atlas& a, const std::vector<Texel>& texels) {
+  std::vector<std::uint8_t> flat(a.charts.size());
+  for (std::size_t c = 0; c < a.charts.size(); ++c) flat[c] = planar(a.charts[c]);
+  for (const Texel& t : texels)
+    if (t.chart >= 0 && std::abs(dot(t.normal, a.charts[std::size_t(t.chart)].n)) < 0.9999f)
+      flat[std::size_t(t.chart)] = 0;
+  return flat;
 }
 
 // Per probe of `lower`, which of its four corners in `upper` (corners()) it sees along its
@@ -142,8 +148,9 @@ bool flat(const Chart& c, Vec3 normal) {
 // on a floor that runs on under it has corners past the wall, whose rays see outdoors: merged
 // in, they would bring the sky into the room along its walls (every direction in which the
 // probe's own short interval meets nothing). A wall between them hides a corner on both sides;
-// a probe off a flat part sees all of them.
-std::vector<std::uint8_t> seen_corners(const Atlas& a, const RayScene& rays, const Grid& lower,
+// a probe of a chart that is not flat (flat_charts) sees all of them.
+std::vector<std::uint8_t> seen_corners(const Atlas& a, const RayScene& rays,
+                                       const std::vector<std::uint8_t>& flat, const Grid& lower,
                                        const Grid& upper) {
   std::vector<std::uint8_t> seen(lower.probes.size(), 0xFF);
   parallel_for(int(lower.probes.size() + 255) / 256, [&](int block) {
@@ -151,7 +158,7 @@ std::vector<std::uint8_t> seen_corners(const Atlas& a, const RayScene& rays, con
     for (std::size_t q = std::size_t(block) * 256; q < stop; ++q) {
       const Probe& p = lower.probes[q];
       const Chart& c = a.charts[p.chart];
-      if (!p.valid || !flat(c, p.normal)) continue;
+      if (!p.valid || !flat[p.chart]) continue;
       const float s = float(upper.spacing);
       const float gx = (p.x - float(c.x)) / s - 0.5f, gy = (p.y - float(c.y)) / s - 0.5f;
       const int x0 = int(std::floor(gx)), y0 = int(std::floor(gy));
@@ -469,6 +476,7 @@ void link_seams(const Scene& scene, const RayScene& rays, Baked& b) {
 void mark_walls(const RayScene& rays, Baked& b) {
   const Atlas& a = b.atlas;
   b.walled.assign(b.texels.size(), 0);
+  const std::vector<std::uint8_t> flat = flat_charts(a, b.texels);
   std::atomic<bool> any{false};
   parallel_for(a.height, [&](int y) {
     for (int x = 0; x < a.width; ++x) {
@@ -476,8 +484,7 @@ void mark_walls(const RayScene& rays, Baked& b) {
       const Texel& t = b.texels[k];
       if (t.chart < 0) continue;
       const Chart& c = a.charts[std::size_t(t.chart)];
-      // A flat part: a curved surface's own chord would pass under it.
-      if (!flat(c, t.normal)) continue;
+      if (!flat[std::size_t(t.chart)]) continue;
       for (const float side : {1.0f, -1.0f}) {
         const Vec3 lift = t.normal * (side * kWallLift * c.texel_size);
         const Vec3 from = t.position + lift;
@@ -557,9 +564,10 @@ Expected<Baked> bake(const Scene& scene, const RayScene& rays, const Options& at
   // The walls that merges and the lookups of light reflected past the first bounce keep to.
   watch.restart();
   mark_walls(rays, out);
+  const std::vector<std::uint8_t> flat = flat_charts(a, out.texels);
   std::vector<std::vector<std::uint8_t>> seen;
   for (int i = 0; i + 1 < l.count; ++i)
-    seen.push_back(seen_corners(a, rays, grids[std::size_t(i)], grids[std::size_t(i) + 1]));
+    seen.push_back(seen_corners(a, rays, flat, grids[std::size_t(i)], grids[std::size_t(i) + 1]));
   report.stages.push_back({"walls", watch.ms()});
 
   const Background bg(scene);

@@ -117,7 +117,8 @@ struct Baked {
 // docs/METHODS.md, "Across seams".
 void link_seams(const Scene& scene, const RayScene& rays, Baked& baked);
 
-// Marks the walled texels (Baked::walled): those of a flat part of a planar chart from whose
+// Marks the walled texels (Baked::walled): those of a flat chart (planar, every texel's normal
+// its plane's) from whose
 // centre, lifted a twentieth of a texel off the surface on either side, a ray to one of its
 // eight neighbours' centres (on the chart's plane extended, past its rim too) meets a surface.
 // docs/METHODS.md, "Walls across a chart".

@@ -259,6 +259,45 @@ TEST(SurfaceCascades, ARoomWhoseFloorRunsOnPastItsWallsIsDarkInside) {
   }
 }
 
+// A black sphere resting on a floor under a uniform sky L: at distance d from its centre a floor
+// point sees it fill the view factor (R / d)^2 cos = R^3 / d^3, so E = pi L (1 - R^3 / d^3), down
+// to 0 at the contact. The sphere's underside meets the floor at a grazing angle: it is no wall
+// (walls across a chart), and the contact shadow is read from every texel around it. Texels about
+// the sphere's size, as on the sky over a black sphere (a ground of radius 100): taken for a wall,
+// the texel under the sphere was left out of every lookup around it (0.31 here).
+TEST(SurfaceCascades, ASphereRestingOnAFloorCastsItsContactShadow) {
+  Scene s;
+  s.sky = {{1, 1, 1}, {1, 1, 1}, {1, 1, 1}};
+  add_floor(s, 20, {0.5f, 0.5f, 0.5f});
+  const float r = 0.5f;
+  add_sphere(s, {0, r, 0}, r, add_material(s, {0, 0, 0}));
+  Expected<RayScene> rays = RayScene::build(s);
+  ASSERT_TRUE(rays);
+  atlas::Options ao;
+  ao.texels = 1 << 12;
+  atlas::CascadeOptions co;
+  co.side0 = 8;
+  atlas::BakeReport report;
+  const atlas::Baked b = bake_ok(s, *rays, ao, co, report);
+  double se = 0, sw = 0;
+  for (int i = 1; i <= 30; ++i)
+    for (int j = 0; j < 24; ++j) {
+      const float rho = 2 * r * float(i) / 30, a = float(j) * float(kPi) / 12;
+      const Vec3 p{rho * std::cos(a), 0, rho * std::sin(a)};
+      Hit h;
+      // From above, past the sphere's side where it hides the point.
+      ASSERT_TRUE(rays->intersect(Ray{p + Vec3{0, 0.01f, 0}, {0, -1, 0}, 0, 1}, h));
+      const double d = std::sqrt(double(rho) * rho + double(r) * r);
+      const double want = kPi * (1 - std::pow(r / d, 3));
+      const double got = b.irradiance_at(s, *rays, h, {0, 1, 0}).g;
+      se += (got - want) * (got - want);
+      sw += want * want;
+    }
+  const double e = std::sqrt(se / sw);
+  std::printf("surface_cascades_test: a black sphere's contact shadow, rel. RMSE %.4g\n", e);
+  EXPECT_LT(e, 0.1);  // measured 0.078
+}
+
 TEST(SurfaceCascades, RendersTheEnclosureOnAnyThreadCountAndRefusesFog) {
   const Scene s = furnace(false, 16, 12);
   RenderOptions o;

@@ -13,6 +13,7 @@
 #include <random>
 #include <string>
 
+#include "core/octahedral.hpp"
 #include "penumbra/spaceland/scene.hpp"
 #include "spaceland/scene_builders.hpp"
 
@@ -199,6 +200,58 @@ TEST(Atlas, TheOctahedralMapRoundTrips) {
     const atlas::Uv p = atlas::octahedral(d);
     ASSERT_TRUE(p.x >= 0 && p.x <= 1 && p.y >= 0 && p.y <= 1);
     EXPECT_LT(length(atlas::from_octahedral(p) - d), 1e-5f);
+  }
+}
+
+// A planar chart's direction frame has x along its normal and is a rotation; charts in one plane
+// share it; and in it no cell of the equal-area octahedral map of any side the cascades use lies
+// across the surface: every cell's corners and centre have x of one sign (or 0, on the plane).
+// In the world's frame a surface facing z has cells centred in its own plane (the map's diamond).
+TEST(Atlas, AFlatChartsDirectionFrameHasNoCellAcrossItsPlane) {
+  Scene s;
+  const std::uint32_t m = add_material(s, {0.5f, 0.5f, 0.5f});
+  add_quad(s, {0, 0, 0}, {1, 0, 0}, {0, 1, 0}, m);         // facing z
+  add_quad(s, {2, 0, 0}, {0, 1, 0}, {1, 0, 0}, m);         // the same plane, facing -z
+  add_quad(s, {0, 3, 0}, {0.6f, 0.8f, 0}, {0, 0, 1}, m);   // turned
+  add_quad(s, {5, 0, 0}, {1, 0, 0}, {0, 1.0f, 1e-7f}, m);  // z, up to rounding
+  Expected<atlas::Atlas> a = atlas::make_atlas(s, {});
+  ASSERT_TRUE(a) << a.error().message;
+  std::vector<atlas::DirectionFrame> frames;
+  for (const atlas::Chart& c : a->charts) {
+    const atlas::DirectionFrame f = atlas::direction_frame(c);
+    EXPECT_NEAR(length(f.x - c.n), 0, 1e-6);
+    EXPECT_NEAR(dot(f.x, f.y), 0, 1e-6);
+    EXPECT_NEAR(length(cross(f.x, f.y) - f.z), 0, 1e-6);
+    frames.push_back(f);
+  }
+  // Charts in parallel planes (the two facing z and -z, and the one facing z up to rounding) lay
+  // their maps alike.
+  int parallel = 0;
+  for (std::size_t p = 0; p < frames.size(); ++p)
+    for (std::size_t q = p + 1; q < frames.size(); ++q)
+      if (std::abs(dot(frames[p].x, frames[q].x)) > 0.9999f) {
+        ++parallel;
+        EXPECT_NEAR(std::abs(dot(frames[p].y, frames[q].y)), 1, 1e-5) << p << " " << q;
+      }
+  EXPECT_EQ(parallel, 3);
+  for (int side = 2; side <= 64; side *= 2) {
+    int across_world = 0;
+    for (int j = 0; j < side; ++j)
+      for (int i = 0; i < side; ++i) {
+        // The cell's corners and centre in the map's own axes; x is its normal component.
+        bool pos = false, neg = false, pos_z = false, neg_z = false;
+        for (const double du : {0.0, 0.5, 1.0})
+          for (const double dv : {0.0, 0.5, 1.0}) {
+            const Vec3 d = octahedral::decode(2 * (i + du) / side - 1, 2 * (j + dv) / side - 1);
+            pos = pos || d.x > 1e-6f;
+            neg = neg || d.x < -1e-6f;
+            pos_z = pos_z || d.z > 1e-6f;
+            neg_z = neg_z || d.z < -1e-6f;
+          }
+        EXPECT_FALSE(pos && neg) << "cell " << i << " " << j << " of " << side;
+        across_world += pos_z && neg_z;
+      }
+    EXPECT_GT(across_world, 0) << side << ": the world's z = 0 crosses cells";
   }
 }
 

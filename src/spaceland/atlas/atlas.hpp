@@ -82,11 +82,11 @@ struct Chart {
 
 // The frame a chart's direction maps are laid in (surface cascades, the radiance an atlas file
 // keeps): x along a planar chart's normal, y across it and the world's z (x where the normal is
-// within 26 degrees of z), z = x cross y; the world's axes for a
-// sphere's chart and one made from lightmap UVs. The equal-area octahedral map's cells meet along
-// the plane x = 0 at every resolution (its sign is u's), so no cell of a flat chart's maps lies
-// across its surface: in the world's frame a surface facing z has the cells of the map's diamond
-// centred in its plane, and a thin wall's cell traced on one side would stand for the other too.
+// within 26 degrees of z), z = x cross y; the world's axes for a sphere's chart and one made from
+// lightmap UVs. The equal-area octahedral map's cells meet along the plane x = 0 at every
+// resolution (its sign is u's), so no cell of a flat chart's maps lies across its surface: in the
+// world's frame a surface facing z has the cells of the map's diamond centred in its plane, and a
+// thin wall's cell traced on one side would stand for the other too.
 struct DirectionFrame {
   Vec3 x{1, 0, 0}, y{0, 1, 0}, z{0, 0, 1};
   Vec3 to_world(Vec3 l) const { return x * l.x + y * l.y + z * l.z; }

@@ -96,30 +96,37 @@ Grid place(const Atlas& a, const std::vector<Texel>& texels, int spacing) {
   return g;
 }
 
-// The (up to) four probes of `upper` around atlas point (x, y) of chart c, bilinearly weighted
-// (the valid ones of those `seen` holds, bit j * 2 + i for corner (i, j); merge_children
-// normalises over those with light).
-cascade::Corners corners(const Atlas& a, const Grid& upper, std::size_t c, float x, float y,
-                         unsigned seen = 0xF) {
+// f(bit, q, w) for the four probes of `upper` around atlas point (x, y) of chart c (clamped to
+// its grid): corner (i, j) as bit j * 2 + i, its probe's index q and its bilinear weight w.
+template <class F>
+void for_each_corner(const Atlas& a, const Grid& upper, std::size_t c, float x, float y, F&& f) {
   const Chart& ch = a.charts[c];
   const float s = float(upper.spacing);
   const float gx = (x - float(ch.x)) / s - 0.5f, gy = (y - float(ch.y)) / s - 0.5f;
   const int x0 = int(std::floor(gx)), y0 = int(std::floor(gy));
   const float fx = gx - float(x0), fy = gy - float(y0);
-  cascade::Corners k;
   for (int j = 0; j < 2; ++j)
     for (int i = 0; i < 2; ++i) {
-      if (!(seen >> (j * 2 + i) & 1u)) continue;
       const int px = std::clamp(x0 + i, 0, upper.nx[c] - 1);
       const int py = std::clamp(y0 + j, 0, upper.ny[c] - 1);
-      const float w = (i ? fx : 1 - fx) * (j ? fy : 1 - fy);
-      const std::uint64_t q =
-          upper.base[c] + std::uint64_t(py) * std::uint64_t(upper.nx[c]) + std::uint64_t(px);
-      if (w <= 0 || !upper.probes[q].valid) continue;
-      k.index[std::size_t(k.n)] = q;
-      k.w[std::size_t(k.n)] = w;
-      ++k.n;
+      f(unsigned(j * 2 + i),
+        upper.base[c] + std::uint64_t(py) * std::uint64_t(upper.nx[c]) + std::uint64_t(px),
+        (i ? fx : 1 - fx) * (j ? fy : 1 - fy));
     }
+}
+
+// The (up to) four probes of `upper` around atlas point (x, y) of chart c, bilinearly weighted
+// (the valid ones of those `seen` holds, bit j * 2 + i for corner (i, j); merge_children
+// normalises over those with light).
+cascade::Corners corners(const Atlas& a, const Grid& upper, std::size_t c, float x, float y,
+                         unsigned seen = 0xF) {
+  cascade::Corners k;
+  for_each_corner(a, upper, c, x, y, [&](unsigned bit, std::uint64_t q, float w) {
+    if (!(seen >> bit & 1u) || w <= 0 || !upper.probes[q].valid) return;
+    k.index[std::size_t(k.n)] = q;
+    k.w[std::size_t(k.n)] = w;
+    ++k.n;
+  });
   return k;
 }
 
@@ -175,27 +182,17 @@ std::vector<std::uint8_t> seen_corners(const Atlas& a, const RayScene& rays,
       const Probe& p = lower.probes[q];
       const Chart& c = a.charts[p.chart];
       if (!p.valid || !flat[p.chart]) continue;
-      const float s = float(upper.spacing);
-      const float gx = (p.x - float(c.x)) / s - 0.5f, gy = (p.y - float(c.y)) / s - 0.5f;
-      const int x0 = int(std::floor(gx)), y0 = int(std::floor(gy));
       std::uint8_t bits = 0;
-      for (int j = 0; j < 2; ++j)
-        for (int i = 0; i < 2; ++i) {
-          const int px = std::clamp(x0 + i, 0, upper.nx[p.chart] - 1);
-          const int py = std::clamp(y0 + j, 0, upper.ny[p.chart] - 1);
-          const Probe& u =
-              upper
-                  .probes[upper.base[p.chart] +
-                          std::uint64_t(py) * std::uint64_t(upper.nx[p.chart]) + std::uint64_t(px)];
-          const unsigned bit = unsigned(j * 2 + i);
-          if (!u.valid) continue;
-          for (int side = 0; side < 2; ++side) {
-            const Vec3 lift = p.normal * ((side ? -kWallLift : kWallLift) * c.texel_size);
-            const Vec3 from = p.position + lift;
-            if (!wall_between(rays, from, u.position + lift, c.n))
-              bits = std::uint8_t(bits | 1u << (bit + 4 * unsigned(side)));
-          }
+      for_each_corner(a, upper, p.chart, p.x, p.y, [&](unsigned bit, std::uint64_t uq, float) {
+        const Probe& u = upper.probes[uq];
+        if (!u.valid) return;
+        for (int side = 0; side < 2; ++side) {
+          const Vec3 lift = p.normal * ((side ? -kWallLift : kWallLift) * c.texel_size);
+          const Vec3 from = p.position + lift;
+          if (!wall_between(rays, from, u.position + lift, c.n))
+            bits = std::uint8_t(bits | 1u << (bit + 4 * unsigned(side)));
         }
+      });
       seen[q] = bits;
     }
   });
@@ -230,32 +227,9 @@ bool same_side(Vec3 n, Vec3 d, float cos) {
 // far side were traced from there (outdoors, for a room's wall). False where none holds light.
 bool merge_side(const cascade::RadianceStore& above, const Grid& upper, const cascade::Corners& k,
                 const std::vector<Vec3>& dirs_above, Vec3 n, float cos, int u, int v, Rgb& out) {
-  const std::size_t side = std::size_t(above.side());
-  Rgb sum{};
-  float weight = 0;
-  for (int j = 0; j < k.n; ++j) {
-    const std::uint64_t q = k.index[std::size_t(j)];
-    const Rgb* probe = above.probe(q);
-    const Vec3 nu = upper.probes[q].local;
-    Rgb mean{};
-    int count = 0;
-    for (int dv = 0; dv < 2; ++dv)
-      for (int du = 0; du < 2; ++du) {
-        const std::size_t c = std::size_t(2 * v + dv) * side + std::size_t(2 * u + du);
-        if (!cascade::holds_light(probe[c]) || !same_side(n, dirs_above[c], cos) ||
-            !same_side(nu, dirs_above[c], cos))
-          continue;
-        mean += probe[c];
-        ++count;
-      }
-    if (count == 0) continue;
-    const float w = k.w[std::size_t(j)];
-    sum += mean * (w / float(count));
-    weight += w;
-  }
-  if (!(weight > 0)) return false;
-  out = sum * (1 / weight);
-  return true;
+  return cascade::merge_children(above, k, u, v, 2, out, [&](std::uint64_t q, std::size_t c) {
+    return same_side(n, dirs_above[c], cos) && same_side(upper.probes[q].local, dirs_above[c], cos);
+  });
 }
 
 // Every covered texel's irradiance on each side from cascade 0 (store, side0 x side0 cells) at
@@ -411,9 +385,9 @@ Rgb Baked::irradiance_at(const Scene& scene, const RayScene& rays, const Hit& hi
           std::lower_bound(seams.begin(), seams.end(), std::uint32_t(k),
                            [](const SeamLink& l, std::uint32_t key) { return l.texel < key; });
       if (link == seams.end() || link->texel != k || link->from != chart) return;
-      if (near && planar(c) &&
-          !sees(
-              plane_point(c, int(k % std::size_t(atlas.width)), int(k / std::size_t(atlas.width)))))
+      // (A walled tap lies on a flat chart: its plane runs on there.)
+      if (near && !sees(plane_point(c, int(k % std::size_t(atlas.width)),
+                                    int(k / std::size_t(atlas.width)))))
         return;
       float there = 0;
       const Rgb e =
@@ -489,11 +463,12 @@ void link_seams(const Scene& scene, const RayScene& rays, Baked& b) {
             [](const Baked::SeamLink& l, const Baked::SeamLink& r) { return l.texel < r.texel; });
 }
 
-void mark_walls(const RayScene& rays, Baked& b) {
+namespace {
+
+// mark_walls, the atlas's flat charts (flat_charts) given.
+void mark_walls(const RayScene& rays, const std::vector<std::uint8_t>& flat, Baked& b) {
   const Atlas& a = b.atlas;
   b.walled.assign(b.texels.size(), 0);
-  const std::vector<std::uint8_t> flat = flat_charts(a, b.texels);
-  std::atomic<bool> any{false};
   parallel_for(a.height, [&](int y) {
     for (int x = 0; x < a.width; ++x) {
       const std::size_t k = std::size_t(y) * std::size_t(a.width) + std::size_t(x);
@@ -509,10 +484,15 @@ void mark_walls(const RayScene& rays, Baked& b) {
             if ((dx || dy) && wall_between(rays, from, plane_point(c, x + dx, y + dy) + lift, c.n))
               b.walled[k] = 1;
       }
-      if (b.walled[k]) any.store(true, std::memory_order_relaxed);
     }
   });
-  if (!any.load()) b.walled.clear();
+  if (std::find(b.walled.begin(), b.walled.end(), 1) == b.walled.end()) b.walled.clear();
+}
+
+}  // namespace
+
+void mark_walls(const RayScene& rays, Baked& b) {
+  mark_walls(rays, flat_charts(b.atlas, b.texels), b);
 }
 
 Expected<Baked> bake(const Scene& scene, const RayScene& rays, const Options& atlas_options,
@@ -578,8 +558,8 @@ Expected<Baked> bake(const Scene& scene, const RayScene& rays, const Options& at
   report.stages.push_back({"probes", watch.ms()});
   // The walls that merges and the lookups of light reflected past the first bounce keep to.
   watch.restart();
-  mark_walls(rays, out);
   const std::vector<std::uint8_t> flat = flat_charts(a, out.texels);
+  mark_walls(rays, flat, out);
   std::vector<std::vector<std::uint8_t>> seen;
   for (int i = 0; i + 1 < l.count; ++i)
     seen.push_back(seen_corners(a, rays, flat, grids[std::size_t(i)], grids[std::size_t(i) + 1]));

@@ -61,19 +61,22 @@ struct Corners {
 };
 
 // The radiance upper probe q sends towards lower direction (u, v): the mean of its split x split
-// children (the upper map's cells inside the lower one) that hold light, the bilinear sample of
-// the upper map at the lower cell's centre, which crosses no seam (4x4: their box mean); false
-// when none holds light.
+// children (the upper map's cells inside the lower one) that hold light and that keep(q, cell)
+// accepts (cell: the child's index in the upper map; the surface cascades keep those on the lower
+// ray's side of the surface), the bilinear sample of the upper map at the lower cell's centre,
+// which crosses no seam (4x4: their box mean); false when none counts.
+template <class Keep>
 inline bool children_mean(const RadianceStore& upper, std::uint64_t q, int u, int v, int split,
-                          Rgb& mean) {
+                          Rgb& mean, Keep&& keep) {
   const Rgb* probe = upper.probe(q);
   const std::size_t side = std::size_t(upper.side());
   Rgb sum{};
   int n = 0;
   for (int dv = 0; dv < split; ++dv)
     for (int du = 0; du < split; ++du) {
-      const Rgb& c = probe[std::size_t(split * v + dv) * side + std::size_t(split * u + du)];
-      if (!holds_light(c)) continue;
+      const std::size_t cell = std::size_t(split * v + dv) * side + std::size_t(split * u + du);
+      const Rgb& c = probe[cell];
+      if (!holds_light(c) || !keep(q, cell)) continue;
       sum += c;
       ++n;
     }
@@ -81,17 +84,23 @@ inline bool children_mean(const RadianceStore& upper, std::uint64_t q, int u, in
   mean = sum * (1.0f / float(n));
   return true;
 }
+inline bool children_mean(const RadianceStore& upper, std::uint64_t q, int u, int v, int split,
+                          Rgb& mean) {
+  return children_mean(upper, q, u, v, split, mean,
+                       [](std::uint64_t, std::size_t) { return true; });
+}
 
 // Merging a lower ray with the cascade above (seed 001 eq. 13-14): the upper probes around it,
 // each through children_mean, weighted and normalised over those that have light this way; false
 // where none does (the ray then goes on by itself: continue_to_sky).
+template <class Keep>
 inline bool merge_children(const RadianceStore& upper, const Corners& c, int u, int v, int split,
-                           Rgb& merged) {
+                           Rgb& merged, Keep&& keep) {
   Rgb sum{}, got;
   float weight = 0;
   for (int j = 0; j < c.n; ++j) {
     const float w = c.w[std::size_t(j)];
-    if (w > 0 && children_mean(upper, c.index[std::size_t(j)], u, v, split, got)) {
+    if (w > 0 && children_mean(upper, c.index[std::size_t(j)], u, v, split, got, keep)) {
       sum += got * w;
       weight += w;
     }
@@ -99,6 +108,11 @@ inline bool merge_children(const RadianceStore& upper, const Corners& c, int u, 
   if (!(weight > 0)) return false;
   merged = sum * (1 / weight);
   return true;
+}
+inline bool merge_children(const RadianceStore& upper, const Corners& c, int u, int v, int split,
+                           Rgb& merged) {
+  return merge_children(upper, c, u, v, split, merged,
+                        [](std::uint64_t, std::size_t) { return true; });
 }
 
 // A probe's cosine-weighted mean radiance over the hemisphere of unit normal n (irradiance / pi),

@@ -70,6 +70,11 @@ struct Ladder {
   std::array<std::array<double, 3>, kScenes> study;
   int first_step = 1;       // (a) from this rung on (2: the first step is not a convergence step)
   double max_leak = kLeak;  // what the dark side may get, over the lit side's mean
+  // (a) only where the rung below is above this error: under it the method is already as close as
+  // its exact parts make it, not limited by the resolution (surface: a sphere light claimed as a
+  // footprint, whose irradiance is exact, is within 1-2% on every rung, and traced once it covers
+  // many cells, as on the finest rung here, 2%).
+  double floor = 0;
 };
 
 // SPWI's rungs: h = s0, the cascade-0 probe spacing in pixels, halved with Q0 x 4 (the map's side
@@ -205,8 +210,15 @@ const Ladder kLadders[] = {
      // (1024 texels: 0.171, 0.207, 0.210 against 0.174, 0.187, 0.219 with one texel size); the
      // finer rungs' texels are already under 1/16 of the distance to the light. Walls across a
      // chart and the charts' direction frames moved the two rooms' from 0.2097, 0.142, 0.08085.
+     // Sphere lights claimed as footprints on flat charts while under 64 cells, and the upper
+     // probes on their cells' centres, moved all three from 0.1713, 0.08478, 0.05401 (sphere
+     // light), 0.2073, 0.09516, 0.05046 (penumbra) and 0.2017, 0.1429, 0.08077 (two rooms): the
+     // sphere light is claimed on the first two rungs and traced on the finest.
      0.85,
-     {{{0.1713, 0.08478, 0.05401}, {0.2073, 0.09516, 0.05046}, {0.2017, 0.1429, 0.08077}}}},
+     {{{0.01273, 0.01101, 0.02046}, {0.1001, 0.07869, 0.02511}, {0.1586, 0.08605, 0.02439}}},
+     1,
+     kLeak,
+     0.025},
 };
 
 bool has_ladder(const std::string& method) {
@@ -467,9 +479,10 @@ void climb(SceneId id, const Case& c) {
           "tolerance %.4g); leak %.2g\n",
           name.c_str(), kSceneNames[id], e[0], e[1], e[2], f.k, f.finest, kMargin * f.finest, leak);
       for (int i = ladder.first_step; i < 3; ++i)
-        EXPECT_LE(e[i], ladder.step * e[i - 1])
-            << ladder.rungs[std::size_t(i)].label << " against "
-            << ladder.rungs[std::size_t(i - 1)].label << ": the error does not fall";
+        if (e[i - 1] > ladder.floor)
+          EXPECT_LE(e[i], ladder.step * e[i - 1])
+              << ladder.rungs[std::size_t(i)].label << " against "
+              << ladder.rungs[std::size_t(i - 1)].label << ": the error does not fall";
       EXPECT_LE(e[2], kMargin * f.finest)
           << ladder.rungs[2].label << ": above the fitted prediction " << f.finest
           << " (k = " << f.k << ") times " << kMargin;

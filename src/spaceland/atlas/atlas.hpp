@@ -28,6 +28,7 @@
 
 #include "penumbra/error.hpp"
 #include "penumbra/spaceland/scene.hpp"
+#include "spaceland/cascade/levels.hpp"
 #include "spaceland/ray.hpp"
 
 namespace penumbra::spaceland::atlas {
@@ -87,11 +88,7 @@ struct Chart {
 // resolution (its sign is u's), so no cell of a flat chart's maps lies across its surface: in the
 // world's frame a surface facing z has the cells of the map's diamond centred in its plane, and a
 // thin wall's cell traced on one side would stand for the other too.
-struct DirectionFrame {
-  Vec3 x{1, 0, 0}, y{0, 1, 0}, z{0, 0, 1};
-  Vec3 to_world(Vec3 l) const { return x * l.x + y * l.y + z * l.z; }
-  Vec3 to_local(Vec3 d) const { return {dot(d, x), dot(d, y), dot(d, z)}; }
-};
+using DirectionFrame = cascade::MapFrame;
 DirectionFrame direction_frame(const Chart& c);
 
 // A node of the quadtree that splits a planar chart into tiles, in that chart's frame (the

@@ -31,6 +31,9 @@ struct CascadeOptions {
   // Keep cascade 0's radiance per texel (Baked::radiance): the directional data an atlas file
   // holds for glossy queries, at the cost of one more cascade-0 store.
   bool keep_radiance = false;
+  // Lights small for a probe's cells (spheres; quads, disks and boxes) claimed as footprints over
+  // its cells rather than hit or missed by its rays (cascade::SphereLights, as SPWI).
+  bool small_lights = true;
 };
 
 // The side of an equal-area map holding `directions` directions; 0 where it is no square of a

@@ -56,6 +56,14 @@ inline int count_to_reach(const Levels& l, double reach, int most) {
   return count_until(most, [&](int i) { return double(l.nominal_end(i)) < reach; });
 }
 
+// The frame a probe's direction maps lie in: world directions into the map's frame and back. The
+// world's axes for SPWI and the grid; a chart's own for surface cascades (atlas::direction_frame).
+struct MapFrame {
+  Vec3 x{1, 0, 0}, y{0, 1, 0}, z{0, 0, 1};
+  Vec3 to_world(Vec3 l) const { return x * l.x + y * l.y + z * l.z; }
+  Vec3 to_local(Vec3 d) const { return {dot(d, x), dot(d, y), dot(d, z)}; }
+};
+
 // The directions of cascade i: the centres of its equal-area octahedral map's cells, row by row
 // (index v * side + u).
 inline std::vector<Vec3> direction_map(const Levels& l, int i) {

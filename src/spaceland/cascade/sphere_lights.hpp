@@ -184,6 +184,24 @@ inline constexpr float kGridClaimFrom = 16;
 inline constexpr double kClusterCells = 0.5;
 inline constexpr double kClusterDepth = 0.25;
 
+// A rectangle, corner + u s + v t for s and t in [0, 1] (u and v orthogonal): a flat chart of
+// surface cascades, whose every probe judges a light small or not at the light's distance from it
+// (SphereLights::pass and add), so that all of them agree. Judged from each probe's own distance,
+// a lower probe that claims a light merges an upper probe that traces it (light twice), or traces
+// it while the probe above passes it by (light lost): a ring around a light's pool wherever its
+// probes' distances straddle the bound.
+struct Region {
+  Vec3 corner, u, v;
+};
+
+// The distance from p to region g.
+inline float distance_to(const Region& g, Vec3 p) {
+  const Vec3 q = p - g.corner;
+  const float s = std::clamp(dot(q, g.u) / dot(g.u, g.u), 0.0f, 1.0f);
+  const float t = std::clamp(dot(q, g.v) / dot(g.v, g.v), 0.0f, 1.0f);
+  return length(q - g.u * s - g.v * t);
+}
+
 // The upper probes a probe merges with: where they are, their weights, where their interval
 // starts.
 struct Uppers {
@@ -191,6 +209,10 @@ struct Uppers {
   std::array<float, 8> w{};
   int n = 0;
   float a = 0;
+  // Their surfaces' normals, where a merge leaves out an upper probe's children across its
+  // surface (surface cascades on a curved chart): a light below an upper probe's horizon is not
+  // brought by it, and the others' share is renormalised as the merge is. Zero: not known.
+  std::array<Vec3, 8> normal{};
 };
 
 // The upper probes of a merge's corners, probe j at position(j), whose interval starts at a.
@@ -294,9 +316,13 @@ inline float reach_for(const SphereLight& l, Vec3 from, Vec3 u, float d, float s
 // that traced one: reach(j, k) is where upper probe j's ray of cell k (its side x side map)
 // stopped, infinity where no surface stopped it, negative where it traced none (into its own
 // surface); the ray of the cell that holds the light's centre, or where it passes beside a shaped
-// light, those of the 8 cells around it that meet it. 1 where none did.
+// light, those of the 8 cells around it that meet it. 1 where none did. The maps lie in `frame`
+// (null: the world's).
 template <class Reach>
-float upper_clear(const Uppers& up, int side, const SphereLight& l, Reach&& reach) {
+float upper_clear(const Uppers& up, int side, const SphereLight& l, Reach&& reach,
+                  const MapFrame* frame = nullptr) {
+  const auto local = [&](Vec3 d) { return frame ? frame->to_local(d) : d; };
+  const auto world = [&](Vec3 d) { return frame ? frame->to_world(d) : d; };
   double clear = 0, weight = 0;
   for (std::size_t j = 0; j < std::size_t(up.n); ++j) {
     const double w = up.w[j];
@@ -305,7 +331,7 @@ float upper_clear(const Uppers& up, int side, const SphereLight& l, Reach&& reac
     // A probe within a shaped light's bound but outside it still asks (a panel a few centimetres
     // before a wall: skipping them all said "clear").
     if (!(w > 0) || !(d > (l.shaped() ? l.inner : l.radius))) continue;
-    const std::array<int, 2> cell = octahedral::cell_of(to / d, side);
+    const std::array<int, 2> cell = octahedral::cell_of(local(to / d), side);
     const float r = reach(j, std::size_t(cell[1]) * std::size_t(side) + std::size_t(cell[0]));
     if (r < 0) continue;
     weight += w;
@@ -313,7 +339,7 @@ float upper_clear(const Uppers& up, int side, const SphereLight& l, Reach&& reac
       if (r >= d - l.radius) clear += w;
       continue;
     }
-    const Vec3 u = octahedral::cell_direction(cell[0], cell[1], side);
+    const Vec3 u = world(octahedral::cell_direction(cell[0], cell[1], side));
     if (r >= reach_for(l, up.p[j], u, d, d - l.radius)) {
       clear += w;
     } else if (toward(l, up.p[j], u) < 0) {
@@ -324,7 +350,7 @@ float upper_clear(const Uppers& up, int side, const SphereLight& l, Reach&& reac
         for (int du = -1; du <= 1; ++du) {
           const int cu = cell[0] + du, cv = cell[1] + dv;
           if ((du == 0 && dv == 0) || cu < 0 || cv < 0 || cu >= side || cv >= side) continue;
-          const float t = toward(l, up.p[j], octahedral::cell_direction(cu, cv, side));
+          const float t = toward(l, up.p[j], world(octahedral::cell_direction(cu, cv, side)));
           const float rk = reach(j, std::size_t(cv) * std::size_t(side) + std::size_t(cu));
           if (t < 0 || rk < 0) continue;
           ++met;
@@ -429,8 +455,8 @@ class SphereLights {
   SphereLights() = default;
   // For cascades that trace the scene's spheres (SPWI): small by the cells that reach them.
   // Also its shaped lights (collect_shapes).
-  SphereLights(const Scene& scene, const Levels& levels) : levels_(levels) {
-    collect_shapes(scene);
+  SphereLights(const Scene& scene, const Levels& levels, bool shapes = true) : levels_(levels) {
+    if (shapes) collect_shapes(scene);
     collect(scene, [&](const Sphere& s) { return is_sphere_light(scene, s); });
   }
   // For the probe grid with voxels of that size: the lights it leaves out of its voxels.
@@ -448,6 +474,12 @@ class SphereLights {
     return out;
   }
   bool empty() const { return lights_.empty(); }
+  // A sphere light is small under this many cells (kSmallCells by default) and under this sine of
+  // its half-angle (1: any).
+  void set_small(double cells, double max_sin) {
+    small_cells_ = cells;
+    max_sin_ = max_sin;
+  }
   // A cascade claims lights from this many times its interval start on (kClaimFrom; the grid's
   // kGridClaimFrom).
   float claim_from() const { return voxel_ > 0 ? kGridClaimFrom : kClaimFrom; }
@@ -457,9 +489,9 @@ class SphereLights {
   // of the cascade whose interval holds d, so that every cascade a ray of the probe's merges
   // through treats the light alike (spread once, or traced once, never both nor neither).
   bool small(double r, double d) const {
-    if (!(d > r)) return false;
+    if (!(d > r) || r > max_sin_ * d) return false;
     if (voxel_ > 0) return r < double(within_ * voxel_);
-    return cells(r, d) < kSmallCells;
+    return cells(r, d) < small_cells_;
   }
 
   // How many cells of the cascade whose interval holds d a sphere of radius r at most d, d away,
@@ -491,8 +523,12 @@ class SphereLights {
   // Where a ray from `origin` along unit `dir` that hit sphere `s` leaves it again (a little past
   // the far root), if s is a light small for a probe at `probe`: the ray goes on from there, its
   // light being spread instead. Negative when the ray stops at s, as at any surface.
-  float pass(const Scene& scene, const Sphere& s, Vec3 probe, Vec3 origin, Vec3 dir) const {
-    if (!is_sphere_light(scene, s) || !small(s.radius, length(s.center - probe))) return -1;
+  // With a region, a sphere light's size is judged from it (Region).
+  float pass(const Scene& scene, const Sphere& s, Vec3 probe, Vec3 origin, Vec3 dir,
+             const Region* region = nullptr) const {
+    if (!is_sphere_light(scene, s) ||
+        !small(s.radius, region ? distance_to(*region, s.center) : length(s.center - probe)))
+      return -1;
     const Vec3 oc = origin - s.center;
     const double b = dot(oc, dir), c = double(dot(oc, oc)) - double(s.radius) * s.radius;
     const double disc = b * b - c;
@@ -503,8 +539,10 @@ class SphereLights {
 
   // The same for any hit h of a ray from `origin` along `dir`: a sphere light as above, or a
   // shaped light (its surface at h.t: the ray goes on from a little past it).
-  float pass(const Scene& scene, const Hit& h, Vec3 probe, Vec3 origin, Vec3 dir) const {
-    if (h.kind == ShapeKind::sphere) return pass(scene, scene.spheres[h.shape], probe, origin, dir);
+  float pass(const Scene& scene, const Hit& h, Vec3 probe, Vec3 origin, Vec3 dir,
+             const Region* region = nullptr) const {
+    if (h.kind == ShapeKind::sphere)
+      return pass(scene, scene.spheres[h.shape], probe, origin, dir, region);
     const std::vector<int>& of = h.kind == ShapeKind::disk ? disk_light_ : mesh_light_;
     if (h.shape >= of.size() || of[h.shape] < 0) return -1;
     const SphereLight& l = lights_[std::size_t(of[h.shape])];
@@ -539,11 +577,18 @@ class SphereLights {
   // cells' cosines, not the light's, had drawn the map's cells on a floor lit by a light behind
   // the camera (a wedge along a fold of the map, 25% from the path tracer; now 1.5%).
   //
+  // The maps lie in `frame` (null: the world's; the gather's directions too). With a region, a
+  // sphere light's size is judged from it (Region).
+  //
   // Returns how many lights and clusters it claimed: its work beside the rays.
   template <class Seen, class Past>
   int add(Vec3 origin, Vec3 n, float a, float end, const Uppers* up, int side, Rgb* out,
-          Seen&& seen, Past&& past_clear, const GatherCells* gather = nullptr) const {
+          Seen&& seen, Past&& past_clear, const GatherCells* gather = nullptr,
+          const MapFrame* frame = nullptr, const Region* region = nullptr) const {
     if (nodes_.empty()) return 0;
+    const auto local = [&](Vec3 d) { return frame ? frame->to_local(d) : d; };
+    const auto world = [&](Vec3 d) { return frame ? frame->to_world(d) : d; };
+    const Vec3 n_map = local(n);  // the normal among the gather's directions
     const double cell = 4 * std::numbers::pi / (double(side) * side);  // a cell's solid angle
     // The sum of the gather's weights of cascade 0's cells about n (it divides by it), found at
     // the first claim.
@@ -568,14 +613,16 @@ class SphereLights {
     const auto claim = [&](const SphereLight& l, float d, double spread) {
       double in = detail::beyond(d, claim_from() * a);
       if (up_weight > 0) {
-        double upper = 0;
+        double upper = 0, taking = 0;
         for (std::size_t j = 0; j < std::size_t(up->n); ++j) {
           if (!(up->w[j] > 0)) continue;
           const Vec3 from_up = l.centre - up->p[j];
+          if (dot(from_up, up->normal[j]) < 0) continue;
           upper += double(up->w[j]) *
                    detail::beyond_squared(dot(from_up, from_up), claim_from() * up->a);
+          taking += double(up->w[j]);
         }
-        in -= upper / up_weight;
+        if (taking > 0) in -= upper / taking;
       }
       if (!(in > 1e-6)) return;
       const bool past = d > end;
@@ -586,7 +633,7 @@ class SphereLights {
       const Vec3 to = (l.centre - origin) / d;
       const double omega = solid_angle(l, to, d);
       const double h = std::sqrt(0.25 * omega / cell + spread * spread / (double(d) * d * cell));
-      const std::array<double, 2> at = detail::map_position(to, side);
+      const std::array<double, 2> at = detail::map_position(local(to), side);
       std::array<double, 64> wu, wv;
       int u0 = 0, v0 = 0;
       const int nu = detail::axis_weights(at[0], h, side, u0, wu);
@@ -594,21 +641,30 @@ class SphereLights {
       double scale = 1;
       if (exact && gather_sum < 0) {
         gather_sum = 0;
-        for (const Vec3& dir : *gather->dirs) gather_sum += std::max(0.0f, dot(n, dir));
+        for (const Vec3& dir : *gather->dirs) gather_sum += std::max(0.0f, dot(n_map, dir));
       }
       if (exact && gather_sum > 0) {
         // What the gather makes of the share: pi Le omega / cell0 times the sum over the cells of
-        // w cos(its cascade-0 cell), over the sum of all cascade-0 cells' cosines; the light
-        // gives pi Le (r/d)^2 cos.
-        const int shift = side / gather->side;
+        // w cos(the gather's cell holding it), over the sum of all the gather's cells' cosines;
+        // the light gives pi Le (r/d)^2 cos. A cell coarser than the gather's (surface cascades
+        // gather cascade 0 at cascade 1's directions) gives each of its cells its own value: its
+        // cosine is theirs, averaged.
+        const int shift = std::max(1, side / gather->side),
+                  finer = side >= gather->side ? 1 : gather->side / side;
         double got = 0;
         for (int j = 0; j < nv; ++j)
           for (int i = 0; i < nu; ++i) {
             const double w = wu[std::size_t(i)] * wv[std::size_t(j)];
             if (!(w > 0)) continue;
-            const std::size_t k0 = std::size_t((v0 + j) / shift) * std::size_t(gather->side) +
-                                   std::size_t((u0 + i) / shift);
-            got += w * std::max(0.0f, dot(n, (*gather->dirs)[k0]));
+            double cos0 = 0;
+            for (int fv = 0; fv < finer; ++fv)
+              for (int fu = 0; fu < finer; ++fu) {
+                const std::size_t k0 =
+                    std::size_t((v0 + j) / shift * finer + fv) * std::size_t(gather->side) +
+                    std::size_t((u0 + i) / shift * finer + fu);
+                cos0 += std::max(0.0f, dot(n_map, (*gather->dirs)[k0]));
+              }
+            got += w * cos0 / (finer * finer);
           }
         const double cos_l = double(dot(n, l.centre - origin)) / d;
         const double cell0 = 4 * std::numbers::pi / (double(gather->side) * gather->side);
@@ -640,7 +696,7 @@ class SphereLights {
             const std::size_t k = std::size_t(v0 + j) * std::size_t(side) + std::size_t(u0 + i);
             const double w = wu[std::size_t(i)] * wv[std::size_t(j)];
             if (w <= 0 || !holds_light(out[k])) continue;
-            const Vec3 u = octahedral::cell_direction(u0 + i, v0 + j, side);
+            const Vec3 u = world(octahedral::cell_direction(u0 + i, v0 + j, side));
             const float t = toward(l, origin, u);
             if (t >= 0) {
               // Past where this probe's rays stop, through the upper probes' rays, as any light.
@@ -671,7 +727,7 @@ class SphereLights {
           out[k] += share * float(w * sees * double(beyond_end));
         }
     };
-    return walk(origin, n, near, far, cell, claim);
+    return walk(origin, n, near, far, cell, claim, kClusterDepth, region);
   }
 
   // The tree's cut for a point at `origin` (normal n; zero for a probe in free space) whose map's
@@ -684,7 +740,7 @@ class SphereLights {
   // cluster is opened. Returns how many it claimed.
   template <class F>
   int walk(Vec3 origin, Vec3 n, float near, float far, double cell, F&& f,
-           double depth = kClusterDepth) const {
+           double depth = kClusterDepth, const Region* region = nullptr) const {
     if (nodes_.empty()) return 0;
     const bool horizon = dot(n, n) > 0;
     const double wide = std::min(kClusterCells * std::sqrt(cell), depth);
@@ -698,7 +754,9 @@ class SphereLights {
       if (node.child < 0) {  // one light
         if (d2 < near * near || d2 > far * far) continue;
         const float d = std::sqrt(d2);
-        if (!claims(node.light, origin, d) || dot(to, n) < 0) continue;
+        const float judged =
+            region && !node.light.shaped() ? distance_to(*region, node.light.centre) : d;
+        if (!claims(node.light, origin, judged) || dot(to, n) < 0) continue;
         f(node.light, d, 0.0);
         ++claimed;
         continue;
@@ -710,7 +768,9 @@ class SphereLights {
       const float tilt = dot(node.half, Vec3{std::abs(n.x), std::abs(n.y), std::abs(n.z)});
       if (horizon && above + tilt < 0) continue;
       if (!node.shaped && d - b >= near && d + b <= far && double(b) <= wide * d &&
-          (!horizon || above >= tilt) && all_small(node.max_radius, d - b, d + b)) {
+          (!horizon || above >= tilt) &&
+          all_small(node.max_radius, (region ? distance_to(*region, node.light.centre) : d) - b,
+                    (region ? distance_to(*region, node.light.centre) : d) + b)) {
         f(node.light, d, double(node.spread));
         ++claimed;
         continue;
@@ -1070,6 +1130,7 @@ class SphereLights {
   }
 
   Levels levels_;
+  double small_cells_ = kSmallCells, max_sin_ = 1;
   float voxel_ = 0, within_ = kSpreadVoxels;
   std::vector<SphereLight> lights_;
   std::vector<int> mesh_light_, disk_light_;  // per mesh and disk: its shaped light, or -1

@@ -479,10 +479,11 @@ void climb(SceneId id, const Case& c) {
           "tolerance %.4g); leak %.2g\n",
           name.c_str(), kSceneNames[id], e[0], e[1], e[2], f.k, f.finest, kMargin * f.finest, leak);
       for (int i = ladder.first_step; i < 3; ++i)
-        if (e[i - 1] > ladder.floor)
+        if (e[i - 1] > ladder.floor) {
           EXPECT_LE(e[i], ladder.step * e[i - 1])
               << ladder.rungs[std::size_t(i)].label << " against "
               << ladder.rungs[std::size_t(i - 1)].label << ": the error does not fall";
+        }
       EXPECT_LE(e[2], kMargin * f.finest)
           << ladder.rungs[2].label << ": above the fitted prediction " << f.finest
           << " (k = " << f.k << ") times " << kMargin;

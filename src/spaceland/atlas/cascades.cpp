@@ -37,7 +37,9 @@ struct Grid {
   std::vector<Probe> probes;
 };
 
-bool planar(const Chart& c);
+bool planar(const Chart& c) {
+  return c.kind == ChartKind::disk || (c.kind == ChartKind::mesh && !c.from_lightmap);
+}
 
 Grid place(const Atlas& a, const std::vector<Texel>& texels, int spacing) {
   Grid g;
@@ -179,10 +181,6 @@ constexpr double kFootprintSine = 0.5;
 // How far off a flat chart the rays that look for walls run, in its texels: under any wall
 // that stands on it, over the surface's own rounding.
 constexpr float kWallLift = 1.0f / 20;
-
-bool planar(const Chart& c) {
-  return c.kind == ChartKind::disk || (c.kind == ChartKind::mesh && !c.from_lightmap);
-}
 
 // Whether a wall stands across a flat chart of normal n between two points lifted off it: a
 // surface met on the way whose plane meets the chart's at more than 45 degrees (a room's wall, a
@@ -711,6 +709,8 @@ Expected<Baked> bake(const Scene& scene, const RayScene& rays, const Options& at
     // A cell's cosine at its centre misweights light that fills part of it at a grazing angle
     // (the top of the Cornell box's back wall): from a camera inside the box, 0.269 -> 0.171.
     const bool fine = l.count > 1;
+    // The gather the lights' shares are made exact for: cascade 0 read at cascade 1's directions.
+    const cascade::GatherCells gather{&dirs[fine ? 1 : 0], l.side(fine ? 1 : 0)};
     const std::size_t nd0 = std::size_t(l.side(0)) * std::size_t(l.side(0));
     std::vector<std::uint8_t> merged0(fine ? grids[0].probes.size() * nd0 : 0);
     std::vector<Claim> claimed0;
@@ -817,14 +817,9 @@ Expected<Baked> bake(const Scene& scene, const RayScene& rays, const Options& at
               for (int s = 0; s < 2; ++s) {
                 const cascade::Corners& corner = s == 0 ? kf : kb;
                 const bool merges = !l.top(i) && corner.n > 0;
-                const Grid& upper = grids[std::size_t(merges ? i + 1 : i)];
-                cascade::Uppers up = cascade::uppers_of(corner, end, [&](std::size_t j) {
-                  return upper.probes[std::size_t(corner.index[j])].position;
+                const cascade::Uppers up = cascade::uppers_of(corner, end, [&](std::size_t j) {
+                  return grids[std::size_t(i) + 1].probes[std::size_t(corner.index[j])].position;
                 });
-                // The merge keeps each upper probe's children on this side of its surface.
-                for (std::size_t j = 0; j < std::size_t(corner.n); ++j)
-                  up.normal[j] =
-                      upper.probes[std::size_t(corner.index[j])].normal * (s == 0 ? 1.0f : -1.0f);
                 auto seen = [&](std::size_t cell, float dist) {
                   return reach[cell] >= start && reach[cell] >= dist ? 1.0f : 0.0f;
                 };
@@ -837,7 +832,6 @@ Expected<Baked> bake(const Scene& scene, const RayScene& rays, const Options& at
                       },
                       &frame);
                 };
-                const cascade::GatherCells gather{&dirs[fine ? 1 : 0], l.side(fine ? 1 : 0)};
                 small->add(p.position, s == 0 ? p.normal : -p.normal, start, end,
                            merges ? &up : nullptr, side, values, seen, past, &gather, &frame,
                            &regions[p.chart]);

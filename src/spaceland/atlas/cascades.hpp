@@ -31,8 +31,8 @@ struct CascadeOptions {
   // Keep cascade 0's radiance per texel (Baked::radiance): the directional data an atlas file
   // holds for glossy queries, at the cost of one more cascade-0 store.
   bool keep_radiance = false;
-  // Lights small for a probe's cells (spheres; quads, disks and boxes) claimed as footprints over
-  // its cells rather than hit or missed by its rays (cascade::SphereLights, as SPWI).
+  // Sphere lights small for a probe's cells claimed as footprints over its cells rather than hit
+  // or missed by its rays, on flat charts (cascade::SphereLights, as SPWI).
   bool small_lights = true;
 };
 

@@ -209,10 +209,6 @@ struct Uppers {
   std::array<float, 8> w{};
   int n = 0;
   float a = 0;
-  // Their surfaces' normals, where a merge leaves out an upper probe's children across its
-  // surface (surface cascades on a curved chart): a light below an upper probe's horizon is not
-  // brought by it, and the others' share is renormalised as the merge is. Zero: not known.
-  std::array<Vec3, 8> normal{};
 };
 
 // The upper probes of a merge's corners, probe j at position(j), whose interval starts at a.
@@ -613,16 +609,14 @@ class SphereLights {
     const auto claim = [&](const SphereLight& l, float d, double spread) {
       double in = detail::beyond(d, claim_from() * a);
       if (up_weight > 0) {
-        double upper = 0, taking = 0;
+        double upper = 0;
         for (std::size_t j = 0; j < std::size_t(up->n); ++j) {
           if (!(up->w[j] > 0)) continue;
           const Vec3 from_up = l.centre - up->p[j];
-          if (dot(from_up, up->normal[j]) < 0) continue;
           upper += double(up->w[j]) *
                    detail::beyond_squared(dot(from_up, from_up), claim_from() * up->a);
-          taking += double(up->w[j]);
         }
-        if (taking > 0) in -= upper / taking;
+        in -= upper / up_weight;
       }
       if (!(in > 1e-6)) return;
       const bool past = d > end;
@@ -767,10 +761,9 @@ class SphereLights {
       const float above = dot(node.middle - origin, n);
       const float tilt = dot(node.half, Vec3{std::abs(n.x), std::abs(n.y), std::abs(n.z)});
       if (horizon && above + tilt < 0) continue;
+      const float judged = region ? distance_to(*region, node.light.centre) : d;
       if (!node.shaped && d - b >= near && d + b <= far && double(b) <= wide * d &&
-          (!horizon || above >= tilt) &&
-          all_small(node.max_radius, (region ? distance_to(*region, node.light.centre) : d) - b,
-                    (region ? distance_to(*region, node.light.centre) : d) + b)) {
+          (!horizon || above >= tilt) && all_small(node.max_radius, judged - b, judged + b)) {
         f(node.light, d, double(node.spread));
         ++claimed;
         continue;

@@ -3,11 +3,13 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 #include "core/math.hpp"
 #include "spaceland/color.hpp"
 #include "spaceland/sampling.hpp"
 #include "spaceland/sky.hpp"
+#include "spaceland/surface.hpp"
 
 namespace penumbra::spaceland {
 
@@ -130,6 +132,7 @@ LightSample Lights::sample(Vec3 p, float u_pick, std::array<float, 2> u) const {
   ls.shape = em.shape;
   ls.primitive = em.primitive;
   Vec3 q, n;
+  std::optional<Rgb> textured;
   if (em.kind == ShapeKind::triangle) {
     const TriangleMesh& m = scene_->meshes[em.shape];
     const auto& tri = m.triangles[em.primitive];
@@ -142,6 +145,23 @@ LightSample Lights::sample(Vec3 p, float u_pick, std::array<float, 2> u) const {
     q = p0 + (m.positions[tri[1]] - p0) * a + (m.positions[tri[2]] - p0) * b;
     float area;
     n = triangle_normal(m, em.primitive, area);
+    const Material& material = scene_->materials[m.materials[em.primitive]];
+    if (material.emission_texture.index >= 0) {
+      // A textured emitter: the radiance at the sampled point (picked by its factor's power).
+      Hit h;
+      h.kind = ShapeKind::triangle;
+      h.shape = em.shape;
+      h.primitive = em.primitive;
+      h.material = m.materials[em.primitive];
+      h.b1 = a;
+      h.b2 = b;
+      if (!m.uvs.empty()) {
+        const float c = 1 - a - b;
+        h.u = c * m.uvs[tri[0]][0] + a * m.uvs[tri[1]][0] + b * m.uvs[tri[2]][0];
+        h.v = c * m.uvs[tri[0]][1] + a * m.uvs[tri[1]][1] + b * m.uvs[tri[2]][1];
+      }
+      textured = emission_at(*scene_, h);
+    }
   } else if (em.kind == ShapeKind::sphere) {
     const Sphere& s = scene_->spheres[em.shape];
     const Vec3 to_c = s.center - p;
@@ -185,7 +205,7 @@ LightSample Lights::sample(Vec3 p, float u_pick, std::array<float, 2> u) const {
   ls.distance = dist;
   ls.point = q;
   ls.normal = n;
-  ls.radiance = em.emission;
+  ls.radiance = textured ? *textured : em.emission;
   ls.pdf = pick * solid_angle_pdf(em, p, q, n);
   return ls;
 }

@@ -136,6 +136,10 @@ constexpr const char* kGridOptions[] = {"grid.voxel",         "grid.levels",   "
                                         "grid.directions",    "grid.interval", "grid.cascades",
                                         "grid.extend_length", "grid.fix",      "sun_rays"};
 
+Status grid_check_scene(const Scene& scene) {
+  return refuse_glossy(scene, "grid", "--method pt");
+}
+
 Status grid_check(const RenderOptions& o) {
   return grid::check_options(o.grid);
 }
@@ -293,7 +297,8 @@ constexpr MethodEntry kMethods[] = {
     {Method::grid, "grid", "the world-space probe grid",
      "the world-space probe grid (seed 001 4.3): radiance cascades over the scene's voxels, "
      "fog and light shafts, later bounces, the radiance cache spwi's come from",
-     kGridOptions, always, grid_check, nullptr, grid_bytes, grid_describe, grid_solve, nullptr},
+     kGridOptions, always, grid_check, grid_check_scene, grid_bytes, grid_describe, grid_solve,
+     nullptr},
     {Method::ssrc, "ssrc", "the screen-space radiance cascades",
      "screen-space radiance cascades (seed 001 4.2): probes and intervals on the screen, filled "
      "by marching the depth buffer with an occlusion bitmask; sees only what is on screen",

@@ -28,6 +28,7 @@ struct Hit {
   Vec3 geometric_normal;  // unit, as the surface is oriented (not yet turned to the ray)
   Vec3 shading_normal;    // unit: interpolated vertex normal where the mesh has them
   float u = 0, v = 0;     // texture coordinates (0 where the mesh has none)
+  float b1 = 0, b2 = 0;   // a triangle's barycentrics of its vertices 1 and 2
   std::uint32_t material = 0;
   int object = -1;
   ShapeKind kind = ShapeKind::triangle;

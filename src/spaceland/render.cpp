@@ -249,6 +249,7 @@ Status solve(const Plan& plan, const Scene& scene, const Scene& given, const Ray
   result.rays += report.rays;
   result.samples = report.samples;
   result.cancelled = report.cancelled;
+  result.warnings = scene.warnings;
   for (std::string& w : report.warnings) result.warnings.push_back(std::move(w));
   result.memory_bytes += report.memory_bytes;
   result.voxel_bytes = report.voxel_bytes;

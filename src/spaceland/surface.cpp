@@ -1,18 +1,94 @@
 #include "spaceland/surface.hpp"
 
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "io/json_reader.hpp"
 #include "spaceland/color.hpp"
 #include "spaceland/scene/mesh_file.hpp"
+#include "spaceland/solve.hpp"
 
 namespace penumbra::spaceland {
 
+namespace {
+
+// The texel of `ref` at the hit: its set of texture coordinates, through its transform.
+Rgb texel_at(const Scene& scene, const Hit& hit, const TextureRef& ref) {
+  float u = hit.u, v = hit.v;
+  if (ref.uv_set == 1) {
+    u = v = 0;
+    if (hit.kind == ShapeKind::triangle) {
+      const TriangleMesh& m = scene.meshes[hit.shape];
+      if (!m.lightmap_uvs.empty()) {
+        const auto& tri = m.triangles[hit.primitive];
+        const float b0 = 1 - hit.b1 - hit.b2;
+        const auto &t0 = m.lightmap_uvs[tri[0]], &t1 = m.lightmap_uvs[tri[1]],
+                   &t2 = m.lightmap_uvs[tri[2]];
+        u = b0 * t0[0] + hit.b1 * t1[0] + hit.b2 * t2[0];
+        v = b0 * t0[1] + hit.b1 * t1[1] + hit.b2 * t2[1];
+      }
+    }
+  }
+  const auto& t = ref.transform;
+  return sample_texture(scene.textures[std::size_t(ref.index)], t[0] * u + t[1] * v + t[2],
+                        t[3] * u + t[4] * v + t[5]);
+}
+
+}  // namespace
+
 Rgb albedo_at(const Scene& scene, const Hit& hit) {
   const Material& m = scene.materials[hit.material];
-  if (m.albedo_texture < 0) return m.albedo;
-  return m.albedo * sample_texture(scene.textures[std::size_t(m.albedo_texture)], hit.u, hit.v);
+  if (m.albedo_texture.index < 0) return m.albedo;
+  return m.albedo * texel_at(scene, hit, m.albedo_texture);
 }
 
 Rgb emission_at(const Scene& scene, const Hit& hit) {
-  return scene.materials[hit.material].emission;
+  const Material& m = scene.materials[hit.material];
+  if (m.emission_texture.index < 0) return m.emission;
+  return m.emission * texel_at(scene, hit, m.emission_texture);
+}
+
+Brdf brdf_at(const Scene& scene, const Hit& hit) {
+  const Material& m = scene.materials[hit.material];
+  const Rgb albedo = albedo_at(scene, hit);
+  if (m.metallic_roughness_texture.index < 0) return make_brdf(albedo, m.metallic, m.roughness);
+  const Rgb mr = texel_at(scene, hit, m.metallic_roughness_texture);
+  return make_brdf(albedo, m.metallic * mr.b, m.roughness * mr.g);
+}
+
+namespace {
+
+// The first material a surface uses that is not version 1's Lambertian, or -1.
+int first_glossy(const Scene& scene) {
+  std::vector<std::uint8_t> used(scene.materials.size(), 0);
+  for (const TriangleMesh& m : scene.meshes)
+    for (std::uint32_t k : m.materials) used[k] = 1;
+  for (const Sphere& s : scene.spheres) used[s.material] = 1;
+  for (const Disk& d : scene.disks) used[d.material] = 1;
+  for (std::size_t k = 0; k < scene.materials.size(); ++k)
+    if (used[k] && !scene.materials[k].lambertian()) return int(k);
+  return -1;
+}
+
+}  // namespace
+
+bool all_lambertian(const Scene& scene) {
+  return first_glossy(scene) < 0;
+}
+
+Status refuse_glossy(const Scene& scene, const char* method, const char* instead) {
+  const int k = first_glossy(scene);
+  if (k < 0) return {};
+  const Material& m = scene.materials[std::size_t(k)];
+  std::string what = "metallic " + io::format_number(m.metallic) + " and roughness " +
+                     io::format_number(m.roughness);
+  if (m.metallic_roughness_texture.index >= 0) what += " times a metallic-roughness texture";
+  return Error{std::string(method) +
+               " renders Lambertian materials only (metallic 0, roughness 1, no "
+               "metallic-roughness texture; its specular cone queries are not built yet): "
+               "material '" +
+               m.name + "' has " + what + "; use " + instead};
 }
 
 void face_towards(Hit& hit, Vec3 d) {

@@ -3,6 +3,7 @@
 #pragma once
 
 #include "penumbra/spaceland/scene.hpp"
+#include "spaceland/brdf.hpp"
 #include "spaceland/ray.hpp"
 
 namespace penumbra::spaceland {
@@ -10,6 +11,13 @@ namespace penumbra::spaceland {
 // The albedo (texture included) and the emission of the surface at a hit.
 Rgb albedo_at(const Scene& scene, const Hit& hit);
 Rgb emission_at(const Scene& scene, const Hit& hit);
+
+// The BRDF at a hit: its base colour, metallic and roughness, textures included.
+Brdf brdf_at(const Scene& scene, const Hit& hit);
+
+// Whether every material of the scene is version 1's Lambertian (a method without specular
+// queries renders only such scenes).
+bool all_lambertian(const Scene& scene);
 
 // A sphere whose material emits: a sphere light, which the cascades spread over their direction
 // cells instead of tracing (cascade/sphere_lights.hpp).

@@ -11,9 +11,11 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <numbers>
 #include <string>
 #include <vector>
 
+#include "io/image_io.hpp"
 #include "io/json_reader.hpp"
 #include "test_support.hpp"
 
@@ -68,6 +70,18 @@ struct Dir : testing::TestDir {
   Dir() : testing::TestDir("mesh") {}
 };
 
+// A 2 x 1 PNG: texel 0 (64, 128, 255), texel 1 (255, 0, 32); returns its path.
+std::string two_texels(Dir& d, const std::string& name) {
+  const std::string path = (fs::path(d.write(name, "")).string());
+  EXPECT_TRUE(io::write_png8(path, 2, 1, {64, 128, 255, 255, 0, 32}).ok());
+  return path;
+}
+
+double srgb_to_linear(unsigned char c) {
+  const double s = c / 255.0;
+  return s <= 0.04045 ? s / 12.92 : std::pow((s + 0.055) / 1.055, 2.4);
+}
+
 // ---- OBJ ----
 
 TEST(MeshFileObj, BunnyHasOneTriangleByFaceLine) {
@@ -90,9 +104,7 @@ TEST(MeshFileObj, BunnyHasOneTriangleByFaceLine) {
 
 TEST(MeshFileObj, QuadIsTwoTrianglesWithTheMtlMaterials) {
   Dir d;
-  d.write("m.mtl",
-          "newmtl red\nKd 0.9 0.1 0.2\nKe 0 0 0\n\nnewmtl lamp\nKd 0 0 0\nKe 5 4 3\n"
-          "map_Kd ignored.png\n");
+  d.write("m.mtl", "newmtl red\nKd 0.9 0.1 0.2\nKe 0 0 0\n\nnewmtl lamp\nKd 0 0 0\nKe 5 4 3\n");
   const std::string obj = d.write("q.OBJ",
                                   "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\n"
                                   "usemtl red\nf 1 2 3 4\nusemtl lamp\nf 1 2 5\n"
@@ -105,12 +117,57 @@ TEST(MeshFileObj, QuadIsTwoTrianglesWithTheMtlMaterials) {
   EXPECT_FLOAT_EQ(m.materials[0].albedo.b, 0.2f);
   EXPECT_FLOAT_EQ(m.materials[1].emission.r, 5);
   EXPECT_FLOAT_EQ(m.materials[1].emission.b, 3);
-  EXPECT_EQ(m.materials[1].albedo_texture, -1);
+  EXPECT_EQ(m.materials[1].albedo_texture.index, -1);
   EXPECT_EQ(m.mesh.materials[0], 0u);
   EXPECT_EQ(m.mesh.materials[1], 0u);
   EXPECT_EQ(m.mesh.materials[2], 1u);
   EXPECT_EQ(m.mesh.positions.size(), 5u);
   EXPECT_TRUE(m.mesh.uvs.empty());
+}
+
+TEST(MeshFileObj, MtlGivesMetallicRoughnessAndTextures) {
+  Dir d;
+  two_texels(d, "t.png");
+  // Pr and Pm where given (an absent Pr is the format's 1, not tinyobjloader's 0); map_Kd with
+  // -s and -o, map_Ke clamped; both read once.
+  d.write("m.mtl",
+          "newmtl metal\nKd 0.9 0.9 0.9\nPm 1\nPr 0.25\nmap_Kd -s 2 1 1 -o 0.5 0.25 0 t.png\n"
+          "newmtl plain\nKd 0.5 0.5 0.5\nPm 0.5\nmap_Kd t.png\nKe 1 1 1\nmap_Ke -clamp on t.png\n"
+          "map_Pr rough.png\n");
+  const std::string obj =
+      d.write("q.obj",
+              "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nvt 0 0\nvt 1 0\nvt 1 1\n"
+              "usemtl metal\nf 1/1 2/2 3/3\nusemtl plain\nf 1/1 3/3 2/2\n");
+  const MeshFile m = loads(obj);
+  ASSERT_EQ(m.materials.size(), 2u);
+  EXPECT_EQ(m.materials[0].metallic, 1);
+  EXPECT_EQ(m.materials[0].roughness, 0.25f);
+  EXPECT_EQ(m.materials[1].metallic, 0.5f);
+  EXPECT_EQ(m.materials[1].roughness, 1);
+  ASSERT_EQ(m.textures.size(), 2u);  // repeating and clamped
+  EXPECT_EQ(m.materials[0].albedo_texture.index, 0);
+  EXPECT_EQ(m.materials[1].albedo_texture.index, 0);
+  EXPECT_EQ(m.materials[1].emission_texture.index, 1);
+  EXPECT_EQ(m.textures[1].wrap_s, Texture::Wrap::clamp);
+  EXPECT_NEAR(m.textures[0].rgb[0], srgb_to_linear(64), 1e-6);
+  EXPECT_NEAR(m.textures[0].rgb[5], srgb_to_linear(32), 1e-6);
+  // In our v (down the image): s_v v + 1 - s_v - o_v.
+  const auto& t = m.materials[0].albedo_texture.transform;
+  EXPECT_EQ(t, (std::array<float, 6>{2, 0, 0.5f, 0, 1, -0.25f}));
+  EXPECT_EQ(m.materials[1].albedo_texture.transform, (std::array<float, 6>{1, 0, 0, 0, 1, 0}));
+  ASSERT_EQ(m.warnings.size(), 1u);
+  EXPECT_EQ(m.warnings[0],
+            "material 'plain' in m.mtl: map_Pr is not implemented: drawn with Pr and Pm alone");
+
+  d.write("bad.mtl", "newmtl m\nKd 0.5 0.5 0.5\nPr 1.5\n");
+  const std::string bad = d.write("b.obj", "mtllib bad.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3\n");
+  EXPECT_EQ(refusal(bad), prefix("b.obj") + "material 'm' in bad.mtl: Pr 1.5 is outside [0, 1]");
+  d.write("gone.mtl", "newmtl m\nmap_Kd gone.png\n");
+  const std::string gone =
+      d.write("g.obj", "mtllib gone.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3\n");
+  const std::string msg = refusal(gone);
+  EXPECT_NE(msg.find("material 'm' in gone.mtl: map_Kd 'gone.png' not found"), std::string::npos)
+      << msg;
 }
 
 // A face of more corners than tinyobjloader's byte counts (it kept 100,000 as 160), between two
@@ -260,7 +317,7 @@ TEST(MeshFile, RefusesPastTheMemoryLimit) {
   const std::string engine = kGltf2 + "2CylinderEngine-glTF-Binary/2CylinderEngine.glb";
   // Its bytes and their copy in tinygltf's buffers fit, the arrays do not.
   msg = refusal(engine, 3 * fs::file_size(engine));
-  EXPECT_NE(msg.find("121496 triangles on 84657 vertices need 8334444 bytes (7.9 MiB) in all"),
+  EXPECT_NE(msg.find("121496 triangles on 84657 vertices need 8335364 bytes (7.9 MiB) in all"),
             std::string::npos)
       << msg;
   // Parsing is counted before it starts: a JSON chunk of 43 KB (its objects cost most).
@@ -505,7 +562,11 @@ TEST(MeshFileGltf, MaterialsAndMixedNormals) {
   EXPECT_FLOAT_EQ(m.materials[0].albedo.g, 0.25f);
   EXPECT_FLOAT_EQ(m.materials[0].emission.r, 4);
   EXPECT_FLOAT_EQ(m.materials[0].emission.g, 2);
-  EXPECT_FLOAT_EQ(m.materials[1].albedo.g, 1);  // the spec's default material
+  EXPECT_FLOAT_EQ(m.materials[1].albedo.g, 1);  // the spec's default material: a rough metal
+  EXPECT_EQ(m.materials[1].metallic, 1);
+  EXPECT_EQ(m.materials[1].roughness, 1);
+  EXPECT_EQ(m.materials[0].metallic, 1);  // factors absent: glTF's 1
+  EXPECT_FALSE(m.materials[0].lambertian());
   EXPECT_EQ(m.mesh.materials, (std::vector<std::uint32_t>{0, 1}));
 
   j["materials"][0]["pbrMetallicRoughness"]["baseColorFactor"] = {1.5, 0, 0, 1};
@@ -514,13 +575,102 @@ TEST(MeshFileGltf, MaterialsAndMixedNormals) {
                 "materials[0].pbrMetallicRoughness.baseColorFactor: 1.5 is outside [0, 1]");
 }
 
+TEST(MeshFileGltf, MetallicRoughnessTexturesAndTheirTransforms) {
+  Dir d;
+  two_texels(d, "t.png");
+  // A triangle with TEXCOORD_0 and TEXCOORD_1.
+  std::vector<float> data = kTriangle;
+  for (float v : {0.f, 0.f, 1.f, 0.f, 0.f, 1.f, 0.5f, 0.5f, 1.f, 1.f, 0.f, 1.f}) data.push_back(v);
+  json j = gltf(data);
+  j["accessors"][0]["count"] = 3;
+  j["bufferViews"].push_back({{"buffer", 0}, {"byteOffset", 36}, {"byteLength", 24}});
+  j["bufferViews"].push_back({{"buffer", 0}, {"byteOffset", 60}, {"byteLength", 24}});
+  for (int v : {1, 2})
+    j["accessors"].push_back(
+        {{"bufferView", v}, {"componentType", 5126}, {"count", 3}, {"type", "VEC2"}});
+  j["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_0"] = 1;
+  j["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_1"] = 2;
+  j["meshes"][0]["primitives"][0]["material"] = 0;
+  j["extensionsUsed"] = {"KHR_texture_transform", "KHR_materials_clearcoat"};
+  j["materials"] = {{{"pbrMetallicRoughness",
+                      {{"metallicFactor", 0.25},
+                       {"roughnessFactor", 0.5},
+                       {"baseColorTexture",
+                        {{"index", 0},
+                         {"extensions",
+                          {{"KHR_texture_transform",
+                            {{"offset", {0.5, 0}}, {"rotation", 0}, {"scale", {2, 1}}}}}}}},
+                       {"metallicRoughnessTexture", {{"index", 0}, {"texCoord", 1}}}}},
+                     {"emissiveTexture", {{"index", 0}}},
+                     {"emissiveFactor", {1, 1, 1}}}};
+  j["textures"] = {{{"source", 0}}};
+  j["images"] = {{{"uri", "t.png"}}};
+  const MeshFile m = loads(d.write("g.gltf", j.dump()));
+  ASSERT_EQ(m.materials.size(), 1u);
+  const Material& mat = m.materials[0];
+  EXPECT_EQ(mat.metallic, 0.25f);
+  EXPECT_EQ(mat.roughness, 0.5f);
+  EXPECT_FALSE(mat.lambertian());
+  // One image, decoded twice: sRGB for colours, as stored for metallic and roughness.
+  ASSERT_EQ(m.textures.size(), 2u);
+  EXPECT_EQ(mat.albedo_texture.index, mat.emission_texture.index);
+  const Texture& linear = m.textures[std::size_t(mat.metallic_roughness_texture.index)];
+  const Texture& srgb = m.textures[std::size_t(mat.albedo_texture.index)];
+  EXPECT_NEAR(linear.rgb[1], 128 / 255.0, 1e-6);
+  EXPECT_NEAR(srgb.rgb[1], srgb_to_linear(128), 1e-6);
+  EXPECT_EQ(mat.metallic_roughness_texture.uv_set, 1);
+  EXPECT_EQ(mat.albedo_texture.uv_set, 0);
+  EXPECT_EQ(mat.albedo_texture.transform, (std::array<float, 6>{2, 0, 0.5f, -0.f, 1, 0}));
+  ASSERT_EQ(m.mesh.uvs.size(), 3u);
+  ASSERT_EQ(m.mesh.lightmap_uvs.size(), 3u);
+  EXPECT_EQ(m.mesh.lightmap_uvs[0][0], 0.5f);
+  ASSERT_EQ(m.warnings.size(), 1u);
+  EXPECT_EQ(m.warnings[0],
+            "uses KHR_materials_clearcoat, which is not implemented: drawn without it");
+
+  // A rotation turns (u, v) by the extension's matrix: (cos, sin; -sin, cos).
+  auto& tt = j["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"]["extensions"]
+              ["KHR_texture_transform"];
+  tt = {{"rotation", std::numbers::pi / 2}, {"texCoord", 1}};
+  const MeshFile r = loads(d.write("r.gltf", j.dump()));
+  const auto& rt = r.materials[0].albedo_texture;
+  EXPECT_EQ(rt.uv_set, 1);
+  EXPECT_NEAR(rt.transform[0], 0, 1e-7);
+  EXPECT_NEAR(rt.transform[1], 1, 1e-7);
+  EXPECT_NEAR(rt.transform[3], -1, 1e-7);
+
+  tt = {{"texCoord", 2}};
+  EXPECT_EQ(refusal(d.write("c.gltf", j.dump())),
+            prefix("c.gltf") +
+                "materials[0].pbrMetallicRoughness.baseColorTexture: samples TEXCOORD_2; only "
+                "TEXCOORD_0 and TEXCOORD_1 are supported");
+  tt = {{"scale", {1, "x"}}};
+  EXPECT_EQ(refusal(d.write("s.gltf", j.dump())),
+            prefix("s.gltf") +
+                "materials[0].pbrMetallicRoughness.baseColorTexture.extensions."
+                "KHR_texture_transform.scale[1]: expected a finite number");
+  tt = json::object();
+  j["materials"][0]["pbrMetallicRoughness"]["metallicFactor"] = 1.5;
+  EXPECT_EQ(refusal(d.write("m.gltf", j.dump())),
+            prefix("m.gltf") +
+                "materials[0].pbrMetallicRoughness.metallicFactor: 1.5 is outside "
+                "[0, 1]");
+  j["materials"][0]["pbrMetallicRoughness"]["metallicFactor"] = 0;
+  j["meshes"][0]["primitives"][0]["attributes"].erase("TEXCOORD_1");
+  const std::string msg = refusal(d.write("t.gltf", j.dump()));
+  EXPECT_NE(msg.find("metallicRoughnessTexture samples TEXCOORD_1, which the primitive does not "
+                     "have"),
+            std::string::npos)
+      << msg;
+}
+
 TEST(MeshFileGltf, RefusesRequiredExtensionsAndVersionOne) {
   Dir d;
   json j = gltf(kTriangle);
-  j["extensionsUsed"] = {"KHR_texture_transform"};
-  j["extensionsRequired"] = {"KHR_texture_transform"};
+  j["extensionsUsed"] = {"KHR_materials_clearcoat"};
+  j["extensionsRequired"] = {"KHR_materials_clearcoat"};
   EXPECT_EQ(refusal(d.write("e.gltf", j.dump())),
-            prefix("e.gltf") + "extensionsRequired: KHR_texture_transform is not supported");
+            prefix("e.gltf") + "extensionsRequired: KHR_materials_clearcoat is not supported");
   // Compressed data is refused even when the extension is only used: the plain data is missing.
   j = gltf(kTriangle);
   j["extensionsUsed"] = {"KHR_draco_mesh_compression"};
@@ -606,13 +756,8 @@ TEST(MeshFileAssimp, BoxTexturedInEveryForm) {
     EXPECT_EQ(m.textures[0].wrap_t, gltf ? Texture::Wrap::clamp : Texture::Wrap::repeat) << f;
     EXPECT_FALSE(m.textures[0].nearest) << f;
     ASSERT_EQ(m.materials.size(), 1u) << f;
-    EXPECT_EQ(m.materials[0].albedo_texture, 0) << f;
+    EXPECT_EQ(m.materials[0].albedo_texture.index, 0) << f;
   }
-}
-
-double srgb_to_linear(unsigned char c) {
-  const double s = c / 255.0;
-  return s <= 0.04045 ? s / 12.92 : std::pow((s + 0.055) / 1.055, 2.4);
 }
 
 TEST(MeshFileAssimp, BoxTexturedTextureIsTheDecodedPng) {
@@ -639,6 +784,56 @@ TEST(MeshFileAssimp, BoxTexturedTextureIsTheDecodedPng) {
   EXPECT_NE(png[0], png[(100 * 211 + 150) * 3 + 1]);
   stbi_image_free(png);
   EXPECT_EQ(checked, 5);
+}
+
+TEST(MeshFileAssimp, TextureTransformsClearcoatAndSecondSets) {
+  // KHR_texture_transform's test model: each material's map as the extension composes it.
+  const std::string tt = kGltf2 + "textureTransform/TextureTransformTest.gltf";
+  if (!have(tt)) return;
+  const MeshFile t = loads(tt);
+  ASSERT_GE(t.materials.size(), 6u);
+  EXPECT_TRUE(t.warnings.empty());
+  auto transform = [&](const std::string& name) {
+    for (const Material& m : t.materials)
+      if (m.name == name) return m.albedo_texture.transform;
+    ADD_FAILURE() << "no material " << name;
+    return std::array<float, 6>{};
+  };
+  EXPECT_EQ(transform("Offset U"), (std::array<float, 6>{1, 0, 0.5f, -0.f, 1, 0}));
+  EXPECT_EQ(transform("Offset V"), (std::array<float, 6>{1, 0, 0, -0.f, 1, 0.5f}));
+  const double a = 0.3, c = std::cos(a), s = std::sin(a);
+  const auto all = transform("All");
+  const double want[6] = {c * 1.5, s * 1.5, -0.2, -s * 1.5, c * 1.5, -0.1};
+  for (int k = 0; k < 6; ++k) EXPECT_NEAR(all[std::size_t(k)], want[k], 1e-6) << k;
+  EXPECT_EQ(transform("Correct"), (std::array<float, 6>{1, 0, 0, 0, 1, 0}));
+
+  // ClearCoatTest: glossy dielectrics, a roughness texture (linear), emissive labels, and the
+  // clearcoat it uses named in a warning.
+  const std::string cc = kGltf2 + "ClearCoat-glTF/ClearCoatTest.gltf";
+  if (!have(cc)) return;
+  const MeshFile m = loads(cc);
+  ASSERT_EQ(m.warnings.size(), 1u);
+  EXPECT_EQ(m.warnings[0],
+            "uses KHR_materials_clearcoat, which is not implemented: drawn without it");
+  int labels = 0, rough = 0, glossy = 0;
+  for (const Material& mat : m.materials) {
+    labels += mat.emission_texture.index >= 0;
+    rough += mat.metallic_roughness_texture.index >= 0;
+    glossy += mat.metallic == 0 && mat.roughness < 1;
+  }
+  EXPECT_EQ(labels, 1);
+  EXPECT_EQ(rough, 1);
+  EXPECT_GE(glossy, 15);
+
+  // boxTexcoords: its metallic-roughness texture samples TEXCOORD_1, its colour TEXCOORD_0.
+  const std::string bt = kGltf2 + "BoxTexcoords-glTF/boxTexcoords.gltf";
+  if (!have(bt)) return;
+  const MeshFile b = loads(bt);
+  ASSERT_EQ(b.materials.size(), 1u);
+  EXPECT_EQ(b.materials[0].albedo_texture.uv_set, 0);
+  EXPECT_EQ(b.materials[0].metallic_roughness_texture.uv_set, 1);
+  EXPECT_EQ(b.mesh.uvs.size(), b.mesh.positions.size());
+  EXPECT_EQ(b.mesh.lightmap_uvs.size(), b.mesh.positions.size());
 }
 
 TEST(MeshFileAssimp, ValidModelsHaveTheirTriangleCounts) {

@@ -574,6 +574,34 @@ TEST(Methods, TheTableRefusesWhatItDoesNotHold) {
   }
 }
 
+TEST(Methods, TheCascadesRefuseGlossyMaterialsUntilTheirConeQueriesExist) {
+  int floor = 0;
+  Scene scene = floor_scene(floor);
+  Material& m = scene.materials[scene.disks.front().material];
+  m.metallic = 1;
+  m.roughness = 0.3f;
+  for (const MethodInfo& info : methods()) {
+    RenderOptions o;
+    o.method = info.method;
+    o.pt.spp = 1;
+    const Expected<RenderResult> r = render(scene, o);
+    if (info.method == Method::pt) {
+      EXPECT_TRUE(r.ok()) << (r.ok() ? "" : r.error().message);
+      continue;
+    }
+    ASSERT_FALSE(r.ok()) << info.name;
+    EXPECT_NE(r.error().message.find(std::string(info.name) + " renders Lambertian materials only"),
+              std::string::npos)
+        << r.error().message;
+    EXPECT_NE(r.error().message.find("has metallic 1 and roughness 0.3; use --method pt"),
+              std::string::npos)
+        << r.error().message;
+    // Other outputs than the radiance need no specular: the albedo, say.
+    o.aov = Aov::albedo;
+    EXPECT_TRUE(render(scene, o).ok()) << info.name;
+  }
+}
+
 TEST(Methods, EachDescribesTheValuesItUsed) {
   int floor = 0;
   Scene scene = floor_scene(floor);

@@ -153,7 +153,23 @@ TEST(Scene3d, Defaults) {
   EXPECT_EQ(s.materials[0].name, "default");
   EXPECT_EQ(s.materials[0].albedo.g, 0.8f);
   EXPECT_EQ(s.materials[0].emission.r, 0);
+  EXPECT_EQ(s.materials[0].metallic, 0);
+  EXPECT_EQ(s.materials[0].roughness, 1);
+  EXPECT_TRUE(s.materials[0].lambertian());
   EXPECT_TRUE(s.media.empty());
+}
+
+TEST(Scene3d, GlossyMaterialsTakeMetallicAndRoughness) {
+  const Scene s = parse_valid(doc(R"(, "materials": {
+      "metal": {"albedo": [0.9, 0.6, 0.3], "metallic": 1, "roughness": 0.25},
+      "plaster": {"albedo": [0.7, 0.7, 0.7], "metallic": 0, "roughness": 1}},
+      "objects": [{"type": "sphere", "center": [0, 0, 0], "radius": 1, "material": "metal"},
+                  {"type": "sphere", "center": [3, 0, 0], "radius": 1, "material": "plaster"}])"));
+  ASSERT_EQ(s.materials.size(), 2u);
+  EXPECT_EQ(s.materials[0].metallic, 1);
+  EXPECT_EQ(s.materials[0].roughness, 0.25f);
+  EXPECT_FALSE(s.materials[0].lambertian());
+  EXPECT_TRUE(s.materials[1].lambertian());  // version 1's meaning: old images do not change
 }
 
 TEST(Scene3d, UniformSkyAndDefaultSunRadius) {
@@ -400,6 +416,12 @@ std::vector<ErrorCase> error_cases() {
        "materials.w.albedo[1]", "found 1.5"},
       {"MaterialEmissionNegative", doc(R"(, "materials": {"w": {"emission": [0, 0, -1]}})"),
        "materials.w.emission[2]", "found -1"},
+      {"MaterialMetallicAboveOne", doc(R"(, "materials": {"w": {"metallic": 1.5}})"),
+       "materials.w.metallic", "expected a number in [0, 1], found 1.5"},
+      {"MaterialRoughnessNegative", doc(R"(, "materials": {"w": {"roughness": -0.1}})"),
+       "materials.w.roughness", "found -0.1"},
+      {"MaterialRoughnessNotNumber", doc(R"(, "materials": {"w": {"roughness": "low"}})"),
+       "materials.w.roughness", "number"},
       {"MaterialUnknownKey", doc(R"(, "materials": {"w": {"color": [1, 1, 1]}})"),
        "materials.w.color", "unknown key"},
       {"MaterialNotObject", doc(R"(, "materials": {"w": [1, 1, 1]})"), "materials.w",
@@ -615,6 +637,19 @@ TEST(Scene3d, MeshPathIsRelativeToTheSceneFile) {
   EXPECT_EQ(r->meshes[0].materials, std::vector<std::uint32_t>(12, 0));
   ASSERT_EQ(r->materials.size(), 2u);
   EXPECT_EQ(r->meshes[1].materials, std::vector<std::uint32_t>(12, 1));
+  // A file used again is parsed once: its materials join the scene once, each object has its
+  // own triangles.
+  const std::string thrice = dir.write("t.json", objects_doc(R"(
+      {"type": "mesh", "file": "models/cube.obj"},
+      {"type": "mesh", "file": "models/cube.obj", "transform": {"translate": [3, 0, 0]}},
+      {"type": "mesh", "file": "models/../models/cube.obj", "material": "m"})"));
+  auto t = load_scene(thrice);
+  ASSERT_TRUE(t.ok()) << t.error().message;
+  ASSERT_EQ(t->meshes.size(), 3u);
+  EXPECT_EQ(t->materials.size(), 2u);
+  EXPECT_EQ(t->meshes[0].materials, t->meshes[1].materials);
+  EXPECT_EQ(mesh_bounds(t->meshes[1]).lo.x, mesh_bounds(t->meshes[0]).lo.x + 3);
+  EXPECT_EQ(t->meshes[2].materials, std::vector<std::uint32_t>(12, 0));
   const Bounds b = mesh_bounds(r->meshes[0]);
   expect_vec3(b.lo, {-0.5f, 1.5f, -0.5f});
   expect_vec3(b.hi, {0.5f, 2.5f, 0.5f});
@@ -710,8 +745,9 @@ TEST(Scene3dCheck, NamesTheField) {
        "<code>: meshes[0].lightmap_uvs[1][0]: expected a finite number, found nan"},
       {"PositionNan", [](Scene& s) { s.meshes[0].positions[2].y = std::nanf(""); },
        "<code>: meshes[0].positions[2][1]: expected a finite number, found nan"},
-      {"TextureIndex", [](Scene& s) { s.materials[0].albedo_texture = 0; },
-       "<code>: materials[0].albedo_texture: texture 0 out of range (-1 or one of the 0 textures)"},
+      {"TextureIndex", [](Scene& s) { s.materials[0].albedo_texture.index = 0; },
+       "<code>: materials[0].albedo_texture.index: texture 0 out of range (-1 or one of the 0 "
+       "textures)"},
       {"AlbedoAboveOne", [](Scene& s) { s.materials[0].albedo.g = 1.5f; },
        "<code>: materials[0].albedo[1]: expected a number in [0, 1], found 1.5"},
       {"SphereRadius", [](Scene& s) { s.spheres[0].radius = 0; },

@@ -55,12 +55,31 @@ struct Texture {
   bool nearest = false;  // magnification filter: nearest texel, else bilinear
 };
 
-// A Lambertian reflector and emitter.
+// How a material samples a texture: which one, through which set of texture coordinates, and
+// the affine map glTF's KHR_texture_transform (or an MTL file's -o and -s) puts on them.
+struct TextureRef {
+  int index = -1;  // into Scene::textures; -1: no texture
+  int uv_set = 0;  // 0: TriangleMesh::uvs; 1: TriangleMesh::lightmap_uvs (glTF's TEXCOORD_1)
+  // (u, v) -> (m[0] u + m[1] v + m[2], m[3] u + m[4] v + m[5])
+  std::array<float, 6> transform{1, 0, 0, 0, 1, 0};
+};
+
+// A reflector and emitter: glTF 2.0's metallic-roughness BRDF (docs/scene-format.md, "Glossy
+// materials"), which is version 1's Lambertian where metallic is 0 and roughness 1.
 struct Material {
-  Rgb albedo{0.8f, 0.8f, 0.8f};  // in [0, 1]; times the texture where there is one
-  Rgb emission{};                // radiance, >= 0
-  int albedo_texture = -1;       // index into Scene::textures, or -1
-  std::string name;              // for messages
+  Rgb albedo{0.8f, 0.8f, 0.8f};           // base colour in [0, 1]; times albedo_texture's texel
+  Rgb emission{};                         // radiance, >= 0; times emission_texture's texel
+  float metallic = 0;                     // in [0, 1]; times metallic_roughness_texture's blue
+  float roughness = 1;                    // in [0, 1]; times metallic_roughness_texture's green
+  TextureRef albedo_texture;              // sRGB-decoded texels
+  TextureRef emission_texture;            // sRGB-decoded texels
+  TextureRef metallic_roughness_texture;  // linear texels (glTF's metallicRoughnessTexture)
+  std::string name;                       // for messages
+
+  // Version 1's Lambertian everywhere on the surface: no specular lobe.
+  bool lambertian() const {
+    return metallic == 0 && roughness == 1 && metallic_roughness_texture.index < 0;
+  }
 };
 
 // Triangles of one object in world space: a mesh file, a box, a quad, or a sphere or disk that a
@@ -116,6 +135,9 @@ struct Scene {
   // One line per object of the document ("objects[2] (sphere)"), indexed by `object` above.
   std::vector<std::string> objects;
   std::string source = "<code>";  // file name used in messages
+  // What the document's files use and the scene is drawn without ("objects[1].file: car.glb:
+  // uses KHR_materials_clearcoat, ..."); render() passes them on in RenderResult::warnings.
+  std::vector<std::string> warnings;
 };
 
 struct LoadOptions {

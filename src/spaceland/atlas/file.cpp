@@ -67,7 +67,14 @@ std::uint64_t scene_hash(const Scene& s) {
   for (const Material& m : s.materials) {
     f.value(m.albedo);
     f.value(m.emission);
-    f.value(m.albedo_texture);
+    f.value(m.metallic);
+    f.value(m.roughness);
+    for (const TextureRef* t :
+         {&m.albedo_texture, &m.emission_texture, &m.metallic_roughness_texture}) {
+      f.value(t->index);
+      f.value(t->uv_set);
+      f.value(t->transform);
+    }
   }
   f.value(s.textures.size());
   for (const Texture& t : s.textures) {

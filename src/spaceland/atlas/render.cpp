@@ -40,7 +40,8 @@ Status check_options(const SurfaceOptions& o) {
 }
 
 Status check_scene(const Scene& scene) {
-  return refuse_fog(scene, "surface", "--method grid or pt");
+  if (Status s = refuse_fog(scene, "surface", "--method grid or pt"); !s) return s;
+  return refuse_glossy(scene, "surface", "--method pt");
 }
 
 std::uint64_t working_bytes(const Scene& scene, const SurfaceOptions& o, bool radiance) {

@@ -375,6 +375,8 @@ void RayScene::Impl::fill(const RTCRayHit& rh, const Ray& ray, Hit& hit) const {
     hit.geometric_normal = len > 0 ? n / len : Vec3{0, 1, 0};
     hit.shading_normal = hit.geometric_normal;
     const float c0 = float(b0), c1 = float(b1), c2 = float(b2);
+    hit.b1 = c1;
+    hit.b2 = c2;
     if (!m.normals.empty()) {
       const Vec3 s = c0 * m.normals[tri[0]] + c1 * m.normals[tri[1]] + c2 * m.normals[tri[2]];
       const float sl = length(s);

@@ -126,20 +126,27 @@ struct SurfaceSums {
   std::vector<Rgb> emission, albedo;
 };
 
-// The material's albedo times its texture's mean texel: a voxel is far coarser than a texel.
+// A texture's mean texel (white where there is none): a voxel is far coarser than a texel.
+Rgb mean_texel(const Scene& scene, const TextureRef& ref) {
+  if (ref.index < 0) return {1, 1, 1};
+  const Texture& t = scene.textures[std::size_t(ref.index)];
+  double sum[3] = {0, 0, 0};
+  for (std::size_t k = 0; k < t.rgb.size(); ++k) sum[k % 3] += t.rgb[k];
+  const double n = std::max<std::size_t>(1, t.rgb.size() / 3);
+  return {float(sum[0] / n), float(sum[1] / n), float(sum[2] / n)};
+}
+
+// Each material's albedo and emission times their textures' mean texels.
 std::vector<Rgb> mean_albedos(const Scene& scene) {
   std::vector<Rgb> out;
-  for (const Material& m : scene.materials) {
-    Rgb a = m.albedo;
-    if (m.albedo_texture >= 0) {
-      const Texture& t = scene.textures[std::size_t(m.albedo_texture)];
-      double sum[3] = {0, 0, 0};
-      for (std::size_t k = 0; k < t.rgb.size(); ++k) sum[k % 3] += t.rgb[k];
-      const double n = std::max<std::size_t>(1, t.rgb.size() / 3);
-      a = a * Rgb{float(sum[0] / n), float(sum[1] / n), float(sum[2] / n)};
-    }
-    out.push_back(a);
-  }
+  for (const Material& m : scene.materials)
+    out.push_back(m.albedo * mean_texel(scene, m.albedo_texture));
+  return out;
+}
+std::vector<Rgb> mean_emissions(const Scene& scene) {
+  std::vector<Rgb> out;
+  for (const Material& m : scene.materials)
+    out.push_back(m.emission * mean_texel(scene, m.emission_texture));
   return out;
 }
 
@@ -266,6 +273,7 @@ class SurfaceRaster {
     sums_.emission.assign(count, Rgb{});
     sums_.albedo.assign(count, Rgb{});
     albedos_ = mean_albedos(scene);
+    emissions_ = mean_emissions(scene);
   }
 
   void triangle(const std::array<Vec3, 3>& tri, std::uint32_t material) {
@@ -375,17 +383,17 @@ class SurfaceRaster {
     for (std::size_t k : touched_) add_at(k, w, material);
   }
   void add_at(std::size_t k, float w, std::uint32_t material) {
-    const Material& m = scene_.materials[material];
+    const Rgb e = emissions_[material];
     sums_.weight[k] += w;
-    if (!is_black(m.emission)) sums_.emitting[k] += w;
-    sums_.emission[k] += m.emission * w;
+    if (!is_black(e)) sums_.emitting[k] += w;
+    sums_.emission[k] += e * w;
     sums_.albedo[k] += albedos_[material] * w;
   }
 
   const Scene& scene_;
   const Voxels& v_;
   SurfaceSums sums_;
-  std::vector<Rgb> albedos_;
+  std::vector<Rgb> albedos_, emissions_;
   std::vector<std::size_t> touched_;
 };
 

@@ -10,6 +10,7 @@
 #include "core/parallel.hpp"
 #include "core/sobol.hpp"
 #include "core/timer.hpp"
+#include "spaceland/brdf.hpp"
 #include "spaceland/color.hpp"
 #include "spaceland/lights.hpp"
 #include "spaceland/media.hpp"
@@ -22,7 +23,6 @@ namespace penumbra::spaceland::pt {
 namespace {
 
 constexpr float kInf = std::numeric_limits<float>::infinity();
-constexpr float kInvPi = float(1 / kPi);
 constexpr float kInv4Pi = float(1 / (4 * kPi));
 
 // Sobol pairs per scattering vertex: free flight, light pick, light point, sun, direction.
@@ -48,23 +48,21 @@ struct Context {
 struct Vertex {
   Vec3 p;
   bool in_medium = false;
-  Vec3 ng, ns;  // surface only
-  Rgb albedo{};
+  Vec3 ng, ns, wo;  // surface only; wo: towards where the light goes on
+  Brdf brdf;
 };
 
-// Density of the direction sampler at a vertex for direction wi.
+// Density of the direction sampler at a vertex for direction wi (a mirror's delta excluded).
 float direction_pdf(const Vertex& v, Vec3 wi) {
   if (v.in_medium) return kInv4Pi;
-  const float c = dot(v.ns, wi);
-  return c > 0 ? c * kInvPi : 0;
+  return brdf_pdf(v.brdf, v.ns, v.ng, v.wo, wi);
 }
 
-// BSDF (or phase function) times the cosine, for light arriving along wi.
+// BSDF (or phase function) times the cosine, for light arriving along wi; none from below the
+// surface.
 Rgb scattering(const Vertex& v, Vec3 wi) {
   if (v.in_medium) return Rgb{kInv4Pi, kInv4Pi, kInv4Pi};
-  if (dot(v.ng, wi) <= 0) return {};  // below the surface: no light through it
-  const float c = dot(v.ns, wi);
-  return c > 0 ? v.albedo * (c * kInvPi) : Rgb{};
+  return brdf_cos(v.brdf, v.ns, v.ng, v.wo, wi);
 }
 
 // A shadow ray from the vertex to a sampled emitter point, or to the sky for the sun; both ends
@@ -161,8 +159,10 @@ Rgb trace(const Context& ctx, Vec3 origin, Vec3 dir, Hit hit, bool found, float 
       v.p = hit.position;
       v.ng = hit.geometric_normal;
       v.ns = hit.shading_normal;
-      v.albedo = albedo_at(ctx.scene, hit);
-      if (is_black(v.albedo)) break;
+      v.wo = -dir;
+      v.brdf = brdf_at(ctx.scene, hit);
+      // A black Lambertian reflects nothing; a glossy surface always reflects (Fresnel).
+      if (v.brdf.lambertian && is_black(v.brdf.diffuse)) break;
     }
     // Next event estimation: one emitter point and the sun.
     if (!ctx.lights.empty()) {
@@ -174,8 +174,10 @@ Rgb trace(const Context& ctx, Vec3 origin, Vec3 dir, Hit hit, bool found, float 
       const LightSample ls = ctx.lights.sample_sun(point(scatters, kSunPoint));
       L += beta * direct(ctx, v, ls, rays);
     }
-    // The next direction: cosine-weighted (albedo / pi x cos / pdf = albedo), or isotropic in
-    // fog (its albedo is already in the free-flight weight).
+    // The next direction: from the BRDF (cosine-weighted for the Lambertian: albedo / pi x cos /
+    // pdf = albedo), or isotropic in fog (its albedo is already in the free-flight weight). The
+    // lobe is picked with the light pick's unused second number, so that Lambertian scenes draw
+    // the very numbers they drew before glossy materials.
     const std::array<float, 2> u = point(scatters, kDirection);
     Vec3 wi;
     if (v.in_medium) {
@@ -183,11 +185,11 @@ Rgb trace(const Context& ctx, Vec3 origin, Vec3 dir, Hit hit, bool found, float 
       prev_pdf = kInv4Pi;
       origin = v.p;
     } else {
-      wi = cosine_direction(v.ns, u);
-      if (dot(wi, v.ng) <= 0) break;  // under the surface: this path carries nothing
-      prev_pdf = direction_pdf(v, wi);
-      if (!(prev_pdf > 0)) break;
-      beta *= v.albedo;
+      const BrdfSample bs = sample_brdf(v.brdf, v.ns, v.ng, v.wo, point(scatters, kPick)[1], u);
+      if (is_black(bs.weight)) break;  // under the surface: this path carries nothing
+      wi = bs.wi;
+      prev_pdf = bs.pdf;  // 0 after a mirror: what it meets counts in full (no light sample)
+      beta *= bs.weight;
       origin = ctx.rays.spawn(v.p, v.ng, wi);
     }
     prev_p = v.p;

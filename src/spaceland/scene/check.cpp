@@ -172,6 +172,19 @@ void check_mesh(const std::string& file, const std::string& path, const Triangle
   for (std::size_t t = 0; t < m.materials.size(); ++t)
     if (m.materials[t] >= s.materials.size())
       check_material_index(file, item(path + ".materials", t), m.materials[t], s);
+  // A texture sampled through the second set needs the mesh to have it (materials are checked
+  // before meshes, so their indices are in range here).
+  if (m.lightmap_uvs.empty())
+    for (std::size_t t = 0; t < m.materials.size(); ++t) {
+      const Material& mat = s.materials[m.materials[t]];
+      for (const TextureRef* r :
+           {&mat.albedo_texture, &mat.emission_texture, &mat.metallic_roughness_texture})
+        if (r->index >= 0 && r->uv_set == 1)
+          fail(file, document ? obj : item(path + ".materials", t),
+               "material '" + mat.name +
+                   "' samples a texture through the second set of texture coordinates, which "
+                   "the mesh does not have");
+    }
   check_object_index(file, path, m.object, s);
 }
 
@@ -276,11 +289,22 @@ void check_scene_or_throw(const Scene& s) {
     const std::string path = item("materials", i);
     check_rgb(file, path + ".albedo", m.albedo, Range::unit);
     check_rgb(file, path + ".emission", m.emission, Range::nonneg);
-    if (m.albedo_texture < -1 ||
-        (m.albedo_texture >= 0 && std::size_t(m.albedo_texture) >= s.textures.size()))
-      fail(file, path + ".albedo_texture",
-           "texture " + std::to_string(m.albedo_texture) + " out of range (-1 or one of the " +
-               std::to_string(s.textures.size()) + " textures)");
+    check_float(file, path + ".metallic", m.metallic, Range::unit);
+    check_float(file, path + ".roughness", m.roughness, Range::unit);
+    for (const auto& [name, t] :
+         {std::pair{".albedo_texture", &m.albedo_texture},
+          std::pair{".emission_texture", &m.emission_texture},
+          std::pair{".metallic_roughness_texture", &m.metallic_roughness_texture}}) {
+      const std::string at = path + name;
+      if (t->index < -1 || (t->index >= 0 && std::size_t(t->index) >= s.textures.size()))
+        fail(file, at + ".index",
+             "texture " + std::to_string(t->index) + " out of range (-1 or one of the " +
+                 std::to_string(s.textures.size()) + " textures)");
+      if (t->uv_set != 0 && t->uv_set != 1)
+        fail(file, at + ".uv_set", "expected 0 or 1, found " + std::to_string(t->uv_set));
+      for (std::size_t k = 0; k < t->transform.size(); ++k)
+        check_float(file, item(at + ".transform", k), t->transform[k], Range::any);
+    }
   }
   for (std::size_t i = 0; i < s.textures.size(); ++i)
     check_texture(file, item("textures", i), s.textures[i]);

@@ -12,14 +12,16 @@
 //   NORMAL, the primitives without it get flat normals, each triangle on vertices of its own;
 //   when none has, `normals` stays empty (flat shading). A normal that is not finite or has zero
 //   length is refused, as a non-finite position is.
-// - A primitive without material gets the glTF spec's default: baseColorFactor (1, 1, 1), no
-//   emission. Alpha of baseColorFactor and textures is ignored.
+// - A primitive without material gets the glTF spec's default: baseColorFactor (1, 1, 1),
+//   metallic and roughness 1, no emission. Alpha of baseColorFactor and textures is ignored.
 // - Skins, morph targets, animations, cameras and lights are ignored: the rest pose is drawn.
 // - Property types are checked before tinygltf reads the file (it skips wrong ones silently).
-// - extensionsRequired may hold only KHR_materials_emissive_strength and KHR_mesh_quantization
-//   (accessors of every component type are read); Draco and meshopt data are refused even when
-//   the extension is only used, since the plain data would be missing.
-#include <stb/stb_image.h>
+// - extensionsRequired may hold only KHR_materials_emissive_strength, KHR_mesh_quantization
+//   (accessors of every component type are read) and KHR_texture_transform; Draco and meshopt
+//   data are refused even when the extension is only used, since the plain data would be
+//   missing. Other extensions only used are named in a warning (the file is drawn without them).
+// - Textures sample TEXCOORD_0 or TEXCOORD_1 (the latter only where every primitive of the file
+//   has it, as lightmap UVs are kept).
 #include <tiny_gltf.h>
 
 #include <algorithm>
@@ -28,6 +30,7 @@
 #include <filesystem>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -168,6 +171,12 @@ std::uint64_t json_cost(std::string_view text) {
   return 2 * std::uint64_t(text.size()) + 1000 * objects + 64 * values;
 }
 
+// Extensions this reader implements (extensionsRequired may name them), and those that change
+// nothing it draws (metadata; material variants, whose default is what is drawn).
+const std::set<std::string> kImplemented = {"KHR_materials_emissive_strength",
+                                            "KHR_mesh_quantization", "KHR_texture_transform"};
+const std::set<std::string> kInvisible = {"KHR_xmp_json_ld", "KHR_xmp", "KHR_materials_variants"};
+
 void check_json(const std::string& bytes, bool binary, Budget& budget) {
   std::string_view json_text = bytes;
   if (binary) {
@@ -194,8 +203,7 @@ void check_json(const std::string& bytes, bool binary, Budget& budget) {
     mesh_fail("glTF 2.0 is needed (this file is version " + version + ")");
   if (j.contains("extensionsRequired"))
     for (const auto& e : j["extensionsRequired"])
-      if (!e.is_string() ||
-          (e != "KHR_materials_emissive_strength" && e != "KHR_mesh_quantization"))
+      if (!e.is_string() || !kImplemented.contains(e.get<std::string>()))
         mesh_fail("extensionsRequired: " + (e.is_string() ? e.get<std::string>() : e.dump()) +
                   " is not supported");
   check_types(j);
@@ -330,6 +338,7 @@ struct PrimitivePlan {
   int mode;
   View positions, normals, uvs, lightmap, indices;
   bool has_normals = false, has_uvs = false, has_lightmap = false, has_indices = false;
+  bool samples_lightmap = false;  // a texture of its material samples TEXCOORD_1
   int material = -1;
   std::size_t triangles = 0, vertices = 0;
 };
@@ -353,6 +362,11 @@ class Reader {
     bool any_normals = false, any_uvs = false, lightmap = !plans.empty();
     for (const PrimitivePlan& p : plans)
       any_normals |= p.has_normals, any_uvs |= p.has_uvs, lightmap &= p.has_lightmap;
+    for (const PrimitivePlan& p : plans)
+      if (p.samples_lightmap && !lightmap)
+        mesh_fail(p.name +
+                  ": its material samples TEXCOORD_1, which not every primitive of the file has "
+                  "(the file's meshes keep a second set only when all have one)");
     std::uint64_t vertices = 0, triangles = 0;
     for (PrimitivePlan& p : plans) {
       p.vertices = any_normals && !p.has_normals ? 3 * p.triangles : p.positions.count;
@@ -374,6 +388,11 @@ class Reader {
     mesh.materials.reserve(triangles);
     for (const PrimitivePlan& p : plans) emit(p, any_normals, any_uvs, lightmap);
     if (out_.materials.empty()) out_.materials.push_back(default_material());
+    // Extensions used but not required that this reader does not implement: the file is drawn
+    // without them, which the user is told (those that change nothing drawn are not named).
+    for (const std::string& e : m_.extensionsUsed)
+      if (!kImplemented.contains(e) && !kInvisible.contains(e))
+        out_.warnings.push_back("uses " + e + ", which is not implemented: drawn without it");
     return std::move(out_);
   }
 
@@ -603,18 +622,25 @@ class Reader {
       mesh_fail(name + ".material: material " + std::to_string(p.material) + " does not exist (" +
                 std::to_string(m_.materials.size()) + " materials)");
     if (p.material >= 0) {
-      const auto& info =
-          m_.materials[std::size_t(p.material)].pbrMetallicRoughness.baseColorTexture;
-      if (info.index >= 0) {
-        const std::string set = "TEXCOORD_" + std::to_string(info.texCoord);
-        if (attr(set) < 0)
-          mesh_fail(name + ": " + at("materials", std::size_t(p.material)) +
-                    "'s baseColorTexture samples " + set + ", which the primitive does not have");
-        p.uvs = view(attr(set), name, set.c_str(), TINYGLTF_TYPE_VEC2,
+      // The sets of texture coordinates the material's textures sample: TEXCOORD_0 is read as
+      // the mesh's uvs, TEXCOORD_1 as its lightmap UVs.
+      const auto& gm = m_.materials[std::size_t(p.material)];
+      for (const TextureUse& use : texture_uses(gm, at("materials", std::size_t(p.material)))) {
+        const int set = reference(*use.info, use.path).uv_set;
+        const std::string name_of_set = "TEXCOORD_" + std::to_string(set);
+        if (attr(name_of_set) < 0)
+          mesh_fail(name + ": " + use.path + " samples " + name_of_set +
+                    ", which the primitive does not have");
+        if (set == 1) {
+          p.samples_lightmap = true;
+          continue;
+        }
+        if (p.has_uvs) continue;
+        p.uvs = view(attr(name_of_set), name, name_of_set.c_str(), TINYGLTF_TYPE_VEC2,
                      F{TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE,
                        TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT},
                      true);
-        same_count(p.uvs, set.c_str());
+        same_count(p.uvs, name_of_set.c_str());
         p.has_uvs = true;
       }
     }
@@ -741,7 +767,12 @@ class Reader {
 
   static Material default_material() {
     // glTF 2.0, 3.9.6: a primitive without material has baseColorFactor 1 and no emission.
-    return Material{.albedo = {1, 1, 1}, .name = "default (glTF)"};
+    Material m;
+    m.albedo = {1, 1, 1};
+    m.metallic = 1;
+    m.roughness = 1;
+    m.name = "default (glTF)";
+    return m;
   }
 
   std::uint32_t material_index(int gltf) {
@@ -781,17 +812,104 @@ class Reader {
     out.albedo = {float(base[0]), float(base[1]), float(base[2])};
     out.emission = {float(emissive[0] * strength), float(emissive[1] * strength),
                     float(emissive[2] * strength)};
-    const int tex = gm.pbrMetallicRoughness.baseColorTexture.index;
-    if (tex >= 0) out.albedo_texture = texture(tex, where);
+    // glTF 2.0, 3.9.2: both factors default to 1 (a rough metal); 0 and 1 with no texture is
+    // the format's Lambertian.
+    const auto& pbr = gm.pbrMetallicRoughness;
+    for (const auto& [name, value] : {std::pair{"metallicFactor", pbr.metallicFactor},
+                                      std::pair{"roughnessFactor", pbr.roughnessFactor}})
+      if (!(value >= 0 && value <= 1))
+        mesh_fail(where + ".pbrMetallicRoughness." + name + ": " + num(value) +
+                  " is outside [0, 1]");
+    out.metallic = float(pbr.metallicFactor);
+    out.roughness = float(pbr.roughnessFactor);
+    for (const TextureUse& use : texture_uses(gm, where)) {
+      TextureRef ref = reference(*use.info, use.path);
+      ref.index =
+          texture(use.info->index, use.path, use.field != &Material::metallic_roughness_texture);
+      out.*use.field = ref;
+    }
     return out;
   }
 
-  int texture(int index, const std::string& user) {
-    const auto cached = textures_.find(index);
+  // A texture a material samples: the glTF reference, its path in messages, and the material's
+  // field it fills.
+  struct TextureUse {
+    const tinygltf::TextureInfo* info;
+    std::string path;
+    TextureRef Material::*field;
+  };
+  static std::vector<TextureUse> texture_uses(const tinygltf::Material& gm,
+                                              const std::string& where) {
+    const auto& pbr = gm.pbrMetallicRoughness;
+    std::vector<TextureUse> uses;
+    for (TextureUse u :
+         {TextureUse{&pbr.baseColorTexture, where + ".pbrMetallicRoughness.baseColorTexture",
+                     &Material::albedo_texture},
+          TextureUse{&pbr.metallicRoughnessTexture,
+                     where + ".pbrMetallicRoughness.metallicRoughnessTexture",
+                     &Material::metallic_roughness_texture},
+          TextureUse{&gm.emissiveTexture, where + ".emissiveTexture", &Material::emission_texture}})
+      if (u.info->index >= 0) uses.push_back(std::move(u));
+    return uses;
+  }
+
+  // The set of texture coordinates a reference samples and KHR_texture_transform's map on them
+  // (uv' = T R S uv, the extension's order), its index not yet set.
+  static TextureRef reference(const tinygltf::TextureInfo& info, const std::string& path) {
+    TextureRef ref;
+    int set = info.texCoord;
+    const auto ext = info.extensions.find("KHR_texture_transform");
+    if (ext != info.extensions.end()) {
+      const tinygltf::Value& t = ext->second;
+      const std::string at = path + ".extensions.KHR_texture_transform";
+      auto pair = [&](const char* key, double fallback, std::array<double, 2>& out) {
+        out = {fallback, fallback};
+        if (!t.Has(key)) return;
+        const tinygltf::Value& v = t.Get(key);
+        if (!v.IsArray() || v.ArrayLen() != 2)
+          mesh_fail(at + "." + key + ": expected an array of 2 numbers");
+        for (int k = 0; k < 2; ++k) {
+          const tinygltf::Value& e = v.Get(k);
+          out[std::size_t(k)] = e.IsNumber() ? e.GetNumberAsDouble() : NAN;
+          if (!std::isfinite(out[std::size_t(k)]))
+            mesh_fail(at + "." + key + "[" + std::to_string(k) + "]: expected a finite number");
+        }
+      };
+      std::array<double, 2> offset{}, scale{};
+      pair("offset", 0, offset);
+      pair("scale", 1, scale);
+      double rotation = 0;
+      if (t.Has("rotation")) {
+        const tinygltf::Value& r = t.Get("rotation");
+        rotation = r.IsNumber() ? r.GetNumberAsDouble() : NAN;
+        if (!std::isfinite(rotation)) mesh_fail(at + ".rotation: expected a finite number");
+      }
+      if (t.Has("texCoord")) {
+        const tinygltf::Value& c = t.Get("texCoord");
+        if (!c.IsNumber() || !(c.GetNumberAsDouble() >= 0) ||
+            c.GetNumberAsDouble() != std::floor(c.GetNumberAsDouble()))
+          mesh_fail(at + ".texCoord: expected an integer >= 0");
+        set = int(std::min(c.GetNumberAsDouble(), 1e9));
+      }
+      const double co = std::cos(rotation), si = std::sin(rotation);
+      ref.transform = {float(co * scale[0]),  float(si * scale[1]), float(offset[0]),
+                       float(-si * scale[0]), float(co * scale[1]), float(offset[1])};
+    }
+    if (set > 1)
+      mesh_fail(path + ": samples TEXCOORD_" + std::to_string(set) +
+                "; only TEXCOORD_0 and TEXCOORD_1 are supported");
+    ref.uv_set = set;
+    return ref;
+  }
+
+  // Texture `index` as the material's `user` samples it: sRGB-decoded (colours) or as stored
+  // (metallic and roughness are linear, glTF 2.0, 3.9.3).
+  int texture(int index, const std::string& user, bool srgb) {
+    const auto cached = textures_.find({index, srgb});
     if (cached != textures_.end()) return cached->second;
     if (std::size_t(index) >= m_.textures.size())
-      mesh_fail(user + ".pbrMetallicRoughness.baseColorTexture: texture " + std::to_string(index) +
-                " does not exist (" + std::to_string(m_.textures.size()) + " textures)");
+      mesh_fail(user + ": texture " + std::to_string(index) + " does not exist (" +
+                std::to_string(m_.textures.size()) + " textures)");
     const auto& gt = m_.textures[std::size_t(index)];
     const std::string where = at("textures", std::size_t(index));
     if (gt.source < 0 || std::size_t(gt.source) >= m_.images.size())
@@ -808,27 +926,7 @@ class Reader {
       mesh_fail(
           iname + ": no image data" +
           (image.uri.empty() ? "" : " ('" + image.uri.substr(0, 60) + "' could not be read)"));
-    const int size = int(std::min<std::size_t>(length, INT32_MAX));
-    int w = 0, h = 0, channels = 0;
-    if (!stbi_info_from_memory(bytes, size, &w, &h, &channels) || w <= 0 || h <= 0)
-      mesh_fail(iname + ": cannot decode the image (" + std::string(stbi_failure_reason()) + ")");
-    budget_.take(std::uint64_t(w) * std::uint64_t(h) * 3 * sizeof(float),
-                 "texture " + iname + " (" + std::to_string(w) + "x" + std::to_string(h) + ")");
-    std::unique_ptr<unsigned char, void (*)(void*)> pixels(
-        stbi_load_from_memory(bytes, size, &w, &h, &channels, 3), stbi_image_free);
-    if (!pixels)
-      mesh_fail(iname + ": cannot decode the image (" + std::string(stbi_failure_reason()) + ")");
-    Texture t;
-    t.width = w;
-    t.height = h;
-    t.rgb.resize(std::size_t(w) * std::size_t(h) * 3);
-    // Base colour textures are sRGB-encoded (glTF 2.0, 3.9.2).
-    float linear[256];
-    for (int c = 0; c < 256; ++c) {
-      const double s = c / 255.0;
-      linear[c] = float(s <= 0.04045 ? s / 12.92 : std::pow((s + 0.055) / 1.055, 2.4));
-    }
-    for (std::size_t k = 0; k < t.rgb.size(); ++k) t.rgb[k] = linear[pixels.get()[k]];
+    Texture t = decode_texture(bytes, length, srgb, iname, budget_);
     if (gt.sampler >= 0) {
       if (std::size_t(gt.sampler) >= m_.samplers.size())
         mesh_fail(where + ": sampler " + std::to_string(gt.sampler) + " does not exist (" +
@@ -844,15 +942,15 @@ class Reader {
       t.nearest = s.magFilter == TINYGLTF_TEXTURE_FILTER_NEAREST;
     }
     out_.textures.push_back(std::move(t));
-    return textures_[index] = int(out_.textures.size() - 1);
+    return textures_[{index, srgb}] = int(out_.textures.size() - 1);
   }
 
   const tinygltf::Model& m_;
   Budget& budget_;
   std::vector<Instance> instances_;
   MeshFile out_;
-  std::map<int, std::uint32_t> materials_;  // glTF material (-1: none) -> out_.materials
-  std::map<int, int> textures_;             // glTF texture -> out_.textures
+  std::map<int, std::uint32_t> materials_;        // glTF material (-1: none) -> out_.materials
+  std::map<std::pair<int, bool>, int> textures_;  // glTF texture, sRGB -> out_.textures
 };
 
 }  // namespace

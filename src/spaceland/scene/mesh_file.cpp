@@ -1,11 +1,16 @@
 // read_mesh_file: dispatch by extension and the messages every mesh-file failure gets.
 #include "spaceland/scene/mesh_file.hpp"
 
+#include <stb/stb_image.h>
+
+#include <algorithm>
+#include <climits>
 #include <cmath>
 #include <cstdio>
 #include <exception>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <new>
 #include <system_error>
 
@@ -43,6 +48,31 @@ std::uint64_t mesh_bytes(std::uint64_t vertices, bool normals, bool uvs, std::ui
   const long double total =
       (long double)vertices * per_vertex + (long double)triangles * per_triangle;
   return total >= 1.8e19L ? UINT64_MAX : std::uint64_t(total);
+}
+
+Texture decode_texture(const unsigned char* bytes, std::size_t length, bool srgb,
+                       const std::string& name, Budget& budget) {
+  const int size = int(std::min<std::size_t>(length, INT32_MAX));
+  int w = 0, h = 0, channels = 0;
+  if (!stbi_info_from_memory(bytes, size, &w, &h, &channels) || w <= 0 || h <= 0)
+    mesh_fail(name + ": cannot decode the image (" + std::string(stbi_failure_reason()) + ")");
+  budget.take(std::uint64_t(w) * std::uint64_t(h) * 3 * sizeof(float),
+              "texture " + name + " (" + std::to_string(w) + "x" + std::to_string(h) + ")");
+  std::unique_ptr<unsigned char, void (*)(void*)> pixels(
+      stbi_load_from_memory(bytes, size, &w, &h, &channels, 3), stbi_image_free);
+  if (!pixels)
+    mesh_fail(name + ": cannot decode the image (" + std::string(stbi_failure_reason()) + ")");
+  Texture t;
+  t.width = w;
+  t.height = h;
+  t.rgb.resize(std::size_t(w) * std::size_t(h) * 3);
+  float linear[256];
+  for (int c = 0; c < 256; ++c) {
+    const double v = c / 255.0;
+    linear[c] = float(!srgb ? v : v <= 0.04045 ? v / 12.92 : std::pow((v + 0.055) / 1.055, 2.4));
+  }
+  for (std::size_t k = 0; k < t.rgb.size(); ++k) t.rgb[k] = linear[pixels.get()[k]];
+  return t;
 }
 
 std::string read_whole_file(const std::string& path, std::uint64_t max_bytes,

@@ -12,9 +12,10 @@ namespace penumbra::spaceland {
 // A mesh file's content in the file's own coordinates (glTF node transforms already applied);
 // the scene applies the object's transform.
 struct MeshFile {
-  TriangleMesh mesh;                // materials index into `materials` below; object unset
-  std::vector<Material> materials;  // the file's materials (a default one where it has none)
-  std::vector<Texture> textures;    // referenced by materials' albedo_texture, local indices
+  TriangleMesh mesh;                  // materials index into `materials` below; object unset
+  std::vector<Material> materials;    // the file's materials (a default one where it has none)
+  std::vector<Texture> textures;      // referenced by materials' texture references, local indices
+  std::vector<std::string> warnings;  // what the file uses and is drawn without
 };
 
 // Reads `file_path` (.obj, .gltf or .glb by extension, case-insensitive). Any failure throws

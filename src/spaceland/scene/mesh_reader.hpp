@@ -2,6 +2,7 @@
 // memory budget and the helpers they share.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <string>
 
@@ -35,6 +36,12 @@ std::uint64_t mesh_bytes(std::uint64_t vertices, bool normals, bool uvs, std::ui
 // The whole file, refused past `max_bytes` before it is read; `what` names it in messages.
 std::string read_whole_file(const std::string& path, std::uint64_t max_bytes,
                             const std::string& what);
+
+// An encoded image (PNG, JPEG, ... as stb_image reads them) as linear RGB texels: sRGB-decoded
+// (colours) or as stored (glTF's metallic and roughness); `name` names it in messages. Refuses
+// texels past the budget before decoding them.
+Texture decode_texture(const unsigned char* bytes, std::size_t length, bool srgb,
+                       const std::string& name, Budget& budget);
 
 // Unit normal of triangle (a, b, c); a degenerate triangle (never hit) gets +z.
 Vec3 flat_normal(Vec3 a, Vec3 b, Vec3 c);

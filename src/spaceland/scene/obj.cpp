@@ -12,6 +12,7 @@
 #include <map>
 #include <sstream>
 #include <string_view>
+#include <tuple>
 #include <unordered_map>
 
 #include "io/json_reader.hpp"
@@ -136,18 +137,46 @@ class MtlReader : public tinyobj::MaterialReader {
         read_whole_file((dir_ / name).string(), budget_.max(), "MTL file '" + name + "' (mtllib)");
     check_text(text, name, false);
     std::istringstream in(text);
+    const std::size_t before = materials->size();
     tinyobj::LoadMtl(map, materials, &in, warn, err);
     files.resize(materials->size(), name);
+    // tinyobjloader reads an absent Pr as 0 (a mirror); the format's default is 1: which
+    // materials give Pr and Pm is read here, in the order of their newmtl statements, as
+    // tinyobjloader stores them.
+    given.resize(materials->size());
+    std::size_t current = before;
+    bool any = false;
+    std::istringstream lines(text);
+    for (std::string l; std::getline(lines, l);) {
+      std::size_t pos = 0;
+      const std::string_view key = next_token(l, pos);
+      if (key == "newmtl") {
+        current = any ? current + 1 : before;
+        any = true;
+      } else if (any && current < given.size() && (key == "Pr" || key == "Pm")) {
+        (key == "Pr" ? given[current].roughness : given[current].metallic) = true;
+      }
+    }
     return true;
   }
+  struct Given {
+    bool metallic = false, roughness = false;
+  };
   std::vector<std::string> files;  // the MTL file of each material
+  std::vector<Given> given;        // whether each material gives Pm and Pr
 
  private:
   std::filesystem::path dir_;
   Budget& budget_;
 };
 
-Material convert(const tinyobj::material_t& m, const std::string& file) {
+Material named_material(std::string name) {
+  Material m;
+  m.name = std::move(name);
+  return m;
+}
+
+Material convert(const tinyobj::material_t& m, const std::string& file, MtlReader::Given given) {
   Material out;
   out.name = m.name;
   const std::string what = "material '" + m.name + "' in " + file;
@@ -160,9 +189,60 @@ Material convert(const tinyobj::material_t& m, const std::string& file) {
   }
   out.albedo = {float(m.diffuse[0]), float(m.diffuse[1]), float(m.diffuse[2])};
   out.emission = {float(m.emission[0]), float(m.emission[1]), float(m.emission[2])};
-  // map_Kd is ignored: the format gives OBJ meshes Kd and Ke only (docs/scene-3d.md).
+  // PBR extension of MTL: Pm (metallic) and Pr (roughness), where given.
+  for (const auto& [key, value, is_given, field] :
+       {std::tuple{"Pm", m.metallic, given.metallic, &out.metallic},
+        std::tuple{"Pr", m.roughness, given.roughness, &out.roughness}}) {
+    if (!is_given) continue;
+    if (!(value >= 0 && value <= 1))
+      mesh_fail(what + ": " + key + " " + io::format_number(value) + " is outside [0, 1]");
+    *field = float(value);
+  }
   return out;
 }
+
+// The images of map_Kd and map_Ke (sRGB-encoded colours), read once each; `name` is relative to
+// the OBJ file. Of their options, -o and -s (offset and scale) and -clamp change what is drawn; the
+// rest (-mm, -bm, -boost, ...) are read by tinyobjloader and left.
+class ObjTextures {
+ public:
+  ObjTextures(std::filesystem::path dir, Budget& budget, std::vector<Texture>& out)
+      : dir_(std::move(dir)), budget_(budget), out_(out) {}
+
+  TextureRef load(const std::filesystem::path& file, const tinyobj::texture_option_t& o,
+                  const std::string& what) {
+    const std::string name = file.generic_string();
+    TextureRef ref;
+    const auto cached = loaded_.find({name, o.clamp});
+    if (cached != loaded_.end()) {
+      ref.index = cached->second;
+    } else {
+      const std::string bytes =
+          read_whole_file((dir_ / name).string(), budget_.max(), what + " '" + name + "'");
+      budget_.take(bytes.size(), what + " '" + name + "'");
+      Texture t = decode_texture(reinterpret_cast<const unsigned char*>(bytes.data()), bytes.size(),
+                                 true, what + " '" + name + "'", budget_);
+      if (o.clamp) t.wrap_s = t.wrap_t = Texture::Wrap::clamp;
+      out_.push_back(std::move(t));
+      ref.index = loaded_[{name, o.clamp}] = int(out_.size() - 1);
+    }
+    // MTL texture coordinates run up the image, ours down (they are stored as 1 - v): the map
+    // (u, v) -> (s u + o) taken in the file's v is s_v v + 1 - s_v - o_v in ours.
+    for (int k = 0; k < 2; ++k)
+      if (!std::isfinite(o.scale[k]) || !std::isfinite(o.origin_offset[k]))
+        mesh_fail(what + ": -s and -o need finite numbers");
+    const float su = float(o.scale[0]), sv = float(o.scale[1]);
+    const float ou = float(o.origin_offset[0]), ov = float(o.origin_offset[1]);
+    ref.transform = {su, 0, ou, 0, sv, 1 - sv - ov};
+    return ref;
+  }
+
+ private:
+  std::filesystem::path dir_;
+  Budget& budget_;
+  std::vector<Texture>& out_;
+  std::map<std::pair<std::string, bool>, int> loaded_;
+};
 
 // Ear clipping of a face that is not convex costs its corners times its reflex corners: bounded
 // for the whole file, so that hostile faces cost seconds at most.
@@ -225,8 +305,26 @@ MeshFile read_obj(const std::string& path, Budget& budget) {
     mesh_fail("invalid OBJ: " + err);
 
   MeshFile out;
-  for (std::size_t i = 0; i < materials.size(); ++i)
-    out.materials.push_back(convert(materials[i], mtl.files[i]));
+  ObjTextures textures(std::filesystem::path(path).parent_path(), budget, out.textures);
+  for (std::size_t i = 0; i < materials.size(); ++i) {
+    const tinyobj::material_t& m = materials[i];
+    Material mat = convert(m, mtl.files[i], mtl.given[i]);
+    const std::string what = "material '" + m.name + "' in " + mtl.files[i];
+    // Texture files are named relative to their MTL file.
+    const std::filesystem::path from = std::filesystem::path(mtl.files[i]).parent_path();
+    if (!m.diffuse_texname.empty())
+      mat.albedo_texture =
+          textures.load(from / m.diffuse_texname, m.diffuse_texopt, what + ": map_Kd");
+    if (!m.emissive_texname.empty())
+      mat.emission_texture =
+          textures.load(from / m.emissive_texname, m.emissive_texopt, what + ": map_Ke");
+    for (const auto& [key, name] :
+         {std::pair{"map_Pr", &m.roughness_texname}, std::pair{"map_Pm", &m.metallic_texname}})
+      if (!name->empty())
+        out.warnings.push_back(what + ": " + key +
+                               " is not implemented: drawn with Pr and Pm alone");
+    out.materials.push_back(std::move(mat));
+  }
   int default_material = -1;
 
   bool any_normals = false, any_uvs = false;
@@ -322,7 +420,7 @@ MeshFile read_obj(const std::string& path, Budget& budget) {
           // Faces without usemtl (or naming no material of the MTL files): albedo 0.8, no emission.
           if (default_material < 0) {
             default_material = int(out.materials.size());
-            out.materials.push_back(Material{.name = "default"});
+            out.materials.push_back(named_material("default"));
           }
           m = default_material;
         }
@@ -333,7 +431,7 @@ MeshFile read_obj(const std::string& path, Budget& budget) {
     }
   }
   if (face_no != face_sizes.size()) mesh_fail("the faces read differ from the file's 'f' lines");
-  if (out.materials.empty()) out.materials.push_back(Material{.name = "default"});
+  if (out.materials.empty()) out.materials.push_back(named_material("default"));
   return out;
 }
 

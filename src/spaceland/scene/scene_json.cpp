@@ -180,11 +180,14 @@ class SceneReader : public io::JsonReader {
   }
 
   Material material_body(const json& j, const std::string& path) const {
-    object_at(j, path, "a material object with albedo and emission");
-    check_keys(j, path, {"albedo", "emission"});
+    object_at(j, path, "a material object with albedo, emission, metallic and roughness");
+    check_keys(j, path, {"albedo", "emission", "metallic", "roughness"});
     Material m;
     if (j.contains("albedo")) m.albedo = rgb(j["albedo"], path + ".albedo", Range::unit);
     if (j.contains("emission")) m.emission = rgb(j["emission"], path + ".emission", Range::nonneg);
+    if (j.contains("metallic")) m.metallic = number(j["metallic"], path + ".metallic", Range::unit);
+    if (j.contains("roughness"))
+      m.roughness = number(j["roughness"], path + ".roughness", Range::unit);
     return m;
   }
 
@@ -337,24 +340,46 @@ class SceneReader : public io::JsonReader {
     const bool has_material = j.contains("material");
     const std::uint32_t material = has_material ? object_material(j, path) : 0;
 
-    const std::uint64_t used = scene_bytes(scene_);
-    const std::uint64_t room = used < options_.max_memory ? options_.max_memory - used : 0;
-    MeshFile mf = read_mesh_file(file_path.string(), file(), path + ".file", room);
-    if (mf.mesh.triangles.empty()) fail_at(path + ".file", name + ": the file has no triangles");
-
-    TriangleMesh& mesh = mf.mesh;
+    // A file is parsed once however many objects use it; each object gets its own copy of the
+    // triangles (transformed), and the file's materials and textures join the scene once.
+    std::error_code ec;
+    const std::string key = std::filesystem::weakly_canonical(file_path, ec).string();
+    auto found = parsed_.find(ec ? file_path.string() : key);
+    if (found == parsed_.end()) {
+      const std::uint64_t used = scene_bytes(scene_) + parsed_bytes_;
+      const std::uint64_t room = used < options_.max_memory ? options_.max_memory - used : 0;
+      Parsed p{read_mesh_file(file_path.string(), file(), path + ".file", room), 0, false};
+      if (p.file.mesh.triangles.empty())
+        fail_at(path + ".file", name + ": the file has no triangles");
+      for (const std::string& w : p.file.warnings)
+        scene_.warnings.push_back(path + ".file: " + name + ": " + w);
+      parsed_bytes_ += mesh_bytes(p.file.mesh);
+      found = parsed_.emplace(ec ? file_path.string() : key, std::move(p)).first;
+    }
+    Parsed& parsed = found->second;
+    if (scene_bytes(scene_) + parsed_bytes_ + mesh_bytes(parsed.file.mesh) > options_.max_memory)
+      fail_at(path + ".file", "the scene needs more than the memory limit of " +
+                                  io::format_rounded(double(options_.max_memory)) +
+                                  " bytes with this object's copy of " + name);
+    TriangleMesh mesh = parsed.file.mesh;
     if (has_material) {
       mesh.materials.assign(mesh.triangles.size(), material);
     } else {
-      // The file's materials and textures join the scene's; their indices shift accordingly.
-      const auto material_base = std::uint32_t(scene_.materials.size());
-      const int texture_base = int(scene_.textures.size());
-      for (Material& m : mf.materials) {
-        if (m.albedo_texture >= 0) m.albedo_texture += texture_base;
-        scene_.materials.push_back(std::move(m));
+      if (!parsed.joined) {
+        // The file's materials and textures join the scene's; their indices shift accordingly.
+        parsed.material_base = std::uint32_t(scene_.materials.size());
+        const int texture_base = int(scene_.textures.size());
+        for (Material& m : parsed.file.materials) {
+          for (TextureRef* t :
+               {&m.albedo_texture, &m.emission_texture, &m.metallic_roughness_texture})
+            if (t->index >= 0) t->index += texture_base;
+          scene_.materials.push_back(std::move(m));
+        }
+        for (Texture& t : parsed.file.textures) scene_.textures.push_back(std::move(t));
+        std::vector<Texture>().swap(parsed.file.textures);
+        parsed.joined = true;
       }
-      for (Texture& t : mf.textures) scene_.textures.push_back(std::move(t));
-      for (std::uint32_t& m : mesh.materials) m += material_base;
+      for (std::uint32_t& m : mesh.materials) m += parsed.material_base;
     }
     transform_mesh(mesh, read_transform(j, path).affine);
     mesh.object = index;
@@ -419,9 +444,24 @@ class SceneReader : public io::JsonReader {
     scene_.media.push_back(m);
   }
 
+  // A mesh file as parsed, kept while the document is read, and where its materials begin in
+  // the scene's once they have joined it.
+  struct Parsed {
+    MeshFile file;
+    std::uint32_t material_base = 0;
+    bool joined = false;
+  };
+  static std::uint64_t mesh_bytes(const TriangleMesh& m) {
+    return m.positions.size() * sizeof(Vec3) + m.normals.size() * sizeof(Vec3) +
+           (m.uvs.size() + m.lightmap_uvs.size()) * sizeof(m.uvs[0]) +
+           m.triangles.size() * sizeof(m.triangles[0]) + m.materials.size() * sizeof(std::uint32_t);
+  }
+
   const LoadOptions& options_;
   std::filesystem::path base_;
   Scene scene_;
+  std::map<std::string, Parsed> parsed_;  // by the file's canonical path
+  std::uint64_t parsed_bytes_ = 0;
   std::map<std::string, std::uint32_t> named_;
   int default_material_ = -1;
 };

@@ -140,7 +140,8 @@ Status check_options(const SpwiOptions& o) {
 }
 
 Status check_scene(const Scene& scene) {
-  return refuse_fog(scene, "spwi", "--method pt");
+  if (Status s = refuse_fog(scene, "spwi", "--method pt"); !s) return s;
+  return refuse_glossy(scene, "spwi", "--method pt");
 }
 
 namespace {

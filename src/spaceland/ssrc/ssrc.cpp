@@ -865,7 +865,8 @@ Status check_options(const SsrcOptions& o) {
 }
 
 Status check_scene(const Scene& scene) {
-  return refuse_fog(scene, "ssrc", "--method pt or grid");
+  if (Status s = refuse_fog(scene, "ssrc", "--method pt or grid"); !s) return s;
+  return refuse_glossy(scene, "ssrc", "--method pt");
 }
 
 Expected<ImageRgb> render(const SolveContext& ctx, const SsrcOptions& o, const Layout& layout,

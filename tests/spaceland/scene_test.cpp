@@ -8,6 +8,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <numbers>
 #include <string>
 #include <vector>
 
@@ -157,6 +158,44 @@ TEST(Scene3d, Defaults) {
   EXPECT_EQ(s.materials[0].roughness, 1);
   EXPECT_TRUE(s.materials[0].lambertian());
   EXPECT_TRUE(s.media.empty());
+}
+
+TEST(Scene3d, TheCameraMayComeFromAGltfFile) {
+  const std::string file = "/usr/share/assimp/models/glTF2/cameras/Cameras.gltf";
+  ASSERT_TRUE(fs::exists(file)) << "run scripts/install-deps.sh (assimp-testmodels)";
+  auto with_camera = [&](const std::string& camera) {
+    return R"({"penumbra": 1, "dimensions": 3, "camera": )" + camera +
+           R"(, "objects": [{"type": "sphere", "center": [0, 0, 0], "radius": 1}]})";
+  };
+  // Cameras.gltf: camera 0 (perspective, yfov 0.7, aspectRatio 1) on a node at (0.5, 0.5, 3),
+  // looking down -z.
+  const Scene s = parse_valid(with_camera(R"({"gltf": ")" + file + R"(", "width": 64})"));
+  expect_vec3(s.camera.position, {0.5f, 0.5f, 3});
+  expect_vec3(s.camera.look_at, {0.5f, 0.5f, 2});
+  expect_vec3(s.camera.up, {0, 1, 0});
+  EXPECT_NEAR(s.camera.fov_y, 0.7 * 180 / std::numbers::pi, 1e-4);
+  EXPECT_EQ(s.camera.width, 64);
+  EXPECT_EQ(s.camera.height, 64);  // from the aspect ratio
+  // The transform moves it as it would move the file's meshes.
+  const Scene t = parse_valid(with_camera(R"({"gltf": ")" + file +
+                                          R"(", "index": 0, "width": 64, "height": 32,
+      "transform": {"translate": [1, 0, 0], "rotate": [0, 90, 0]}})"));
+  expect_vec3(t.camera.position, {4, 0.5f, -0.5f}, 1e-5f);
+  expect_vec3(t.camera.look_at, {3, 0.5f, -0.5f}, 1e-5f);
+  EXPECT_EQ(t.camera.height, 32);
+  // Refusals name the camera and what is wrong in the file.
+  auto refused = [&](const std::string& camera) {
+    const Expected<Scene> r = parse_scene(with_camera(camera), "scene.json");
+    return r.ok() ? std::string("loaded") : r.error().message;
+  };
+  EXPECT_EQ(refused(R"({"gltf": ")" + file + R"(", "index": 1, "width": 64})"),
+            "scene.json: camera.gltf: Cameras.gltf: cameras[1]: a orthographic camera (only "
+            "perspective cameras are supported)");
+  EXPECT_EQ(refused(R"({"gltf": ")" + file + R"(", "index": 5, "width": 64})"),
+            "scene.json: camera.gltf: Cameras.gltf: cameras: camera 5 does not exist (2 cameras)");
+  EXPECT_NE(refused(R"({"gltf": ")" + file + R"("})").find("camera.width"), std::string::npos);
+  EXPECT_NE(refused(R"({"gltf": "x.obj", "width": 64})").find("camera.gltf: expected a glTF file"),
+            std::string::npos);
 }
 
 TEST(Scene3d, GlossyMaterialsTakeMetallicAndRoughness) {

@@ -30,6 +30,7 @@
 #include <filesystem>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <numbers>
 #include <set>
 #include <string>
 #include <vector>
@@ -399,6 +400,39 @@ class Reader {
  private:
   // The node tree: children in range, one parent each, no cycle; then the scene's roots walked
   // without recursion, transforms composed down the tree.
+ public:
+  // Camera `index` of the file where the first node of the drawn scene (depth first, in
+  // document order) that uses it places it.
+  GltfCamera camera(int index) {
+    const std::string where = at("cameras", std::size_t(std::max(index, 0)));
+    if (index < 0 || std::size_t(index) >= m_.cameras.size())
+      mesh_fail("cameras: camera " + std::to_string(index) + " does not exist (" +
+                std::to_string(m_.cameras.size()) + " cameras)");
+    const auto& c = m_.cameras[std::size_t(index)];
+    if (c.type != "perspective")
+      mesh_fail(where + ": a " + c.type + " camera (only perspective cameras are supported)");
+    const double yfov = c.perspective.yfov, aspect = c.perspective.aspectRatio;
+    if (!(yfov > 0 && yfov < std::numbers::pi))
+      mesh_fail(where + ".perspective.yfov: " + num(float(yfov)) +
+                " is not an angle in (0, pi) radians");
+    if (!(aspect >= 0) || !std::isfinite(aspect))
+      mesh_fail(where + ".perspective.aspectRatio: expected a finite number > 0");
+    walk_nodes();
+    for (const auto& [camera, world] : cameras_) {
+      if (camera != index) continue;
+      // glTF 2.0, 3.10.1: a camera looks down its node's -Z, with +Y up.
+      GltfCamera out;
+      out.position = world.point({0, 0, 0});
+      out.forward = world.direction({0, 0, -1});
+      out.up = world.direction({0, 1, 0});
+      out.fov_y = float(yfov * 180 / std::numbers::pi);
+      out.aspect = float(aspect);
+      return out;
+    }
+    mesh_fail(where + ": no node of the drawn scene uses it");
+  }
+
+ private:
   void walk_nodes() {
     const std::size_t n = m_.nodes.size();
     std::vector<int> parent(n, -1);
@@ -460,6 +494,7 @@ class Reader {
       seen[std::size_t(i)] = 1;
       const auto& node = m_.nodes[std::size_t(i)];
       const Affine world = up * local(node, at("nodes", std::size_t(i)));
+      if (node.camera >= 0) cameras_.push_back({node.camera, world});
       if (node.mesh >= 0) {
         if (std::size_t(node.mesh) >= m_.meshes.size())
           mesh_fail(at("nodes", std::size_t(i)) + ".mesh: mesh " + std::to_string(node.mesh) +
@@ -948,6 +983,7 @@ class Reader {
   const tinygltf::Model& m_;
   Budget& budget_;
   std::vector<Instance> instances_;
+  std::vector<std::pair<int, Affine>> cameras_;  // camera index, the world of a node using it
   MeshFile out_;
   std::map<int, std::uint32_t> materials_;        // glTF material (-1: none) -> out_.materials
   std::map<std::pair<int, bool>, int> textures_;  // glTF texture, sRGB -> out_.textures
@@ -955,7 +991,10 @@ class Reader {
 
 }  // namespace
 
-MeshFile read_gltf(const std::string& path, Budget& budget) {
+namespace {
+
+// Loads and checks a glTF file's model (everything read_gltf reads before its meshes).
+tinygltf::Model load_model(const std::string& path, Budget& budget) {
   const std::string bytes = read_whole_file(path, budget.max(), "the file");
   budget.take(bytes.size(), "the file's bytes");
   const bool binary = bytes.size() >= 4 && bytes.compare(0, 4, "glTF") == 0;
@@ -980,7 +1019,19 @@ MeshFile read_gltf(const std::string& path, Budget& budget) {
     while (!err.empty() && (err.back() == '\n' || err.back() == ' ')) err.pop_back();
     mesh_fail("invalid glTF: " + (err.empty() ? std::string("tinygltf refused it") : err));
   }
+  return model;
+}
+
+}  // namespace
+
+MeshFile read_gltf(const std::string& path, Budget& budget) {
+  const tinygltf::Model model = load_model(path, budget);
   return Reader(model, budget).read();
+}
+
+GltfCamera read_gltf_camera(const std::string& path, int index, Budget& budget) {
+  const tinygltf::Model model = load_model(path, budget);
+  return Reader(model, budget).camera(index);
 }
 
 }  // namespace penumbra::spaceland::mesh_detail

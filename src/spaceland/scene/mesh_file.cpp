@@ -103,15 +103,16 @@ Vec3 flat_normal(Vec3 a, Vec3 b, Vec3 c) {
 
 }  // namespace mesh_detail
 
-MeshFile read_mesh_file(const std::string& file_path, const std::string& scene_file,
-                        const std::string& json_path, std::uint64_t max_bytes) {
-  const std::string ext = io::lowercase_extension(file_path);
+namespace {
+
+// read(budget) with every failure as "<scene_file>: <json_path>: <file name>: <what>".
+template <class Read>
+auto reading(const std::string& file_path, const std::string& scene_file,
+             const std::string& json_path, std::uint64_t max_bytes, Read&& read) {
   std::string what;
   try {
     mesh_detail::Budget budget(max_bytes);
-    if (ext == ".obj") return mesh_detail::read_obj(file_path, budget);
-    if (ext == ".gltf" || ext == ".glb") return mesh_detail::read_gltf(file_path, budget);
-    what = "unknown mesh file type '" + ext + "' (expected .obj, .gltf or .glb)";
+    return read(budget);
   } catch (const mesh_detail::MeshError& e) {
     what = e.what;
   } catch (const std::bad_alloc&) {
@@ -122,6 +123,29 @@ MeshFile read_mesh_file(const std::string& file_path, const std::string& scene_f
   }
   io::fail(scene_file, json_path,
            std::filesystem::path(file_path).filename().string() + ": " + what);
+}
+
+}  // namespace
+
+MeshFile read_mesh_file(const std::string& file_path, const std::string& scene_file,
+                        const std::string& json_path, std::uint64_t max_bytes) {
+  const std::string ext = io::lowercase_extension(file_path);
+  return reading(file_path, scene_file, json_path, max_bytes, [&](mesh_detail::Budget& budget) {
+    if (ext == ".obj") return mesh_detail::read_obj(file_path, budget);
+    if (ext == ".gltf" || ext == ".glb") return mesh_detail::read_gltf(file_path, budget);
+    mesh_detail::mesh_fail("unknown mesh file type '" + ext + "' (expected .obj, .gltf or .glb)");
+  });
+}
+
+GltfCamera read_gltf_camera(const std::string& file_path, int index, const std::string& scene_file,
+                            const std::string& json_path, std::uint64_t max_bytes) {
+  const std::string ext = io::lowercase_extension(file_path);
+  return reading(file_path, scene_file, json_path, max_bytes, [&](mesh_detail::Budget& budget) {
+    if (ext != ".gltf" && ext != ".glb")
+      mesh_detail::mesh_fail("a camera is read from a glTF file (.gltf or .glb), not '" + ext +
+                             "'");
+    return mesh_detail::read_gltf_camera(file_path, index, budget);
+  });
 }
 
 }  // namespace penumbra::spaceland

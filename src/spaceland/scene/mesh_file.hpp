@@ -25,6 +25,17 @@ struct MeshFile {
 MeshFile read_mesh_file(const std::string& file_path, const std::string& scene_file,
                         const std::string& json_path, std::uint64_t max_bytes);
 
+// A glTF file's perspective camera where its node places it, in the file's coordinates.
+struct GltfCamera {
+  Vec3 position, forward, up;  // forward and up: the node's -Z and +Y (not normalised)
+  float fov_y = 40;            // degrees
+  float aspect = 0;            // width / height, 0 where the file gives none
+};
+
+// Camera `index` of glTF file `file_path`, with read_mesh_file's messages and memory limit.
+GltfCamera read_gltf_camera(const std::string& file_path, int index, const std::string& scene_file,
+                            const std::string& json_path, std::uint64_t max_bytes);
+
 // The texture's linear RGB at texture coordinates (u, v), with its wrap modes and filter.
 Rgb sample_texture(const Texture& texture, float u, float v);
 

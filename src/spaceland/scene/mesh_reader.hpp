@@ -48,5 +48,6 @@ Vec3 flat_normal(Vec3 a, Vec3 b, Vec3 c);
 
 MeshFile read_obj(const std::string& path, Budget& budget);
 MeshFile read_gltf(const std::string& path, Budget& budget);
+GltfCamera read_gltf_camera(const std::string& path, int index, Budget& budget);
 
 }  // namespace penumbra::spaceland::mesh_detail

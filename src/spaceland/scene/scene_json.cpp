@@ -140,6 +140,7 @@ class SceneReader : public io::JsonReader {
 
   void read_camera(const json& j) {
     object_at(j, "camera", "an object with position, look_at, up, fov_y, width and height");
+    if (j.contains("gltf")) return read_gltf_camera(j);
     check_keys(j, "camera", {"position", "look_at", "up", "fov_y", "width", "height"});
     Camera& c = scene_.camera;
     c.position = required_vec3(j, "camera", "position");
@@ -150,6 +151,42 @@ class SceneReader : public io::JsonReader {
     const std::string side = "an integer in 1.." + std::to_string(kMaxImageSide);
     c.width = integer(require(j, "camera", "width", side), "camera.width", 1, kMaxImageSide);
     c.height = integer(require(j, "camera", "height", side), "camera.height", 1, kMaxImageSide);
+    check_camera(file(), c);
+  }
+
+  // The camera a glTF file holds: {"gltf": FILE, "index": N (default 0), "width": W,
+  // "height": H (default W / the file's aspectRatio), "transform": as an object's}.
+  void read_gltf_camera(const json& j) {
+    check_keys(j, "camera", {"gltf", "index", "width", "height", "transform"});
+    const std::string what = "a glTF file name (.gltf or .glb)";
+    const std::string name = string(require(j, "camera", "gltf", what), "camera.gltf", what);
+    const std::string ext = io::lowercase_extension(name);
+    if (ext != ".gltf" && ext != ".glb") expected("camera.gltf", what, j["gltf"]);
+    std::filesystem::path path(name);
+    if (path.is_relative()) path = base_ / path;
+    const int index = j.contains("index") ? integer(j["index"], "camera.index", 0, 1 << 30) : 0;
+    const GltfCamera g = spaceland::read_gltf_camera(path.string(), index, file(), "camera.gltf",
+                                                     options_.max_memory);
+    const Affine t = read_transform(j, "camera").affine;
+    Camera& c = scene_.camera;
+    c.position = t.point(g.position);
+    c.look_at = c.position + normalize(t.direction(g.forward));
+    c.up = normalize(t.direction(g.up));
+    c.fov_y = g.fov_y;
+    const std::string side = "an integer in 1.." + std::to_string(kMaxImageSide);
+    c.width = integer(require(j, "camera", "width", side), "camera.width", 1, kMaxImageSide);
+    if (j.contains("height") || !(g.aspect > 0)) {
+      c.height =
+          integer(require(j, "camera", "height", side + " (the file's camera has no aspectRatio)"),
+                  "camera.height", 1, kMaxImageSide);
+    } else {
+      const double h = std::round(c.width / double(g.aspect));
+      if (!(h >= 1 && h <= kMaxImageSide))
+        fail_at("camera.width", "the file's aspectRatio " + io::format_number(g.aspect) +
+                                    " makes the height " + io::format_number(h) + ", outside 1.." +
+                                    std::to_string(kMaxImageSide) + "; give camera.height");
+      c.height = int(h);
+    }
     check_camera(file(), c);
   }
 

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "core/sobol.hpp"
+#include "spaceland/brdf_albedo.hpp"
 #include "spaceland/brdf_reference.hpp"
 
 namespace penumbra::spaceland {
@@ -186,6 +187,35 @@ TEST(SpacelandBrdf, AWhiteFurnaceNeverGainsAndLosesWhatSingleScatteringLoses) {
     }
   EXPECT_GT(smooth_worst, 0.97);
   EXPECT_NEAR(rough_normal, 1 - std::log(2.0), 2e-3);
+}
+
+TEST(SpacelandBrdf, TheSplitSumTablesGiveEachLobesDirectionalAlbedo) {
+  // Off the tables' grid: the two lobes' albedos add up to the hemisphere integral of f cos.
+  double worst = 0;
+  for (double metallic : {0.0, 0.4, 1.0})
+    for (double roughness : {0.05, 0.23, 0.5, 0.77, 0.97})
+      for (double theta_o : {0.1, 0.7, 1.2, 1.45}) {
+        const LobeAlbedo l = lobe_albedo({0.8f, 0.8f, 0.8f}, float(metallic), float(roughness),
+                                         float(std::cos(theta_o)));
+        const double want = albedo_at_angle(0.8, metallic, roughness, theta_o);
+        const double got = l.specular.g + l.diffuse.g;
+        worst = std::max(worst, std::abs(got / want - 1));
+        EXPECT_NEAR(got / want, 1, 0.005)
+            << "metallic " << metallic << " roughness " << roughness << " theta " << theta_o;
+      }
+  EXPECT_LT(worst, 0.005);
+  // Closed forms: a mirror's F is Schlick's at the viewing angle (A = 1 - s, B = s); a white
+  // rough metal's albedo is 1 - m ln(1 + 1/m); the Lambertian is its albedo alone.
+  for (double m : {0.2, 0.6, 0.95}) {
+    const SplitSum mirror = split_sum(float(m), 0);
+    EXPECT_NEAR(mirror.b, std::pow(1 - m, 5), 2e-3) << m;
+    EXPECT_NEAR(mirror.a + mirror.b, 1, 2e-3) << m;
+    const SplitSum rough = split_sum(float(m), 1);
+    EXPECT_NEAR(rough.a + rough.b, 1 - m * std::log(1 + 1 / m), 3e-3) << m;
+  }
+  const LobeAlbedo lambert = lobe_albedo({0.3f, 0.5f, 0.7f}, 0, 1, 0.5f);
+  EXPECT_EQ(lambert.diffuse.b, 0.7f);
+  EXPECT_EQ(lambert.specular.b, 0.0f);
 }
 
 TEST(SpacelandBrdf, AMirrorReflectsExactlyWithSchlicksFresnel) {

@@ -215,4 +215,25 @@ inline BrdfSample sample_brdf(const Brdf& b, Vec3 n, Vec3 ng, Vec3 wo, float pic
   return s;
 }
 
+// The GGX width whose lobe's median cone (half-angle 2 atan(alpha): the half vector lies within
+// atan(alpha) of the normal half the time) has the solid angle of one cell of an equal-area
+// direction map of side `side`, 4 pi / side^2: the narrowest lobe such a map resolves.
+inline float cell_alpha(int side) {
+  const double cell = 4 * kPi / (double(side) * side);
+  const double half_angle = std::acos(std::max(-1.0, 1 - cell / (2 * kPi)));
+  return float(std::tan(half_angle / 2));
+}
+
+// The specular lobe's shape for averaging radiance over it (a cone query): D V cos at wi with
+// Fresnel left out (the split sum carries it), GGX of width alpha. Zero under the surface.
+inline float lobe_weight(float alpha, Vec3 n, Vec3 wo, Vec3 wi) {
+  const float ci = dot(n, wi), co = std::max(dot(n, wo), 1e-4f);
+  if (ci <= 0) return 0;
+  const Vec3 hv = wo + wi;
+  const float hl = length(hv);
+  if (!(hl > 0)) return 0;
+  return brdf_detail::ggx_d(alpha, std::max(dot(n, hv / hl), 0.0f)) *
+         brdf_detail::smith_v(alpha, co, ci) * ci;
+}
+
 }  // namespace penumbra::spaceland

@@ -84,12 +84,28 @@ SplitSum split_sum(float mu, float roughness) {
   return {mix(p.a, q.a, r.a, w.a), mix(p.b, q.b, r.b, w.b), mix(p.s, q.s, r.s, w.s)};
 }
 
-LobeAlbedo lobe_albedo(Rgb albedo, float metallic, float roughness, float mu) {
-  const Brdf b = make_brdf(albedo, metallic, roughness);
-  if (b.lambertian) return {Rgb{}, albedo};
-  const SplitSum t = split_sum(mu, roughness);
+LobeAlbedo lobe_albedo(const Brdf& b, float mu) {
+  if (b.lambertian) return {Rgb{}, b.diffuse};
+  const SplitSum t = split_sum(mu, std::sqrt(b.alpha));
   const Rgb one{1, 1, 1};
   return {b.f0 * t.a + one * t.b, b.diffuse * (one - b.f0) * (1 - t.s)};
+}
+
+Rgb hemispherical_albedo(const Brdf& b) {
+  if (b.lambertian) return b.diffuse;
+  // 2 mu dmu by the midpoint rule on 16 steps.
+  Rgb sum{};
+  constexpr int kSteps = 16;
+  for (int k = 0; k < kSteps; ++k) {
+    const float mu = (float(k) + 0.5f) / float(kSteps);
+    const LobeAlbedo l = lobe_albedo(b, mu);
+    sum += (l.specular + l.diffuse) * (2 * mu / float(kSteps));
+  }
+  return sum;
+}
+
+LobeAlbedo lobe_albedo(Rgb albedo, float metallic, float roughness, float mu) {
+  return lobe_albedo(make_brdf(albedo, metallic, roughness), mu);
 }
 
 }  // namespace penumbra::spaceland

@@ -25,6 +25,15 @@ struct LobeAlbedo {
 // quadrature (thread-safe), read bilinearly: within 0.5% of the integrals
 // (tests/spaceland/brdf_test.cpp).
 LobeAlbedo lobe_albedo(Rgb albedo, float metallic, float roughness, float mu);
+// The same for a BRDF made already (make_brdf, brdf_at: textures applied).
+struct Brdf;
+LobeAlbedo lobe_albedo(const Brdf& brdf, float mu);
+
+// The share of a uniform light the BRDF reflects over all directions (its albedo averaged over
+// the viewing hemisphere, weighted by the cosine): what a method that keeps one colour per
+// surface (the grid's voxels, the radiance cache) reflects of a glossy surface. The Lambertian:
+// its albedo.
+Rgb hemispherical_albedo(const Brdf& brdf);
 
 // The tables' values at a grid point's neighbourhood, for the tests: A, B and S.
 struct SplitSum {

@@ -137,7 +137,7 @@ constexpr const char* kGridOptions[] = {"grid.voxel",         "grid.levels",   "
                                         "grid.extend_length", "grid.fix",      "sun_rays"};
 
 Status grid_check_scene(const Scene& scene) {
-  return refuse_glossy(scene, "grid", "--method pt");
+  return refuse_glossy(scene, "grid", "--method pt or spwi");
 }
 
 Status grid_check(const RenderOptions& o) {

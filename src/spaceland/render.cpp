@@ -249,7 +249,6 @@ Status solve(const Plan& plan, const Scene& scene, const Scene& given, const Ray
   result.rays += report.rays;
   result.samples = report.samples;
   result.cancelled = report.cancelled;
-  result.warnings = scene.warnings;
   for (std::string& w : report.warnings) result.warnings.push_back(std::move(w));
   result.memory_bytes += report.memory_bytes;
   result.voxel_bytes = report.voxel_bytes;
@@ -282,6 +281,7 @@ Expected<RenderResult> render(const Scene& scene, const RenderOptions& options) 
     RenderResult result;
     result.options = options;
     result.device = to_string(options.device);
+    result.warnings = scene.warnings;  // what its files use and it is drawn without
     Stopwatch total;
     Stopwatch stage;
     // Embree may not allocate past the limit (its estimate was checked above; this holds it).

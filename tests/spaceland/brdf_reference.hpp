@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <vector>
 
 #include "penumbra/vec3.hpp"
 
@@ -26,6 +27,7 @@ inline double reference_f(double c, double metallic, double roughness, Vec3 n, V
   const double V =
       0.5 / (nl * std::sqrt(nv * nv * (1 - a2) + a2) + nv * std::sqrt(nl * nl * (1 - a2) + a2));
   const double diffuse = (1 - F) * c * (1 - metallic) / kPiD;
+  if (a2 == 0) return diffuse;  // a mirror: its specular lobe is a delta (reference_mirror)
   return diffuse + F * D * V;
 }
 
@@ -75,13 +77,48 @@ double cone_integral(Vec3 axis, double width, G&& g, int rings = 100, int sector
   return sum * (width / rings) * (2 * kPiD / sectors);
 }
 
-// Directional albedo: the integral of f cos over the hemisphere about n, seen from wo.
-inline double reference_albedo(double c, double metallic, double roughness, Vec3 n, Vec3 wo) {
-  const Vec3 r = normalize(n * float(2 * dot(n, wo)) - wo);
-  return sphere_integral(r, [&](Vec3 wi) {
-    const double nl = dot(n, wi);
-    return nl > 0 ? reference_f(c, metallic, roughness, n, wo, wi) * nl : 0.0;
-  });
+// A mirror's (roughness 0) delta: Schlick's Fresnel at the viewing angle.
+inline double reference_mirror(double c, double metallic, Vec3 n, Vec3 wo) {
+  const double f0 = 0.04 * (1 - metallic) + c * metallic;
+  return f0 + (1 - f0) * std::pow(1 - double(dot(n, wo)), 5);
 }
+
+// Directional albedo: the integral of f cos over the hemisphere about n, seen from wo (a
+// mirror's delta included).
+inline double reference_albedo(double c, double metallic, double roughness, Vec3 n, Vec3 wo,
+                               int rings = 800, int sectors = 400) {
+  const Vec3 r = normalize(n * float(2 * dot(n, wo)) - wo);
+  return (roughness == 0 ? reference_mirror(c, metallic, n, wo) : 0.0) +
+         sphere_integral(
+             r,
+             [&](Vec3 wi) {
+               const double nl = dot(n, wi);
+               return nl > 0 ? reference_f(c, metallic, roughness, n, wo, wi) * nl : 0.0;
+             },
+             rings, sectors);
+}
+
+// reference_albedo about n = +y as a function of the viewing cosine, tabulated on 97 points
+// and read linearly (each a quadrature of 80,000 points).
+class AlbedoTable {
+ public:
+  AlbedoTable(double c, double metallic, double roughness) : values_(kSteps + 1) {
+    for (int k = 0; k <= kSteps; ++k) {
+      const double m = std::max(1e-3, double(k) / kSteps);
+      const Vec3 wo{float(std::sqrt(1 - m * m)), float(m), 0};
+      values_[std::size_t(k)] = reference_albedo(c, metallic, roughness, {0, 1, 0}, wo, 400, 200);
+    }
+  }
+  double operator()(double cos_o) const {
+    const double x = std::clamp(cos_o, 0.0, 1.0) * kSteps;
+    const int k = std::min(kSteps - 1, int(x));
+    return values_[std::size_t(k)] +
+           (x - k) * (values_[std::size_t(k) + 1] - values_[std::size_t(k)]);
+  }
+
+ private:
+  static constexpr int kSteps = 96;
+  std::vector<double> values_;
+};
 
 }  // namespace penumbra::spaceland::testing

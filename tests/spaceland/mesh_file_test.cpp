@@ -159,6 +159,24 @@ TEST(MeshFileObj, MtlGivesMetallicRoughnessAndTextures) {
   EXPECT_EQ(m.warnings[0],
             "material 'plain' in m.mtl: map_Pr is not implemented: drawn with Pr and Pm alone");
 
+  // Old Mac line endings (\r alone) and a material before any newmtl, as tinyobjloader reads
+  // them; a Pr that is not a number is refused, not read as 0 (a mirror).
+  d.write("cr.mtl", "newmtl a\rKd 0.5 0.5 0.5\rPr 0.2\rPm 1\rnewmtl b\rKd 0.1 0.1 0.1\r");
+  const MeshFile cr = loads(d.write("cr.obj",
+                                    "mtllib cr.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nusemtl a\nf 1 2 3\n"
+                                    "usemtl b\nf 1 3 2\n"));
+  ASSERT_EQ(cr.materials.size(), 2u);
+  EXPECT_EQ(cr.materials[0].roughness, 0.2f);
+  EXPECT_EQ(cr.materials[0].metallic, 1);
+  EXPECT_EQ(cr.materials[1].roughness, 1);
+  d.write("none.mtl", "Kd 0.5 0.5 0.5\nPr 0.5\n");
+  const MeshFile none =
+      loads(d.write("none.obj", "mtllib none.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3\n"));
+  ASSERT_FALSE(none.materials.empty());
+  d.write("nan.mtl", "newmtl m\nPr abc\n");
+  const std::string nan = d.write("n.obj", "mtllib nan.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3\n");
+  EXPECT_EQ(refusal(nan), prefix("n.obj") + "nan.mtl line 2: 'abc' is not a finite number");
+
   d.write("bad.mtl", "newmtl m\nKd 0.5 0.5 0.5\nPr 1.5\n");
   const std::string bad = d.write("b.obj", "mtllib bad.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3\n");
   EXPECT_EQ(refusal(bad), prefix("b.obj") + "material 'm' in bad.mtl: Pr 1.5 is outside [0, 1]");

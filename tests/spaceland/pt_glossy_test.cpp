@@ -19,16 +19,6 @@ namespace {
 
 using namespace penumbra::spaceland::testing;
 
-// A floor (a disk 1000 across at y = 0) of base colour `c`, metallic and roughness, seen from
-// above at a slant; returns its object.
-int add_glossy_floor(Scene& s, Rgb c, float metallic, float roughness) {
-  const int object = add_floor(s, 1000, c);
-  Material& m = s.materials[s.disks.back().material];
-  m.metallic = metallic;
-  m.roughness = roughness;
-  return object;
-}
-
 Scene floor_scene(Rgb sky) {
   Scene s;
   s.camera = camera({0, 2, 4}, {0, 0, 0}, 32, 24, 50);
@@ -75,48 +65,14 @@ TEST(SpacelandPtGlossy, AMirrorFloorShowsFresnelTimesWhatItsMirroredRayMeets) {
   EXPECT_LT(worst, 1e-4);
 }
 
-// Relative RMS error and mean ratio of the floor's pixels against want(p, wo).
-template <class Want>
-std::pair<double, double> glossy_floor_error(const Scene& s, const ImageRgb& img, int floor,
-                                             Want&& want) {
-  const FirstHits hits = first_hits(s);
-  double sum = 0, got_sum = 0, want_sum = 0;
-  int n = 0;
-  for (int j = 0; j < img.height(); ++j)
-    for (int i = 0; i < img.width(); ++i) {
-      if (int(hits.object.at(i, j).r) != floor) continue;
-      const Rgb q = hits.position.at(i, j);
-      const Vec3 p{q.r, q.g, q.b};
-      const double w = want(p, normalize(s.camera.position - p));
-      const double got = img.at(i, j).g;
-      sum += (got / w - 1) * (got / w - 1);
-      got_sum += got;
-      want_sum += w;
-      ++n;
-    }
-  EXPECT_GT(n, 300);
-  return {std::sqrt(sum / std::max(n, 1)), got_sum / want_sum};
-}
-
 TEST(SpacelandPtGlossy, AGlossyFloorUnderAUniformSkyShowsItsDirectionalAlbedo) {
-  const Vec3 n{0, 1, 0};
   for (const auto& [metallic, roughness] :
-       {std::pair{0.0f, 0.3f}, std::pair{1.0f, 0.5f}, std::pair{0.5f, 0.8f}}) {
+       {std::pair{0.0f, 0.3f}, std::pair{1.0f, 0.5f}, std::pair{0.5f, 0.8f},
+        std::pair{0.0f, 0.0f}}) {  // the last: a mirror over a diffuse lobe (plastic)
     Scene s = floor_scene({1, 1, 1});
     const int floor = add_glossy_floor(s, {0.7f, 0.7f, 0.7f}, metallic, roughness);
-    // The albedo depends on the angle alone: tabulated over cos_o, interpolated linearly.
-    constexpr int kSteps = 128;
-    std::vector<double> table(kSteps + 1);
-    for (int k = 0; k <= kSteps; ++k) {
-      const double c = std::max(1e-3, double(k) / kSteps);
-      const Vec3 wo{float(std::sqrt(1 - c * c)), float(c), 0};
-      table[std::size_t(k)] = reference_albedo(0.7, metallic, roughness, n, wo);
-    }
-    auto want = [&](Vec3, Vec3 wo) {
-      const double x = std::clamp(double(wo.y), 0.0, 1.0) * kSteps;
-      const int k = std::min(kSteps - 1, int(x));
-      return table[std::size_t(k)] + (x - k) * (table[std::size_t(k) + 1] - table[std::size_t(k)]);
-    };
+    const AlbedoTable albedo(0.7, metallic, roughness);
+    auto want = [&](Vec3, Vec3 wo) { return albedo(wo.y); };
     const auto [e64, mean64] = glossy_floor_error(s, render_ok(s, pt(64)).radiance, floor, want);
     const auto [e256, mean256] = glossy_floor_error(s, render_ok(s, pt(256)).radiance, floor, want);
     EXPECT_NEAR(mean256, 1.0, 0.003) << metallic << " " << roughness;
@@ -126,11 +82,15 @@ TEST(SpacelandPtGlossy, AGlossyFloorUnderAUniformSkyShowsItsDirectionalAlbedo) {
   }
 }
 
-TEST(SpacelandPtGlossy, ARoughMetalFloorUnderASphereLightIntegratesTheBrdfOverTheLight) {
+TEST(SpacelandPtGlossy, AGlossyFloorUnderASphereLightIntegratesTheBrdfOverTheLight) {
   const Vec3 n{0, 1, 0};
-  for (float roughness : {0.15f, 0.3f, 0.6f}) {
+  // Rough metals, a glossy plastic (both lobes, one picked per sample: the mixture's density in
+  // MIS) and a mirror plastic (the delta's weight F / p, and its mirrored ray meeting the light).
+  for (const auto& [metallic, roughness] :
+       {std::pair{1.0f, 0.15f}, std::pair{1.0f, 0.3f}, std::pair{1.0f, 0.6f}, std::pair{0.0f, 0.3f},
+        std::pair{0.0f, 0.0f}}) {
     Scene s = floor_scene({0, 0, 0});
-    const int floor = add_glossy_floor(s, {0.9f, 0.9f, 0.9f}, 1, roughness);
+    const int floor = add_glossy_floor(s, {0.9f, 0.9f, 0.9f}, metallic, roughness);
     const float le = 5;
     const Sphere light =
         add_sphere(s, {0, 1.0f, -1.5f}, 0.3f, add_material(s, {0, 0, 0}, {le, le, le}));
@@ -138,16 +98,28 @@ TEST(SpacelandPtGlossy, ARoughMetalFloorUnderASphereLightIntegratesTheBrdfOverTh
       const Vec3 to = light.center - p;
       const double d = length(to), sin_max = light.radius / d;
       const double width = 1 - std::sqrt(1 - sin_max * sin_max);
-      return le * cone_integral(to / float(d), width, [&](Vec3 wi) {
-               const double nl = dot(n, wi);
-               return nl > 0 ? reference_f(0.9, 1, roughness, n, wo, wi) * nl : 0.0;
-             });
+      double mirrored = 0;
+      if (roughness == 0) {
+        // The delta: Fresnel times the light where the mirrored ray meets it.
+        const Vec3 m{-wo.x, wo.y, -wo.z};
+        const Vec3 oc = p - light.center;
+        const double b = dot(oc, m), c = dot(oc, oc) - double(light.radius) * light.radius;
+        if (b * b - c > 0 && -b > 0) mirrored = reference_mirror(0.9, metallic, n, wo);
+      }
+      return le * (mirrored + cone_integral(to / float(d), width, [&](Vec3 wi) {
+                     const double nl = dot(n, wi);
+                     return nl > 0 ? reference_f(0.9, metallic, roughness, n, wo, wi) * nl : 0.0;
+                   }));
     };
     const auto [e64, mean64] = glossy_floor_error(s, render_ok(s, pt(64)).radiance, floor, want);
     const auto [e256, mean256] = glossy_floor_error(s, render_ok(s, pt(256)).radiance, floor, want);
-    EXPECT_NEAR(mean256, 1.0, 0.003) << roughness;
-    EXPECT_LT(e256, 0.01) << roughness;
-    EXPECT_LT(e256, 0.6 * e64) << roughness;
+    EXPECT_NEAR(mean256, 1.0, 0.003) << metallic << " " << roughness;
+    EXPECT_LT(e256, 0.01) << metallic << " " << roughness;
+    // The mirror's delta is exact at any sample count: its floor of 0.1% (pixels whose mirrored
+    // ray grazes the light's rim) is reached at 64 samples already.
+    if (roughness > 0) {
+      EXPECT_LT(e256, 0.6 * e64) << metallic << " " << roughness;
+    }
     (void)mean64;
   }
 }

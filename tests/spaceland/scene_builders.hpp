@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <numbers>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/math.hpp"
@@ -343,6 +344,39 @@ inline double wide_floor_shape_error(const RenderOptions& o, bool behind, bool b
       n);
   EXPECT_GT(n, 96 * 72 / 3);
   return e;
+}
+
+// A floor (a disk 1000 across at y = 0) of base colour `c`, metallic and roughness, seen from
+// above at a slant; returns its object.
+inline int add_glossy_floor(Scene& s, Rgb c, float metallic, float roughness) {
+  const int object = add_floor(s, 1000, c);
+  Material& m = s.materials[s.disks.back().material];
+  m.metallic = metallic;
+  m.roughness = roughness;
+  return object;
+}
+
+// Relative RMS error and mean ratio of the floor's pixels against want(p, wo).
+template <class Want>
+std::pair<double, double> glossy_floor_error(const Scene& s, const ImageRgb& img, int floor,
+                                             Want&& want) {
+  const FirstHits hits = first_hits(s);
+  double sum = 0, got_sum = 0, want_sum = 0;
+  int n = 0;
+  for (int j = 0; j < img.height(); ++j)
+    for (int i = 0; i < img.width(); ++i) {
+      if (int(hits.object.at(i, j).r) != floor) continue;
+      const Rgb q = hits.position.at(i, j);
+      const Vec3 p{q.r, q.g, q.b};
+      const double w = want(p, normalize(s.camera.position - p));
+      const double got = img.at(i, j).g;
+      sum += (got / w - 1) * (got / w - 1);
+      got_sum += got;
+      want_sum += w;
+      ++n;
+    }
+  EXPECT_GT(n, 300);
+  return {std::sqrt(sum / std::max(n, 1)), got_sum / want_sum};
 }
 
 }  // namespace penumbra::spaceland::testing

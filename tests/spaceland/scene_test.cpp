@@ -689,6 +689,15 @@ TEST(Scene3d, MeshPathIsRelativeToTheSceneFile) {
   EXPECT_EQ(t->meshes[0].materials, t->meshes[1].materials);
   EXPECT_EQ(mesh_bounds(t->meshes[1]).lo.x, mesh_bounds(t->meshes[0]).lo.x + 3);
   EXPECT_EQ(t->meshes[2].materials, std::vector<std::uint32_t>(12, 0));
+  // Used first with a material of its own, then with the file's: those join at the second.
+  const std::string override_first = dir.write("o.json", objects_doc(R"(
+      {"type": "mesh", "file": "models/cube.obj", "material": "m"},
+      {"type": "mesh", "file": "models/cube.obj"})"));
+  auto o = load_scene(override_first);
+  ASSERT_TRUE(o.ok()) << o.error().message;
+  EXPECT_EQ(o->materials.size(), 2u);
+  EXPECT_EQ(o->meshes[0].materials, std::vector<std::uint32_t>(12, 0));
+  EXPECT_EQ(o->meshes[1].materials, std::vector<std::uint32_t>(12, 1));
   const Bounds b = mesh_bounds(r->meshes[0]);
   expect_vec3(b.lo, {-0.5f, 1.5f, -0.5f});
   expect_vec3(b.hi, {0.5f, 2.5f, 0.5f});

@@ -11,9 +11,11 @@
 #include <cmath>
 #include <functional>
 #include <string>
+#include <utility>
 
 #include "penumbra/spaceland/render.hpp"
 #include "penumbra/spaceland/scene.hpp"
+#include "spaceland/brdf_reference.hpp"
 #include "spaceland/scene_builders.hpp"
 
 namespace penumbra::spaceland {
@@ -165,6 +167,46 @@ TEST(Spwi, AQuadOrBoxLightsPoolIsTheClosedFormInViewAndBehindTheCamera) {
 
 // The derived probe spacing: 4 pixels, 2 on images under 240 pixels on their shorter side (fewer
 // than 60 probes across at 4); one given is kept. A render reports the one it used.
+// Glossy surfaces: the diffuse gather and the specular lobe over cascade 0, each weighted by its
+// lobe's directional albedo (the split sum). Under a uniform sky any normalised average of the
+// cascades is the sky, so the floor is the sky times the BRDF's directional albedo, to the
+// tables' accuracy; a mirror is Schlick's Fresnel.
+TEST(Spwi, GlossyFloorsUnderAUniformSkyGiveTheirDirectionalAlbedo) {
+  for (const auto& [metallic, roughness] : {std::pair{0.0f, 0.3f}, std::pair{1.0f, 0.5f},
+                                            std::pair{1.0f, 0.0f}, std::pair{0.5f, 1.0f}}) {
+    Scene s;
+    s.camera = camera({0, 2, 4}, {0, 0, 0}, 48, 36, 50);
+    s.sky = {{1, 1, 1}, {1, 1, 1}, {1, 1, 1}};
+    const int floor = add_glossy_floor(s, {0.7f, 0.7f, 0.7f}, metallic, roughness);
+    const AlbedoTable albedo(0.7, metallic, roughness);
+    const auto [error, mean] =
+        glossy_floor_error(s, render_ok(s, spwi(SpwiMerge::bilinear3d)).radiance, floor,
+                           [&](Vec3, Vec3 wo) { return albedo(wo.y); });
+    EXPECT_LT(error, 0.006) << metallic << " " << roughness;
+    EXPECT_NEAR(mean, 1, 0.004) << metallic << " " << roughness;
+  }
+}
+
+// The sun on a glossy floor: the BRDF towards the sun's centre times its irradiance and cosine.
+TEST(Spwi, TheSunOnAGlossyFloorIsTheBrdfTimesItsIrradiance) {
+  for (const auto& [metallic, roughness] : {std::pair{1.0f, 0.4f}, std::pair{0.0f, 0.6f}}) {
+    Scene s;
+    s.camera = camera({0, 2, 4}, {0, 0, 0}, 48, 36, 50);
+    s.has_sun = true;
+    s.sun.direction = normalize(Vec3{0, 1, -1.6f});
+    s.sun.irradiance = {2, 2, 2};
+    const int floor = add_glossy_floor(s, {0.7f, 0.7f, 0.7f}, metallic, roughness);
+    const Vec3 n{0, 1, 0};
+    const auto [error, mean] = glossy_floor_error(
+        s, render_ok(s, spwi(SpwiMerge::bilinear3d)).radiance, floor, [&](Vec3, Vec3 wo) {
+          return 2 * reference_f(0.7, metallic, roughness, n, wo, s.sun.direction) *
+                 dot(n, s.sun.direction);
+        });
+    EXPECT_LT(error, 1e-3) << metallic << " " << roughness;
+    EXPECT_NEAR(mean, 1, 1e-3) << metallic << " " << roughness;
+  }
+}
+
 TEST(Spwi, TheProbeSpacingFollowsTheImageSize) {
   const SpwiOptions derived;
   EXPECT_EQ(spwi::probe_spacing_for(derived, 96, 72), 2);

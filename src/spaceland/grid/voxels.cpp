@@ -8,6 +8,8 @@
 #include "core/math.hpp"
 #include "core/parallel.hpp"
 #include "io/json_reader.hpp"
+#include "spaceland/brdf.hpp"
+#include "spaceland/brdf_albedo.hpp"
 #include "spaceland/cascade/sphere_lights.hpp"
 #include "spaceland/color.hpp"
 
@@ -136,11 +138,20 @@ Rgb mean_texel(const Scene& scene, const TextureRef& ref) {
   return {float(sum[0] / n), float(sum[1] / n), float(sum[2] / n)};
 }
 
-// Each material's albedo and emission times their textures' mean texels.
+// Each material's albedo and emission times their textures' mean texels; a glossy material's
+// albedo is the share of a uniform light it reflects (hemispherical_albedo), its metallic and
+// roughness times their texture's mean.
 std::vector<Rgb> mean_albedos(const Scene& scene) {
   std::vector<Rgb> out;
-  for (const Material& m : scene.materials)
-    out.push_back(m.albedo * mean_texel(scene, m.albedo_texture));
+  for (const Material& m : scene.materials) {
+    const Rgb base = m.albedo * mean_texel(scene, m.albedo_texture);
+    if (m.lambertian()) {
+      out.push_back(base);
+      continue;
+    }
+    const Rgb mr = mean_texel(scene, m.metallic_roughness_texture);
+    out.push_back(hemispherical_albedo(make_brdf(base, m.metallic * mr.b, m.roughness * mr.g)));
+  }
   return out;
 }
 std::vector<Rgb> mean_emissions(const Scene& scene) {
@@ -266,7 +277,7 @@ Expected<Voxels> empty_grid(const Scene& scene, float size, std::uint64_t max_by
 // The voxels each surface touches (conservatively), with its area share.
 class SurfaceRaster {
  public:
-  SurfaceRaster(const Scene& scene, const Voxels& v) : scene_(scene), v_(v) {
+  SurfaceRaster(const Scene& scene, const Voxels& v) : v_(v) {
     const std::size_t count = std::size_t(v.count());
     sums_.weight.assign(count, 0);
     sums_.emitting.assign(count, 0);
@@ -390,7 +401,6 @@ class SurfaceRaster {
     sums_.albedo[k] += albedos_[material] * w;
   }
 
-  const Scene& scene_;
   const Voxels& v_;
   SurfaceSums sums_;
   std::vector<Rgb> albedos_, emissions_;

@@ -58,14 +58,25 @@ struct ObjCounts {
   std::uint64_t vertices = 0, uvs = 0, normals = 0;
 };
 
+// Of each material of an MTL file (in the order of its named newmtl lines, as tinyobjloader
+// stores them), whether it gives Pm and Pr: tinyobjloader reads an absent Pr as 0, a mirror,
+// where the format's default is 1.
+struct MtlGiven {
+  bool metallic = false, roughness = false;
+};
+
 void check_text(std::string_view text, const std::string& file, bool obj,
-                std::vector<std::uint32_t>* face_sizes = nullptr, ObjCounts* counts = nullptr) {
+                std::vector<std::uint32_t>* face_sizes = nullptr, ObjCounts* counts = nullptr,
+                std::vector<MtlGiven>* given = nullptr) {
   struct Kind {
     long long count = 0, max_index = 0;
     std::size_t max_line = 0;
     const char* name;
   };
   Kind kinds[3] = {{0, 0, 0, "vertex"}, {0, 0, 0, "texture coordinate"}, {0, 0, 0, "normal"}};
+  // What precedes the first named newmtl: tinyobjloader keeps it as a nameless material only
+  // where no named one follows.
+  MtlGiven initial;
   std::size_t line = 0, begin = 0;
   while (begin < text.size()) {
     // Lines end at \n, \r\n or \r, as tinyobjloader's do.
@@ -83,6 +94,15 @@ void check_text(std::string_view text, const std::string& file, bool obj,
       if (key == "vn") min_count = 3, kind = 2;
     } else if (key == "Kd" || key == "Ke") {
       min_count = 3;
+    } else if (key == "Pr" || key == "Pm") {
+      min_count = 1;
+      if (given) {
+        MtlGiven& g = given->empty() ? initial : given->back();
+        (key == "Pr" ? g.roughness : g.metallic) = true;
+      }
+    } else if (key == "newmtl" && given) {
+      std::size_t after = pos;
+      if (!next_token(l, after).empty()) given->emplace_back();  // a nameless one is skipped
     }
     const std::string where = file + " " + line_at(line);
     if (min_count > 0) {
@@ -116,6 +136,7 @@ void check_text(std::string_view text, const std::string& file, bool obj,
       if (face_sizes) face_sizes->push_back(std::uint32_t(corners));
     }
   }
+  if (given && given->empty()) given->push_back(initial);
   if (counts)
     *counts = {std::uint64_t(kinds[0].count), std::uint64_t(kinds[1].count),
                std::uint64_t(kinds[2].count)};
@@ -135,35 +156,20 @@ class MtlReader : public tinyobj::MaterialReader {
                   std::map<std::string, int>* map, std::string* warn, std::string* err) override {
     const std::string text =
         read_whole_file((dir_ / name).string(), budget_.max(), "MTL file '" + name + "' (mtllib)");
-    check_text(text, name, false);
+    std::vector<MtlGiven> found;
+    check_text(text, name, false, nullptr, nullptr, &found);
     std::istringstream in(text);
     const std::size_t before = materials->size();
     tinyobj::LoadMtl(map, materials, &in, warn, err);
     files.resize(materials->size(), name);
-    // tinyobjloader reads an absent Pr as 0 (a mirror); the format's default is 1: which
-    // materials give Pr and Pm is read here, in the order of their newmtl statements, as
-    // tinyobjloader stores them.
-    given.resize(materials->size());
-    std::size_t current = before;
-    bool any = false;
-    std::istringstream lines(text);
-    for (std::string l; std::getline(lines, l);) {
-      std::size_t pos = 0;
-      const std::string_view key = next_token(l, pos);
-      if (key == "newmtl") {
-        current = any ? current + 1 : before;
-        any = true;
-      } else if (any && current < given.size() && (key == "Pr" || key == "Pm")) {
-        (key == "Pr" ? given[current].roughness : given[current].metallic) = true;
-      }
-    }
+    if (materials->size() - before != found.size())
+      mesh_fail(name + ": " + std::to_string(found.size()) + " named materials, of which " +
+                "tinyobjloader read " + std::to_string(materials->size() - before));
+    given.insert(given.end(), found.begin(), found.end());
     return true;
   }
-  struct Given {
-    bool metallic = false, roughness = false;
-  };
   std::vector<std::string> files;  // the MTL file of each material
-  std::vector<Given> given;        // whether each material gives Pm and Pr
+  std::vector<MtlGiven> given;     // whether each material gives Pm and Pr
 
  private:
   std::filesystem::path dir_;
@@ -176,7 +182,7 @@ Material named_material(std::string name) {
   return m;
 }
 
-Material convert(const tinyobj::material_t& m, const std::string& file, MtlReader::Given given) {
+Material convert(const tinyobj::material_t& m, const std::string& file, MtlGiven given) {
   Material out;
   out.name = m.name;
   const std::string what = "material '" + m.name + "' in " + file;

@@ -77,6 +77,11 @@ class SceneReader : public io::JsonReader {
     if (doc.contains("objects")) {
       const json& objects = doc["objects"];
       if (!objects.is_array()) expected("objects", "an array of objects", objects);
+      // How many objects use each mesh file: its parse is kept until the last one.
+      for (const json& o : objects)
+        if (o.is_object() && o.contains("type") && o["type"] == "mesh" && o.contains("file") &&
+            o["file"].is_string())
+          ++uses_[mesh_key(o["file"].get<std::string>())];
       for (std::size_t i = 0; i < objects.size(); ++i)
         read_object(objects[i], "objects[" + std::to_string(i) + "]");
     }
@@ -377,28 +382,33 @@ class SceneReader : public io::JsonReader {
     const bool has_material = j.contains("material");
     const std::uint32_t material = has_material ? object_material(j, path) : 0;
 
-    // A file is parsed once however many objects use it; each object gets its own copy of the
-    // triangles (transformed), and the file's materials and textures join the scene once.
-    std::error_code ec;
-    const std::string key = std::filesystem::weakly_canonical(file_path, ec).string();
-    auto found = parsed_.find(ec ? file_path.string() : key);
+    // A file is parsed once however many objects use it (kept until its last use, counted
+    // against the memory limit meanwhile); each object gets its own copy of the triangles
+    // (transformed, the last use takes the parse's), and the file's materials and textures join
+    // the scene once.
+    const std::string key = mesh_key(name);
+    auto found = parsed_.find(key);
     if (found == parsed_.end()) {
       const std::uint64_t used = scene_bytes(scene_) + parsed_bytes_;
       const std::uint64_t room = used < options_.max_memory ? options_.max_memory - used : 0;
-      Parsed p{read_mesh_file(file_path.string(), file(), path + ".file", room), 0, false};
+      Parsed p{read_mesh_file(file_path.string(), file(), path + ".file", room), 0, false, 0};
       if (p.file.mesh.triangles.empty())
         fail_at(path + ".file", name + ": the file has no triangles");
       for (const std::string& w : p.file.warnings)
         scene_.warnings.push_back(path + ".file: " + name + ": " + w);
-      parsed_bytes_ += mesh_bytes(p.file.mesh);
-      found = parsed_.emplace(ec ? file_path.string() : key, std::move(p)).first;
+      p.bytes = mesh_bytes(p.file.mesh);
+      for (const Texture& t : p.file.textures) p.bytes += t.rgb.size() * sizeof(float);
+      parsed_bytes_ += p.bytes;
+      found = parsed_.emplace(key, std::move(p)).first;
     }
     Parsed& parsed = found->second;
-    if (scene_bytes(scene_) + parsed_bytes_ + mesh_bytes(parsed.file.mesh) > options_.max_memory)
+    const bool last = --uses_[key] <= 0;
+    if (!last &&
+        scene_bytes(scene_) + parsed_bytes_ + mesh_bytes(parsed.file.mesh) > options_.max_memory)
       fail_at(path + ".file", "the scene needs more than the memory limit of " +
                                   io::format_rounded(double(options_.max_memory)) +
                                   " bytes with this object's copy of " + name);
-    TriangleMesh mesh = parsed.file.mesh;
+    TriangleMesh mesh = last ? std::move(parsed.file.mesh) : parsed.file.mesh;
     if (has_material) {
       mesh.materials.assign(mesh.triangles.size(), material);
     } else {
@@ -412,11 +422,20 @@ class SceneReader : public io::JsonReader {
             if (t->index >= 0) t->index += texture_base;
           scene_.materials.push_back(std::move(m));
         }
-        for (Texture& t : parsed.file.textures) scene_.textures.push_back(std::move(t));
+        for (Texture& t : parsed.file.textures) {
+          const std::uint64_t b = t.rgb.size() * sizeof(float);
+          parsed.bytes -= b;
+          parsed_bytes_ -= b;
+          scene_.textures.push_back(std::move(t));
+        }
         std::vector<Texture>().swap(parsed.file.textures);
         parsed.joined = true;
       }
       for (std::uint32_t& m : mesh.materials) m += parsed.material_base;
+    }
+    if (last) {
+      parsed_bytes_ -= parsed.bytes;
+      parsed_.erase(found);
     }
     transform_mesh(mesh, read_transform(j, path).affine);
     mesh.object = index;
@@ -481,13 +500,22 @@ class SceneReader : public io::JsonReader {
     scene_.media.push_back(m);
   }
 
-  // A mesh file as parsed, kept while the document is read, and where its materials begin in
-  // the scene's once they have joined it.
+  // A mesh file as parsed, kept until its last use, and where its materials begin in the
+  // scene's once they have joined it.
   struct Parsed {
     MeshFile file;
     std::uint32_t material_base = 0;
     bool joined = false;
+    std::uint64_t bytes = 0;  // of its arrays and textures not yet the scene's
   };
+  // The key of a mesh file named `name` in the document: its canonical path where it has one.
+  std::string mesh_key(const std::string& name) const {
+    std::filesystem::path p(name);
+    if (p.is_relative()) p = base_ / p;
+    std::error_code ec;
+    const std::filesystem::path c = std::filesystem::weakly_canonical(p, ec);
+    return ec ? p.string() : c.string();
+  }
   static std::uint64_t mesh_bytes(const TriangleMesh& m) {
     return m.positions.size() * sizeof(Vec3) + m.normals.size() * sizeof(Vec3) +
            (m.uvs.size() + m.lightmap_uvs.size()) * sizeof(m.uvs[0]) +
@@ -497,7 +525,8 @@ class SceneReader : public io::JsonReader {
   const LoadOptions& options_;
   std::filesystem::path base_;
   Scene scene_;
-  std::map<std::string, Parsed> parsed_;  // by the file's canonical path
+  std::map<std::string, Parsed> parsed_;  // by mesh_key
+  std::map<std::string, int> uses_;       // objects still to read of each mesh_key
   std::uint64_t parsed_bytes_ = 0;
   std::map<std::string, std::uint32_t> named_;
   int default_material_ = -1;

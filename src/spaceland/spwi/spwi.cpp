@@ -13,6 +13,7 @@
 #include "core/parallel.hpp"
 #include "core/timer.hpp"
 #include "io/json_reader.hpp"
+#include "spaceland/brdf_albedo.hpp"
 #include "spaceland/cascade/radiance.hpp"
 #include "spaceland/cascade/sphere_lights.hpp"
 #include "spaceland/color.hpp"
@@ -140,8 +141,7 @@ Status check_options(const SpwiOptions& o) {
 }
 
 Status check_scene(const Scene& scene) {
-  if (Status s = refuse_fog(scene, "spwi", "--method pt"); !s) return s;
-  return refuse_glossy(scene, "spwi", "--method pt");
+  return refuse_fog(scene, "spwi", "--method pt");
 }
 
 namespace {
@@ -515,25 +515,65 @@ ImageRgb gather(const SolveContext& ctx, const SpwiOptions& o, const Layout& lay
     mean = probe_mean[std::size_t(index)];
     return holds_light(mean);
   };
+  // A glossy pixel's specular lobe is read from cascade 0's merged maps, no narrower than one of
+  // their cells (the widest query of seed 001 2.6, weighted by the lobe).
+  const float alpha_cell = cell_alpha(layout.map_side(0));
+  auto lobe_radiance = [&](std::uint64_t index, Vec3 n, Vec3 wo, float alpha, Rgb& mean) {
+    const Rgb* probe = store.probe(index);
+    Rgb sum{};
+    float weight = 0;
+    for (std::size_t d = 0; d < dirs.size(); ++d) {
+      if (!holds_light(probe[d])) continue;
+      const float w = lobe_weight(alpha, n, wo, dirs[d]);
+      if (!(w > 0)) continue;
+      sum += probe[d] * w;
+      weight += w;
+    }
+    if (!(weight > 0)) return false;
+    mean = sum * (1 / weight);
+    return true;
+  };
   return shade_pixels(
       ctx.g, bg, rays, [&](int x, int y, std::size_t k, const Hit& h, std::uint64_t& local) {
         Rgb l = emission_at(ctx.scene, h);
-        const Rgb albedo = albedo_at(ctx.scene, h);
+        const Brdf brdf = brdf_at(ctx.scene, h);
+        const Vec3 wo = normalize(-ctx.g.directions[k]);
+        const Vec3 n = h.shading_normal;
+        // The Lambertian: its albedo and no specular lobe.
+        const LobeAlbedo lobes = lobe_albedo(brdf, std::max(dot(n, wo), 0.0f));
+        const float alpha = std::max(brdf.alpha, alpha_cell);
         Corners c;
         if (gather_corners(layout, x, y, ctx.g.linear_depth(k), h.geometric_normal, probes, o, c)) {
-          Rgb e{};
+          Rgb e{}, spec{};
           float used = 0;  // the weight of probes with light towards this pixel's hemisphere
+          float spec_used = 0;
           for (int j = 0; j < c.n; ++j) {
             Rgb mean;
             const float w = c.w[std::size_t(j)];
-            if (w <= 0 || !probe_radiance(c.index[std::size_t(j)], h.shading_normal, mean))
-              continue;
+            if (w <= 0) continue;
+            if (!brdf.lambertian && lobe_radiance(c.index[std::size_t(j)], n, wo, alpha, mean)) {
+              spec += mean * w;
+              spec_used += w;
+            }
+            if (!probe_radiance(c.index[std::size_t(j)], n, mean)) continue;
             e += mean * w;
             used += w;
           }
-          if (used > 0) l += albedo * e * (1 / used);
+          if (used > 0) l += lobes.diffuse * e * (1 / used);
+          if (spec_used > 0) l += lobes.specular * spec * (1 / spec_used);
         }
-        if (sun_direct) l += sun.reflected(h, albedo, local);
+        if (sun_direct) {
+          if (brdf.lambertian) {
+            l += sun.reflected(h, brdf.diffuse, local);
+          } else {
+            // The sun is small: the BRDF at its centre times what a white Lambertian receives.
+            const Vec3 s = sun.direction();
+            const float cs = dot(n, s);
+            if (cs > 0)
+              l += sun.reflected(h, Rgb{1, 1, 1}, local) *
+                   brdf_cos(brdf, n, h.geometric_normal, wo, s) * float(kPi / cs);
+          }
+        }
         return l;
       });
 }

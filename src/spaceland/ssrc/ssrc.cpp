@@ -866,7 +866,7 @@ Status check_options(const SsrcOptions& o) {
 
 Status check_scene(const Scene& scene) {
   if (Status s = refuse_fog(scene, "ssrc", "--method pt or grid"); !s) return s;
-  return refuse_glossy(scene, "ssrc", "--method pt");
+  return refuse_glossy(scene, "ssrc", "--method pt or spwi");
 }
 
 Expected<ImageRgb> render(const SolveContext& ctx, const SsrcOptions& o, const Layout& layout,

@@ -12,19 +12,26 @@ namespace penumbra::spaceland {
 
 namespace {
 
-constexpr int kSide = 32;        // mu and roughness steps
+constexpr int kSide = kSplitSumSide;
 constexpr int kSamples = 2048;   // Sobol points per entry
 constexpr float kMuLow = 0.01f;  // the first mu: at 0 the lobe sees nothing
 
-float mu_at(int k) {
+// [j * kSide + k]: roughness j, mu k.
+constexpr SplitSum kTable[kSide * kSide] = {
+#include "spaceland/brdf_albedo_table.inc"
+};
+
+}  // namespace
+
+float split_sum_mu(int k) {
   return kMuLow + (1 - kMuLow) * float(k) / float(kSide - 1);
 }
-float roughness_at(int j) {
+float split_sum_roughness(int j) {
   return float(j) / float(kSide - 1);
 }
 
 // A, B by the visible-normal sampler (weight F G2 / G1 with F split in F0), S by the cosine.
-SplitSum integrate(float mu, float roughness) {
+SplitSum integrate_split_sum(float mu, float roughness) {
   const float alpha = roughness * roughness;
   const Vec3 n{0, 0, 1}, t{1, 0, 0}, bt{0, 1, 0};
   const Vec3 wo{std::sqrt(std::max(0.0f, 1 - mu * mu)), 0, mu};
@@ -54,29 +61,12 @@ SplitSum integrate(float mu, float roughness) {
   return {float(a / kSamples), float(b / kSamples), float(s / kSamples)};
 }
 
-struct Tables {
-  std::array<SplitSum, kSide * kSide> at;  // [j * kSide + k]: roughness j, mu k
-  Tables() {
-    for (int j = 0; j < kSide; ++j)
-      for (int k = 0; k < kSide; ++k)
-        at[std::size_t(j * kSide + k)] = integrate(mu_at(k), roughness_at(j));
-  }
-};
-
-const Tables& tables() {
-  static const Tables t;  // C++11: initialised once, thread-safe
-  return t;
-}
-
-}  // namespace
-
 SplitSum split_sum(float mu, float roughness) {
-  const Tables& t = tables();
   const float x = std::clamp((mu - kMuLow) / (1 - kMuLow), 0.0f, 1.0f) * float(kSide - 1);
   const float y = std::clamp(roughness, 0.0f, 1.0f) * float(kSide - 1);
   const int k0 = std::min(int(x), kSide - 2), j0 = std::min(int(y), kSide - 2);
   const float fx = x - float(k0), fy = y - float(j0);
-  auto get = [&](int j, int k) { return t.at[std::size_t(j * kSide + k)]; };
+  auto get = [&](int j, int k) { return kTable[std::size_t(j * kSide + k)]; };
   auto mix = [&](float v00, float v10, float v01, float v11) {
     return (v00 * (1 - fx) + v10 * fx) * (1 - fy) + (v01 * (1 - fx) + v11 * fx) * fy;
   };

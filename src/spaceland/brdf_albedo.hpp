@@ -21,9 +21,8 @@ struct LobeAlbedo {
 };
 
 // Both lobes' directional albedo for the BRDF of base colour `albedo`, metallic and roughness at
-// cos_o = mu (in [0, 1]). Tables of 32 x 32 (mu, roughness) computed once, on first use, by
-// quadrature (thread-safe), read bilinearly: within 0.5% of the integrals
-// (tests/spaceland/brdf_test.cpp).
+// cos_o = mu (in [0, 1]). Tables of 32 x 32 (mu, roughness) computed by quadrature (below), read
+// bilinearly: within 0.5% of the integrals (tests/spaceland/brdf_test.cpp).
 LobeAlbedo lobe_albedo(Rgb albedo, float metallic, float roughness, float mu);
 // The same for a BRDF made already (make_brdf, brdf_at: textures applied).
 struct Brdf;
@@ -35,10 +34,19 @@ LobeAlbedo lobe_albedo(const Brdf& brdf, float mu);
 // its albedo.
 Rgb hemispherical_albedo(const Brdf& brdf);
 
-// The tables' values at a grid point's neighbourhood, for the tests: A, B and S.
+// The tables' values, read bilinearly at (mu, roughness): A, B and S.
 struct SplitSum {
   float a = 0, b = 0, s = 0;
 };
 SplitSum split_sum(float mu, float roughness);
+
+// The tables' grid: kSplitSumSide steps of mu from 0.01 to 1 and of roughness from 0 to 1. The
+// values ship in brdf_albedo_table.inc, written by tools/brdf_tables.cpp from
+// integrate_split_sum (2048 Sobol points an entry, a second of work a program should not pay
+// at its first glossy pixel); the tests recompute them.
+inline constexpr int kSplitSumSide = 32;
+float split_sum_mu(int k);
+float split_sum_roughness(int j);
+SplitSum integrate_split_sum(float mu, float roughness);
 
 }  // namespace penumbra::spaceland

@@ -518,14 +518,14 @@ ImageRgb gather(const SolveContext& ctx, const SpwiOptions& o, const Layout& lay
   // A glossy pixel's specular lobe is read from cascade 0's merged maps, no narrower than one of
   // their cells (the widest query of seed 001 2.6, weighted by the lobe).
   const float alpha_cell = cell_alpha(layout.map_side(0));
-  auto lobe_radiance = [&](std::uint64_t index, Vec3 n, Vec3 wo, float alpha, Rgb& mean) {
+  // `weights`: the lobe's at each cell, the same for the pixel's 4 probes.
+  auto lobe_radiance = [&](std::uint64_t index, const std::vector<float>& weights, Rgb& mean) {
     const Rgb* probe = store.probe(index);
     Rgb sum{};
     float weight = 0;
     for (std::size_t d = 0; d < dirs.size(); ++d) {
-      if (!holds_light(probe[d])) continue;
-      const float w = lobe_weight(alpha, n, wo, dirs[d]);
-      if (!(w > 0)) continue;
+      const float w = weights[d];
+      if (!(w > 0) || !holds_light(probe[d])) continue;
       sum += probe[d] * w;
       weight += w;
     }
@@ -541,7 +541,14 @@ ImageRgb gather(const SolveContext& ctx, const SpwiOptions& o, const Layout& lay
         const Vec3 n = h.shading_normal;
         // The Lambertian: its albedo and no specular lobe.
         const LobeAlbedo lobes = lobe_albedo(brdf, std::max(dot(n, wo), 0.0f));
-        const float alpha = std::max(brdf.alpha, alpha_cell);
+        // Per thread, allocated at its first glossy pixel only.
+        thread_local std::vector<float> weights;
+        if (!brdf.lambertian) {
+          const float alpha = std::max(brdf.alpha, alpha_cell);
+          weights.resize(dirs.size());
+          for (std::size_t d = 0; d < dirs.size(); ++d)
+            weights[d] = lobe_weight(alpha, n, wo, dirs[d]);
+        }
         Corners c;
         if (gather_corners(layout, x, y, ctx.g.linear_depth(k), h.geometric_normal, probes, o, c)) {
           Rgb e{}, spec{};
@@ -551,7 +558,7 @@ ImageRgb gather(const SolveContext& ctx, const SpwiOptions& o, const Layout& lay
             Rgb mean;
             const float w = c.w[std::size_t(j)];
             if (w <= 0) continue;
-            if (!brdf.lambertian && lobe_radiance(c.index[std::size_t(j)], n, wo, alpha, mean)) {
+            if (!brdf.lambertian && lobe_radiance(c.index[std::size_t(j)], weights, mean)) {
               spec += mean * w;
               spec_used += w;
             }

@@ -73,10 +73,6 @@ int first_glossy(const Scene& scene) {
 
 }  // namespace
 
-bool all_lambertian(const Scene& scene) {
-  return first_glossy(scene) < 0;
-}
-
 Status refuse_glossy(const Scene& scene, const char* method, const char* instead) {
   const int k = first_glossy(scene);
   if (k < 0) return {};

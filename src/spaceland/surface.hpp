@@ -15,10 +15,6 @@ Rgb emission_at(const Scene& scene, const Hit& hit);
 // The BRDF at a hit: its base colour, metallic and roughness, textures included.
 Brdf brdf_at(const Scene& scene, const Hit& hit);
 
-// Whether every material of the scene is version 1's Lambertian (a method without specular
-// queries renders only such scenes).
-bool all_lambertian(const Scene& scene);
-
 // A sphere whose material emits: a sphere light, which the cascades spread over their direction
 // cells instead of tracing (cascade/sphere_lights.hpp).
 inline bool is_sphere_light(const Scene& scene, const Sphere& s) {

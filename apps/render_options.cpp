@@ -253,6 +253,7 @@ const std::pair<const char*, const char*> kFlags[] = {
     {"`ssrc.backfaces`", "--backfaces"},
     {"`spwi.sun`", "--sun"},
     {"`spwi.gather`", "--gather"},
+    {"`spwi.specular`", "--specular"},
     {"`ssrc.gather`", "--gather"},
     {"`ssrc.offscreen`", "--offscreen"},
     {"`spwi.overlap`", "--disjoint"},

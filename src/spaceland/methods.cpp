@@ -74,11 +74,10 @@ Expected<ImageRgb> pt_solve(const SolveContext& ctx, const RenderOptions& o, Sol
 // With the grid's voxel size and levels and the cache's probe spacing: those of the radiance
 // cache its later bounces read.
 constexpr const char* kSpwiOptions[] = {
-    "spwi.probe_spacing", "spwi.directions",     "spwi.interval",
-    "spwi.branching",     "spwi.cascades",       "spwi.merge",
-    "spwi.sun",           "spwi.gather",         "spwi.depth_bias",
-    "spwi.overlap",       "spwi.preaverage",     "spwi.merge_edge",
-    "spwi.gather_edge",   "spwi.gather_normal",  "grid.voxel",
+    "spwi.probe_spacing", "spwi.directions",     "spwi.interval",   "spwi.branching",
+    "spwi.cascades",      "spwi.merge",          "spwi.sun",        "spwi.gather",
+    "spwi.depth_bias",    "spwi.overlap",        "spwi.preaverage", "spwi.merge_edge",
+    "spwi.gather_edge",   "spwi.gather_normal",  "spwi.specular",   "grid.voxel",
     "grid.levels",        "cache_probe_spacing", "sun_rays"};
 
 Status spwi_check(const RenderOptions& o) {
@@ -90,7 +89,7 @@ Status spwi_check_scene(const Scene& scene) {
 }
 
 std::uint64_t spwi_bytes(const Scene& scene, const RenderOptions& o) {
-  return spwi::bytes_upper_bound(scene.camera.width, scene.camera.height, o.spwi);
+  return spwi::bytes_upper_bound(scene, o.spwi);
 }
 
 void spwi_describe(const RenderResult& r, std::vector<Parameter>& p, std::string& line) {
@@ -106,6 +105,7 @@ void spwi_describe(const RenderResult& r, std::vector<Parameter>& p, std::string
   p.push_back({"merge_edge", double(o.merge_edge)});
   p.push_back({"gather_edge", double(o.gather_edge)});
   p.push_back({"gather_normal", double(o.gather_normal)});
+  p.push_back({"specular", std::string(to_string(o.specular))});
   p.push_back({"sun_rays", std::int64_t(r.options.sun_rays)});
   if (r.options.bounces > 1 && r.options.aov == Aov::radiance) {
     // The radiance cache of its later bounces.
@@ -135,10 +135,6 @@ Expected<ImageRgb> spwi_solve(const SolveContext& ctx, const RenderOptions& o, S
 constexpr const char* kGridOptions[] = {"grid.voxel",         "grid.levels",   "grid.probe_spacing",
                                         "grid.directions",    "grid.interval", "grid.cascades",
                                         "grid.extend_length", "grid.fix",      "sun_rays"};
-
-Status grid_check_scene(const Scene& scene) {
-  return refuse_glossy(scene, "grid", "--method pt or spwi");
-}
 
 Status grid_check(const RenderOptions& o) {
   return grid::check_options(o.grid);
@@ -297,8 +293,7 @@ constexpr MethodEntry kMethods[] = {
     {Method::grid, "grid", "the world-space probe grid",
      "the world-space probe grid (seed 001 4.3): radiance cascades over the scene's voxels, "
      "fog and light shafts, later bounces, the radiance cache spwi's come from",
-     kGridOptions, always, grid_check, grid_check_scene, grid_bytes, grid_describe, grid_solve,
-     nullptr},
+     kGridOptions, always, grid_check, nullptr, grid_bytes, grid_describe, grid_solve, nullptr},
     {Method::ssrc, "ssrc", "the screen-space radiance cascades",
      "screen-space radiance cascades (seed 001 4.2): probes and intervals on the screen, filled "
      "by marching the depth buffer with an occlusion bitmask; sees only what is on screen",

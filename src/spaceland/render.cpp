@@ -105,6 +105,9 @@ const char* to_string(SpwiGather g) {
 const char* to_string(SsrcOffscreen o) {
   return o == SsrcOffscreen::sky ? "sky" : "world";
 }
+const char* to_string(SpecularQuery q) {
+  return q == SpecularQuery::cone ? "cone" : q == SpecularQuery::wide ? "wide" : "ray";
+}
 const char* to_string(SpwiSun s) {
   return s == SpwiSun::direct ? "direct" : "cascades";
 }

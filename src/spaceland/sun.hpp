@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "penumbra/spaceland/scene.hpp"
+#include "spaceland/brdf.hpp"
 #include "spaceland/embree/ray_scene.hpp"
 #include "spaceland/media.hpp"
 
@@ -28,6 +29,10 @@ class SunLight {
   // The same at a point with normal n, the shadow ray starting from `from` (already clear of
   // the surface).
   Rgb reflected(Vec3 from, Vec3 n, Rgb albedo, std::uint64_t& rays) const;
+  // Reflected at a visible hit by a BRDF towards the viewer wo: the Lambertian's albedo as
+  // above; a glossy one's value at the sun's centre (the sun is small) times what a white
+  // Lambertian receives over pi over the cosine.
+  Rgb reflected(const Hit& hit, const Brdf& brdf, Vec3 wo, std::uint64_t& rays) const;
 
  private:
   const RayScene* rays_;

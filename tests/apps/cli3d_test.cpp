@@ -246,6 +246,17 @@ TEST_F(Cli3d, GridReportsItsVoxelsAndIsRefusedItsOthersOptions) {
     EXPECT_EQ(bad.status, 2);
     EXPECT_NE(bad.err.find("--sun-rays"), std::string::npos) << bad.err;
   }
+  // --specular: spwi's, reported; an unknown query is refused.
+  const auto ray = run(
+      {"render", scene_, "--method", "spwi", "--specular", "ray", "--json", "-o", out("r.pfm")});
+  ASSERT_EQ(ray.status, 0) << ray.err;
+  EXPECT_EQ(nlohmann::json::parse(ray.out)["parameters"]["specular"], "ray");
+  bad = run({"render", scene_, "--method", "spwi", "--specular", "narrow", "-o", out("x.pfm")});
+  EXPECT_EQ(bad.status, 2);
+  EXPECT_NE(bad.err.find("--specular"), std::string::npos) << bad.err;
+  bad = run({"render", scene_, "--method", "pt", "--specular", "ray", "-o", out("x.pfm")});
+  EXPECT_EQ(bad.status, 2);
+  EXPECT_NE(bad.err.find("--specular applies to --method spwi"), std::string::npos) << bad.err;
   // --merge belongs to spwi.
   bad = run({"render", scene_, "--method", "grid", "--merge", "fix", "-o", out("x.pfm")});
   EXPECT_EQ(bad.status, 2);

@@ -356,10 +356,13 @@ inline int add_glossy_floor(Scene& s, Rgb c, float metallic, float roughness) {
   return object;
 }
 
-// Relative RMS error and mean ratio of the floor's pixels against want(p, wo).
+// Relative RMS error and mean ratio of the floor's pixels against want(p, wo): each pixel's error
+// relative to its own want (`Relative::pixel`), or the RMS error over the floor's mean want
+// (`Relative::mean`, as `penumbra compare` does: dim pixels weigh by their light).
+enum class Relative { pixel, mean };
 template <class Want>
 std::pair<double, double> glossy_floor_error(const Scene& s, const ImageRgb& img, int floor,
-                                             Want&& want) {
+                                             Want&& want, Relative relative = Relative::pixel) {
   const FirstHits hits = first_hits(s);
   double sum = 0, got_sum = 0, want_sum = 0;
   int n = 0;
@@ -370,13 +373,16 @@ std::pair<double, double> glossy_floor_error(const Scene& s, const ImageRgb& img
       const Vec3 p{q.r, q.g, q.b};
       const double w = want(p, normalize(s.camera.position - p));
       const double got = img.at(i, j).g;
-      sum += (got / w - 1) * (got / w - 1);
+      const double e = relative == Relative::pixel ? got / w - 1 : got - w;
+      sum += e * e;
       got_sum += got;
       want_sum += w;
       ++n;
     }
   EXPECT_GT(n, 300);
-  return {std::sqrt(sum / std::max(n, 1)), got_sum / want_sum};
+  const double rms = std::sqrt(sum / std::max(n, 1));
+  return {relative == Relative::pixel ? rms : rms / (want_sum / std::max(n, 1)),
+          got_sum / want_sum};
 }
 
 }  // namespace penumbra::spaceland::testing

@@ -52,6 +52,14 @@ enum class SpwiGather {
   probe,  // once per probe, over the probe's hemisphere; a pixel reads 4 values
 };
 
+// How a glossy surface's specular lobe reads the cascades (--specular; seed 001 section 2.6).
+enum class SpecularQuery {
+  cone,  // the cone query: cascades 0..K-1 unmerged, K merged, K per pixel from the roughness
+         // (the first cascade whose cells are no wider than the lobe)
+  wide,  // the widest query only: cascade 0 merged, the lobe no narrower than one of its cells
+  ray,   // a baseline: one exact ray along the mirror direction (sharp at any roughness)
+};
+
 // What a screen-space cascade ray sees once its march leaves the screen (--offscreen).
 enum class SsrcOffscreen {
   sky,    // the sky (the seed's method: the screen is all it knows)
@@ -120,6 +128,7 @@ struct SpwiOptions {
   // Final gather: each probe's weight times cos^p of the angle between its normal and the
   // pixel's (0: off, as the thesis).
   float gather_normal = 1;
+  SpecularQuery specular = SpecularQuery::cone;  // glossy materials' specular lobe
 };
 
 // The world-space probe grid (docs/METHODS.md, "The world-space probe grid").
@@ -320,5 +329,6 @@ const char* to_string(SpwiMerge m);
 const char* to_string(SpwiSun s);
 const char* to_string(SpwiGather g);
 const char* to_string(SsrcOffscreen o);
+const char* to_string(SpecularQuery q);
 
 }  // namespace penumbra::spaceland

@@ -41,7 +41,7 @@ Status check_options(const SurfaceOptions& o) {
 
 Status check_scene(const Scene& scene) {
   if (Status s = refuse_fog(scene, "surface", "--method grid or pt"); !s) return s;
-  return refuse_glossy(scene, "surface", "--method pt or spwi");
+  return refuse_glossy(scene, "surface", "--method pt, spwi or grid");
 }
 
 std::uint64_t working_bytes(const Scene& scene, const SurfaceOptions& o, bool radiance) {

@@ -413,7 +413,9 @@ struct PointLight {
   Vec3 centre;
   float radius = 0;
   Rgb value;
-  float half = 0;  // its footprint's half-width in cells
+  Rgb radiance;     // its emission times the part of it claimed
+  float omega = 0;  // its solid angle
+  float half = 0;   // its footprint's half-width in cells
   // Past `end` (where cascade 0's rays stop) the upper probes' rays towards it may say more: the
   // part of them that find the way clear (the caller's), for the cells that got to the end.
   float end = kInfinity, past = -1;
@@ -827,6 +829,8 @@ class SphereLights {
           pl.radius = l.radius;
           const double r2 = double(l.radius) * l.radius / (double(d) * d);
           pl.value = l.emission * float(in * (cosine ? r2 * c : omega * c / std::numbers::pi));
+          pl.radiance = l.emission * float(in);
+          pl.omega = float(omega);
           pl.half = float(std::min(
               1.5, std::sqrt(0.25 * omega / cell + spread * spread / (double(d) * d * cell))));
           footprint((l.centre - p) / d, n, side, dirs, pl);

@@ -6,6 +6,7 @@
 
 #include "core/math.hpp"
 #include "core/parallel.hpp"
+#include "spaceland/brdf.hpp"
 #include "spaceland/cascade/radiance.hpp"
 #include "spaceland/cascade/sphere_lights.hpp"
 #include "spaceland/color.hpp"
@@ -114,11 +115,12 @@ Vec3 RadianceField::free_point_near(Vec3 p, Vec3 n) const {
   return free_point;
 }
 
-bool RadianceField::mean_radiance(Vec3 p, Vec3 n, Rgb& out, const RayScene* rays) const {
+template <class Value>
+bool RadianceField::surface_read(Vec3 p, Vec3 n, const RayScene* rays,
+                                 std::vector<cascade::PointLight>& lights, Value&& probe_value,
+                                 Rgb& out) const {
   const Voxels& v = *voxels_;
   const Vec3 free_point = rays ? p + n * (2 * v.size) : free_point_near(p, n);
-  std::vector<cascade::PointLight>& lights = cascade::point_lights();
-  lights_at(p, n, lights);
   UpperView view{p, n, free_point};
   auto serve = [&](std::uint64_t q, Vec3 probe, Rgb& value) {
     // In front of the surface, and seeing it (from the free point): no light from behind a
@@ -133,7 +135,7 @@ bool RadianceField::mean_radiance(Vec3 p, Vec3 n, Rgb& out, const RayScene* rays
       const float dist = length(to);
       if (dist > 0 && march(v, free_point, to * (1 / dist), 0, dist).blocked) return false;
     }
-    if (!cascade::cosine_mean(dirs_, n, radiance_, q, value)) return false;
+    if (!probe_value(q, value)) return false;
     if (!lights.empty())
       value +=
           cascade::seen_from(reach_.data() + std::size_t(q) * dirs_.size(), probe, lights,
@@ -143,6 +145,56 @@ bool RadianceField::mean_radiance(Vec3 p, Vec3 n, Rgb& out, const RayScene* rays
   // Where none of the 8 probes around p serves (they sit in the surface's own voxels, or behind
   // it), up to 4 probe spacings out.
   return tent(p, 4, serve, out);
+}
+
+bool RadianceField::mean_radiance(Vec3 p, Vec3 n, Rgb& out, const RayScene* rays) const {
+  std::vector<cascade::PointLight>& lights = cascade::point_lights();
+  lights_at(p, n, lights);
+  return surface_read(
+      p, n, rays, lights,
+      [&](std::uint64_t q, Rgb& value) {
+        return cascade::cosine_mean(dirs_, n, radiance_, q, value);
+      },
+      out);
+}
+
+bool RadianceField::lobe_radiance(Vec3 p, Vec3 n, Vec3 ns, Vec3 wo, float alpha, Rgb& out,
+                                  const RayScene* rays) const {
+  const float a = std::max(alpha, cell_alpha(plan_[0].side));
+  thread_local std::vector<float> weights;
+  weights.resize(dirs_.size());
+  float all = 0;
+  for (std::size_t d = 0; d < dirs_.size(); ++d)
+    all += weights[d] = lobe_weight(a, ns, wo, dirs_[d]);
+  if (!(all > 0)) return false;
+  // The lights met here, valued by the lobe instead of the cosine: a light of radiance L and
+  // solid angle omega adds L omega / cell to the cells about its direction, which the lobe's
+  // mean takes with its weight there over the weights' sum.
+  std::vector<cascade::PointLight>& lights = cascade::point_lights();
+  lights_at(p, n, lights);
+  const float cell = float(4 * kPi) / float(dirs_.size());
+  for (cascade::PointLight& pl : lights) {
+    const Vec3 to = pl.centre - p;
+    const float d = length(to);
+    pl.value = d > 0 ? pl.radiance * (pl.omega / cell * lobe_weight(a, ns, wo, to * (1 / d)) / all)
+                     : Rgb{};
+  }
+  return surface_read(
+      p, n, rays, lights,
+      [&](std::uint64_t q, Rgb& value) {
+        const Rgb* probe = radiance_.probe(q);
+        Rgb sum{};
+        float weight = 0;
+        for (std::size_t d = 0; d < dirs_.size(); ++d) {
+          if (!(weights[d] > 0) || !cascade::holds_light(probe[d])) continue;
+          sum += probe[d] * weights[d];
+          weight += weights[d];
+        }
+        if (!(weight > 0)) return false;
+        value = sum * (1 / weight);
+        return true;
+      },
+      out);
 }
 
 std::uint64_t RadianceField::bytes() const {
@@ -210,6 +262,14 @@ bool LevelFields::mean_radiance(Vec3 p, Vec3 n, Rgb& out, const RayScene* rays) 
   return map->blend(
       p, float(fields[0].cascades()[0].spacing), kBlendBand,
       [&](std::size_t l, Rgb& v) { return fields[l].mean_radiance(p, n, v, rays); }, out);
+}
+
+bool LevelFields::lobe_radiance(Vec3 p, Vec3 n, Vec3 ns, Vec3 wo, float alpha, Rgb& out,
+                                const RayScene* rays) const {
+  return map->blend(
+      p, float(fields[0].cascades()[0].spacing), kBlendBand,
+      [&](std::size_t l, Rgb& v) { return fields[l].lobe_radiance(p, n, ns, wo, alpha, v, rays); },
+      out);
 }
 
 bool LevelFields::sphere_radiance(Vec3 p, Rgb& out) const {

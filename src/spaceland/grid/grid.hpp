@@ -58,6 +58,12 @@ class RadianceField {
   // p; without, a march through the voxels from the free voxel nearest p in front of it.
   // Cascade 0's share of the spread sphere lights is met here, at p (lights_at).
   bool mean_radiance(Vec3 p, Vec3 n, Rgb& out, const RayScene* rays = nullptr) const;
+  // A glossy surface's specular lobe (seed 001 2.6's widest query): the radiance the same probes
+  // bring, averaged over GGX's D V cos of width alpha about the shading normal ns towards the
+  // viewer wo, no narrower than one of cascade 0's cells (cell_alpha); the lights met at p
+  // weighted by the lobe towards them.
+  bool lobe_radiance(Vec3 p, Vec3 n, Vec3 ns, Vec3 wo, float alpha, Rgb& out,
+                     const RayScene* rays = nullptr) const;
   // The mean radiance over the whole sphere at a point in free space or fog (what an isotropic
   // medium scatters, per unit scattering coefficient), from the cascade-0 probes around p that
   // the voxels let it see; false when none does.
@@ -83,6 +89,12 @@ class RadianceField {
   template <class Serve>
   bool tent(Vec3 p, int max_radius, Serve&& serve, Rgb& out) const;
   Vec3 free_point_near(Vec3 p, Vec3 n) const;
+  // The cascade-0 probes around surface point p that lie in front of it and see it, each
+  // serving probe_value(q, value) (false: none) plus the `lights` it sees (lights_at's, valued
+  // by the caller).
+  template <class Value>
+  bool surface_read(Vec3 p, Vec3 n, const RayScene* rays, std::vector<cascade::PointLight>& lights,
+                    Value&& probe_value, Rgb& out) const;
   // The lights cascade 0 leaves to point p (SphereLights::at_point; n zero in free space).
   void lights_at(Vec3 p, Vec3 n, std::vector<cascade::PointLight>& out) const;
   // Cascade 1's probes around a point (p, normal n, `from` a free point in front of it) that it
@@ -118,6 +130,8 @@ struct LevelFields {
   std::vector<RadianceField> fields;
   // RadianceField's, over the levels.
   bool mean_radiance(Vec3 p, Vec3 n, Rgb& out, const RayScene* rays = nullptr) const;
+  bool lobe_radiance(Vec3 p, Vec3 n, Vec3 ns, Vec3 wo, float alpha, Rgb& out,
+                     const RayScene* rays = nullptr) const;
   bool sphere_radiance(Vec3 p, Rgb& out) const;
   std::uint64_t rays() const;
 };

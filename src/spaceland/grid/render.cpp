@@ -9,6 +9,7 @@
 #include "core/parallel.hpp"
 #include "core/timer.hpp"
 #include "io/json_reader.hpp"
+#include "spaceland/brdf_albedo.hpp"
 #include "spaceland/gbuffer.hpp"
 #include "spaceland/grid/clipmap.hpp"
 #include "spaceland/grid/grid.hpp"
@@ -167,12 +168,19 @@ Expected<ImageRgb> render(const SolveContext& ctx, const GridOptions& o, SolveRe
   watch.restart();
 
   ImageRgb img = shade_pixels(
-      ctx.g, bg, report.rays, [&](int, int, std::size_t, const Hit& h, std::uint64_t& local) {
-        const Rgb albedo = albedo_at(ctx.scene, h);
+      ctx.g, bg, report.rays, [&](int, int, std::size_t k, const Hit& h, std::uint64_t& local) {
+        const Brdf brdf = brdf_at(ctx.scene, h);
+        const Vec3 wo = normalize(-ctx.g.directions[k]);
+        // The Lambertian: its albedo and no specular lobe.
+        const LobeAlbedo lobes = lobe_albedo(brdf, std::max(dot(h.shading_normal, wo), 0.0f));
         Rgb l = emission_at(ctx.scene, h), mean;
         if (field->mean_radiance(h.position, h.geometric_normal, mean, &ctx.rays))
-          l += albedo * mean;
-        return l + sun.reflected(h, albedo, local);
+          l += lobes.diffuse * mean;
+        if (!brdf.lambertian &&
+            field->lobe_radiance(h.position, h.geometric_normal, h.shading_normal, wo, brdf.alpha,
+                                 mean, &ctx.rays))
+          l += lobes.specular * mean;
+        return l + sun.reflected(h, brdf, wo, local);
       });
   report.rays += add_fog(ctx, *field, sun, used.voxel * float(o.probe_spacing), img);
   report.stages.push_back({"gather", watch.ms()});

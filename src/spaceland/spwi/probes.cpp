@@ -239,16 +239,14 @@ bool upper_corners(const Layout& layout, int up, double x, double y, const Probe
   return normalise(c, upper);
 }
 
-bool gather_corners(const Layout& layout, int x, int y, float depth, Vec3 normal,
+bool gather_corners(const Layout& layout, int i, int x, int y, float depth, Vec3 normal,
                     const std::vector<Probe>& probes, const SpwiOptions& o, Corners& c) {
   float fx = 0, fy = 0;
+  const int s = layout.spacing(i), nx = layout.nx[std::size_t(i)], ny = layout.ny[std::size_t(i)];
   if (o.merge == SpwiMerge::minmax) {
-    c = minmax_corners(
-        screen_corners(x + 0.5, y + 0.5, layout.spacing(0), layout.nx[0], layout.ny[0], fx, fy),
-        probes, depth);
+    c = minmax_corners(screen_corners(x + 0.5, y + 0.5, s, nx, ny, fx, fy), probes, depth);
   } else {
-    c = valid_corners(x + 0.5, y + 0.5, layout.spacing(0), layout.nx[0], layout.ny[0], probes, fx,
-                      fy);
+    c = valid_corners(x + 0.5, y + 0.5, s, nx, ny, probes, fx, fy);
     bilateral(c, probes, depth, o.gather_edge);
   }
   if (o.gather_normal > 0) {

@@ -40,9 +40,10 @@ std::vector<std::array<Probe, 4>> place_sub_probes(const Scene& scene, const GBu
 bool upper_corners(const Layout& layout, int up, double x, double y, const Probe& probe,
                    const std::vector<Probe>& upper, const SpwiOptions& o, Corners& c);
 
-// The cascade-0 probes a pixel at (x, y) with this depth and normal gathers from (Alg. 11): depth-
-// aware, weighted by cos^p of the normals' angle, normalised; false when none is left.
-bool gather_corners(const Layout& layout, int x, int y, float depth, Vec3 normal,
+// The cascade-i probes a pixel at (x, y) with this depth and normal gathers from (Alg. 11, with
+// i = 0; above, the specular cone query's): depth-aware, weighted by cos^p of the normals' angle,
+// normalised; false when none is left.
+bool gather_corners(const Layout& layout, int i, int x, int y, float depth, Vec3 normal,
                     const std::vector<Probe>& probes, const SpwiOptions& o, Corners& c);
 
 }  // namespace penumbra::spaceland::spwi

@@ -7,12 +7,15 @@
 #include <limits>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/math.hpp"
+#include "core/octahedral.hpp"
 #include "core/parallel.hpp"
 #include "core/timer.hpp"
 #include "io/json_reader.hpp"
+#include "spaceland/brdf.hpp"
 #include "spaceland/brdf_albedo.hpp"
 #include "spaceland/cascade/radiance.hpp"
 #include "spaceland/cascade/sphere_lights.hpp"
@@ -83,6 +86,36 @@ void add_grids(Layout& l) {
 
 }  // namespace
 
+int cone_cascade(const cascade::Levels& l, float alpha, int top) {
+  int k = 0;
+  while (k < top && cell_alpha(l.side(k)) > alpha) ++k;
+  return k;
+}
+
+int cone_top(const Scene& scene, const cascade::Levels& l, const SpwiOptions& o) {
+  if (o.specular != SpecularQuery::cone) return 0;
+  float narrowest = std::numeric_limits<float>::infinity();
+  for (const Material& m : scene.materials) {
+    if (m.lambertian()) continue;
+    // A roughness texture may make any part of the surface a mirror.
+    narrowest = std::min(narrowest, m.metallic_roughness_texture.index >= 0
+                                        ? 0.0f
+                                        : make_brdf(m.albedo, m.metallic, m.roughness).alpha);
+  }
+  return std::isinf(narrowest) ? 0 : cone_cascade(l, narrowest, l.count - 1);
+}
+
+std::uint64_t cone_bytes(const Layout& l, int top) {
+  std::uint64_t bytes = 0;
+  for (int i = 0; top > 0 && i <= top; ++i) {
+    if (i < top) bytes += l.rays(i) * sizeof(Interval);
+    if (i > 0)
+      bytes += l.rays(i) * sizeof(Rgb) + l.probes(i) * sizeof(Probe) +
+               l.levels.directions(i) * sizeof(Vec3);
+  }
+  return bytes;
+}
+
 std::uint64_t Layout::bytes() const {
   std::uint64_t largest = 0, probe_bytes = 0;
   for (int i = 0; i < count(); ++i) {
@@ -93,12 +126,12 @@ std::uint64_t Layout::bytes() const {
   return 2 * largest * sizeof(Rgb) + probe_bytes + (count() > 0 ? probes(0) * sizeof(Rgb) : 0);
 }
 
-std::uint64_t bytes_upper_bound(int width, int height, const SpwiOptions& o) {
-  Layout l = options_layout(width, height, o);
+std::uint64_t bytes_upper_bound(const Scene& scene, const SpwiOptions& o) {
+  Layout l = options_layout(scene.camera.width, scene.camera.height, o);
   l.levels.count = o.cascades > 0 ? std::min(o.cascades, cascade::kMaxCascades / l.levels.side_step)
                                   : screen_cascades(l);
   add_grids(l);
-  return l.bytes();
+  return l.bytes() + cone_bytes(l, cone_top(scene, l.levels, o));
 }
 
 Status check_options(const SpwiOptions& o) {
@@ -134,6 +167,9 @@ Status check_options(const SpwiOptions& o) {
     return Error{
         "`spwi.preaverage` does not combine with the min-max merge yet: use one or the "
         "other"};
+  if (o.specular != SpecularQuery::cone && o.specular != SpecularQuery::wide &&
+      o.specular != SpecularQuery::ray)
+    return Error{"`spwi.specular`: expected cone, wide or ray"};
   if (!(o.gather_normal >= 0 && o.gather_normal <= 64))
     return Error{"`spwi.gather_normal`: expected an exponent in [0, 64], found " +
                  io::format_number(o.gather_normal)};
@@ -236,6 +272,8 @@ struct ScreenCascade {
   // no surface).
   const std::vector<float>& upper_reach;
   std::vector<float>& lower_reach;
+  // Where the cone query keeps this cascade's own intervals (null: it does not), probe-major.
+  std::vector<Interval>* own;
   std::vector<Vec3> dirs = cascade::direction_map(layout.levels, i);
   // The final gather's cells, that the lights' shares are made exact for.
   std::vector<Vec3> dirs0 = cascade::direction_map(layout.levels, 0);
@@ -256,12 +294,15 @@ struct ScreenCascade {
     std::vector<std::uint8_t> found;
     std::vector<int> cell;
     std::vector<std::array<float, 4>> reach;
+    std::vector<Rgb> before;  // a probe's map before its lights' shares (for its own intervals)
   };
 
   // Probe p's share of the sphere lights, in the cells whose rays reach them (the fraction of a
   // pre-averaged cell's sub-probe rays that do).
-  void add_lights(Row& row, const Probe& p, Rgb* out) const {
+  void add_lights(Row& row, const Probe& p, Rgb* out, Interval* mine) const {
     if (lights.empty()) return;
+    const std::size_t cells = std::size_t(layout.map_side(i)) * layout.map_side(i);
+    if (mine) row.before.assign(out, out + cells);
     const cascade::Uppers up = cascade::uppers_of(
         row.c, b, [&](std::size_t j) { return upper_probes[std::size_t(row.c.index[j])].p; });
     auto seen = [&](std::size_t k, float d) {
@@ -281,6 +322,11 @@ struct ScreenCascade {
     const cascade::GatherCells gather{&dirs0, layout.map_side(0)};
     lights.add(p.p, p.n, a, b, row.merge ? &up : nullptr, layout.map_side(i), out, seen, past,
                &gather);
+    // The shares are light inside this cascade's interval: its own.
+    if (mine)
+      for (std::size_t k = 0; k < cells; ++k)
+        if (holds_light(row.before[k]) && holds_light(mine[k].radiance))
+          mine[k].radiance += out[k] - row.before[k];
   }
 
   EmbreeTracer tracer(Row& row) const { return {ctx.rays, surface, bg, o.sun, row.rays}; }
@@ -307,31 +353,41 @@ struct ScreenCascade {
   // the merge with the cascade above. `reach` (with sphere lights) becomes where a ray that met
   // nothing in its interval stopped beyond it: its merged continuation's stop
   // (cascade::merged_reach), or its own trace's where it goes on by itself.
-  Rgb resolve(Row& row, const Ray& r, bool found, const Hit& hit, int u, int v,
-              float& reach) const {
-    if (found) return hit.t >= a ? surface(hit, r.direction) : kNoLight;  // opaque
+  // `mine`: its own interval's part (what goes on to the merge counts as passing through).
+  Rgb resolve(Row& row, const Ray& r, bool found, const Hit& hit, int u, int v, float& reach,
+              Interval& mine) const {
+    if (found) {  // opaque
+      mine = {hit.t >= a ? surface(hit, r.direction) : kNoLight, 0};
+      return mine.radiance;
+    }
     // The top cascade's misses see the sky; so do rays of a probe with no upper probe around it
     // (only sky above it on screen).
     EmbreeTracer t = tracer(row);
-    if (!row.merge) return t.sky(r.direction);
+    if (!row.merge) {
+      mine = {t.sky(r.direction), 0};
+      return mine.radiance;
+    }
     Rgb merged;
     if (cascade::merge_children(upper, row.c, u, v, split, merged)) {
       if (!lights.empty())
         reach = cascade::merged_reach(row.c, u, v, split, upper_reach.data(),
                                       layout.map_side(i + 1), b);
+      mine = {Rgb{}, 1};
       return merged;
     }
     // No upper probe has light for this direction (its rays met surfaces before their intervals,
     // or the upper map has only directions into their surfaces): the ray goes on by itself.
-    return cascade::continue_to_sky(t, r.origin, r.direction, b, &reach);
+    mine = {cascade::continue_to_sky(t, r.origin, r.direction, b, &reach), 0};
+    return mine.radiance;
   }
 
   // The bilinear fix: a segment from this probe to the start of each upper probe's interval in
   // this direction, merged with that probe alone, so that the merged ray is continuous.
   // `reach`: the nearest surface its segments met, from the probe (infinity: none).
-  Rgb fixed_ray(Row& row, const Probe& from, Vec3 d, int u, int v, float& reach) const {
-    Rgb sum{};
-    float weight = 0;
+  Rgb fixed_ray(Row& row, const Probe& from, Vec3 d, int u, int v, float& reach,
+                Interval& mine) const {
+    Rgb sum{}, own{};
+    float weight = 0, through = 0;
     for (int j = 0; j < row.c.n; ++j) {
       if (row.c.w[std::size_t(j)] <= 0) continue;
       const std::uint64_t uq = row.c.index[std::size_t(j)];
@@ -344,25 +400,34 @@ struct ScreenCascade {
       Rgb got;
       Hit h;
       ++row.rays;
+      const float w = row.c.w[std::size_t(j)];
       if (pass_small_lights(from.p, r, ctx.rays.intersect(r, h), h)) {
         got = surface(h, r.direction);
         reach = std::min(reach, length(h.position - from.p));
-      } else if (!cascade::children_mean(upper, uq, u, v, split, got))
+        own += got * w;
+      } else if (cascade::children_mean(upper, uq, u, v, split, got)) {
+        through += w;
+      } else {
         continue;
-      sum += got * row.c.w[std::size_t(j)];
-      weight += row.c.w[std::size_t(j)];
+      }
+      sum += got * w;
+      weight += w;
     }
-    return weight > 0 ? sum * (1 / weight) : kNoLight;
+    if (!(weight > 0)) return kNoLight;
+    mine = {own * (1 / weight), through / weight};
+    return sum * (1 / weight);
   }
 
   // The radiance probe `from` receives along d from this cascade's interval and, through the
   // merge, from beyond it; `reach` is where its ray stopped (infinity: at no surface).
-  Rgb ray_value(Row& row, const Probe& from, Vec3 d, int u, int v, float& reach) const {
-    reach = -1;                                // no ray
+  Rgb ray_value(Row& row, const Probe& from, Vec3 d, int u, int v, float& reach,
+                Interval& mine) const {
+    reach = -1;  // no ray
+    mine = {};
     if (dot(d, from.n) <= 0) return kNoLight;  // into the probe's own surface
     reach = cascade::kInfinity;
     if (row.merge && o.merge == SpwiMerge::fix) {
-      const Rgb got = fixed_ray(row, from, d, u, v, reach);
+      const Rgb got = fixed_ray(row, from, d, u, v, reach, mine);
       // Its segments start at the interval: with sphere lights to see past it, the stretch
       // before is traced too (a wall there would otherwise let them through).
       if (!lights.empty() && a > 0) {
@@ -379,12 +444,12 @@ struct ScreenCascade {
     ++row.rays;
     const bool found = pass_small_lights(from.p, r, ctx.rays.intersect(r, h), h);
     if (found) reach = h.t;
-    return resolve(row, r, found, h, u, v, reach);
+    return resolve(row, r, found, h, u, v, reach, mine);
   }
 
   // One stream of the probe's rays: from one point, through neighbouring map cells in order, as
   // the camera's rays are (Embree's coherent stream pays for those).
-  void trace_stream(Row& row, const Probe& pr, Rgb* out) const {
+  void trace_stream(Row& row, const Probe& pr, Rgb* out, Interval* mine) const {
     const int side = layout.map_side(i);
     row.batch.clear();
     row.cell.clear();
@@ -405,16 +470,19 @@ struct ScreenCascade {
       const int k = row.cell[j];
       row.found[j] = pass_small_lights(pr.p, row.batch[j], row.found[j] != 0, row.hits[j]);
       float reach = row.found[j] ? row.hits[j].t : cascade::kInfinity;
-      out[k] =
-          resolve(row, row.batch[j], row.found[j] != 0, row.hits[j], k % side, k / side, reach);
+      Interval own;
+      out[k] = resolve(row, row.batch[j], row.found[j] != 0, row.hits[j], k % side, k / side, reach,
+                       own);
+      if (mine) mine[k] = own;
       if (!lights.empty()) row.reach[std::size_t(k)][0] = reach;
     }
-    add_lights(row, pr, out);
+    add_lights(row, pr, out, mine);
   }
 
   // Pre-averaging (seed 000 section 5.1): each direction traced from the 2x2 sub-probes of the
   // tile, averaged into the probe (4x the rays, the same storage); otherwise ray by ray.
-  void trace_each(Row& row, const Probe& pr, const std::array<Probe, 4>* subs, Rgb* out) const {
+  void trace_each(Row& row, const Probe& pr, const std::array<Probe, 4>* subs, Rgb* out,
+                  Interval* mine) const {
     const int side = layout.map_side(i);
     if (!lights.empty()) row.reach.assign(std::size_t(side) * side, {-1, -1, -1, -1});
     for (int v = 0; v < side; ++v)
@@ -422,21 +490,37 @@ struct ScreenCascade {
         const std::size_t k = std::size_t(v) * side + u;
         const Vec3 d = dirs[k];
         std::array<float, 4> reach{-1, -1, -1, -1};
+        Interval own;
         if (!subs) {
-          out[k] = ray_value(row, pr, d, u, v, reach[0]);
+          out[k] = ray_value(row, pr, d, u, v, reach[0], own);
         } else {
           std::array<Rgb, 4> got;
+          std::array<Interval, 4> owns;
           int n = 0;
           for (const Probe& sp : *subs) {
             if (!sp.valid) continue;
-            got[std::size_t(n)] = ray_value(row, sp, d, u, v, reach[std::size_t(n)]);
+            got[std::size_t(n)] =
+                ray_value(row, sp, d, u, v, reach[std::size_t(n)], owns[std::size_t(n)]);
             ++n;
           }
           out[k] = cascade::mean_with_light(std::span<const Rgb>(got.data(), std::size_t(n)));
+          // The sub-probes' own intervals averaged as their values are.
+          own = {};
+          Rgb sum{};
+          float through = 0;
+          int with = 0;
+          for (int s = 0; s < n; ++s)
+            if (holds_light(owns[std::size_t(s)].radiance)) {
+              sum += owns[std::size_t(s)].radiance;
+              through += owns[std::size_t(s)].through;
+              ++with;
+            }
+          if (with > 0) own = {sum * (1.0f / float(with)), through / float(with)};
         }
+        if (mine) mine[k] = own;
         if (!lights.empty()) row.reach[k] = reach;
       }
-    add_lights(row, pr, out);
+    add_lights(row, pr, out, mine);
   }
 
   void trace_probe(Row& row, int px, int py, std::uint64_t q) const {
@@ -451,10 +535,11 @@ struct ScreenCascade {
     const bool pre = o.preaverage && !(fix && a > 0);
     const std::array<Probe, 4>* subs =
         pre ? &sub_probes[std::size_t(q) / std::size_t(layout.layers)] : nullptr;
+    Interval* mine = own ? own->data() + std::size_t(q) * layout.levels.directions(i) : nullptr;
     if (!subs && !fix)
-      trace_stream(row, pr, lower.probe(q));
+      trace_stream(row, pr, lower.probe(q), mine);
     else
-      trace_each(row, pr, subs, lower.probe(q));
+      trace_each(row, pr, subs, lower.probe(q), mine);
     if (lights.empty()) return;
     // Where its rays stopped, for the cascade below's lights past its rays (the farthest of a
     // pre-averaged cell's sub-probe rays).
@@ -486,11 +571,77 @@ struct ScreenCascade {
   }
 };
 
+// What the cone query reads of cascade i (seed 001 2.6): its probes and directions, its merged
+// radiance M_i (above cascade 0, whose store the gather has) and its own intervals U_i, T_i
+// (below the top K).
+struct KeptCascade {
+  std::vector<Probe> probes;
+  std::vector<Vec3> dirs;
+  RadianceStore merged;
+  std::vector<Interval> intervals;
+};
+
+// A lobe's cells on a side x side map: each cell's index and weight.
+using LobeCells = std::vector<std::pair<std::uint32_t, float>>;
+
+// The lobe of width alpha about the mirror direction r, weighted (lobe_weight) over a window of
+// (2 radius + 1)^2 cells about r's cell, folded across the map's edges as the octahedron folds (a
+// cell past an edge is the one mirrored along it), each cell once; the whole map where the window
+// would cover it.
+void lobe_cells(const std::vector<Vec3>& dirs, int side, float alpha, Vec3 n, Vec3 wo, Vec3 r,
+                int radius, LobeCells& out) {
+  out.clear();
+  auto add = [&](std::size_t cell) {
+    const float w = lobe_weight(alpha, n, wo, dirs[cell]);
+    if (w > 0) out.push_back({std::uint32_t(cell), w});
+  };
+  if (2 * radius + 1 >= side) {
+    for (std::size_t cell = 0; cell < dirs.size(); ++cell) add(cell);
+    return;
+  }
+  const std::array<int, 2> c = octahedral::cell_of(r, side);
+  for (int dv = -radius; dv <= radius; ++dv)
+    for (int du = -radius; du <= radius; ++du) {
+      int u = c[0] + du, v = c[1] + dv;
+      if (u < 0 || u >= side) {
+        u = u < 0 ? -u - 1 : 2 * side - 1 - u;
+        v = side - 1 - v;
+      }
+      if (v < 0 || v >= side) {
+        v = v < 0 ? -v - 1 : 2 * side - 1 - v;
+        u = side - 1 - u;
+      }
+      add(std::size_t(v) * side + std::size_t(u));
+    }
+  // A corner's fold may reach a cell twice.
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end(),
+                        [](const auto& x, const auto& y) { return x.first == y.first; }),
+            out.end());
+}
+
+// A probe's mean of value(cell) over the lobe's cells where has(cell); false where none has.
+template <class Has, class Value, class T>
+bool lobe_mean(const LobeCells& cells, Has&& has, Value&& value, T& mean) {
+  T sum{};
+  float weight = 0;
+  for (const auto& [cell, w] : cells) {
+    if (!has(cell)) continue;
+    sum += value(cell) * w;
+    weight += w;
+  }
+  if (!(weight > 0)) return false;
+  mean = sum * (1 / weight);
+  return true;
+}
+
 // The final gather (Alg. 11): the 4 nearest cascade-0 probes, depth-aware weights, each probe's
 // cosine-weighted mean radiance over the pixel's hemisphere; the sun by one shadow ray per pixel
-// unless the top cascade carries it.
+// unless the top cascade carries it. Glossy pixels add their specular lobe (o.specular), the cone
+// query reading `kept`.
 ImageRgb gather(const SolveContext& ctx, const SpwiOptions& o, const Layout& layout,
                 const RadianceStore& store, const std::vector<Probe>& probes, const Background& bg,
+                const Surfaces& surface, const std::vector<KeptCascade>& kept,
                 std::uint64_t& rays) {
   const std::vector<Vec3> dirs = cascade::direction_map(layout.levels, 0);
   const std::uint64_t count = layout.probes(0);
@@ -533,6 +684,77 @@ ImageRgb gather(const SolveContext& ctx, const SpwiOptions& o, const Layout& lay
     mean = sum * (1 / weight);
     return true;
   };
+  std::vector<float> cell_alphas;
+  for (int i = 0; i < std::max(1, int(kept.size())); ++i)
+    cell_alphas.push_back(cell_alpha(layout.map_side(i)));
+  // The cone query (seed 001 2.6) of a lobe of width alpha at pixel (x, y), to cascade K:
+  // U_0 + T_0 (U_1 + T_1 (... + T_{K-1} M_K)), each cascade read from its probes about the pixel
+  // over the lobe no narrower than its cells. Where cascade K's probes about the pixel have no
+  // light that way (none on its surface: a curved one's normals turn away between them), the merged
+  // cascade below takes its place. False where none has.
+  auto cone = [&](int x, int y, std::size_t k, const Hit& h, Vec3 wo, float alpha, int top,
+                  Rgb& out) {
+    thread_local LobeCells cells;
+    const Vec3 n = h.shading_normal;
+    const Vec3 r = n * (2 * dot(n, wo)) - wo;
+    Rgb acc{};
+    bool merged = false;  // acc holds the merged cascade's answer
+    for (int i = top; i >= 0; --i) {
+      const KeptCascade& kc = kept[std::size_t(i)];
+      const std::vector<Probe>& at = i == 0 ? probes : kc.probes;
+      const float cell = cell_alphas[std::size_t(i)], a = std::max(alpha, cell);
+      // The lobe's tail: a window 3 lobe widths wide (96% of a lobe's median cone tan^2 law).
+      const int radius = std::clamp(int(std::ceil(3 * a / cell)), 3, 8);
+      lobe_cells(i == 0 ? dirs : kc.dirs, layout.map_side(i), a, n, wo, r, radius, cells);
+      Corners c;
+      const bool found =
+          gather_corners(layout, i, x, y, ctx.g.linear_depth(k), h.geometric_normal, at, o, c);
+      if (!merged) {
+        if (!found) continue;
+        const RadianceStore& m = i == 0 ? store : kc.merged;
+        Rgb sum{}, mean;
+        float used = 0;
+        for (int j = 0; j < c.n; ++j) {
+          const Rgb* probe = m.probe(c.index[std::size_t(j)]);
+          const float w = c.w[std::size_t(j)];
+          if (w > 0 && lobe_mean(
+                           cells, [&](std::uint32_t d) { return holds_light(probe[d]); },
+                           [&](std::uint32_t d) { return probe[d]; }, mean)) {
+            sum += mean * w;
+            used += w;
+          }
+        }
+        if (!(used > 0)) continue;
+        acc = sum * (1 / used);
+        merged = true;
+        continue;
+      }
+      if (!found) continue;  // no probe of this cascade here: the rest is as above
+      Rgb own{};
+      float through = 0, used = 0;
+      for (int j = 0; j < c.n; ++j) {
+        const Interval* probe =
+            kc.intervals.data() + std::size_t(c.index[std::size_t(j)]) * kc.dirs.size();
+        const float w = c.w[std::size_t(j)];
+        Rgb u;
+        float t = 0;
+        auto has = [&](std::uint32_t d) { return holds_light(probe[d].radiance); };
+        if (w > 0 &&
+            lobe_mean(
+                cells, has, [&](std::uint32_t d) { return probe[d].radiance; }, u) &&
+            lobe_mean(
+                cells, has, [&](std::uint32_t d) { return probe[d].through; }, t)) {
+          own += u * w;
+          through += t * w;
+          used += w;
+        }
+      }
+      if (used > 0) acc = own * (1 / used) + acc * (through / used);
+    }
+    out = acc;
+    return merged;
+  };
+  const int top = std::max(0, int(kept.size()) - 1);
   return shade_pixels(
       ctx.g, bg, rays, [&](int x, int y, std::size_t k, const Hit& h, std::uint64_t& local) {
         Rgb l = emission_at(ctx.scene, h);
@@ -541,16 +763,40 @@ ImageRgb gather(const SolveContext& ctx, const SpwiOptions& o, const Layout& lay
         const Vec3 n = h.shading_normal;
         // The Lambertian: its albedo and no specular lobe.
         const LobeAlbedo lobes = lobe_albedo(brdf, std::max(dot(n, wo), 0.0f));
+        // The widest query (merged cascade 0) where the lobe is no narrower than its cells, the
+        // cone query could not answer, or --specular says so.
+        bool wide = !brdf.lambertian;
+        if (wide && o.specular == SpecularQuery::ray) {
+          // The baseline: one exact ray along the mirror direction.
+          const Vec3 r = n * (2 * dot(n, wo)) - wo;
+          Hit seen;
+          ++local;
+          const Ray ray{ctx.rays.spawn(h.position, h.geometric_normal, r), r, 0,
+                        cascade::kInfinity};
+          l += lobes.specular * (ctx.rays.intersect(ray, seen) ? surface(seen, r)
+                                 : o.sun == SpwiSun::cascades  ? bg(r)
+                                                               : bg.sky(r));
+          wide = false;
+        } else if (wide && top > 0) {
+          const float alpha = brdf.mirror() ? 0.0f : brdf.alpha;
+          const int to = cone_cascade(layout.levels, alpha, top);
+          Rgb got;
+          if (to > 0 && cone(x, y, k, h, wo, alpha, to, got)) {
+            l += lobes.specular * got;
+            wide = false;
+          }
+        }
         // Per thread, allocated at its first glossy pixel only.
         thread_local std::vector<float> weights;
-        if (!brdf.lambertian) {
+        if (wide) {
           const float alpha = std::max(brdf.alpha, alpha_cell);
           weights.resize(dirs.size());
           for (std::size_t d = 0; d < dirs.size(); ++d)
             weights[d] = lobe_weight(alpha, n, wo, dirs[d]);
         }
         Corners c;
-        if (gather_corners(layout, x, y, ctx.g.linear_depth(k), h.geometric_normal, probes, o, c)) {
+        if (gather_corners(layout, 0, x, y, ctx.g.linear_depth(k), h.geometric_normal, probes, o,
+                           c)) {
           Rgb e{}, spec{};
           float used = 0;  // the weight of probes with light towards this pixel's hemisphere
           float spec_used = 0;
@@ -558,7 +804,7 @@ ImageRgb gather(const SolveContext& ctx, const SpwiOptions& o, const Layout& lay
             Rgb mean;
             const float w = c.w[std::size_t(j)];
             if (w <= 0) continue;
-            if (!brdf.lambertian && lobe_radiance(c.index[std::size_t(j)], weights, mean)) {
+            if (wide && lobe_radiance(c.index[std::size_t(j)], weights, mean)) {
               spec += mean * w;
               spec_used += w;
             }
@@ -569,18 +815,7 @@ ImageRgb gather(const SolveContext& ctx, const SpwiOptions& o, const Layout& lay
           if (used > 0) l += lobes.diffuse * e * (1 / used);
           if (spec_used > 0) l += lobes.specular * spec * (1 / spec_used);
         }
-        if (sun_direct) {
-          if (brdf.lambertian) {
-            l += sun.reflected(h, brdf.diffuse, local);
-          } else {
-            // The sun is small: the BRDF at its centre times what a white Lambertian receives.
-            const Vec3 s = sun.direction();
-            const float cs = dot(n, s);
-            if (cs > 0)
-              l += sun.reflected(h, Rgb{1, 1, 1}, local) *
-                   brdf_cos(brdf, n, h.geometric_normal, wo, s) * float(kPi / cs);
-          }
-        }
+        if (sun_direct) l += sun.reflected(h, brdf, wo, local);
         return l;
       });
 }
@@ -593,7 +828,11 @@ Expected<ImageRgb> render(const SolveContext& ctx, const SpwiOptions& o, const L
   // With sphere lights, where each ray of two cascades stopped besides.
   std::uint64_t largest = 0;
   for (int i = 0; i < layout.count(); ++i) largest = std::max(largest, layout.rays(i));
-  const std::uint64_t need = layout.bytes() + (lights.empty() ? 0 : 2 * largest * sizeof(float));
+  // With glossy materials, what the cone query keeps of cascades 0..top.
+  const int top = cone_top(ctx.scene, layout.levels, o);
+  std::vector<KeptCascade> kept(top > 0 ? std::size_t(top) + 1 : 0);
+  const std::uint64_t need =
+      layout.bytes() + (lights.empty() ? 0 : 2 * largest * sizeof(float)) + cone_bytes(layout, top);
   report.memory_bytes += need;
   if (need > ctx.max_memory)
     return Error{"spwi's cascades need about " + io::format_mib(need) + ", more than the `" +
@@ -612,17 +851,25 @@ Expected<ImageRgb> render(const SolveContext& ctx, const SpwiOptions& o, const L
         if (o.preaverage) sub_probes = place_sub_probes(ctx.scene, ctx.g, layout, i, o.depth_bias);
         lower.assign(layout.probes(i), layout.map_side(i));
         if (!lights.empty()) lower_reach.assign(std::size_t(layout.rays(i)), -1.0f);
+        std::vector<Interval>* own = i < top ? &kept[std::size_t(i)].intervals : nullptr;
+        if (own) own->assign(std::size_t(layout.rays(i)), Interval{});
         const ScreenCascade traced{ctx,   o,      layout,      surface,      bg,
                                    i,     probes, sub_probes,  upper_probes, upper,
-                                   lower, lights, upper_reach, lower_reach};
+                                   lower, lights, upper_reach, lower_reach,  own};
         rays += traced.run();
+        if (i > 0 && i <= top) {
+          KeptCascade& kc = kept[std::size_t(i)];
+          kc.probes = probes;
+          kc.dirs = cascade::direction_map(layout.levels, i);
+          kc.merged = lower;
+        }
         upper_probes = std::move(probes);
         std::swap(upper_reach, lower_reach);
         report.stages.push_back({"cascade " + std::to_string(i), watch.ms()});
       });
   Stopwatch watch;
   report.rays += rays;
-  ImageRgb img = gather(ctx, o, layout, store, upper_probes, bg, report.rays);
+  ImageRgb img = gather(ctx, o, layout, store, upper_probes, bg, surface, kept, report.rays);
   report.stages.push_back({"gather", watch.ms()});
   return img;
 }

@@ -11,6 +11,7 @@
 #include "penumbra/image.hpp"
 #include "penumbra/spaceland/render.hpp"
 #include "spaceland/cascade/levels.hpp"
+#include "spaceland/cascade/radiance.hpp"
 #include "spaceland/gbuffer.hpp"
 #include "spaceland/solve.hpp"
 
@@ -38,9 +39,28 @@ struct Layout {
   std::uint64_t bytes() const;
 };
 
+// A cascade ray's own interval, kept for the specular cone query (seed 001 2.6: U_i and T_i):
+// the radiance it met there (kNoLight: no ray), and the fraction of it that went on past the
+// interval's end to the cascades above.
+struct Interval {
+  Rgb radiance = cascade::kNoLight;
+  float through = 0;
+};
+
+// The cone query's top cascade K for a lobe of GGX width alpha: the first whose cells are no
+// wider than the lobe (cell_alpha: a cell's solid angle matched to the lobe's median cone), at
+// most `top`. Cascades 0..K-1 are read unmerged, K merged.
+int cone_cascade(const cascade::Levels& levels, float alpha, int top);
+// The highest K any pixel of the scene reaches (its narrowest lobe; a roughness texture may make
+// any lobe a mirror), at most the top cascade; 0 where no material is glossy or o.specular is not
+// the cone query.
+int cone_top(const Scene& scene, const cascade::Levels& levels, const SpwiOptions& o);
+// What the cone query keeps of cascades 0..top: U and T below top, M and the probes above 0.
+std::uint64_t cone_bytes(const Layout& layout, int top);
+
 // The layout before the G-buffer is known (t0 = 0 is resolved later; the cascade count taken at
-// its largest), for the memory check.
-std::uint64_t bytes_upper_bound(int width, int height, const SpwiOptions& o);
+// its largest), for the memory check: with what the cone query keeps for the scene's materials.
+std::uint64_t bytes_upper_bound(const Scene& scene, const SpwiOptions& o);
 
 // The layout for a G-buffer: t0 and the cascade count derived where the options leave them 0.
 Layout make_layout(const Scene& scene, const GBuffer& g, const SpwiOptions& o);

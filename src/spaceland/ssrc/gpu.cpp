@@ -338,8 +338,8 @@ Expected<ImageRgb> render_gpu(const SolveContext& ctx, const SsrcOptions& o, con
       if (!g.found[k]) continue;
       const Hit& h = g.hits[k];
       cascade::Corners c;
-      if (spwi::gather_corners(l.tiles, x, y, g.linear_depth(k), h.geometric_normal, pr.probes[0],
-                               pr.probe_options, c))
+      if (spwi::gather_corners(l.tiles, 0, x, y, g.linear_depth(k), h.geometric_normal,
+                               pr.probes[0], pr.probe_options, c))
         gather.set(k, c);
       std::memcpy(&light[6 * k], &pr.direct[k], sizeof(Rgb));
       std::memcpy(&light[6 * k + 3], &pr.albedo[k], sizeof(Rgb));

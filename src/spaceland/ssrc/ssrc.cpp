@@ -729,7 +729,7 @@ struct Gather {
 
   bool operator()(int x, int y, std::size_t k, const Hit& h, Rgb& mean) const {
     cascade::Corners c;
-    if (!spwi::gather_corners(s.layout.tiles, x, y, s.ctx.g.linear_depth(k), h.geometric_normal,
+    if (!spwi::gather_corners(s.layout.tiles, 0, x, y, s.ctx.g.linear_depth(k), h.geometric_normal,
                               probes, s.probe_options, c))
       return false;
     Rgb sum{};
@@ -866,7 +866,7 @@ Status check_options(const SsrcOptions& o) {
 
 Status check_scene(const Scene& scene) {
   if (Status s = refuse_fog(scene, "ssrc", "--method pt or grid"); !s) return s;
-  return refuse_glossy(scene, "ssrc", "--method pt or spwi");
+  return refuse_glossy(scene, "ssrc", "--method pt, spwi or grid");
 }
 
 Expected<ImageRgb> render(const SolveContext& ctx, const SsrcOptions& o, const Layout& layout,

@@ -76,13 +76,13 @@ TEST(GlossyCascades, ARoughFloorUnderASphereLightIsTheBrdfOverTheLight) {
     float metallic, roughness;
     double error, mean;  // the bounds: relative RMSE over the floor, and the mean's ratio
   };
-  // The bounds: measured (2026-11-29, 64 x 48) with a margin. SPWI's rough metal at 0.6 is 20%
-  // dark under the light (a lobe 3-4 of cascade 0's cells wide reading a light spread over its
-  // cells; docs/QUALITY.md, "Glossy materials"); at 1, and its plastic, within 14%. The grid's
-  // lobes over its 16 cells: its metal 25% and 21% (too bright under the light at 0.7, too dark
-  // around it at 1), its plastic 4%.
+  // The bounds: measured (2026-11-29, 64 x 48) with a margin. SPWI's rough metal at 0.6 is 13%
+  // dark under the light (its cone to cascade 1, the light spread over cascade 0's cells:
+  // docs/QUALITY.md, "Glossy materials"), 99% of the floor's mean; at 1 (the widest query) and
+  // its plastic, within 14%. The grid's lobes over its 16 cells: its metal 25% and 21% (too
+  // bright under the light at 0.7, too dark around it at 1), its plastic 4%.
   for (const Case& c :
-       {Case{Method::spwi, 1, 0.6f, 1.15, 0.25}, Case{Method::spwi, 1, 1, 0.13, 0.04},
+       {Case{Method::spwi, 1, 0.6f, 1.1, 0.18}, Case{Method::spwi, 1, 1, 0.13, 0.04},
         Case{Method::spwi, 0, 0.6f, 0.16, 0.03}, Case{Method::grid, 1, 0.7f, 0.3, 0.05},
         Case{Method::grid, 1, 1, 0.25, 0.14}, Case{Method::grid, 0, 0.7f, 0.06, 0.02}}) {
     Scene s;

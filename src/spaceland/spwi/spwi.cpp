@@ -88,7 +88,7 @@ void add_grids(Layout& l) {
 
 int cone_cascade(const cascade::Levels& l, float alpha, int top) {
   int k = 0;
-  while (k < top && cell_alpha(l.side(k)) > alpha) ++k;
+  while (k < top && cell_alpha(l.side(k)) > alpha / kLobeCells) ++k;
   return k;
 }
 
@@ -591,7 +591,16 @@ using LobeCells = std::vector<std::pair<std::uint32_t, float>>;
 void lobe_cells(const std::vector<Vec3>& dirs, int side, float alpha, Vec3 n, Vec3 wo, Vec3 r,
                 int radius, LobeCells& out) {
   out.clear();
+  // A fold may reach a cell the window holds already: each is marked with this call's number.
+  thread_local std::vector<std::uint32_t> seen;
+  thread_local std::uint32_t mark = 0;
+  if (seen.size() < dirs.size() || ++mark == 0) {
+    seen.assign(std::max(seen.size(), dirs.size()), 0);
+    mark = 1;
+  }
   auto add = [&](std::size_t cell) {
+    if (seen[cell] == mark) return;
+    seen[cell] = mark;
     const float w = lobe_weight(alpha, n, wo, dirs[cell]);
     if (w > 0) out.push_back({std::uint32_t(cell), w});
   };
@@ -613,11 +622,6 @@ void lobe_cells(const std::vector<Vec3>& dirs, int side, float alpha, Vec3 n, Ve
       }
       add(std::size_t(v) * side + std::size_t(u));
     }
-  // A corner's fold may reach a cell twice.
-  std::sort(out.begin(), out.end());
-  out.erase(std::unique(out.begin(), out.end(),
-                        [](const auto& x, const auto& y) { return x.first == y.first; }),
-            out.end());
 }
 
 // A probe's mean of value(cell) over the lobe's cells where has(cell); false where none has.
@@ -703,8 +707,9 @@ ImageRgb gather(const SolveContext& ctx, const SpwiOptions& o, const Layout& lay
       const KeptCascade& kc = kept[std::size_t(i)];
       const std::vector<Probe>& at = i == 0 ? probes : kc.probes;
       const float cell = cell_alphas[std::size_t(i)], a = std::max(alpha, cell);
-      // The lobe's tail: a window 3 lobe widths wide (96% of a lobe's median cone tan^2 law).
-      const int radius = std::clamp(int(std::ceil(3 * a / cell)), 3, 8);
+      // The lobe's tail: a window 3 lobe widths about its centre (the median cone's tan^2 law
+      // leaves 4% of the lobe outside), at most 33 x 33 cells (K's lobe is 4-8 cells wide).
+      const int radius = std::clamp(int(std::ceil(3 * a / cell)), 3, 16);
       lobe_cells(i == 0 ? dirs : kc.dirs, layout.map_side(i), a, n, wo, r, radius, cells);
       Corners c;
       const bool found =
@@ -733,21 +738,24 @@ ImageRgb gather(const SolveContext& ctx, const SpwiOptions& o, const Layout& lay
       Rgb own{};
       float through = 0, used = 0;
       for (int j = 0; j < c.n; ++j) {
-        const Interval* probe =
-            kc.intervals.data() + std::size_t(c.index[std::size_t(j)]) * kc.dirs.size();
+        const Interval* probe = kc.intervals.data() +
+                                std::size_t(c.index[std::size_t(j)]) * layout.levels.directions(i);
         const float w = c.w[std::size_t(j)];
-        Rgb u;
-        float t = 0;
-        auto has = [&](std::uint32_t d) { return holds_light(probe[d].radiance); };
-        if (w > 0 &&
-            lobe_mean(
-                cells, has, [&](std::uint32_t d) { return probe[d].radiance; }, u) &&
-            lobe_mean(
-                cells, has, [&](std::uint32_t d) { return probe[d].through; }, t)) {
-          own += u * w;
-          through += t * w;
-          used += w;
+        if (!(w > 0)) continue;
+        // The probe's U and T over the lobe, in one pass.
+        Rgb u{};
+        float t = 0, weight = 0;
+        for (const auto& [d, lw] : cells) {
+          const Interval& in = probe[d];
+          if (!holds_light(in.radiance)) continue;
+          u += in.radiance * lw;
+          t += in.through * lw;
+          weight += lw;
         }
+        if (!(weight > 0)) continue;
+        own += u * (w / weight);
+        through += t * (w / weight);
+        used += w;
       }
       if (used > 0) acc = own * (1 / used) + acc * (through / used);
     }

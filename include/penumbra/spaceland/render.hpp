@@ -55,7 +55,7 @@ enum class SpwiGather {
 // How a glossy surface's specular lobe reads the cascades (--specular; seed 001 section 2.6).
 enum class SpecularQuery {
   cone,  // the cone query: cascades 0..K-1 unmerged, K merged, K per pixel from the roughness
-         // (the first cascade whose cells are no wider than the lobe)
+         // (the first cascade whose cells are at most a quarter of the lobe's width)
   wide,  // the widest query only: cascade 0 merged, the lobe no narrower than one of its cells
   ray,   // a baseline: one exact ray along the mirror direction (sharp at any roughness)
 };

@@ -670,32 +670,15 @@ ImageRgb gather(const SolveContext& ctx, const SpwiOptions& o, const Layout& lay
     mean = probe_mean[std::size_t(index)];
     return holds_light(mean);
   };
-  // A glossy pixel's specular lobe is read from cascade 0's merged maps, no narrower than one of
-  // their cells (the widest query of seed 001 2.6, weighted by the lobe).
-  const float alpha_cell = cell_alpha(layout.map_side(0));
-  // `weights`: the lobe's at each cell, the same for the pixel's 4 probes.
-  auto lobe_radiance = [&](std::uint64_t index, const std::vector<float>& weights, Rgb& mean) {
-    const Rgb* probe = store.probe(index);
-    Rgb sum{};
-    float weight = 0;
-    for (std::size_t d = 0; d < dirs.size(); ++d) {
-      const float w = weights[d];
-      if (!(w > 0) || !holds_light(probe[d])) continue;
-      sum += probe[d] * w;
-      weight += w;
-    }
-    if (!(weight > 0)) return false;
-    mean = sum * (1 / weight);
-    return true;
-  };
   std::vector<float> cell_alphas;
   for (int i = 0; i < std::max(1, int(kept.size())); ++i)
     cell_alphas.push_back(cell_alpha(layout.map_side(i)));
   // The cone query (seed 001 2.6) of a lobe of width alpha at pixel (x, y), to cascade K:
   // U_0 + T_0 (U_1 + T_1 (... + T_{K-1} M_K)), each cascade read from its probes about the pixel
-  // over the lobe no narrower than its cells. Where cascade K's probes about the pixel have no
-  // light that way (none on its surface: a curved one's normals turn away between them), the merged
-  // cascade below takes its place. False where none has.
+  // over the lobe no narrower than its cells; K = 0 is the widest query, merged cascade 0 alone.
+  // Where cascade K's probes about the pixel have no light that way (none on its surface: a curved
+  // one's normals turn away between them), the merged cascade below takes its place. False where
+  // none has.
   auto cone = [&](int x, int y, std::size_t k, const Hit& h, Vec3 wo, float alpha, int top,
                   Rgb& out) {
     thread_local LobeCells cells;
@@ -704,19 +687,21 @@ ImageRgb gather(const SolveContext& ctx, const SpwiOptions& o, const Layout& lay
     Rgb acc{};
     bool merged = false;  // acc holds the merged cascade's answer
     for (int i = top; i >= 0; --i) {
-      const KeptCascade& kc = kept[std::size_t(i)];
-      const std::vector<Probe>& at = i == 0 ? probes : kc.probes;
+      // Cascade 0 is the gather's (kept holds nothing of it without a cone above it).
+      const KeptCascade* kc = i > 0 ? &kept[std::size_t(i)] : nullptr;
+      Corners c;
+      if (!gather_corners(layout, i, x, y, ctx.g.linear_depth(k), h.geometric_normal,
+                          kc ? kc->probes : probes, o, c))
+        continue;  // no probe of this cascade here: the rest is as above
       const float cell = cell_alphas[std::size_t(i)], a = std::max(alpha, cell);
       // The lobe's tail: a window 3 lobe widths about its centre (the median cone's tan^2 law
-      // leaves 4% of the lobe outside), at most 33 x 33 cells (K's lobe is 4-8 cells wide).
-      const int radius = std::clamp(int(std::ceil(3 * a / cell)), 3, 16);
-      lobe_cells(i == 0 ? dirs : kc.dirs, layout.map_side(i), a, n, wo, r, radius, cells);
-      Corners c;
-      const bool found =
-          gather_corners(layout, i, x, y, ctx.g.linear_depth(k), h.geometric_normal, at, o, c);
+      // leaves 4% of the lobe outside), at most 33 x 33 cells (K's lobe is 4-8 cells wide);
+      // cascade 0's few cells whole.
+      const int side = layout.map_side(i);
+      const int radius = i == 0 ? side : std::clamp(int(std::ceil(3 * a / cell)), 3, 16);
+      lobe_cells(kc ? kc->dirs : dirs, side, a, n, wo, r, radius, cells);
       if (!merged) {
-        if (!found) continue;
-        const RadianceStore& m = i == 0 ? store : kc.merged;
+        const RadianceStore& m = kc ? kc->merged : store;
         Rgb sum{}, mean;
         float used = 0;
         for (int j = 0; j < c.n; ++j) {
@@ -734,11 +719,10 @@ ImageRgb gather(const SolveContext& ctx, const SpwiOptions& o, const Layout& lay
         merged = true;
         continue;
       }
-      if (!found) continue;  // no probe of this cascade here: the rest is as above
       Rgb own{};
       float through = 0, used = 0;
       for (int j = 0; j < c.n; ++j) {
-        const Interval* probe = kc.intervals.data() +
+        const Interval* probe = kept[std::size_t(i)].intervals.data() +
                                 std::size_t(c.index[std::size_t(j)]) * layout.levels.directions(i);
         const float w = c.w[std::size_t(j)];
         if (!(w > 0)) continue;
@@ -771,58 +755,40 @@ ImageRgb gather(const SolveContext& ctx, const SpwiOptions& o, const Layout& lay
         const Vec3 n = h.shading_normal;
         // The Lambertian: its albedo and no specular lobe.
         const LobeAlbedo lobes = lobe_albedo(brdf, std::max(dot(n, wo), 0.0f));
-        // The widest query (merged cascade 0) where the lobe is no narrower than its cells, the
-        // cone query could not answer, or --specular says so.
-        bool wide = !brdf.lambertian;
-        if (wide && o.specular == SpecularQuery::ray) {
+        // The specular lobe, added after the diffuse.
+        Rgb specular{};
+        if (!brdf.lambertian && o.specular == SpecularQuery::ray) {
           // The baseline: one exact ray along the mirror direction.
           const Vec3 r = n * (2 * dot(n, wo)) - wo;
           Hit seen;
           ++local;
           const Ray ray{ctx.rays.spawn(h.position, h.geometric_normal, r), r, 0,
                         cascade::kInfinity};
-          l += lobes.specular * (ctx.rays.intersect(ray, seen) ? surface(seen, r)
-                                 : o.sun == SpwiSun::cascades  ? bg(r)
-                                                               : bg.sky(r));
-          wide = false;
-        } else if (wide && top > 0) {
+          specular = lobes.specular * (ctx.rays.intersect(ray, seen) ? surface(seen, r)
+                                       : o.sun == SpwiSun::cascades  ? bg(r)
+                                                                     : bg.sky(r));
+        } else if (!brdf.lambertian) {
           const float alpha = brdf.mirror() ? 0.0f : brdf.alpha;
-          const int to = cone_cascade(layout.levels, alpha, top);
           Rgb got;
-          if (to > 0 && cone(x, y, k, h, wo, alpha, to, got)) {
-            l += lobes.specular * got;
-            wide = false;
-          }
-        }
-        // Per thread, allocated at its first glossy pixel only.
-        thread_local std::vector<float> weights;
-        if (wide) {
-          const float alpha = std::max(brdf.alpha, alpha_cell);
-          weights.resize(dirs.size());
-          for (std::size_t d = 0; d < dirs.size(); ++d)
-            weights[d] = lobe_weight(alpha, n, wo, dirs[d]);
+          if (cone(x, y, k, h, wo, alpha, cone_cascade(layout.levels, alpha, top), got))
+            specular = lobes.specular * got;
         }
         Corners c;
         if (gather_corners(layout, 0, x, y, ctx.g.linear_depth(k), h.geometric_normal, probes, o,
                            c)) {
-          Rgb e{}, spec{};
+          Rgb e{};
           float used = 0;  // the weight of probes with light towards this pixel's hemisphere
-          float spec_used = 0;
           for (int j = 0; j < c.n; ++j) {
             Rgb mean;
             const float w = c.w[std::size_t(j)];
             if (w <= 0) continue;
-            if (wide && lobe_radiance(c.index[std::size_t(j)], weights, mean)) {
-              spec += mean * w;
-              spec_used += w;
-            }
             if (!probe_radiance(c.index[std::size_t(j)], n, mean)) continue;
             e += mean * w;
             used += w;
           }
           if (used > 0) l += lobes.diffuse * e * (1 / used);
-          if (spec_used > 0) l += lobes.specular * spec * (1 / spec_used);
         }
+        l += specular;
         if (sun_direct) l += sun.reflected(h, brdf, wo, local);
         return l;
       });

@@ -254,6 +254,7 @@ const std::pair<const char*, const char*> kFlags[] = {
     {"`spwi.sun`", "--sun"},
     {"`spwi.gather`", "--gather"},
     {"`spwi.specular`", "--specular"},
+    {"`grid.specular`", "--specular"},
     {"`ssrc.gather`", "--gather"},
     {"`ssrc.offscreen`", "--offscreen"},
     {"`spwi.overlap`", "--disjoint"},

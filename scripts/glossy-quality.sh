@@ -8,7 +8,8 @@
 #   OPTION  passed on to the method's render (e.g. --specular wide); its images are named after
 #           the method and the options (spwi.specular-wide.pfm)
 # The sphere among small lights at 1 bounce against 512 samples per pixel; the bunny and the
-# Cornell box at 2 bounces against 256 (their references keep some noise of their own).
+# Cornell box at 2 bounces against 256 (their references keep some noise of their own); the
+# floor under a gradient sky at 1 bounce against 256.
 set -euo pipefail
 build=${1:?usage: scripts/glossy-quality.sh BUILD [METHOD] [OUT] [OPTION...]}
 method=${2:-spwi}
@@ -23,8 +24,9 @@ run() {  # scene roughness bounces spp
   local s=$out/$1_r$2.json name=$1_r$2
   [ -f "$out/$name.pt.pfm" ] || "$bin" render "$s" --method pt --spp "$4" --bounces "$3" \
     -o "$out/$name.pt.pfm" > /dev/null 2>&1
+  rm -f "$out/$name.$tag.pfm"  # never compare an older image
   "$bin" render "$s" --method "$method" --bounces "$3" "${options[@]}" -o "$out/$name.$tag.pfm" \
-    > /dev/null 2>&1
+    > /dev/null
   local e
   e=$("$bin" compare "$out/$name.$tag.pfm" "$out/$name.pt.pfm" --radiance \
     --montage "$out/$name.$tag.montage.png" --json | python3 -c \
@@ -34,3 +36,4 @@ run() {  # scene roughness bounces spp
 for r in 0.1 0.3 0.6 1.0; do run sphere_metal $r 1 512; done
 for r in 0.3 0.6 1.0; do run bunny_glossy $r 2 256; done
 for r in 0.3 0.6; do run cornell_metal $r 2 256; done
+for r in 0.3 0.6; do run gradient_metal $r 1 256; done

@@ -7,6 +7,8 @@
                             and sun, on a ground of the same roughness
   sphere_metal_r<R>.json    a rough metal sphere (metallic 1) among four small sphere lights
                             on a matte floor
+  gradient_metal_r<R>.json  a metal floor under a sky from a black horizon to a white zenith
+                            (L = w.y: light the cascades carry, nothing met at a point)
 
 R in 0.1, 0.3, 0.6, 1.0 (the issue's table). Usage: scripts/glossy-scenes.py DIR
 """
@@ -66,6 +68,21 @@ def sphere(r):
     }
 
 
+def gradient(r):
+    return {
+        "penumbra": 1,
+        "dimensions": 3,
+        "description": f"A metal floor (roughness {r}) under a sky from a black horizon to a "
+                       "white zenith",
+        "camera": {"position": [0, 2, 4], "look_at": [0, 0, 0], "fov_y": 50,
+                   "width": 200, "height": 150},
+        "sky": {"zenith": [1, 1, 1], "horizon": [0, 0, 0], "ground": [0, 0, 0]},
+        "materials": {"metal": {"albedo": [0.9, 0.9, 0.9], "metallic": 1, "roughness": r}},
+        "objects": [{"type": "disk", "center": [0, 0, 0], "normal": [0, 1, 0], "radius": 1000,
+                     "material": "metal"}],
+    }
+
+
 def main():
     if len(sys.argv) != 2:
         sys.exit(__doc__)
@@ -73,7 +90,7 @@ def main():
     os.makedirs(out, exist_ok=True)
     for r in ROUGHNESS:
         for name, make in (("cornell_metal", cornell), ("bunny_glossy", bunny),
-                           ("sphere_metal", sphere)):
+                           ("sphere_metal", sphere), ("gradient_metal", gradient)):
             with open(os.path.join(out, f"{name}_r{r}.json"), "w") as f:
                 json.dump(make(r), f, indent=1)
                 f.write("\n")

@@ -216,12 +216,15 @@ inline BrdfSample sample_brdf(const Brdf& b, Vec3 n, Vec3 ng, Vec3 wo, float pic
 }
 
 // The GGX width whose lobe's median cone (half-angle 2 atan(alpha): the half vector lies within
-// atan(alpha) of the normal half the time) has the solid angle of one cell of an equal-area
-// direction map of side `side`, 4 pi / side^2: the narrowest lobe such a map resolves.
-inline float cell_alpha(int side) {
-  const double cell = 4 * kPi / (double(side) * side);
-  const double half_angle = std::acos(std::max(-1.0, 1 - cell / (2 * kPi)));
+// atan(alpha) of the normal half the time) has the given solid angle (cap_alpha), or that of one
+// cell of an equal-area direction map of side `side`, 4 pi / side^2: the narrowest lobe such a
+// map resolves (cell_alpha).
+inline float cap_alpha(double solid_angle) {
+  const double half_angle = std::acos(std::clamp(1 - solid_angle / (2 * kPi), -1.0, 1.0));
   return float(std::tan(half_angle / 2));
+}
+inline float cell_alpha(int side) {
+  return cap_alpha(4 * kPi / (double(side) * side));
 }
 
 // The specular lobe's shape for averaging radiance over it (a cone query): D V cos at wi with

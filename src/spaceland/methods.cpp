@@ -132,9 +132,9 @@ Expected<ImageRgb> spwi_solve(const SolveContext& ctx, const RenderOptions& o, S
 
 // ---- grid: the world-space probe grid (seed 001 4.3) ----
 
-constexpr const char* kGridOptions[] = {"grid.voxel",         "grid.levels",   "grid.probe_spacing",
-                                        "grid.directions",    "grid.interval", "grid.cascades",
-                                        "grid.extend_length", "grid.fix",      "sun_rays"};
+constexpr const char* kGridOptions[] = {
+    "grid.voxel",    "grid.levels",        "grid.probe_spacing", "grid.directions", "grid.interval",
+    "grid.cascades", "grid.extend_length", "grid.fix",           "grid.specular",   "sun_rays"};
 
 Status grid_check(const RenderOptions& o) {
   return grid::check_options(o.grid);
@@ -154,6 +154,7 @@ void grid_describe(const RenderResult& r, std::vector<Parameter>& p, std::string
   p.push_back({"voxel_memory_bytes", r.voxel_bytes});
   p.push_back({"extend_length", double(o.extend_length)});
   p.push_back({"fix", std::string(o.fix ? "bilinear" : "none")});
+  p.push_back({"specular", std::string(to_string(o.specular))});
   p.push_back({"sun_rays", std::int64_t(r.options.sun_rays)});
   char mib[32];
   std::snprintf(mib, sizeof mib, "%.1f", double(r.voxel_bytes) / (1 << 20));

@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <utility>
 #include <thread>
 #include <vector>
 
@@ -246,17 +247,24 @@ TEST_F(Cli3d, GridReportsItsVoxelsAndIsRefusedItsOthersOptions) {
     EXPECT_EQ(bad.status, 2);
     EXPECT_NE(bad.err.find("--sun-rays"), std::string::npos) << bad.err;
   }
-  // --specular: spwi's, reported; an unknown query is refused.
-  const auto ray = run(
-      {"render", scene_, "--method", "spwi", "--specular", "ray", "--json", "-o", out("r.pfm")});
-  ASSERT_EQ(ray.status, 0) << ray.err;
-  EXPECT_EQ(nlohmann::json::parse(ray.out)["parameters"]["specular"], "ray");
+  // --specular: spwi's and the grid's, reported; an unknown query is refused.
+  // The grid takes cone or wide (the exact ray is spwi's baseline alone).
+  for (const auto& [method, query] : {std::pair{"spwi", "ray"}, std::pair{"grid", "wide"}}) {
+    const auto ok = run(
+        {"render", scene_, "--method", method, "--specular", query, "--json", "-o", out("s.pfm")});
+    ASSERT_EQ(ok.status, 0) << ok.err;
+    EXPECT_EQ(nlohmann::json::parse(ok.out)["parameters"]["specular"], query);
+  }
   bad = run({"render", scene_, "--method", "spwi", "--specular", "narrow", "-o", out("x.pfm")});
   EXPECT_EQ(bad.status, 2);
   EXPECT_NE(bad.err.find("--specular"), std::string::npos) << bad.err;
   bad = run({"render", scene_, "--method", "pt", "--specular", "ray", "-o", out("x.pfm")});
   EXPECT_EQ(bad.status, 2);
-  EXPECT_NE(bad.err.find("--specular applies to --method spwi"), std::string::npos) << bad.err;
+  EXPECT_NE(bad.err.find("--specular applies to --method spwi or grid only"), std::string::npos)
+      << bad.err;
+  bad = run({"render", scene_, "--method", "grid", "--specular", "ray", "-o", out("x.pfm")});
+  EXPECT_EQ(bad.status, 2);
+  EXPECT_NE(bad.err.find("--specular: expected cone or wide"), std::string::npos) << bad.err;
   // --merge belongs to spwi.
   bad = run({"render", scene_, "--method", "grid", "--merge", "fix", "-o", out("x.pfm")});
   EXPECT_EQ(bad.status, 2);

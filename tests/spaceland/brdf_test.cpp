@@ -14,6 +14,7 @@
 #include "core/sobol.hpp"
 #include "spaceland/brdf_albedo.hpp"
 #include "spaceland/brdf_reference.hpp"
+#include "spaceland/cascade/cone.hpp"
 
 namespace penumbra::spaceland {
 namespace {
@@ -246,6 +247,31 @@ TEST(SpacelandBrdf, AMirrorReflectsExactlyWithSchlicksFresnel) {
   EXPECT_NEAR(s.weight.b, 0.2 + 0.8 * w5, 1e-5);
   // No density: a light sample never meets the delta.
   EXPECT_EQ(brdf_cos(b, kN, kN, wo, want).r, 0.0f);
+}
+
+// A light's share of a lobe (the cone query's lights met at a point): a mirror takes all of a
+// light its reflection falls in and none of one beside it; a lobe wider than a small light
+// takes omega w / E, E the lobe's integral (here by quadrature); a cap over the whole hemisphere
+// holds the whole lobe, whichever way it is sampled.
+TEST(SpacelandBrdf, ALightsShareOfALobeIsTheLobesPartInItsCap) {
+  const Vec3 n{0, 0, 1}, wo = normalize(Vec3{0.5f, 0, 1});
+  const float mu = dot(n, wo);
+  const Vec3 r = reflect(wo, n);
+  const float small = 0.01f;  // steradians: a cap 3.2 degrees in radius
+  EXPECT_NEAR(cascade::lobe_share(0, n, wo, r, small, mu), 1, 1e-6);
+  const Vec3 beside = normalize(r + Vec3{0, 0.1f, 0});  // 5.7 degrees off the mirror direction
+  EXPECT_NEAR(cascade::lobe_share(0, n, wo, beside, small, mu), 0, 1e-6);
+  for (const float alpha : {0.3f, 1.0f}) {
+    const double e = cone_integral(
+        n, 1, [&](Vec3 wi) { return lobe_weight(alpha, n, wo, wi); }, 400, 400);
+    for (const Vec3 towards : {r, beside, normalize(Vec3{-0.3f, 0.2f, 1})}) {
+      const double want = small * lobe_weight(alpha, n, wo, towards) / e;
+      EXPECT_NEAR(cascade::lobe_share(alpha, n, wo, towards, small, mu), want, 0.02 * want)
+          << alpha;
+    }
+  }
+  for (const float alpha : {0.0f, 0.05f, 0.3f, 0.7f, 1.0f})
+    EXPECT_NEAR(cascade::lobe_share(alpha, n, wo, n, float(2 * kPi), mu), 1, 0.03) << alpha;
 }
 
 }  // namespace

@@ -156,6 +156,8 @@ struct GridOptions {
   // start to each of the 8 upper probes' interval starts (one per child direction), instead of
   // merging its own interval with the upper probes' (32 traced pieces a ray instead of 1).
   bool fix = false;
+  // Glossy materials' specular lobe: cone or wide (the exact ray is SPWI's baseline alone).
+  SpecularQuery specular = SpecularQuery::cone;
 };
 
 // Screen-space radiance cascades (docs/METHODS.md, "Screen-space cascades"): cascade i has

@@ -11,6 +11,7 @@
 #include "core/parallel.hpp"
 #include "core/timer.hpp"
 #include "io/json_reader.hpp"
+#include "spaceland/cascade/cone.hpp"
 #include "spaceland/cascade/radiance.hpp"
 #include "spaceland/color.hpp"
 #include "spaceland/grid/probes.hpp"
@@ -108,9 +109,22 @@ int extension_doublings(const CascadePlan& c, const GridOptions& o, float voxel,
   return n;
 }
 
+std::uint64_t cone_bytes(const std::vector<CascadePlan>& plan, int top) {
+  std::uint64_t bytes = 0;
+  for (int i = 0; top > 0 && i <= top && i < int(plan.size()); ++i) {
+    const CascadePlan& c = plan[std::size_t(i)];
+    const std::uint64_t rays = c.bytes() / sizeof(Rgb);
+    if (i < top) bytes += rays * sizeof(Interval);
+    if (i > 0) bytes += c.bytes() + std::uint64_t(c.side) * std::uint64_t(c.side) * sizeof(Vec3);
+  }
+  return bytes;
+}
+
 std::uint64_t cascades_bytes(const std::vector<CascadePlan>& plan, const GridOptions& o,
-                             float voxel, bool lights) {
-  std::uint64_t need = 0;
+                             float voxel, bool lights, int cone_top) {
+  // What the cone query keeps, besides the largest pair of cascades being solved.
+  const std::uint64_t need = cone_bytes(plan, cone_top);
+  std::uint64_t solving = 0;
   for (std::size_t i = 0; i < plan.size(); ++i) {
     // Extending holds the cascade's intervals and transmittances twice (a doubling reads one
     // pair and writes the other) and a byte a ray, besides its merged radiance.
@@ -126,10 +140,10 @@ std::uint64_t cascades_bytes(const std::vector<CascadePlan>& plan, const GridOpt
     };
     const std::uint64_t maps = map(plan[i]) + (i + 1 < plan.size() ? map(plan[i + 1]) : 0);
     // Sphere lights: a float a ray besides its radiance, where it stopped.
-    need =
-        std::max(need, pair + maps + extension + (lights ? pair / sizeof(Rgb) * sizeof(float) : 0));
+    solving = std::max(solving,
+                       pair + maps + extension + (lights ? pair / sizeof(Rgb) * sizeof(float) : 0));
   }
-  return need;
+  return need + solving;
 }
 
 namespace {
@@ -238,6 +252,8 @@ struct GridCascade {
   std::vector<float>* lower_reach;
   // Cascade 0: its share of the sphere lights is met at the points that read it.
   bool claims_at_points;
+  // Where the cone query keeps this cascade's own intervals (null: it does not), probe-major.
+  Interval* own;
   // The fix traces from each interval's start to the upper probes': no ray needs to know whether
   // a surface lies before its interval.
   bool fix = o.fix && up;
@@ -262,10 +278,11 @@ struct GridCascade {
 
   // The bilinear fix: each child direction to each upper probe's interval start, then that
   // probe's light along the child direction.
+  // `in`, where kept: the pieces' mean radiance and transmittance (U and T of the cone query).
   Rgb fixed_ray(Vec3 p, const cascade::Corners& around, const Vec3 (&upper_probe)[8], int du,
-                int dv) const {
+                int dv, Interval* in) const {
     const std::size_t up_side = std::size_t(up->side);
-    Rgb sum{};
+    Rgb sum{}, own{}, through{};
     float weight = 0;
     for (int j = 0; j < 8; ++j) {
       const float w = around.w[std::size_t(j)];
@@ -278,15 +295,25 @@ struct GridCascade {
           const Vec3 from = p + up_dirs[ud] * c.t_start;
           const Vec3 to = upper_probe[j] + up_dirs[ud] * up->t_start - from;
           const float dist = length(to);
-          mean += then(dist > 0 ? march(v, from, to * (1 / dist), 0, dist) : Segment{},
-                       upper.at(uq, ud));
+          const Segment s = dist > 0 ? march(v, from, to * (1 / dist), 0, dist) : Segment{};
+          mean += then(s, upper.at(uq, ud));
+          if (in) {
+            own += s.radiance * (w / 4);
+            if (!s.blocked) through += s.transmittance * (w / 4);
+          }
         }
       sum += mean * (w / 4);
       weight += w;
     }
-    if (weight > 0) return sum * (1 / weight);
+    if (weight > 0) {
+      if (in) *in = {own * (1 / weight), through * (1 / weight)};
+      return sum * (1 / weight);
+    }
     // No upper probe seen: the ray traces its interval and on to the sky.
-    return cascade::continue_to_sky(tracer, p, dirs[std::size_t(dv) * c.side + du], c.t_start);
+    const Rgb l =
+        cascade::continue_to_sky(tracer, p, dirs[std::size_t(dv) * c.side + du], c.t_start);
+    if (in) *in = {l, Rgb{}};
+    return l;
   }
 
   // The ray's own interval, from the probe (a surface between the probe and the interval's start
@@ -309,25 +336,32 @@ struct GridCascade {
   // Direction (du, dv) of probe q: its interval, merged with the upper probes around it; `reach`
   // is where its ray stopped, its merged continuation included (infinity: at no surface, or not
   // known, with the fix).
-  Rgb ray(std::uint64_t q, Vec3 p, const cascade::Corners& around, int du, int dv,
-          float& reach) const {
+  // `in`, where kept: the interval's own radiance and transmittance (U and T of the cone query;
+  // T 0 where nothing above continues it).
+  Rgb ray(std::uint64_t q, Vec3 p, const cascade::Corners& around, int du, int dv, float& reach,
+          Interval* in) const {
     const std::size_t d = std::size_t(dv) * c.side + du;
     reach = 0;  // stopped before its interval
     Segment s;
     if (!interval(q, p, d, s)) return kNoLight;
     reach = kInfinity;
     if (s.blocked) reach = s.t_end;
-    if (s.blocked || !up) return then(s, tracer.sky(dirs[d]));
-    Rgb merged;
-    if (cascade::merge_children(upper, around, du, dv, 2, merged)) {
+    Rgb l;
+    if (s.blocked || !up) {
+      l = then(s, tracer.sky(dirs[d]));
+    } else if (Rgb merged; cascade::merge_children(upper, around, du, dv, 2, merged)) {
       if (lights && !lights->empty()) {
         reach =
             cascade::merged_reach(around, du, dv, 2, upper_reach->data(), up->side, up->t_start);
       }
+      if (in) *in = {s.radiance, s.transmittance};
       return s.radiance + s.transmittance * merged;
+    } else {
+      // No upper probe has light this way: the ray continues itself to the sky.
+      l = then(s, cascade::continue_to_sky(tracer, p, dirs[d], c.t_end, &reach));
     }
-    // No upper probe has light this way: the ray continues itself to the sky.
-    return then(s, cascade::continue_to_sky(tracer, p, dirs[d], c.t_end, &reach));
+    if (in) *in = {l, Rgb{}};
+    return l;
   }
 
   // Returns the rays it traced (none for a probe inside a surface).
@@ -344,16 +378,22 @@ struct GridCascade {
     if (up) around = upper_corners(p, upper_probe);
     const bool spread = lights && !lights->empty();
     float* reach = spread ? lower_reach->data() + std::size_t(q) * nd : nullptr;
+    Interval* in = own ? own + std::size_t(q) * nd : nullptr;
     float r = kInfinity;
     for (int dv = 0; dv < c.side; ++dv)
       for (int du = 0; du < c.side; ++du) {
         const std::size_t k = std::size_t(dv) * c.side + du;
-        out[k] = fix ? fixed_ray(p, around, upper_probe, du, dv) : ray(q, p, around, du, dv, r);
+        Interval* ik = in ? in + k : nullptr;
+        out[k] =
+            fix ? fixed_ray(p, around, upper_probe, du, dv, ik) : ray(q, p, around, du, dv, r, ik);
         if (spread) reach[k] = !fix ? r : holds_light(out[k]) ? kInfinity : 0.0f;
       }
     // Its share of the sphere lights left out of the voxels, in the cells whose ray got past them
-    // (cascade 0 leaves its share to the points that read it: RadianceField::lights_at).
+    // (cascade 0 leaves its share to the points that read it: RadianceField::lights_at). The cone
+    // query keeps it in U too: the light lies inside this cascade's interval.
     if (!spread || claims_at_points) return nd;
+    thread_local std::vector<Rgb> before;
+    if (in) before.assign(out, out + nd);
     const cascade::Uppers ups = cascade::uppers_of(around, up ? up->t_start : 0,
                                                    [&](std::size_t j) { return upper_probe[j]; });
     const std::size_t up_cells = up ? std::size_t(up->side) * std::size_t(up->side) : 0;
@@ -366,6 +406,9 @@ struct GridCascade {
             return (*upper_reach)[std::size_t(around.index[j]) * up_cells + k];
           });
         });
+    if (in)
+      for (std::size_t k = 0; k < nd; ++k)
+        if (holds_light(in[k].radiance)) in[k].radiance += out[k] - before[k];
     return nd;
   }
 };
@@ -373,12 +416,15 @@ struct GridCascade {
 }  // namespace
 
 Expected<RadianceField> solve(const Voxels& v, const Background& bg, const GridOptions& o,
-                              std::uint64_t max_bytes, const cascade::SphereLights* lights) {
+                              std::uint64_t max_bytes, const cascade::SphereLights* lights,
+                              float narrowest) {
   Expected<cascade::Levels> levels = grid_levels(v, o);
   if (!levels) return levels.error();
   const std::vector<CascadePlan> plan = cascades_of(v, *levels);
   const bool spread = lights && !lights->empty();
-  const std::uint64_t need = cascades_bytes(plan, o, v.size, spread);
+  const int cone_top =
+      o.specular == SpecularQuery::cone ? cascade::cone_top(*levels, narrowest) : 0;
+  const std::uint64_t need = cascades_bytes(plan, o, v.size, spread, cone_top);
   if (need > max_bytes)
     return Error{"the probe grid's cascades need " +
                  io::format_rounded(double(need) / double(1 << 20)) +
@@ -390,6 +436,9 @@ Expected<RadianceField> solve(const Voxels& v, const Background& bg, const GridO
   std::vector<float> upper_reach, lower_reach;
   std::atomic<std::uint64_t> traced{0};
   std::vector<double> ms(plan.size());
+  // What the cone query reads of cascades 0..top: their own intervals below top, their merged
+  // radiance and directions above 0 (cascade 0's are the field's).
+  std::vector<RadianceField::Kept> kept(cone_top > 0 ? std::size_t(cone_top) + 1 : 0);
   RadianceStore cascade0 = cascade::top_down(*levels, [&](int i, const RadianceStore& upper,
                                                           RadianceStore& lower) {
     Stopwatch watch;
@@ -405,6 +454,8 @@ Expected<RadianceField> solve(const Voxels& v, const Background& bg, const GridO
     }
     const int doublings = extension_doublings(c, o, v.size, top);
     const Extended ext = doublings > 0 ? extend_cascade(v, c, dirs, doublings) : Extended{};
+    if (i < cone_top)
+      kept[std::size_t(i)].intervals.assign(std::size_t(c.probes()) * dirs.size(), {});
     const GridCascade solver{v,
                              o,
                              c,
@@ -418,7 +469,8 @@ Expected<RadianceField> solve(const Voxels& v, const Background& bg, const GridO
                              lights,
                              &upper_reach,
                              &lower_reach,
-                             i == 0};
+                             i == 0,
+                             i < cone_top ? kept[std::size_t(i)].intervals.data() : nullptr};
     parallel_for(c.nz, [&](int z) {
       std::uint64_t local = 0;
       for (std::uint64_t q = std::uint64_t(z) * c.ny * c.nx, end = q + std::uint64_t(c.ny) * c.nx;
@@ -426,6 +478,10 @@ Expected<RadianceField> solve(const Voxels& v, const Background& bg, const GridO
         local += solver.probe(q, lower.probe(q));
       traced.fetch_add(local, std::memory_order_relaxed);
     });
+    if (i > 0 && i <= cone_top) {
+      kept[std::size_t(i)].merged = lower;
+      kept[std::size_t(i)].dirs = dirs;
+    }
     std::swap(up_dirs, dirs);
     std::swap(upper_reach, lower_reach);
     ms[std::size_t(i)] = watch.ms();
@@ -434,6 +490,8 @@ Expected<RadianceField> solve(const Voxels& v, const Background& bg, const GridO
   RadianceField f =
       RadianceField::make(v, plan, std::move(up_dirs), std::move(cascade0), std::move(ms));
   f.rays_ = traced.load();
+  f.kept_ = std::move(kept);
+  f.levels_ = *levels;
   if (spread) {
     f.lights_ = *lights;
     f.reach_ = std::move(upper_reach);                        // cascade 0's, swapped up last
@@ -487,6 +545,10 @@ Status check_options(const GridOptions& o) {
     return Error{
         "`grid.levels`: extension reads a cascade's own probes along its rays, which a level "
         "does not have past its box: with extension the grid is one level (1)"};
+  if (o.specular != SpecularQuery::cone && o.specular != SpecularQuery::wide)
+    return Error{
+        "`grid.specular`: expected cone or wide (the exact mirror ray is spwi's "
+        "baseline)"};
   return check_cascade_options(o);
 }
 

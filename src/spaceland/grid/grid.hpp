@@ -49,21 +49,45 @@ Expected<cascade::Levels> grid_levels(const Voxels& v, const GridOptions& o);
 // The cascades for a grid of voxels, cascade 0 first.
 Expected<std::vector<CascadePlan>> plan_cascades(const Voxels& v, const GridOptions& o);
 
-// The merged radiance of cascade 0: per probe, the radiance arriving along each direction.
+// A cascade ray's own interval, kept for the specular cone query (seed 001 2.6: U_i and T_i):
+// the radiance it met there (kNoLight: no ray), and the part of it that went on past the
+// interval's end to the cascades above (RGB: fog colours it; 0 where a surface ended it or the
+// ray went on by itself, its U then holding all it saw).
+struct Interval {
+  Rgb radiance = cascade::kNoLight;
+  Rgb through{};
+};
+
+// The merged radiance of cascade 0: per probe, the radiance arriving along each direction; with
+// glossy materials and the cone query, what it needs of cascades 0..K as well.
 class RadianceField {
  public:
+  // What the cone query keeps of cascade i: its own intervals (below the top K), its merged
+  // radiance and directions (above 0: cascade 0's are the field's).
+  struct Kept {
+    std::vector<Interval> intervals;
+    cascade::RadianceStore merged;
+    std::vector<Vec3> dirs;
+  };
+
   // The cosine-weighted mean radiance over the hemisphere of unit normal n at surface point p
   // (irradiance / pi), from the cascade-0 probes around p that lie in front of its surface and
   // see it; false when none does. Whether a probe sees p: with `rays`, an exact shadow ray from
   // p; without, a march through the voxels from the free voxel nearest p in front of it.
   // Cascade 0's share of the spread sphere lights is met here, at p (lights_at).
   bool mean_radiance(Vec3 p, Vec3 n, Rgb& out, const RayScene* rays = nullptr) const;
-  // A glossy surface's specular lobe (seed 001 2.6's widest query): the radiance the same probes
-  // bring, averaged over GGX's D V cos of width alpha about the shading normal ns towards the
-  // viewer wo, no narrower than one of cascade 0's cells (cell_alpha); the lights met at p
-  // weighted by the lobe towards them.
+  // A glossy surface's specular lobe (seed 001 2.6's cone query): the radiance averaged over
+  // GGX's D V cos of width alpha about the shading normal ns towards the viewer wo, as
+  // U_0 + T_0 (U_1 + ... + T_{K-1} M_K), K = cone_cascade(alpha) up to the cascades kept
+  // (cone_top; none kept: K = 0, the widest query, merged cascade 0 alone). Each cascade is read
+  // from its probes around p that lie in front of its surface and see it, over the lobe no
+  // narrower than one of its cells (cell_alpha); the lights met at p count in U_0, weighted by
+  // the lobe towards them. Where cascade K's probes have no light in the lobe, the merged cascade
+  // below stands in. False where none has.
   bool lobe_radiance(Vec3 p, Vec3 n, Vec3 ns, Vec3 wo, float alpha, Rgb& out,
                      const RayScene* rays = nullptr) const;
+  // The highest K the cone query reads (0: the widest query only).
+  int cone_top() const { return kept_.empty() ? 0 : int(kept_.size()) - 1; }
   // The mean radiance over the whole sphere at a point in free space or fog (what an isotropic
   // medium scatters, per unit scattering coefficient), from the cascade-0 probes around p that
   // the voxels let it see; false when none does.
@@ -81,20 +105,20 @@ class RadianceField {
 
  private:
   friend Expected<RadianceField> solve(const Voxels&, const Background&, const GridOptions&,
-                                       std::uint64_t, const cascade::SphereLights*);
+                                       std::uint64_t, const cascade::SphereLights*, float);
   // Cascade 0's field: each probe's validity and its mean over the sphere.
   static RadianceField make(const Voxels& v, std::vector<CascadePlan> plan, std::vector<Vec3> dirs,
                             cascade::RadianceStore radiance, std::vector<double> ms);
-  // The weighted mean of what the cascade-0 probes around p serve (field.cpp).
-  template <class Serve>
-  bool tent(Vec3 p, int max_radius, Serve&& serve, Rgb& out) const;
+  // The weighted mean of what cascade i's probes around p serve (field.cpp).
+  template <class Serve, class T>
+  bool tent(int i, Vec3 p, int max_radius, Serve&& serve, T& out) const;
   Vec3 free_point_near(Vec3 p, Vec3 n) const;
-  // The cascade-0 probes around surface point p that lie in front of it and see it, each
-  // serving probe_value(q, value) (false: none) plus the `lights` it sees (lights_at's, valued
-  // by the caller).
-  template <class Value>
-  bool surface_read(Vec3 p, Vec3 n, const RayScene* rays, std::vector<cascade::PointLight>& lights,
-                    Value&& probe_value, Rgb& out) const;
+  // Cascade i's probes around surface point p that lie in front of it and see it, each serving
+  // probe_value(q, value) (false: none) plus the `lights` it sees (lights_at's, valued by the
+  // caller; cascade 0 only).
+  template <class Value, class T>
+  bool surface_read(int i, Vec3 p, Vec3 n, const RayScene* rays,
+                    std::vector<cascade::PointLight>& lights, Value&& probe_value, T& out) const;
   // The lights cascade 0 leaves to point p (SphereLights::at_point; n zero in free space).
   void lights_at(Vec3 p, Vec3 n, std::vector<cascade::PointLight>& out) const;
   // Cascade 1's probes around a point (p, normal n, `from` a free point in front of it) that it
@@ -121,6 +145,8 @@ class RadianceField {
   cascade::SphereLights lights_;
   std::vector<float> reach_;
   std::vector<float> reach1_;  // cascade 1's, likewise (empty with one cascade)
+  cascade::Levels levels_;
+  std::vector<Kept> kept_;  // cascades 0..cone_top() (empty: the widest query only)
 };
 
 // The fields of a clipmap's levels (clipmap.hpp), finest first: a point reads the finest level
@@ -152,15 +178,19 @@ Rgb in_scattered(const Field& field, const SunLight* sun, Vec3 x, std::uint64_t&
 // SphereLights(scene, voxel) for one grid) are spread over the cells that see them. Refuses (Error)
 // plans whose memory passes `max_bytes` (two cascades' radiance at once: the largest and the one
 // above it).
+// With o.specular cone and `narrowest` (the scene's narrowest lobe, cascade::narrowest_lobe)
+// finite, it keeps what the cone query reads of cascades 0..cone_top.
 Expected<RadianceField> solve(const Voxels& v, const Background& bg, const GridOptions& o,
                               std::uint64_t max_bytes,
-                              const cascade::SphereLights* lights = nullptr);
+                              const cascade::SphereLights* lights = nullptr,
+                              float narrowest = cascade::kInfinity);
 
 // Every level's cascades (level_options), level l spreading lights[l] (Clipmap::lights); the
 // fields solved first hold part of `max_bytes`, the next level's cascades have the rest.
 Expected<LevelFields> solve_levels(const Clipmap& map, const Background& bg, const GridOptions& o,
                                    std::uint64_t max_bytes,
-                                   const std::vector<cascade::SphereLights>& lights);
+                                   const std::vector<cascade::SphereLights>& lights,
+                                   float narrowest = cascade::kInfinity);
 
 // add_bounce on every level, each from its own field (`base`, `normals`: per level). A level's
 // rays read the coarser levels' voxels: all are lit before any is solved again.
@@ -179,10 +209,14 @@ std::uint64_t add_bounces(Clipmap& map, const LevelFields& fields,
 std::uint64_t add_bounce(Voxels& v, const RadianceField& field, const std::vector<Rgb>& base,
                          const SunLight* sun = nullptr, std::vector<Vec3>* normals = nullptr);
 
+// What the cone query keeps of cascades 0..top: U and T below top, M and the directions above 0.
+std::uint64_t cone_bytes(const std::vector<CascadePlan>& plan, int top);
+
 // Working bytes of two cascades' radiance at once, the largest pair (with extension, the lower
-// one's intervals twice over besides; with sphere lights to spread, where each ray stopped).
+// one's intervals twice over besides; with sphere lights to spread, where each ray stopped),
+// plus what the cone query keeps of cascades 0..cone_top.
 std::uint64_t cascades_bytes(const std::vector<CascadePlan>& plan, const GridOptions& o,
-                             float voxel, bool lights = false);
+                             float voxel, bool lights = false, int cone_top = 0);
 
 // How many times cascade c's traced intervals are doubled (0: traced whole).
 int extension_doublings(const CascadePlan& c, const GridOptions& o, float voxel, bool top);

@@ -10,6 +10,7 @@
 #include "core/timer.hpp"
 #include "io/json_reader.hpp"
 #include "spaceland/brdf_albedo.hpp"
+#include "spaceland/cascade/cone.hpp"
 #include "spaceland/gbuffer.hpp"
 #include "spaceland/grid/clipmap.hpp"
 #include "spaceland/grid/grid.hpp"
@@ -82,13 +83,14 @@ std::uint64_t add_fog(const SolveContext& ctx, const LevelFields& field, const S
 
 Expected<LevelFields> solve_levels(const Clipmap& map, const Background& bg, const GridOptions& o,
                                    std::uint64_t left,
-                                   const std::vector<cascade::SphereLights>& lights) {
+                                   const std::vector<cascade::SphereLights>& lights,
+                                   float narrowest) {
   LevelFields out;
   out.map = &map;
   std::uint64_t held = 0;  // what the fields already solved hold
   for (std::size_t l = 0; l < map.size(); ++l) {
     Expected<RadianceField> f =
-        solve(map[l], bg, level_options(o, l), left - std::min(left, held), &lights[l]);
+        solve(map[l], bg, level_options(o, l), left - std::min(left, held), &lights[l], narrowest);
     if (!f) return f.error();
     held += f->bytes();
     out.fields.push_back(std::move(*f));
@@ -133,7 +135,10 @@ Expected<ImageRgb> render(const SolveContext& ctx, const GridOptions& o, SolveRe
   const std::uint64_t voxel_memory = voxel_bytes(map->voxels(), bounces);
   const std::uint64_t left = ctx.max_memory - std::min(ctx.max_memory, voxel_memory);
   const std::vector<cascade::SphereLights> lights = map->lights(ctx.scene);
-  Expected<LevelFields> field = solve_levels(*map, bg, o, left, lights);
+  // The cone query reads the last solve's cascades only: earlier ones light the voxels.
+  const float narrowest = cascade::narrowest_lobe(ctx.scene);
+  Expected<LevelFields> field =
+      solve_levels(*map, bg, o, left, lights, bounces ? cascade::kInfinity : narrowest);
   if (!field) return field.error();
   report.rays += field->rays();
   report.stages.push_back({"cascades", watch.ms()});
@@ -145,7 +150,8 @@ Expected<ImageRgb> render(const SolveContext& ctx, const GridOptions& o, SolveRe
       watch.restart();
       report.rays += add_bounces(*map, *field, base, &sun);
       *field = LevelFields{};  // their radiance freed before the next solve's
-      field = solve_levels(*map, bg, o, left, lights);
+      field = solve_levels(*map, bg, o, left, lights,
+                           b + 1 == ctx.bounces ? narrowest : cascade::kInfinity);
       if (!field) return field.error();
       report.rays += field->rays();
       report.stages.push_back({"bounce " + std::to_string(b + 1), watch.ms()});
@@ -160,8 +166,8 @@ Expected<ImageRgb> render(const SolveContext& ctx, const GridOptions& o, SolveRe
   for (std::size_t l = 0; l < map->size(); ++l) {
     const RadianceField& f = field->fields[l];
     fields += f.bytes();
-    const std::uint64_t solving =
-        cascades_bytes(f.cascades(), level_options(o, l), (*map)[l].size, !lights[l].empty());
+    const std::uint64_t solving = cascades_bytes(f.cascades(), level_options(o, l), (*map)[l].size,
+                                                 !lights[l].empty(), f.cone_top());
     cascades = std::max(cascades, solving - std::min(solving, f.bytes()));
   }
   report.memory_bytes += voxel_memory + fields + cascades;

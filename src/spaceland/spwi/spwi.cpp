@@ -17,6 +17,7 @@
 #include "io/json_reader.hpp"
 #include "spaceland/brdf.hpp"
 #include "spaceland/brdf_albedo.hpp"
+#include "spaceland/cascade/cone.hpp"
 #include "spaceland/cascade/radiance.hpp"
 #include "spaceland/cascade/sphere_lights.hpp"
 #include "spaceland/color.hpp"
@@ -29,8 +30,12 @@
 
 namespace penumbra::spaceland::spwi {
 
+using cascade::cone_cascade;
 using cascade::holds_light;
 using cascade::kNoLight;
+using cascade::lobe_cells;
+using cascade::lobe_mean;
+using cascade::LobeCells;
 using cascade::RadianceStore;
 
 namespace {
@@ -86,23 +91,9 @@ void add_grids(Layout& l) {
 
 }  // namespace
 
-int cone_cascade(const cascade::Levels& l, float alpha, int top) {
-  int k = 0;
-  while (k < top && cell_alpha(l.side(k)) > alpha / kLobeCells) ++k;
-  return k;
-}
-
 int cone_top(const Scene& scene, const cascade::Levels& l, const SpwiOptions& o) {
-  if (o.specular != SpecularQuery::cone) return 0;
-  float narrowest = std::numeric_limits<float>::infinity();
-  for (const Material& m : scene.materials) {
-    if (m.lambertian()) continue;
-    // A roughness texture may make any part of the surface a mirror.
-    narrowest = std::min(narrowest, m.metallic_roughness_texture.index >= 0
-                                        ? 0.0f
-                                        : make_brdf(m.albedo, m.metallic, m.roughness).alpha);
-  }
-  return std::isinf(narrowest) ? 0 : cone_cascade(l, narrowest, l.count - 1);
+  return o.specular == SpecularQuery::cone ? cascade::cone_top(l, cascade::narrowest_lobe(scene))
+                                           : 0;
 }
 
 std::uint64_t cone_bytes(const Layout& l, int top) {
@@ -581,64 +572,6 @@ struct KeptCascade {
   std::vector<Interval> intervals;
 };
 
-// A lobe's cells on a side x side map: each cell's index and weight.
-using LobeCells = std::vector<std::pair<std::uint32_t, float>>;
-
-// The lobe of width alpha about the mirror direction r, weighted (lobe_weight) over a window of
-// (2 radius + 1)^2 cells about r's cell, folded across the map's edges as the octahedron folds (a
-// cell past an edge is the one mirrored along it), each cell once; the whole map where the window
-// would cover it.
-void lobe_cells(const std::vector<Vec3>& dirs, int side, float alpha, Vec3 n, Vec3 wo, Vec3 r,
-                int radius, LobeCells& out) {
-  out.clear();
-  // A fold may reach a cell the window holds already: each is marked with this call's number.
-  thread_local std::vector<std::uint32_t> seen;
-  thread_local std::uint32_t mark = 0;
-  if (seen.size() < dirs.size() || ++mark == 0) {
-    seen.assign(std::max(seen.size(), dirs.size()), 0);
-    mark = 1;
-  }
-  auto add = [&](std::size_t cell) {
-    if (seen[cell] == mark) return;
-    seen[cell] = mark;
-    const float w = lobe_weight(alpha, n, wo, dirs[cell]);
-    if (w > 0) out.push_back({std::uint32_t(cell), w});
-  };
-  if (2 * radius + 1 >= side) {
-    for (std::size_t cell = 0; cell < dirs.size(); ++cell) add(cell);
-    return;
-  }
-  const std::array<int, 2> c = octahedral::cell_of(r, side);
-  for (int dv = -radius; dv <= radius; ++dv)
-    for (int du = -radius; du <= radius; ++du) {
-      int u = c[0] + du, v = c[1] + dv;
-      if (u < 0 || u >= side) {
-        u = u < 0 ? -u - 1 : 2 * side - 1 - u;
-        v = side - 1 - v;
-      }
-      if (v < 0 || v >= side) {
-        v = v < 0 ? -v - 1 : 2 * side - 1 - v;
-        u = side - 1 - u;
-      }
-      add(std::size_t(v) * side + std::size_t(u));
-    }
-}
-
-// A probe's mean of value(cell) over the lobe's cells where has(cell); false where none has.
-template <class Has, class Value, class T>
-bool lobe_mean(const LobeCells& cells, Has&& has, Value&& value, T& mean) {
-  T sum{};
-  float weight = 0;
-  for (const auto& [cell, w] : cells) {
-    if (!has(cell)) continue;
-    sum += value(cell) * w;
-    weight += w;
-  }
-  if (!(weight > 0)) return false;
-  mean = sum * (1 / weight);
-  return true;
-}
-
 // The final gather (Alg. 11): the 4 nearest cascade-0 probes, depth-aware weights, each probe's
 // cosine-weighted mean radiance over the pixel's hemisphere; the sun by one shadow ray per pixel
 // unless the top cascade carries it. Glossy pixels add their specular lobe (o.specular), the cone
@@ -694,12 +627,9 @@ ImageRgb gather(const SolveContext& ctx, const SpwiOptions& o, const Layout& lay
                           kc ? kc->probes : probes, o, c))
         continue;  // no probe of this cascade here: the rest is as above
       const float cell = cell_alphas[std::size_t(i)], a = std::max(alpha, cell);
-      // The lobe's tail: a window 3 lobe widths about its centre (the median cone's tan^2 law
-      // leaves 4% of the lobe outside), at most 33 x 33 cells (K's lobe is 4-8 cells wide);
-      // cascade 0's few cells whole.
       const int side = layout.map_side(i);
-      const int radius = i == 0 ? side : std::clamp(int(std::ceil(3 * a / cell)), 3, 16);
-      lobe_cells(kc ? kc->dirs : dirs, side, a, n, wo, r, radius, cells);
+      lobe_cells(kc ? kc->dirs : dirs, side, a, n, wo, r, cascade::lobe_radius(i, side, a, cell),
+                 cells);
       if (!merged) {
         const RadianceStore& m = kc ? kc->merged : store;
         Rgb sum{}, mean;

@@ -47,15 +47,6 @@ struct Interval {
   float through = 0;
 };
 
-// The cone query's top cascade K for a lobe of GGX width alpha: the first whose cells are at
-// most a kLobeCells-th of the lobe's width (cell_alpha: a cell's solid angle matched to the
-// lobe's median cone), at most `top`. Cascades 0..K-1 are read unmerged, K merged. A lobe read
-// over fewer cells is blurred by them, over more it reads coarser probes: measured (2026-11-29,
-// 160 x 120, against the path tracer; cells at most 1, 1/2, 1/4, 1/8 of the lobe) a metal floor
-// under a gradient sky, roughness 0.3: 12.2%, 5.1%, 3.1%, 7.7%; 0.6: 4.6%, 4.6%, 1.5%, 0.2%;
-// under a sphere light, roughness 0.6: 32%, 32%, 16.8%, 16.8%; 1: 5.3%, 5.3%, 5.3%, 5.7%.
-inline constexpr float kLobeCells = 4;
-int cone_cascade(const cascade::Levels& levels, float alpha, int top);
 // The highest K any pixel of the scene reaches (its narrowest lobe; a roughness texture may make
 // any lobe a mirror), at most the top cascade; 0 where no material is glossy or o.specular is not
 // the cone query.

@@ -168,9 +168,10 @@ TEST(GlossyCascades, TheGridsConeQueryFollowsAGradientSkyCloserThanItsWidestQuer
     double error, mean;  // the cone query's bounds
   };
   // Measured (2026-11-29, 48 x 36; the same against the path tracer at 512 samples): at 0.3
-  // (K = 4) the cone 18.3% and 1.136 of the mean, the widest query 36.3% and 1.238 (the far
-  // floor, which reflects the dark horizon, too bright: docs/QUALITY.md); at 0.6 (K = 2) the
-  // cone 1.04% and 1.004, the widest 5.1% and 0.953.
+  // (K = 4) the cone 18.3% and 1.136 of the mean, the widest query 36.3% and 1.238; at 0.6
+  // (K = 2) the cone 1.04% and 1.004, the widest 5.1% and 0.953. At 0.3 the far floor, which
+  // mirrors the dark horizon, is too bright: a floor alone leaves the grid one probe layer high
+  // at cascade 2, inside the floor, and the cone reads cascade 1 (docs/QUALITY.md).
   for (const Case& c : {Case{0.3f, 0.22, 0.17}, Case{0.6f, 0.02, 0.01}}) {
     Scene s;
     s.camera = camera({0, 2, 4}, {0, 0, 0}, 48, 36, 50);

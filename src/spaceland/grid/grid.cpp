@@ -282,7 +282,7 @@ struct GridCascade {
   Rgb fixed_ray(Vec3 p, const cascade::Corners& around, const Vec3 (&upper_probe)[8], int du,
                 int dv, Interval* in) const {
     const std::size_t up_side = std::size_t(up->side);
-    Rgb sum{}, own{}, through{};
+    Rgb sum{}, met{}, through{};
     float weight = 0;
     for (int j = 0; j < 8; ++j) {
       const float w = around.w[std::size_t(j)];
@@ -298,7 +298,7 @@ struct GridCascade {
           const Segment s = dist > 0 ? march(v, from, to * (1 / dist), 0, dist) : Segment{};
           mean += then(s, upper.at(uq, ud));
           if (in) {
-            own += s.radiance * (w / 4);
+            met += s.radiance * (w / 4);
             if (!s.blocked) through += s.transmittance * (w / 4);
           }
         }
@@ -306,7 +306,7 @@ struct GridCascade {
       weight += w;
     }
     if (weight > 0) {
-      if (in) *in = {own * (1 / weight), through * (1 / weight)};
+      if (in) *in = {met * (1 / weight), through * (1 / weight)};
       return sum * (1 / weight);
     }
     // No upper probe seen: the ray traces its interval and on to the sky.
@@ -430,7 +430,11 @@ Expected<RadianceField> solve(const Voxels& v, const Background& bg, const GridO
                  io::format_rounded(double(need) / double(1 << 20)) +
                  " MiB, more than the `max_memory` limit of " +
                  io::format_rounded(double(max_bytes) / double(1 << 20)) +
-                 " MiB; use a larger --voxel or fewer --directions"};
+                 " MiB; use a larger --voxel or fewer --directions" +
+                 (cone_top > 0 ? std::string(", or --specular wide (the cone query keeps "
+                                             "cascades 0..") +
+                                     std::to_string(cone_top) + " for the glossy materials)"
+                               : std::string())};
 
   std::vector<Vec3> dirs, up_dirs;  // this cascade's directions and the one above's
   std::vector<float> upper_reach, lower_reach;

@@ -81,9 +81,9 @@ class RadianceField {
   // U_0 + T_0 (U_1 + ... + T_{K-1} M_K), K = cone_cascade(alpha) up to the cascades kept
   // (cone_top; none kept: K = 0, the widest query, merged cascade 0 alone). Each cascade is read
   // from its probes around p that lie in front of its surface and see it, over the lobe no
-  // narrower than one of its cells (cell_alpha); the lights met at p count in U_0, weighted by
-  // the lobe towards them. Where cascade K's probes have no light in the lobe, the merged cascade
-  // below stands in. False where none has.
+  // narrower than one of its cells (cell_alpha); the lights met at p count in U_0, each its
+  // radiance times the part of the lobe inside its cap (cascade::lobe_share). Where cascade K's
+  // probes have no light in the lobe, the merged cascade below stands in. False where none has.
   bool lobe_radiance(Vec3 p, Vec3 n, Vec3 ns, Vec3 wo, float alpha, Rgb& out,
                      const RayScene* rays = nullptr) const;
   // The highest K the cone query reads (0: the widest query only).

@@ -190,7 +190,7 @@ constexpr int kCellPoints = 4;
 bool RadianceField::lobe_radiance(Vec3 p, Vec3 n, Vec3 ns, Vec3 wo, float alpha, Rgb& out,
                                   const RayScene* rays) const {
   thread_local cascade::LobeCells cells;
-  const Vec3 r = ns * (2 * dot(ns, wo)) - wo;
+  const Vec3 r = reflect(wo, ns);
   std::vector<cascade::PointLight>& lights = cascade::point_lights();
   Rgb acc{};
   bool merged = false;  // acc holds the merged cascade's answer

@@ -616,7 +616,7 @@ ImageRgb gather(const SolveContext& ctx, const SpwiOptions& o, const Layout& lay
                   Rgb& out) {
     thread_local LobeCells cells;
     const Vec3 n = h.shading_normal;
-    const Vec3 r = n * (2 * dot(n, wo)) - wo;
+    const Vec3 r = reflect(wo, n);
     Rgb acc{};
     bool merged = false;  // acc holds the merged cascade's answer
     for (int i = top; i >= 0; --i) {
@@ -689,7 +689,7 @@ ImageRgb gather(const SolveContext& ctx, const SpwiOptions& o, const Layout& lay
         Rgb specular{};
         if (!brdf.lambertian && o.specular == SpecularQuery::ray) {
           // The baseline: one exact ray along the mirror direction.
-          const Vec3 r = n * (2 * dot(n, wo)) - wo;
+          const Vec3 r = reflect(wo, n);
           Hit seen;
           ++local;
           const Ray ray{ctx.rays.spawn(h.position, h.geometric_normal, r), r, 0,

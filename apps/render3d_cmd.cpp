@@ -140,7 +140,11 @@ int render_scene_3d(const RenderArgs& a) {
   if (given("--cascades")) options.surface.cascades = a.options.rc.cascades;
   if (given("--merge")) options.ssrc.merge = a.spwi.merge;
   if (given("--gather")) options.ssrc.gather = a.spwi.gather;
-  if (given("--specular")) options.grid.specular = a.spwi.specular;
+  if (given("--specular")) {
+    options.grid.specular = a.spwi.specular;
+    options.ssrc.specular = a.spwi.specular;
+    options.surface.specular = a.spwi.specular;
+  }
   if (given("--merge-edge")) options.ssrc.merge_edge = a.spwi.merge_edge;
   if (given("--gather-edge")) options.ssrc.gather_edge = a.spwi.gather_edge;
   if (given("--gather-normal")) options.ssrc.gather_normal = a.spwi.gather_normal;

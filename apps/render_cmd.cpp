@@ -500,10 +500,10 @@ std::unique_ptr<RenderCommand> add_render_command(CLI::App& app) {
         "the pixel's hemisphere (pixel), or once per probe, over its own (probe)");
     add_enum_option(render, "--specular", a.spwi.specular,
                     {sl::SpecularQuery::cone, sl::SpecularQuery::wide, sl::SpecularQuery::ray},
-                    "3D spwi and grid, glossy materials: the specular lobe from the cone query "
-                    "(cascades 0..K-1 unmerged, K merged, K from the roughness), the widest "
-                    "query (merged cascade 0 alone), or (spwi) one exact ray along the mirror "
-                    "direction (a baseline)");
+                    "3D, glossy materials: the specular lobe from the cone query (spwi and "
+                    "grid: cascades 0..K-1 unmerged, K merged, K from the roughness), the widest "
+                    "query (merged cascade 0 alone; ssrc's and surface's only query), or (spwi) "
+                    "one exact ray along the mirror direction (a baseline)");
     render
         ->add_option("--depth-bias", a.spwi.depth_bias,
                      "3D spwi: probes moved to this fraction of their depth (seed 000: 0.98)")

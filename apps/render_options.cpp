@@ -255,6 +255,8 @@ const std::pair<const char*, const char*> kFlags[] = {
     {"`spwi.gather`", "--gather"},
     {"`spwi.specular`", "--specular"},
     {"`grid.specular`", "--specular"},
+    {"`ssrc.specular`", "--specular"},
+    {"`surface.specular`", "--specular"},
     {"`ssrc.gather`", "--gather"},
     {"`ssrc.offscreen`", "--offscreen"},
     {"`spwi.overlap`", "--disjoint"},

@@ -7,6 +7,7 @@
 
 #include "io/json_reader.hpp"
 #include "spaceland/atlas/render.hpp"
+#include "spaceland/cascade/cone.hpp"
 #include "spaceland/grid/grid.hpp"
 #include "spaceland/method.hpp"
 #include "spaceland/pt/pt.hpp"
@@ -177,11 +178,23 @@ bool ssrc_bounces_itself(const RenderOptions& o) {
   return o.ssrc.offscreen != SsrcOffscreen::world;
 }
 
-constexpr const char* kSsrcOptions[] = {
-    "ssrc.probe_spacing", "ssrc.directions",    "ssrc.interval",   "ssrc.cascades",
-    "ssrc.steps",         "ssrc.backfaces",     "ssrc.sectors",    "ssrc.rays",
-    "ssrc.thickness",     "ssrc.merge",         "ssrc.merge_edge", "ssrc.gather",
-    "ssrc.gather_edge",   "ssrc.gather_normal", "ssrc.offscreen",  "sun_rays"};
+constexpr const char* kSsrcOptions[] = {"ssrc.probe_spacing",
+                                        "ssrc.directions",
+                                        "ssrc.interval",
+                                        "ssrc.cascades",
+                                        "ssrc.steps",
+                                        "ssrc.backfaces",
+                                        "ssrc.sectors",
+                                        "ssrc.rays",
+                                        "ssrc.thickness",
+                                        "ssrc.merge",
+                                        "ssrc.merge_edge",
+                                        "ssrc.gather",
+                                        "ssrc.gather_edge",
+                                        "ssrc.gather_normal",
+                                        "ssrc.offscreen",
+                                        "ssrc.specular",
+                                        "sun_rays"};
 
 Status ssrc_check(const RenderOptions& o) {
   if (o.device == Device::gpu)
@@ -194,7 +207,8 @@ Status ssrc_check_scene(const Scene& scene) {
 }
 
 std::uint64_t ssrc_bytes(const Scene& scene, const RenderOptions& o) {
-  const ssrc::Layout l = ssrc::make_layout(scene.camera.width, scene.camera.height, o.ssrc);
+  ssrc::Layout l = ssrc::make_layout(scene.camera.width, scene.camera.height, o.ssrc);
+  l.glossy = cascade::narrowest_lobe(scene) < cascade::kInfinity;
   return l.bytes() + (o.device == Device::gpu ? ssrc::gpu_bytes(l, o.ssrc) : 0);
 }
 
@@ -215,6 +229,7 @@ void ssrc_describe(const RenderResult& r, std::vector<Parameter>& p, std::string
   p.push_back({"gather_edge", double(o.gather_edge)});
   p.push_back({"gather_normal", double(o.gather_normal)});
   p.push_back({"offscreen", std::string(to_string(o.offscreen))});
+  p.push_back({"specular", std::string(to_string(o.specular))});
   p.push_back({"sun_rays", std::int64_t(r.options.sun_rays)});
   line = ", " + std::to_string(o.cascades) + " cascades, s0 " + std::to_string(o.probe_spacing) +
          " px, r0 " + std::to_string(o.interval) + " px, " + std::to_string(o.sectors) +
@@ -226,7 +241,8 @@ void ssrc_describe(const RenderResult& r, std::vector<Parameter>& p, std::string
 // On the CPU, or with a port (the GPU's) running the cascades, the gather and the shading.
 Expected<ImageRgb> ssrc_run(const SolveContext& ctx, const RenderOptions& o, SolveReport& report,
                             RenderOptions& used, ssrc::Port port) {
-  const ssrc::Layout layout = ssrc::make_layout(ctx.g.width, ctx.g.height, o.ssrc);
+  ssrc::Layout layout = ssrc::make_layout(ctx.g.width, ctx.g.height, o.ssrc);
+  layout.glossy = cascade::narrowest_lobe(ctx.scene) < cascade::kInfinity;
   used.ssrc.probe_spacing = layout.tiles.levels.spacing0;
   used.ssrc.interval = layout.r0;
   used.ssrc.cascades = layout.count();
@@ -246,8 +262,9 @@ Expected<ImageRgb> ssrc_solve_gpu(const SolveContext& ctx, const RenderOptions& 
 // ---- surface: surface radiance cascades (seed 001 section 2.5.3) ----
 
 constexpr const char* kSurfaceOptions[] = {
-    "surface.texel_size", "surface.texels",   "surface.refine", "surface.directions",
-    "surface.interval",   "surface.cascades", "surface.atlas",  "sun_rays"};
+    "surface.texel_size", "surface.texels",   "surface.refine",
+    "surface.directions", "surface.interval", "surface.cascades",
+    "surface.atlas",      "surface.specular", "sun_rays"};
 
 Status surface_check(const RenderOptions& o) {
   return atlas::check_options(o.surface);
@@ -269,6 +286,7 @@ void surface_describe(const RenderResult& r, std::vector<Parameter>& p, std::str
   p.push_back({"directions", std::int64_t(o.directions)});
   p.push_back({"interval", double(o.interval)});
   p.push_back({"cascades", std::int64_t(o.cascades)});
+  p.push_back({"specular", std::string(to_string(o.specular))});
   p.push_back({"sun_rays", std::int64_t(r.options.sun_rays)});
   if (!o.atlas.empty()) p.push_back({"atlas", o.atlas});
   line = (o.atlas.empty() ? std::string() : ", from " + o.atlas) + ", " +

@@ -57,10 +57,4 @@ inline Status refuse_fog(const Scene& scene, const char* method, const char* ins
                std::to_string(scene.media.size()) + " medium box(es); use " + instead};
 }
 
-// The refusal of a method that renders Lambertian materials only (its check_scene), naming the
-// first glossy material a surface uses: "<method> renders Lambertian materials only (metallic 0,
-// roughness 1, no metallic-roughness texture); material 'floor' has metallic 1 and roughness
-// 0.3: use <instead>".
-Status refuse_glossy(const Scene& scene, const char* method, const char* instead);
-
 }  // namespace penumbra::spaceland

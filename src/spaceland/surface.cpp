@@ -4,10 +4,8 @@
 #include <string>
 #include <vector>
 
-#include "io/json_reader.hpp"
 #include "spaceland/color.hpp"
 #include "spaceland/scene/mesh_file.hpp"
-#include "spaceland/solve.hpp"
 
 namespace penumbra::spaceland {
 
@@ -55,36 +53,6 @@ Brdf brdf_at(const Scene& scene, const Hit& hit) {
   if (m.metallic_roughness_texture.index < 0) return make_brdf(albedo, m.metallic, m.roughness);
   const Rgb mr = texel_at(scene, hit, m.metallic_roughness_texture);
   return make_brdf(albedo, m.metallic * mr.b, m.roughness * mr.g);
-}
-
-namespace {
-
-// The first material a surface uses that is not version 1's Lambertian, or -1.
-int first_glossy(const Scene& scene) {
-  std::vector<std::uint8_t> used(scene.materials.size(), 0);
-  for (const TriangleMesh& m : scene.meshes)
-    for (std::uint32_t k : m.materials) used[k] = 1;
-  for (const Sphere& s : scene.spheres) used[s.material] = 1;
-  for (const Disk& d : scene.disks) used[d.material] = 1;
-  for (std::size_t k = 0; k < scene.materials.size(); ++k)
-    if (used[k] && !scene.materials[k].lambertian()) return int(k);
-  return -1;
-}
-
-}  // namespace
-
-Status refuse_glossy(const Scene& scene, const char* method, const char* instead) {
-  const int k = first_glossy(scene);
-  if (k < 0) return {};
-  const Material& m = scene.materials[std::size_t(k)];
-  std::string what = "metallic " + io::format_number(m.metallic) + " and roughness " +
-                     io::format_number(m.roughness);
-  if (m.metallic_roughness_texture.index >= 0) what += " times a metallic-roughness texture";
-  return Error{std::string(method) +
-               " renders Lambertian materials only (metallic 0, roughness 1, no "
-               "metallic-roughness texture; its specular cone queries are not built yet): "
-               "material '" +
-               m.name + "' has " + what + "; use " + instead};
 }
 
 void face_towards(Hit& hit, Vec3 d) {

@@ -12,8 +12,8 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
-#include <utility>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include "penumbra/io.hpp"
@@ -247,9 +247,11 @@ TEST_F(Cli3d, GridReportsItsVoxelsAndIsRefusedItsOthersOptions) {
     EXPECT_EQ(bad.status, 2);
     EXPECT_NE(bad.err.find("--sun-rays"), std::string::npos) << bad.err;
   }
-  // --specular: spwi's and the grid's, reported; an unknown query is refused.
-  // The grid takes cone or wide (the exact ray is spwi's baseline alone).
-  for (const auto& [method, query] : {std::pair{"spwi", "ray"}, std::pair{"grid", "wide"}}) {
+  // --specular: every cascade method's, reported; an unknown query is refused.
+  // The grid takes cone or wide (the exact ray is spwi's baseline alone); ssrc and the surface
+  // cascades wide only (their cone queries are not built).
+  for (const auto& [method, query] : {std::pair{"spwi", "ray"}, std::pair{"grid", "wide"},
+                                      std::pair{"ssrc", "wide"}, std::pair{"surface", "wide"}}) {
     const auto ok = run(
         {"render", scene_, "--method", method, "--specular", query, "--json", "-o", out("s.pfm")});
     ASSERT_EQ(ok.status, 0) << ok.err;
@@ -260,11 +262,18 @@ TEST_F(Cli3d, GridReportsItsVoxelsAndIsRefusedItsOthersOptions) {
   EXPECT_NE(bad.err.find("--specular"), std::string::npos) << bad.err;
   bad = run({"render", scene_, "--method", "pt", "--specular", "ray", "-o", out("x.pfm")});
   EXPECT_EQ(bad.status, 2);
-  EXPECT_NE(bad.err.find("--specular applies to --method spwi or grid only"), std::string::npos)
+  EXPECT_NE(bad.err.find("--specular applies to --method spwi, grid, ssrc or surface only"),
+            std::string::npos)
       << bad.err;
   bad = run({"render", scene_, "--method", "grid", "--specular", "ray", "-o", out("x.pfm")});
   EXPECT_EQ(bad.status, 2);
   EXPECT_NE(bad.err.find("--specular: expected cone or wide"), std::string::npos) << bad.err;
+  for (const char* method : {"ssrc", "surface"}) {
+    bad = run({"render", scene_, "--method", method, "--specular", "cone", "-o", out("x.pfm")});
+    EXPECT_EQ(bad.status, 2);
+    EXPECT_NE(bad.err.find("--specular: expected wide"), std::string::npos) << bad.err;
+    EXPECT_NE(bad.err.find("cone query over"), std::string::npos) << bad.err;
+  }
   // --merge belongs to spwi.
   bad = run({"render", scene_, "--method", "grid", "--merge", "fix", "-o", out("x.pfm")});
   EXPECT_EQ(bad.status, 2);
@@ -380,6 +389,33 @@ TEST_F(Cli3d, BakeWritesAnAtlasThatRenderViews) {
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_NE(r.out.find("wrote " + out("b.exr")), std::string::npos) << r.out;
   EXPECT_EQ(r.out.find("with the radiance per direction"), std::string::npos) << r.out;
+
+  // A glossy floor reads cascade 0's radiance per direction: from an atlas that holds it, the
+  // same light as a bake in place (the file's half floats apart); one baked with --no-radiance
+  // is refused by name.
+  std::string glossy = kScene3d;
+  glossy.replace(glossy.find("\"radius\": 5 }"), 13, "\"radius\": 5, \"material\": \"metal\" }");
+  glossy.replace(glossy.find("\"lamp\": {"), 9,
+                 "\"metal\": { \"metallic\": 1, \"roughness\": 0.5 }, \"lamp\": {");
+  const std::string metal = tmp_.write("metal.json", glossy);
+  r = run({"bake", metal, "-o", out("g.exr"), "--texels", "4096", "--directions", "16"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  r = run({"render", metal, "--method", "surface", "--atlas", out("g.exr"), "-o", out("g.pfm")});
+  ASSERT_EQ(r.status, 0) << r.err;
+  r = run({"render", metal, "--method", "surface", "--texels", "4096", "--directions", "16", "-o",
+           out("h.pfm")});
+  ASSERT_EQ(r.status, 0) << r.err;
+  r = run({"compare", out("g.pfm"), out("h.pfm"), "--radiance", "--json"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_LT(nlohmann::json::parse(r.out)["relative_rmse"].get<double>(), 2e-3) << r.out;
+  r = run({"bake", metal, "-o", out("n.exr"), "--texels", "1024", "--directions", "4",
+           "--no-radiance"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  r = run({"render", metal, "--method", "surface", "--atlas", out("n.exr"), "-o", out("x.pfm")});
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("atlas " + out("n.exr") + " holds no radiance per direction"),
+            std::string::npos)
+      << r.err;
 
   // Refusals, nothing written.
   std::string text = kScene3d;

@@ -90,6 +90,23 @@ TEST(SsrcGpu, TheMemoryCheckCountsThePortsBuffers) {
   }
 }
 
+// The kernels shade Lambertian pixels only: a glossy material is refused by name before any
+// work, with the CPU named as the way on; the CPU renders it.
+TEST(SsrcGpu, GlossyMaterialsAreRefusedForTheCpu) {
+  Scene s = lit_box(32, 24);
+  s.materials[0].metallic = 1;
+  s.materials[0].roughness = 0.4f;
+  RenderOptions o = ssrc(Device::gpu, SpwiMerge::bilateral, SpwiGather::probe, 32, 1);
+  const Expected<RenderResult> refused = render(s, o);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_NE(refused.error().message.find("ssrc's glossy materials (their specular lobe) are on "
+                                         "the CPU only; use `device` cpu"),
+            std::string::npos)
+      << refused.error().message;
+  o.device = Device::cpu;
+  EXPECT_TRUE(render(s, o).ok());
+}
+
 // Every merge and gather at 8, 16 and 32 sectors over two bounces, each scene. The kernels do
 // the CPU's float operations in its order, with no multiply-add fused (`precise`): on lavapipe
 // (LLVM, IEEE division and sqrt) the images are the same bits (measured: relative RMSE 0 in all

@@ -192,6 +192,9 @@ struct SsrcOptions {
   // Rays that leave the screen see the sky, or (world) go on as exact rays through the scene: a
   // cost that depends on the scene, for rooms and light from off screen.
   SsrcOffscreen offscreen = SsrcOffscreen::sky;
+  // Glossy materials' specular lobe: the widest query only (merged cascade 0's bins weighed by
+  // the lobe); the cone query over ssrc's own intervals is not built.
+  SpecularQuery specular = SpecularQuery::wide;
 };
 
 // Surface radiance cascades (docs/METHODS.md, "Surface radiance cascades"): probes on the
@@ -209,6 +212,9 @@ struct SurfaceOptions {
   // A baked atlas to view from (bake() below, `penumbra bake`), made for this scene with the
   // same bounces: no cascade is traced and the options above come from the file. "": bake now.
   std::string atlas;
+  // Glossy materials' specular lobe: the widest query only (cascade 0's radiance kept per texel,
+  // weighed by the lobe); the cone query over the surface cascades' own intervals is not built.
+  SpecularQuery specular = SpecularQuery::wide;
 };
 
 struct RenderOptions {

@@ -1,12 +1,15 @@
 #include "spaceland/atlas/cascades.hpp"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 
 #include "core/math.hpp"
 #include "core/parallel.hpp"
 #include "core/timer.hpp"
+#include "spaceland/brdf_albedo.hpp"
+#include "spaceland/cascade/cone.hpp"
 #include "spaceland/cascade/levels.hpp"
 #include "spaceland/cascade/radiance.hpp"
 #include "spaceland/cascade/sphere_lights.hpp"
@@ -388,14 +391,14 @@ Rgb Baked::light(std::size_t k, bool f, bool with_sun) const {
   return e;
 }
 
-template <class Keep>
-Rgb Baked::within(std::uint32_t chart, Uv uv, bool front, bool with_sun, float& weight,
+template <class Value, class Keep>
+Rgb Baked::within(std::uint32_t chart, Uv uv, bool front, float& weight, Value&& value,
                   Keep&& keep) const {
   Rgb sum{};
   weight = 0;
   for_each_tap(atlas, uv, [&](std::size_t k, float w) {
     if (texels[k].chart != int(chart) || !keep(k)) return;
-    sum += light(k, front, with_sun) * w;
+    sum += value(k, front) * w;
     weight += w;
   });
   return sum;
@@ -411,8 +414,9 @@ Vec3 plane_point(const Chart& c, int x, int y) {
 
 }  // namespace
 
-Rgb Baked::irradiance_at(const Scene& scene, const RayScene& rays, const Hit& hit, Vec3 towards,
-                         bool with_sun) const {
+template <class Value>
+Rgb Baked::read_at(const Scene& scene, const RayScene& rays, const Hit& hit, Vec3 towards,
+                   Value&& value) const {
   std::uint32_t chart = 0;
   const Uv uv = atlas.locate(scene, hit, chart);
   // The side is the hit's, read from every texel: a chart's normals (and a linked chart's) face
@@ -435,7 +439,7 @@ Rgb Baked::irradiance_at(const Scene& scene, const RayScene& rays, const Hit& hi
   auto sees = [&](Vec3 centre) { return !wall_between(rays, from, centre + lift, c.n); };
   auto keep = [&](std::size_t k) { return !near || sees(texels[k].position); };
   float weight = 0;
-  Rgb sum = within(chart, uv, front, with_sun, weight, keep);
+  Rgb sum = within(chart, uv, front, weight, value, keep);
   // Past the rim: the light where the surface goes on, read in its own chart.
   if (!seams.empty())
     for_each_tap(atlas, uv, [&](std::size_t k, float w) {
@@ -450,7 +454,7 @@ Rgb Baked::irradiance_at(const Scene& scene, const RayScene& rays, const Hit& hi
         return;
       float there = 0;
       const Rgb e =
-          within(link->chart, link->uv, front, with_sun, there, [](std::size_t) { return true; });
+          within(link->chart, link->uv, front, there, value, [](std::size_t) { return true; });
       if (there > 0) {
         sum += e * (w / there);
         weight += w;
@@ -472,14 +476,68 @@ Rgb Baked::irradiance_at(const Scene& scene, const RayScene& rays, const Hit& hi
       const float d2 = dx * dx + dy * dy;
       if (d2 < best) {
         best = d2;
-        nearest = light(k, front, with_sun);
+        nearest = value(k, front);
       }
       if (near && d2 < best_seen && sees(texels[k].position)) {
         best_seen = d2;
-        nearest_seen = light(k, front, with_sun);
+        nearest_seen = value(k, front);
       }
     }
   return best_seen < 3e38f ? nearest_seen : nearest;
+}
+
+Rgb Baked::irradiance_at(const Scene& scene, const RayScene& rays, const Hit& hit, Vec3 towards,
+                         bool with_sun) const {
+  return read_at(scene, rays, hit, towards,
+                 [&](std::size_t k, bool front) { return light(k, front, with_sun); });
+}
+
+namespace {
+
+// The points a cell wider than a quarter of the lobe is weighed at, along each side (as the
+// grid's: a lobe weighed at the cells' centres alone jumps from cell to cell).
+constexpr int kCellPoints = 4;
+
+}  // namespace
+
+Rgb Baked::lobe_at(const Scene& scene, const RayScene& rays, const Hit& hit, Vec3 wo, Vec3 n,
+                   float alpha) const {
+  if (side0 <= 0) return {};
+  thread_local std::vector<Vec3> dirs;
+  thread_local int dirs_side = 0;
+  if (dirs_side != side0) {
+    dirs = octahedral::map_directions(side0);
+    dirs_side = side0;
+  }
+  const float cell = cell_alpha(side0), a = std::max(alpha, cell);
+  const int sub = cell > alpha / cascade::kLobeCells ? kCellPoints : 1;
+  const std::size_t nd = dirs.size();
+  // The lobe's cells in each chart's frame the taps read (the hit's, a seam's other chart).
+  struct Charted {
+    int chart = -1;
+    cascade::LobeCells cells;
+  };
+  thread_local std::array<Charted, 2> made;
+  for (Charted& c : made) c.chart = -1;
+  const Vec3 r = reflect(wo, n);
+  auto cells_of = [&](int chart) -> const cascade::LobeCells& {
+    for (Charted& c : made)
+      if (c.chart == chart) return c.cells;
+    Charted& c = made[made[0].chart < 0 ? 0 : 1];
+    const DirectionFrame f = direction_frame(atlas.charts[std::size_t(chart)]);
+    c.chart = chart;
+    cascade::lobe_cells(dirs, side0, a, f.to_local(n), f.to_local(wo), f.to_local(r), side0,
+                        c.cells, sub);
+    return c.cells;
+  };
+  return read_at(scene, rays, hit, wo, [&](std::size_t k, bool) {
+    const Rgb* probe = radiance.data() + k * nd;
+    Rgb mean{};
+    cascade::lobe_mean(
+        cells_of(texels[k].chart), [](std::uint32_t) { return true; },
+        [&](std::uint32_t d) { return probe[d]; }, mean);
+    return mean;
+  });
 }
 
 void link_seams(const Scene& scene, const RayScene& rays, Baked& b) {
@@ -700,7 +758,10 @@ Expected<Baked> bake(const Scene& scene, const RayScene& rays, const Options& at
     auto met = [&](Hit& h, Vec3 d) {
       Rgb radiance = emission_at(scene, h);
       if (last)
-        radiance += albedo_at(scene, h) * last->irradiance_at(scene, rays, h, -d) * float(1 / kPi);
+        // A glossy surface's view-dependent light, as the grid's voxels: the share of a uniform
+        // light it reflects (hemispherical_albedo).
+        radiance += hemispherical_albedo(brdf_at(scene, h)) *
+                    last->irradiance_at(scene, rays, h, -d) * float(1 / kPi);
       return radiance;
     };
     std::atomic<std::uint64_t> traced{0};

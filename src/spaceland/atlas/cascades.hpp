@@ -102,12 +102,25 @@ struct Baked {
   // the surface count (one short ray each), so that light from past a wall does not bleed in.
   Rgb irradiance_at(const Scene& scene, const RayScene& rays, const Hit& hit, Vec3 towards,
                     bool with_sun = true) const;
+  // A glossy surface's specular lobe (GGX width alpha about the shading normal n, towards the
+  // viewer wo) averaged over cascade 0's radiance kept per texel (`radiance`, which it needs),
+  // read from the same texels as irradiance_at: seed 001 2.6's widest query. Each texel's map
+  // is weighed in its own chart's frame, a cell wider than a quarter of the lobe at 4 x 4 points
+  // (cascade::lobe_cells), the lobe taken no narrower than a cell. Zero where the lobe lies
+  // under the surface.
+  Rgb lobe_at(const Scene& scene, const RayScene& rays, const Hit& hit, Vec3 wo, Vec3 n,
+              float alpha) const;
 
  private:
+  // What irradiance_at and lobe_at share: value(k, front) of the texels around the hit, as
+  // irradiance_at describes.
+  template <class Value>
+  Rgb read_at(const Scene& scene, const RayScene& rays, const Hit& hit, Vec3 towards,
+              Value&& value) const;
   // Bilinear over the covered texels of `chart` around uv that `keep(k)`; weight 0 where none
   // of the four is.
-  template <class Keep>
-  Rgb within(std::uint32_t chart, Uv uv, bool front, bool with_sun, float& weight,
+  template <class Value, class Keep>
+  Rgb within(std::uint32_t chart, Uv uv, bool front, float& weight, Value&& value,
              Keep&& keep) const;
   // Texel k's light on the side its normal points to (front) or the other.
   Rgb light(std::size_t k, bool front, bool with_sun) const;

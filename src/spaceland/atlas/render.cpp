@@ -11,6 +11,8 @@
 #include "io/json_reader.hpp"
 #include "spaceland/atlas/cascades.hpp"
 #include "spaceland/atlas/file.hpp"
+#include "spaceland/brdf_albedo.hpp"
+#include "spaceland/cascade/cone.hpp"
 #include "spaceland/cascade/store.hpp"
 #include "spaceland/color.hpp"
 #include "spaceland/shade.hpp"
@@ -36,12 +38,16 @@ Status check_options(const SurfaceOptions& o) {
     return Error{"`surface.refine`: expected 0..10 levels, found " + std::to_string(o.refine)};
   if (o.cascades < 0 || o.cascades > 12)
     return Error{"`surface.cascades`: expected 0..12, found " + std::to_string(o.cascades)};
+  if (o.specular != SpecularQuery::wide)
+    return Error{std::string("`surface.specular`: expected wide (the widest query, over cascade "
+                             "0's radiance kept per texel), found ") +
+                 to_string(o.specular) +
+                 ": the cone query over the surface cascades' own intervals is not built"};
   return {};
 }
 
 Status check_scene(const Scene& scene) {
-  if (Status s = refuse_fog(scene, "surface", "--method grid or pt"); !s) return s;
-  return refuse_glossy(scene, "surface", "--method pt, spwi or grid");
+  return refuse_fog(scene, "surface", "--method grid or pt");
 }
 
 std::uint64_t working_bytes(const Scene& scene, const SurfaceOptions& o, bool radiance) {
@@ -50,8 +56,9 @@ std::uint64_t working_bytes(const Scene& scene, const SurfaceOptions& o, bool ra
   if (o.texel_size > 0) texels = surface_area(scene) / (double(o.texel_size) * o.texel_size);
   texels = std::min(3 * texels, 1e15);
   std::uint64_t bytes = bake_bytes(std::uint64_t(texels), side_of(o.directions));
-  // The bake's per-texel copy, the file's planar floats, their half copy and the encoding.
-  if (radiance)
+  // The bake's per-texel copy, the file's planar floats, their half copy and the encoding; a
+  // glossy scene's view keeps the copy too.
+  if (radiance || cascade::narrowest_lobe(scene) < cascade::kInfinity)
     bytes += 4 * cascade::RadianceStore::bytes(std::uint64_t(texels), side_of(o.directions));
   return bytes;
 }
@@ -129,11 +136,14 @@ Status bake_file(const FileBake& b, const std::string& path, BakeResult& result)
 
 Expected<ImageRgb> render(const SolveContext& ctx, const SurfaceOptions& o, SolveReport& report,
                           SurfaceOptions& used) {
+  // Glossy materials read cascade 0's radiance per direction: kept by the bake, read from a file.
+  const bool glossy = cascade::narrowest_lobe(ctx.scene) < cascade::kInfinity;
   Expected<Baked> baked = Error{""};
   if (o.atlas.empty()) {
     BakeReport bake_report;
-    baked = bake(ctx.scene, ctx.rays, atlas_options(o), cascade_options(o, ctx.bounces),
-                 ctx.max_memory, bake_report);
+    CascadeOptions co = cascade_options(o, ctx.bounces);
+    co.keep_radiance = glossy;
+    baked = bake(ctx.scene, ctx.rays, atlas_options(o), co, ctx.max_memory, bake_report);
     if (!baked) return baked.error();
     report.stages.insert(report.stages.end(), bake_report.stages.begin(), bake_report.stages.end());
     report.rays += bake_report.rays;
@@ -145,9 +155,13 @@ Expected<ImageRgb> render(const SolveContext& ctx, const SurfaceOptions& o, Solv
   } else {
     Stopwatch watch;
     Record r;
-    baked = read_atlas(o.atlas, ctx.given ? *ctx.given : ctx.scene, ctx.max_memory, r, false,
+    baked = read_atlas(o.atlas, ctx.given ? *ctx.given : ctx.scene, ctx.max_memory, r, glossy,
                        ctx.bounces);
     if (!baked) return baked.error();
+    if (glossy && baked->side0 == 0)
+      return Error{"atlas " + o.atlas +
+                   " holds no radiance per direction (baked with --no-radiance), which the "
+                   "scene's glossy materials read: bake it again without --no-radiance"};
     // The file holds the light at 2^-k of its scale; the view runs at 2^-light_exponent.
     scale(*baked, r.light_exponent - ctx.light_exponent);
     report.stages.push_back({"read atlas", watch.ms()});
@@ -174,10 +188,16 @@ Expected<ImageRgb> render(const SolveContext& ctx, const SurfaceOptions& o, Solv
   const SunLight sun(ctx.scene, ctx.rays, ctx.sun_rays);
   ImageRgb img = shade_pixels(
       ctx.g, bg, report.rays, [&](int, int, std::size_t k, const Hit& h, std::uint64_t& local) {
-        const Rgb albedo = albedo_at(ctx.scene, h);
-        const Rgb e = baked->irradiance_at(ctx.scene, ctx.rays, h, -ctx.g.directions[k], false);
-        return emission_at(ctx.scene, h) + albedo * e * float(1 / kPi) +
-               sun.reflected(h, albedo, local);
+        const Brdf brdf = brdf_at(ctx.scene, h);
+        const Vec3 wo = normalize(-ctx.g.directions[k]);
+        // The Lambertian: its albedo and no specular lobe.
+        const LobeAlbedo lobes = lobe_albedo(brdf, std::max(dot(h.shading_normal, wo), 0.0f));
+        const Rgb e = baked->irradiance_at(ctx.scene, ctx.rays, h, wo, false);
+        Rgb l = emission_at(ctx.scene, h) + lobes.diffuse * e * float(1 / kPi);
+        if (!brdf.lambertian)
+          l += lobes.specular *
+               baked->lobe_at(ctx.scene, ctx.rays, h, wo, h.shading_normal, brdf.alpha);
+        return l + sun.reflected(h, brdf, wo, local);
       });
   report.stages.push_back({"view", watch.ms()});
   return img;

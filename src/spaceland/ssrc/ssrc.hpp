@@ -42,13 +42,14 @@ inline constexpr float kOnPlane = 0.02f;
 inline constexpr float kParallel = 1e-12f;
 
 struct Layout {
-  spwi::Layout tiles;  // the probe tiles of each cascade (levels.spacing*, nx, ny)
-  int q0 = 16;         // screen directions of cascade 0
-  int r0 = 16;         // cascade 0's interval, pixels
-  int steps = 16;      // samples an interval at least (the top one: to the screen's edge)
-  int sectors = 32;    // per direction: occlusion bits
-  int bins = 8;        // per direction: stored radiance, sectors / bins sectors each
-  int rays = 4;        // directions marched together
+  spwi::Layout tiles;   // the probe tiles of each cascade (levels.spacing*, nx, ny)
+  int q0 = 16;          // screen directions of cascade 0
+  int r0 = 16;          // cascade 0's interval, pixels
+  int steps = 16;       // samples an interval at least (the top one: to the screen's edge)
+  int sectors = 32;     // per direction: occlusion bits
+  int bins = 8;         // per direction: stored radiance, sectors / bins sectors each
+  int rays = 4;         // directions marched together
+  bool glossy = false;  // a glossy material in the scene: its pixels keep more (bytes())
 
   int count() const { return tiles.count(); }
   int directions(int i) const { return q0 << i; }
@@ -86,12 +87,13 @@ struct Layout {
   std::uint64_t bytes() const;
 };
 
-// The layout for a width x height image, derived values filled in.
+// The layout for a width x height image, derived values filled in (`glossy` is the caller's).
 Layout make_layout(int width, int height, const SsrcOptions& o);
 
 // The options' ranges and combinations, fields named as in SsrcOptions (`ssrc.sectors`).
 Status check_options(const SsrcOptions& o);
-// What the scene adds: the screen carries no fog.
+// What the scene adds: the screen carries no fog. (Glossy materials read merged cascade 0 with
+// their lobe, on the CPU.)
 Status check_scene(const Scene& scene);
 
 // What render() prepares on the CPU before the cascades, as views of its own buffers: handed to

@@ -7,6 +7,7 @@
 
 #include "core/math.hpp"
 #include "io/json_reader.hpp"
+#include "spaceland/surface.hpp"
 
 namespace penumbra::spaceland {
 
@@ -46,14 +47,7 @@ struct Bound {
 
 Expected<Bound> bound(const Scene& s, int bounces) {
   Bound b;
-  std::vector<char> used(s.materials.size(), 0);
-  auto use = [&](std::uint32_t m) {
-    if (m < used.size()) used[m] = 1;
-  };
-  for (const TriangleMesh& mesh : s.meshes)
-    for (std::uint32_t m : mesh.materials) use(m);
-  for (const Sphere& sp : s.spheres) use(sp.material);
-  for (const Disk& d : s.disks) use(d.material);
+  const std::vector<char> used = materials_in_use(s);
   for (std::size_t i = 0; i < s.materials.size(); ++i) {
     const Material& m = s.materials[i];
     if (!finite(m.emission) || !finite(m.albedo))

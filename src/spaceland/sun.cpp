@@ -82,8 +82,14 @@ Rgb SunLight::reflected(const Hit& hit, const Brdf& brdf, Vec3 wo, std::uint64_t
   if (brdf.lambertian) return reflected(hit, brdf.diffuse, rays);
   const float cs = dot(hit.shading_normal, dir_);
   if (!on_ || !(cs > 0)) return {};
-  return reflected(hit, Rgb{1, 1, 1}, rays) *
-         brdf_cos(brdf, hit.shading_normal, hit.geometric_normal, wo, dir_) * float(kPi / cs);
+  return glossy(hit, brdf, wo, reflected(hit, Rgb{1, 1, 1}, rays));
+}
+
+Rgb SunLight::glossy(const Hit& hit, const Brdf& brdf, Vec3 wo, Rgb white) const {
+  const float cs = dot(hit.shading_normal, dir_);
+  if (!on_ || !(cs > 0)) return {};
+  return white * brdf_cos(brdf, hit.shading_normal, hit.geometric_normal, wo, dir_) *
+         float(kPi / cs);
 }
 
 Rgb SunLight::reflected(Vec3 from, Vec3 n, Rgb albedo, std::uint64_t& rays) const {

@@ -33,6 +33,9 @@ class SunLight {
   // above; a glossy one's value at the sun's centre (the sun is small) times what a white
   // Lambertian receives over pi over the cosine.
   Rgb reflected(const Hit& hit, const Brdf& brdf, Vec3 wo, std::uint64_t& rays) const;
+  // The glossy BRDF's value from what reflected(hit, white) gave: one set of shadow rays for
+  // both a glossy pixel's view and what a later bounce sees of it (its albedo times white).
+  Rgb glossy(const Hit& hit, const Brdf& brdf, Vec3 wo, Rgb white) const;
 
  private:
   const RayScene* rays_;

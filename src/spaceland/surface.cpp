@@ -55,6 +55,18 @@ Brdf brdf_at(const Scene& scene, const Hit& hit) {
   return make_brdf(albedo, m.metallic * mr.b, m.roughness * mr.g);
 }
 
+std::vector<char> materials_in_use(const Scene& scene) {
+  std::vector<char> used(scene.materials.size(), 0);
+  auto use = [&](std::uint32_t m) {
+    if (m < used.size()) used[m] = 1;
+  };
+  for (const TriangleMesh& mesh : scene.meshes)
+    for (std::uint32_t m : mesh.materials) use(m);
+  for (const Sphere& sp : scene.spheres) use(sp.material);
+  for (const Disk& d : scene.disks) use(d.material);
+  return used;
+}
+
 void face_towards(Hit& hit, Vec3 d) {
   if (dot(hit.geometric_normal, d) > 0) hit.geometric_normal = -hit.geometric_normal;
   if (dot(hit.shading_normal, d) > 0) hit.shading_normal = -hit.shading_normal;

@@ -2,6 +2,8 @@
 // normals turned to the side a ray arrives from.
 #pragma once
 
+#include <vector>
+
 #include "penumbra/spaceland/scene.hpp"
 #include "spaceland/brdf.hpp"
 #include "spaceland/ray.hpp"
@@ -21,6 +23,10 @@ inline bool is_sphere_light(const Scene& scene, const Sphere& s) {
   const Rgb& e = scene.materials[s.material].emission;
   return e.r > 0 || e.g > 0 || e.b > 0;
 }
+
+// Per material of the scene, 1 where a surface (a mesh's triangle, a sphere, a disk) uses it:
+// a file's library may name materials nothing uses (an MTL file, glTF's defaults).
+std::vector<char> materials_in_use(const Scene& scene);
 
 // Turns a hit's normals to the side the ray arrives from (surfaces are two-sided).
 void face_towards(Hit& hit, Vec3 ray_direction);

@@ -90,8 +90,8 @@ TEST(SsrcGpu, TheMemoryCheckCountsThePortsBuffers) {
   }
 }
 
-// The kernels shade Lambertian pixels only: a glossy material is refused by name before any
-// work, with the CPU named as the way on; the CPU renders it.
+// The kernels shade Lambertian pixels only: a glossy material is refused by name, with the CPU
+// named as the way on; the CPU renders it.
 TEST(SsrcGpu, GlossyMaterialsAreRefusedForTheCpu) {
   Scene s = lit_box(32, 24);
   s.materials[0].metallic = 1;

@@ -26,6 +26,7 @@
 #include <string>
 #include <vector>
 
+#include "penumbra/compare.hpp"
 #include "penumbra/spaceland/render.hpp"
 #include "penumbra/spaceland/scene.hpp"
 #include "spaceland/scene_builders.hpp"
@@ -574,20 +575,37 @@ TEST(Methods, TheTableRefusesWhatItDoesNotHold) {
   }
 }
 
-// Every method renders glossy materials on the CPU; ssrc's GPU kernels shade Lambertian pixels
-// only and refuse them by name (ssrc_gpu_test.cpp).
+// Every method renders glossy materials on the CPU, and a metal floor is not the Lambertian one;
+// ssrc's GPU kernels shade Lambertian pixels only and refuse them by name (ssrc_gpu_test.cpp).
+// A glossy material no surface uses changes nothing: the same bits as without it.
 TEST(Methods, EveryMethodRendersGlossyMaterials) {
   int floor = 0;
-  Scene scene = floor_scene(floor);
-  Material& m = scene.materials[scene.disks.front().material];
+  Scene lambertian = floor_scene(floor);
+  add_sphere(lambertian, {0.3f, 0.8f, 0}, 0.3f, add_material(lambertian, {0, 0, 0}, {20, 20, 20}));
+  lambertian.sky = {{0.3f, 0.4f, 0.6f}, {0.3f, 0.4f, 0.6f}, {0.3f, 0.4f, 0.6f}};
+  Scene metal = lambertian;
+  Material& m = metal.materials[metal.disks.front().material];
   m.metallic = 1;
   m.roughness = 0.3f;
+  Scene unused = lambertian;
+  unused.materials.push_back(m);
+  unused.materials.back().name = "unused";
   for (const MethodInfo& info : methods()) {
     RenderOptions o;
     o.method = info.method;
     o.pt.spp = 1;
-    const Expected<RenderResult> r = render(scene, o);
-    EXPECT_TRUE(r.ok()) << info.name << ": " << (r.ok() ? "" : r.error().message);
+    const Expected<RenderResult> r = render(metal, o);
+    ASSERT_TRUE(r.ok()) << info.name << ": " << r.error().message;
+    const RenderResult plain = render_ok(lambertian, o);
+    const Expected<ErrorMetrics> apart = compare_images(r->radiance, plain.radiance);
+    ASSERT_TRUE(apart.ok()) << apart.error().message;
+    EXPECT_GT(apart->relative_rmse, 0.05) << info.name;
+    const RenderResult with_unused = render_ok(unused, o);
+    const ImageRgb& same = with_unused.radiance;
+    ASSERT_EQ(same.size(), plain.radiance.size());
+    EXPECT_TRUE(std::equal(same.data(), same.data() + same.size(), plain.radiance.data()))
+        << info.name;
+    EXPECT_EQ(with_unused.memory_bytes, plain.memory_bytes) << info.name;
   }
 }
 

@@ -57,9 +57,10 @@ std::uint64_t working_bytes(const Scene& scene, const SurfaceOptions& o, bool ra
   texels = std::min(3 * texels, 1e15);
   std::uint64_t bytes = bake_bytes(std::uint64_t(texels), side_of(o.directions));
   // The bake's per-texel copy, the file's planar floats, their half copy and the encoding; a
-  // glossy scene's view keeps the copy too.
-  if (radiance || cascade::narrowest_lobe(scene) < cascade::kInfinity)
-    bytes += 4 * cascade::RadianceStore::bytes(std::uint64_t(texels), side_of(o.directions));
+  // glossy scene's view keeps the copy alone.
+  const int copies = radiance ? 4 : cascade::narrowest_lobe(scene) < cascade::kInfinity ? 1 : 0;
+  bytes += std::uint64_t(copies) *
+           cascade::RadianceStore::bytes(std::uint64_t(texels), side_of(o.directions));
   return bytes;
 }
 

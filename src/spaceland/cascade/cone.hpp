@@ -1,6 +1,7 @@
 // Seed 001 section 2.6's cone query, shared by the 3D methods that keep their cascades for it
 // (SPWI, the grid): which cascade K a lobe reads merged, which cells of a direction map a lobe
-// covers, a probe's mean over them, and the part of a lobe a light met at the point fills.
+// covers, a probe's mean over them, and the part of a lobe a light met at the point fills. (The
+// surface cascades' widest query weighs their texels' maps with lobe_cells too.)
 #pragma once
 
 #include <algorithm>
@@ -17,6 +18,7 @@
 #include "spaceland/brdf.hpp"
 #include "spaceland/brdf_albedo.hpp"
 #include "spaceland/cascade/levels.hpp"
+#include "spaceland/surface.hpp"
 
 namespace penumbra::spaceland::cascade {
 
@@ -35,12 +37,14 @@ inline int cone_cascade(const Levels& l, float alpha, int top) {
   return k;
 }
 
-// The narrowest specular lobe of the scene's materials (GGX alpha; a roughness texture may make
-// any part of a surface a mirror: 0); infinity where none is glossy.
+// The narrowest specular lobe of the materials the scene's surfaces use (GGX alpha; a roughness
+// texture may make any part of a surface a mirror: 0); infinity where none is glossy.
 inline float narrowest_lobe(const Scene& scene) {
   float narrowest = std::numeric_limits<float>::infinity();
-  for (const Material& m : scene.materials) {
-    if (m.lambertian()) continue;
+  const std::vector<char> used = materials_in_use(scene);
+  for (std::size_t k = 0; k < scene.materials.size(); ++k) {
+    const Material& m = scene.materials[k];
+    if (!used[k] || m.lambertian()) continue;
     narrowest = std::min(narrowest, m.metallic_roughness_texture.index >= 0
                                         ? 0.0f
                                         : make_brdf(m.albedo, m.metallic, m.roughness).alpha);

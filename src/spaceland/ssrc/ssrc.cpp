@@ -1050,8 +1050,11 @@ Expected<ImageRgb> render(const SolveContext& ctx, const SsrcOptions& o, const L
       bounce_albedo[k] = hemispherical_albedo(brdf);
       bounce_direct[k] = direct[k];
       if (sun.on()) {
-        direct[k] += sun.reflected(h, brdf, wo, rays);
-        bounce_direct[k] += sun.reflected(h, bounce_albedo[k], rays);
+        // One set of shadow rays for both: the BRDF towards the sun's centre for the camera
+        // (SunLight::reflected's glossy form), the hemispherical albedo for a later bounce.
+        const Rgb white = sun.reflected(h, Rgb{1, 1, 1}, rays);
+        direct[k] += sun.glossy(h, brdf, wo, white);
+        bounce_direct[k] += bounce_albedo[k] * white;
       }
     });
   }

@@ -208,7 +208,7 @@ Status ssrc_check_scene(const Scene& scene) {
 
 std::uint64_t ssrc_bytes(const Scene& scene, const RenderOptions& o) {
   ssrc::Layout l = ssrc::make_layout(scene.camera.width, scene.camera.height, o.ssrc);
-  l.glossy = cascade::narrowest_lobe(scene) < cascade::kInfinity;
+  l.glossy = cascade::any_glossy(scene);
   return l.bytes() + (o.device == Device::gpu ? ssrc::gpu_bytes(l, o.ssrc) : 0);
 }
 
@@ -242,7 +242,7 @@ void ssrc_describe(const RenderResult& r, std::vector<Parameter>& p, std::string
 Expected<ImageRgb> ssrc_run(const SolveContext& ctx, const RenderOptions& o, SolveReport& report,
                             RenderOptions& used, ssrc::Port port) {
   ssrc::Layout layout = ssrc::make_layout(ctx.g.width, ctx.g.height, o.ssrc);
-  layout.glossy = cascade::narrowest_lobe(ctx.scene) < cascade::kInfinity;
+  layout.glossy = cascade::any_glossy(ctx.scene);
   used.ssrc.probe_spacing = layout.tiles.levels.spacing0;
   used.ssrc.interval = layout.r0;
   used.ssrc.cascades = layout.count();

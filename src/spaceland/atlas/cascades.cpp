@@ -492,14 +492,6 @@ Rgb Baked::irradiance_at(const Scene& scene, const RayScene& rays, const Hit& hi
                  [&](std::size_t k, bool front) { return light(k, front, with_sun); });
 }
 
-namespace {
-
-// The points a cell wider than a quarter of the lobe is weighed at, along each side (as the
-// grid's: a lobe weighed at the cells' centres alone jumps from cell to cell).
-constexpr int kCellPoints = 4;
-
-}  // namespace
-
 Rgb Baked::lobe_at(const Scene& scene, const RayScene& rays, const Hit& hit, Vec3 wo, Vec3 n,
                    float alpha) const {
   if (side0 <= 0) return {};
@@ -510,7 +502,7 @@ Rgb Baked::lobe_at(const Scene& scene, const RayScene& rays, const Hit& hit, Vec
     dirs_side = side0;
   }
   const float cell = cell_alpha(side0), a = std::max(alpha, cell);
-  const int sub = cell > alpha / cascade::kLobeCells ? kCellPoints : 1;
+  const int sub = cell > alpha / cascade::kLobeCells ? cascade::kCellPoints : 1;
   const std::size_t nd = dirs.size();
   // The lobe's cells in each chart's frame the taps read (the hit's, a seam's other chart).
   struct Charted {

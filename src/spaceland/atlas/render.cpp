@@ -58,7 +58,7 @@ std::uint64_t working_bytes(const Scene& scene, const SurfaceOptions& o, bool ra
   std::uint64_t bytes = bake_bytes(std::uint64_t(texels), side_of(o.directions));
   // The bake's per-texel copy, the file's planar floats, their half copy and the encoding; a
   // glossy scene's view keeps the copy alone.
-  const int copies = radiance ? 4 : cascade::narrowest_lobe(scene) < cascade::kInfinity ? 1 : 0;
+  const int copies = radiance ? 4 : cascade::any_glossy(scene) ? 1 : 0;
   bytes += std::uint64_t(copies) *
            cascade::RadianceStore::bytes(std::uint64_t(texels), side_of(o.directions));
   return bytes;
@@ -138,7 +138,7 @@ Status bake_file(const FileBake& b, const std::string& path, BakeResult& result)
 Expected<ImageRgb> render(const SolveContext& ctx, const SurfaceOptions& o, SolveReport& report,
                           SurfaceOptions& used) {
   // Glossy materials read cascade 0's radiance per direction: kept by the bake, read from a file.
-  const bool glossy = cascade::narrowest_lobe(ctx.scene) < cascade::kInfinity;
+  const bool glossy = cascade::any_glossy(ctx.scene);
   Expected<Baked> baked = Error{""};
   if (o.atlas.empty()) {
     BakeReport bake_report;

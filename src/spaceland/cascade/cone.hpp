@@ -52,6 +52,19 @@ inline float narrowest_lobe(const Scene& scene) {
   return narrowest;
 }
 
+// Whether a surface of the scene is glossy (narrowest_lobe finite): what keeps or reads the
+// specular lobe's data.
+inline bool any_glossy(const Scene& scene) {
+  return narrowest_lobe(scene) < std::numeric_limits<float>::infinity();
+}
+
+// The points a cell wider than a quarter of the lobe (kLobeCells) is weighed at along each side,
+// in every method's lobe (lobe_cells' `sub`, ssrc's bins): at the cells' centres alone the lobe
+// jumps from cell to cell as the mirror direction moves (the grid's metal floor at roughness 0.3
+// under a sky from a black horizon to a white zenith, 96 x 72, against the path tracer: 28% with
+// stripes; 2 points: 16.1%, 4: 12.1%, 8: 11.6%).
+inline constexpr int kCellPoints = 4;
+
 // The highest K a lobe of width `narrowest` or wider reaches on these levels (0: none glossy).
 inline int cone_top(const Levels& l, float narrowest) {
   return narrowest < std::numeric_limits<float>::infinity()

@@ -180,13 +180,6 @@ struct OwnThrough {
 
 }  // namespace
 
-// The points a cell wider than a quarter of the lobe is weighed at, along each side: a lobe
-// read over cascade 0's 16 cells at their centres alone jumped from cell to cell as the mirror
-// direction moved (a metal floor at roughness 0.3 under a sky from a black horizon to a white
-// zenith, 96 x 72, against the path tracer: 28% with stripes; 2 points: 16.1%, 4: 12.1%, 8:
-// 11.6%).
-constexpr int kCellPoints = 4;
-
 bool RadianceField::lobe_radiance(Vec3 p, Vec3 n, Vec3 ns, Vec3 wo, float alpha, Rgb& out,
                                   const RayScene* rays) const {
   thread_local cascade::LobeCells cells;
@@ -200,7 +193,7 @@ bool RadianceField::lobe_radiance(Vec3 p, Vec3 n, Vec3 ns, Vec3 wo, float alpha,
     const std::vector<Vec3>& dirs = i == 0 ? dirs_ : kept_[std::size_t(i)].dirs;
     // Cells wider than a quarter of the lobe weigh it over 4 x 4 points each (lobe_cells).
     cascade::lobe_cells(dirs, c.side, a, ns, wo, r, cascade::lobe_radius(i, c.side, a, cell), cells,
-                        cell > alpha / cascade::kLobeCells ? kCellPoints : 1);
+                        cell > alpha / cascade::kLobeCells ? cascade::kCellPoints : 1);
     if (cells.empty()) continue;
     lights.clear();
     if (i == 0) {

@@ -708,11 +708,6 @@ struct Gather {
     return total;
   }
 
-  // The points a bin wider than a quarter of the lobe is weighed at along each side: 4 screen
-  // angles, and 4 sectors where there are 32 (as the grid's cells: a lobe weighed at a bin's
-  // centre alone jumps from bin to bin as the mirror direction moves).
-  static constexpr int kCellPoints = 4;
-
   // A glossy surface's specular lobe (GGX width alpha about the shading normal n, seen along v,
   // towards the viewer) over each direction's bins, into w (q0 x bins): the lobe's weight
   // (lobe_weight) at each sector's centre angle of each point's slice, times the sector's solid
@@ -722,7 +717,9 @@ struct Gather {
     const Layout& l = s.layout;
     const float cell = cap_alpha(4 * kPi / (double(l.q0) * l.bins)), a = std::max(alpha, cell);
     const bool fine = cell > alpha / cascade::kLobeCells;
-    const int points = fine ? kCellPoints : 1;
+    // A bin wider than a quarter of the lobe: cascade::kCellPoints screen angles (and its 4
+    // sectors at 32).
+    const int points = fine ? cascade::kCellPoints : 1;
     // Directions further than 5 lobe widths from the mirror direction r (the half vector 5
     // alpha off the normal) are left out, whole slices at once: at roughness 0.3 the weights
     // take a third of the time (a metal floor under a gradient sky, 400 x 300: 1.65 s to 0.6 s;
@@ -736,8 +733,9 @@ struct Gather {
       float* wd = w + std::size_t(d * l.bins);
       std::fill(wd, wd + l.bins, 0.0f);
       for (int j = 0; j < points; ++j) {
-        const Vec3 t = slice_tangent(
-            v, fine ? screen_points[std::size_t(d * kCellPoints + j)] : screen[std::size_t(d)]);
+        const Vec3 t =
+            slice_tangent(v, fine ? screen_points[std::size_t(d * cascade::kCellPoints + j)]
+                                  : screen[std::size_t(d)]);
         // The cosine of r's angle to the slice's half-plane (its nearest point: r's projection
         // on the plane, or the view axis where r lies behind it).
         const float rv = dot(r, v), rt = dot(r, t);
@@ -1154,9 +1152,9 @@ Expected<ImageRgb> render(const SolveContext& ctx, const SsrcOptions& o, const L
     for (int d = 0; d < layout.q0; ++d) {
       gather.screen.push_back(s.directions[0][std::size_t(d)].world);
       if (glossy)
-        for (int j = 0; j < Gather::kCellPoints; ++j)
+        for (int j = 0; j < cascade::kCellPoints; ++j)
           gather.screen_points.push_back(frame.screen_direction(
-              layout.phi(0, d) + 2 * kPi * ((j + 0.5) / Gather::kCellPoints - 0.5) / layout.q0));
+              layout.phi(0, d) + 2 * kPi * ((j + 0.5) / cascade::kCellPoints - 0.5) / layout.q0));
     }
     gather.prepare_probes();
     std::uint64_t traced = 0;

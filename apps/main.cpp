@@ -1,6 +1,6 @@
 // penumbra: the command line. A thin front end over libpenumbra; each subcommand lives in its
 // own file (render_cmd, compare_cmd, quality_cmd, paint_cmd, bake_cmd,
-// field_cmd).
+// field_cmd, view_cmd).
 // Exit codes: 0 success, 1 bad input or runtime failure, 2 usage error.
 #include <CLI/CLI.hpp>
 #include <algorithm>
@@ -16,6 +16,7 @@
 #include "penumbra/penumbra.hpp"
 #include "quality_cmd.hpp"
 #include "render_cmd.hpp"
+#include "view_cmd.hpp"
 
 namespace {
 constexpr int kUsage = 2;
@@ -90,6 +91,7 @@ int main(int argc, char** argv) {
   const std::unique_ptr<PaintCommand> paint = add_paint_command(app);
   const std::unique_ptr<BakeCommand> bake = add_bake_command(app);
   const std::unique_ptr<FieldCommand> field = add_field_command(app);
+  const std::unique_ptr<ViewCommand> view = add_view_command(app);
 
   try {
     app.parse(argc, argv);
@@ -106,5 +108,6 @@ int main(int argc, char** argv) {
   if (paint->parsed()) return run_paint(paint->args);
   if (bake->parsed()) return run_bake(bake->args);
   if (field->parsed()) return run_field(field->args);
+  if (view->parsed()) return run_view(view->args);
   return kUsage;
 }

@@ -23,6 +23,7 @@
 #include "core/timer.hpp"
 #include "io/image_io.hpp"
 #include "io/path_util.hpp"
+#include "window_support.hpp"
 
 using namespace penumbra;
 using namespace penumbra::flatland;
@@ -35,26 +36,6 @@ namespace {
 
 constexpr int kFailure = 1;
 constexpr int kInterrupted = 130;  // SIGINT or SIGTERM: the outputs were still written
-
-// GLFW reports errors through a callback, possibly on the worker thread (glfwPostEmptyEvent).
-std::mutex glfw_error_mutex;
-std::string glfw_error;
-
-extern "C" void on_glfw_error(int, const char* text) {
-  std::lock_guard lock(glfw_error_mutex);
-  glfw_error = text ? text : "unknown error";
-}
-
-std::string last_glfw_error() {
-  std::lock_guard lock(glfw_error_mutex);
-  return glfw_error;
-}
-
-// SIGINT and SIGTERM end the session as closing the window does (outputs are still written).
-std::atomic<bool> g_stop{false};
-extern "C" void on_stop_signal(int) {
-  g_stop.store(true);
-}
 
 }  // namespace
 
@@ -203,20 +184,6 @@ void Painter::handle_input() {
   quit_down_ = q_down;
 }
 
-// The window's back buffer as 8-bit RGB, row 0 at the top.
-std::vector<unsigned char> Painter::read_window(int& w, int& h) {
-  glfwGetFramebufferSize(window_, &w, &h);
-  std::vector<unsigned char> rgb(std::size_t(w) * h * 3), flipped(rgb.size());
-  glFinish();
-  glPixelStorei(GL_PACK_ALIGNMENT, 1);
-  glReadBuffer(GL_BACK);
-  glReadPixels(0, 0, w, h, GL_RGB, GL_UNSIGNED_BYTE, rgb.data());
-  const std::size_t row = std::size_t(w) * 3;
-  for (int y = 0; y < h; ++y)  // OpenGL's rows start at the bottom
-    std::copy_n(&rgb[std::size_t(h - 1 - y) * row], row, &flipped[std::size_t(y) * row]);
-  return flipped;
-}
-
 // The screenshot, the saved painting and the recording, all or nothing.
 int Painter::write_outputs(const std::vector<unsigned char>* shot, int shot_w, int shot_h) {
   std::vector<std::string> paths;
@@ -246,52 +213,22 @@ int Painter::write_outputs(const std::vector<unsigned char>* shot, int shot_w, i
 }
 
 int Painter::run() {
-  glfwSetErrorCallback(on_glfw_error);
-  if (!glfwInit()) {
-    std::cerr << "penumbra paint: no display: cannot open a window (" << last_glfw_error()
-              << "); set DISPLAY, or run under Xvfb for scripted use\n";
-    return kFailure;
-  }
-  glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
-  glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 0);
-  glfwWindowHint(GLFW_RESIZABLE, GLFW_FALSE);
   const float z = zoom();
-  window_ = glfwCreateWindow(int(std::ceil(canvas_.width() * z + kPanelWidth)),
-                             int(std::max(std::ceil(canvas_.height() * z), kMinHeight)),
-                             "Penumbra painter", nullptr, nullptr);
-  if (!window_) {
-    std::cerr << "penumbra paint: cannot create an OpenGL 3.0 window: " << last_glfw_error()
-              << "\n";
-    glfwTerminate();
-    return kFailure;
-  }
-  glfwMakeContextCurrent(window_);
-  // Shortcuts are polled once a frame: sticky keys keep a tap that is over before the poll.
-  glfwSetInputMode(window_, GLFW_STICKY_KEYS, GLFW_TRUE);
   // Replays and measurements run as fast as they can; a person gets vsync.
-  glfwSwapInterval(args_.replay.empty() && args_.frames == 0 ? 1 : 0);
-  IMGUI_CHECKVERSION();
-  ImGui::CreateContext();
-  ImGui::GetIO().IniFilename = nullptr;  // no imgui.ini in the working directory
-  ImGui::StyleColorsDark();
-  ImGui_ImplGlfw_InitForOpenGL(window_, true);
-  ImGui_ImplOpenGL3_Init("#version 130");
-  glGenTextures(1, &texture_);
-  glBindTexture(GL_TEXTURE_2D, texture_);
-  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  window_ = window_support::open_window("penumbra paint", "Penumbra painter",
+                                        int(std::ceil(canvas_.width() * z + kPanelWidth)),
+                                        int(std::max(std::ceil(canvas_.height() * z), kMinHeight)),
+                                        args_.replay.empty() && args_.frames == 0, texture_, true);
+  if (!window_) return kFailure;
 
   continuous_ = args_.frames > 0;
   worker_ = std::make_unique<Worker>([] { glfwPostEmptyEvent(); });
-  std::signal(SIGINT, on_stop_signal);
-  std::signal(SIGTERM, on_stop_signal);
+  window_support::watch_stop_signals(true);
   int status = 0;
   bool done = false;
   std::vector<unsigned char> shot;
   int shot_w = 0, shot_h = 0;
-  while (!done && !glfwWindowShouldClose(window_) && !g_stop.load()) {
+  while (!done && !glfwWindowShouldClose(window_) && !window_support::stop_requested()) {
     // A replay draws as fast as it can; otherwise the window sleeps until input arrives or the
     // solver posts a new frame (waking twice a second to notice a signal).
     if (replayed_ < replay_.size())
@@ -361,7 +298,8 @@ int Painter::run() {
     }
     if (args_.frames > 0 && current && solve_ms_.size() >= std::size_t(args_.frames)) done = true;
     if (!args_.screenshot.empty() && current && args_.frames == 0) done = true;
-    if (done && !args_.screenshot.empty()) shot = read_window(shot_w, shot_h);
+    if (done && !args_.screenshot.empty())
+      shot = window_support::read_window(window_, shot_w, shot_h);
     glfwSwapBuffers(window_);
     ui_ms_.push_back(frame_watch.ms());
   }
@@ -369,29 +307,15 @@ int Painter::run() {
   // Outputs first: they need only the canvas, the strokes and the screenshot, not the frame in
   // progress, which may take seconds to finish (RC) and cannot be cut short.
   glfwHideWindow(window_);
-  const bool interrupted = g_stop.load();
-  if (status == 0 && !args_.screenshot.empty() && shot.empty()) {
-    std::cerr << "penumbra paint: " << (interrupted ? "interrupted" : "the window was closed")
-              << " before the final frame; nothing written\n";
-    status = kFailure;
-  }
-  if (status == 0 && args_.frames > 0 && solve_ms_.size() < std::size_t(args_.frames)) {
-    std::cerr << "penumbra paint: " << (interrupted ? "interrupted" : "the window was closed")
-              << " after " << solve_ms_.size() << " of " << args_.frames
-              << " frames; nothing written\n";
-    status = kFailure;
-  }
+  const bool interrupted = window_support::stop_requested();
+  if (status == 0)
+    status = window_support::scripted_end("penumbra paint", !args_.screenshot.empty(),
+                                          !shot.empty(), args_.frames, solve_ms_.size());
   if (status == 0) status = write_outputs(shot.empty() ? nullptr : &shot, shot_w, shot_h);
   if (status == 0 && interrupted) status = kInterrupted;
-  std::signal(SIGINT, SIG_DFL);
-  std::signal(SIGTERM, SIG_DFL);
+  window_support::watch_stop_signals(false);
   worker_.reset();
-  glDeleteTextures(1, &texture_);
-  ImGui_ImplOpenGL3_Shutdown();
-  ImGui_ImplGlfw_Shutdown();
-  ImGui::DestroyContext();
-  glfwDestroyWindow(window_);
-  glfwTerminate();
+  window_support::close_window(window_, texture_);
 
   if (args_.stats) {
     std::printf("penumbra paint: %dx%d cells, method %s, %zu solver frames\n", canvas_.width(),

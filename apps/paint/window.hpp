@@ -40,7 +40,6 @@ class Painter {
   void draw_panel();  // panel.cpp
   void submit();
   void upload(const Frame& f);
-  std::vector<unsigned char> read_window(int& w, int& h);
   int write_outputs(const std::vector<unsigned char>* shot, int shot_w, int shot_h);
   void replace_canvas(penumbra::flatland::paint::Canvas c);
 

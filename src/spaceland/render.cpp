@@ -9,8 +9,10 @@
 #include <optional>
 #include <string>
 
+#include "core/fnv.hpp"
 #include "core/timer.hpp"
 #include "io/json_reader.hpp"
+#include "spaceland/atlas/file.hpp"
 #include "spaceland/atlas/render.hpp"
 #include "spaceland/brightness.hpp"
 #include "spaceland/embree/ray_scene.hpp"
@@ -220,7 +222,7 @@ namespace {
 // `room`: the memory limit less what is held already (the scene, the BVH, the pixel buffers),
 // which the method's own refusals (the grid's cascades, the radiance cache) are held to.
 Status solve(const Plan& plan, const Scene& scene, const Scene& given, const RayScene& rays,
-             const GBuffer& g, std::uint64_t room, RenderResult& result) {
+             const GBuffer& g, std::uint64_t room, Kept* kept, RenderResult& result) {
   const RenderOptions& o = plan.options;
   const MethodEntry& m = entry(o.method);
   SolveContext ctx{scene, rays, g, o.bounces, room, o.sun_rays};
@@ -228,6 +230,7 @@ Status solve(const Plan& plan, const Scene& scene, const Scene& given, const Ray
   ctx.light_exponent = plan.light_exponent;
   ctx.progress = &o.progress;
   ctx.cancel = o.cancel;
+  ctx.kept = kept;
   std::optional<RadianceCache> cache;
   if (plan.radiance_cache) {
     Stopwatch watch;
@@ -274,7 +277,57 @@ Status check_finite(const ImageRgb& image, Aov aov) {
 
 }  // namespace
 
-Expected<RenderResult> render(const Scene& scene, const RenderOptions& options) {
+struct Renderer::State {
+  std::uint64_t scene_key = 0;
+  std::optional<RayScene> rays;
+  Kept kept;
+};
+
+namespace {
+
+// The scene but its camera (and names): what the BVH and a method's kept state are made from.
+std::uint64_t scene_key(const Scene& scene) {
+  Fnv1a f;
+  f.value(atlas::scene_hash(scene));  // geometry, materials, textures, sky, sun
+  // Which object each shape belongs to (the BVH reports it: the object AOV, ssrc's back faces).
+  for (const TriangleMesh& m : scene.meshes) f.value(m.object);
+  for (const Sphere& sp : scene.spheres) f.value(sp.object);
+  for (const Disk& d : scene.disks) f.value(d.object);
+  for (const Medium& m : scene.media) {
+    f.value(m.center);
+    f.value(m.half_size);
+    f.value(m.axes);
+    f.value(m.extinction);
+    f.value(m.albedo);
+    f.value(m.emission);
+  }
+  return f.h;
+}
+
+// The state's BVH for `scene`: kept where the scene but its camera is the same, else built
+// (dropping the method's state too). Sets `built` when it was built.
+Status keep_rays(const Scene& scene, std::uint64_t max_memory, Renderer::State& state,
+                 bool& built) {
+  const std::uint64_t key = scene_key(scene);
+  built = false;
+  if (key != state.scene_key || !state.rays) {
+    state.rays.reset();
+    state.kept = Kept{key, {}};
+    state.scene_key = key;
+    Expected<RayScene> r = RayScene::build(scene, max_memory);
+    if (!r) {
+      state.scene_key = 0;
+      return r.error();
+    }
+    state.rays = std::move(*r);
+    built = true;
+  }
+  return {};
+}
+
+// render(), keeping the BVH and the method's state in `state` where given.
+Expected<RenderResult> render_kept(const Scene& scene, const RenderOptions& options,
+                                   Renderer::State* state) {
   Expected<Plan> plan = make_plan(scene, options);
   if (!plan) return plan.error();
   if (Status s = check_memory(scene, options); !s) return s.error();
@@ -288,10 +341,19 @@ Expected<RenderResult> render(const Scene& scene, const RenderOptions& options) 
     Stopwatch total;
     Stopwatch stage;
     // Embree may not allocate past the limit (its estimate was checked above; this holds it).
-    Expected<RayScene> rays = RayScene::build(scene, options.max_memory);
-    if (!rays) return rays.error();
-    result.stages.push_back({"build BVH", stage.ms()});
+    std::optional<RayScene> built;
+    if (state) {
+      bool fresh = false;
+      if (Status s = keep_rays(scene, options.max_memory, *state, fresh); !s) return s.error();
+      if (fresh) result.stages.push_back({"build BVH", stage.ms()});
+    } else {
+      Expected<RayScene> r = RayScene::build(scene, options.max_memory);
+      if (!r) return r.error();
+      built = std::move(*r);
+      result.stages.push_back({"build BVH", stage.ms()});
+    }
     stage.restart();
+    const RayScene* rays = built ? &*built : &*state->rays;
     const GBuffer g = make_gbuffer(scene, *rays);
     result.stages.push_back({"G-buffer", stage.ms()});
     stage.restart();
@@ -308,7 +370,9 @@ Expected<RenderResult> render(const Scene& scene, const RenderOptions& options) 
       const std::uint64_t held =
           result.memory_bytes + scene_bytes(scene) * (k ? 2 : 1);  // the copy, where dimmed
       const std::uint64_t room = options.max_memory - std::min(options.max_memory, held);
-      if (Status s = solve(*plan, k ? lit : scene, scene, *rays, g, room, result); !s)
+      if (Status s = solve(*plan, k ? lit : scene, scene, *rays, g, room,
+                           state ? &state->kept : nullptr, result);
+          !s)
         return s.error();
       if (k) {
         float* p = result.radiance.data();
@@ -333,6 +397,47 @@ Expected<RenderResult> render(const Scene& scene, const RenderOptions& options) 
     if (Status s = check_finite(result.radiance, options.aov); !s) return s.error();
     return result;
   });
+}
+
+}  // namespace
+
+Expected<RenderResult> render(const Scene& scene, const RenderOptions& options) {
+  return render_kept(scene, options, nullptr);
+}
+
+Renderer::Renderer() : state_(std::make_unique<State>()) {}
+Renderer::~Renderer() = default;
+Renderer::Renderer(Renderer&&) noexcept = default;
+Renderer& Renderer::operator=(Renderer&&) noexcept = default;
+
+Expected<RenderResult> Renderer::render(const Scene& scene, const RenderOptions& options) {
+  if (!state_) state_ = std::make_unique<State>();  // a moved-from renderer works again
+  return render_kept(scene, options, state_.get());
+}
+
+Expected<std::vector<ImageRgb>> Renderer::channels(const Scene& scene, const std::vector<Aov>& aovs,
+                                                   const RenderOptions& options) {
+  for (Aov a : aovs)
+    if (a == Aov::radiance) return Error{"Renderer::channels: radiance is not a G-buffer channel"};
+  if (Status s = check_scene(scene); !s) return s.error();
+  RenderOptions o;
+  o.aov = Aov::depth;  // the BVH and the G-buffer
+  o.max_memory = options.max_memory;
+  if (Status s = check_memory(scene, o); !s) return s.error();
+  if (!state_) state_ = std::make_unique<State>();
+  tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
+  return arena.execute([&]() -> Expected<std::vector<ImageRgb>> {
+    bool built = false;
+    if (Status s = keep_rays(scene, o.max_memory, *state_, built); !s) return s.error();
+    const GBuffer g = make_gbuffer(scene, *state_->rays);
+    std::vector<ImageRgb> out;
+    for (Aov a : aovs) out.push_back(aov_image(scene, g, a));
+    return out;
+  });
+}
+
+void Renderer::clear() {
+  state_ = std::make_unique<State>();
 }
 
 Expected<BakeResult> bake(const Scene& scene, const RenderOptions& options, const std::string& path,

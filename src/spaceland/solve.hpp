@@ -2,6 +2,7 @@
 // (method.hpp) hands each solver this and its own options, never the whole RenderOptions.
 #pragma once
 
+#include <any>
 #include <atomic>
 #include <cstdint>
 #include <functional>
@@ -17,6 +18,13 @@
 namespace penumbra::spaceland {
 
 class RadianceCache;
+
+// What a Renderer keeps for a method between frames of one scene (the surface method's atlas):
+// the method stores its own type in `method` with what it was made from, and checks that itself.
+struct Kept {
+  std::uint64_t scene_key = 0;  // Renderer::scene_key of the scene it was made for
+  std::any method;
+};
 
 // The scene, its ray tracer, the camera's first hits, and what every method shares.
 struct SolveContext {
@@ -36,6 +44,8 @@ struct SolveContext {
   // Progressive methods call `progress` between passes and stop when `cancel` turns true.
   const std::function<void(const RenderProgress&)>* progress = nullptr;
   const std::atomic<bool>* cancel = nullptr;
+  // A Renderer's store for what does not depend on the camera; null in a single render().
+  Kept* kept = nullptr;
 };
 
 // What a solve reports besides the image.

@@ -4,6 +4,7 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <string>
 #include <variant>
 #include <vector>
@@ -281,6 +282,34 @@ Status check_memory(const Scene& scene, const RenderOptions& options);
 // invalid or the memory estimate exceeds options.max_memory; never returns a value that is not
 // finite (except the depth of a miss).
 Expected<RenderResult> render(const Scene& scene, const RenderOptions& options);
+
+// Renders views of one scene again and again (the viewer, `penumbra view`), keeping what does not
+// depend on the camera: the ray tracer's BVH; the surface method's atlas once baked or read (for
+// the same surface options and bounces; an atlas file rewritten since is read again); the grid's
+// solved voxels while its levels stay where they were placed (a camera that moves less than a
+// voxel, or only turns, with the same finest voxel). One method's state at a time: picking
+// another drops it. Each render compares the scene but its camera with the last one's (geometry,
+// objects, materials, textures, sky, sun, fog) and drops what it kept when they differ, so its
+// results are always render()'s, bit for bit. Holds its memory until destroyed or clear(); one
+// thread at a time.
+class Renderer {
+ public:
+  Renderer();
+  ~Renderer();
+  Renderer(Renderer&&) noexcept;
+  Renderer& operator=(Renderer&&) noexcept;
+  Expected<RenderResult> render(const Scene& scene, const RenderOptions& options);
+  // G-buffer channels of the camera's first hits (each an Aov but radiance), from one set of
+  // camera rays through the kept BVH: what a viewer's upscaling is guided by. The same images as
+  // render() with that aov; of `options`, threads and max_memory are read.
+  Expected<std::vector<ImageRgb>> channels(const Scene& scene, const std::vector<Aov>& aovs,
+                                           const RenderOptions& options);
+  void clear();  // drops what is kept
+  struct State;
+
+ private:
+  std::unique_ptr<State> state_;
+};
 
 // What bake() made and cost.
 struct BakeResult {

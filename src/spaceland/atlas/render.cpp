@@ -1,11 +1,14 @@
 #include "spaceland/atlas/render.hpp"
 
 #include <algorithm>
+#include <any>
 #include <cmath>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "core/fnv.hpp"
 #include "core/math.hpp"
 #include "core/timer.hpp"
 #include "io/json_reader.hpp"
@@ -135,10 +138,41 @@ Status bake_file(const FileBake& b, const std::string& path, BakeResult& result)
   return {};
 }
 
-Expected<ImageRgb> render(const SolveContext& ctx, const SurfaceOptions& o, SolveReport& report,
-                          SurfaceOptions& used) {
-  // Glossy materials read cascade 0's radiance per direction: kept by the bake, read from a file.
-  const bool glossy = cascade::any_glossy(ctx.scene);
+namespace {
+
+// What a Renderer keeps of the surface method between views: the atlas, seams and walls linked,
+// and what it was made from (the scene but its camera, the options, bounces and light scale).
+struct KeptAtlas {
+  std::uint64_t key = 0;
+  Baked baked;
+  SurfaceOptions used;
+  std::uint64_t memory_bytes = 0;
+};
+
+std::uint64_t kept_key(const SolveContext& ctx, const SurfaceOptions& o, bool glossy) {
+  Fnv1a f;
+  f.value(ctx.kept->scene_key);
+  f.value(o.texel_size);
+  f.value(o.texels);
+  f.value(o.refine);
+  f.value(o.directions);
+  f.value(o.interval);
+  f.value(o.cascades);
+  f.bytes(o.atlas.data(), o.atlas.size());
+  if (!o.atlas.empty()) {  // a file baked again under the same name is read again
+    std::error_code ec;
+    f.value(std::filesystem::last_write_time(o.atlas, ec).time_since_epoch().count());
+    f.value(std::filesystem::file_size(o.atlas, ec));
+  }
+  f.value(ctx.bounces);
+  f.value(ctx.light_exponent);
+  f.value(glossy);
+  return f.h;
+}
+
+// Bakes (or reads o.atlas) and links its seams and walls.
+Expected<Baked> make_baked(const SolveContext& ctx, const SurfaceOptions& o, bool glossy,
+                           SolveReport& report, SurfaceOptions& used) {
   Expected<Baked> baked = Error{""};
   if (o.atlas.empty()) {
     BakeReport bake_report;
@@ -184,7 +218,39 @@ Expected<ImageRgb> render(const SolveContext& ctx, const SurfaceOptions& o, Solv
     mark_walls(ctx.rays, *baked);
     report.stages.push_back({"walls", watch.ms()});
   }
-  watch.restart();
+  return baked;
+}
+
+}  // namespace
+
+Expected<ImageRgb> render(const SolveContext& ctx, const SurfaceOptions& o, SolveReport& report,
+                          SurfaceOptions& used) {
+  // Glossy materials read cascade 0's radiance per direction: kept by the bake, read from a file.
+  const bool glossy = cascade::any_glossy(ctx.scene);
+  // A Renderer's views of one scene share the atlas: baked (or read) once.
+  KeptAtlas* kept = ctx.kept ? std::any_cast<KeptAtlas>(&ctx.kept->method) : nullptr;
+  const std::uint64_t key = ctx.kept ? kept_key(ctx, o, glossy) : 0;
+  std::optional<Baked> own;
+  const Baked* baked = nullptr;
+  if (kept && kept->key == key) {
+    baked = &kept->baked;
+    report.memory_bytes += kept->memory_bytes;
+    used = kept->used;
+  } else {
+    if (ctx.kept) ctx.kept->method.reset();  // the old atlas goes before a new one is made
+    const std::uint64_t before = report.memory_bytes;
+    Expected<Baked> made = make_baked(ctx, o, glossy, report, used);
+    if (!made) return made.error();
+    if (ctx.kept) {
+      ctx.kept->method = KeptAtlas{key, std::move(*made), used, report.memory_bytes - before};
+      baked = &std::any_cast<KeptAtlas>(&ctx.kept->method)->baked;
+    } else {
+      own = std::move(*made);
+      baked = &*own;
+    }
+  }
+
+  Stopwatch watch;
   const Background bg(ctx.scene);
   const SunLight sun(ctx.scene, ctx.rays, ctx.sun_rays);
   ImageRgb img = shade_pixels(

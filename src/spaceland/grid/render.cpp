@@ -1,11 +1,14 @@
 // The probe grid as a 3D method: voxelise, solve (once per bounce), shade the camera's pixels and
 // the fog on their rays.
 #include <algorithm>
+#include <any>
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <vector>
 
+#include "core/fnv.hpp"
 #include "core/parallel.hpp"
 #include "core/timer.hpp"
 #include "io/json_reader.hpp"
@@ -107,31 +110,60 @@ std::uint64_t add_bounces(Clipmap& map, const LevelFields& fields,
   return rays;
 }
 
-Expected<ImageRgb> render(const SolveContext& ctx, const GridOptions& o, SolveReport& report,
-                          GridOptions& used) {
+namespace {
+
+// What a Renderer keeps of the grid between views: the voxels and their solved cascades, for as
+// long as the levels' placement (and everything else they are made from) stays the same; a
+// level moves only when the camera crosses into another of its voxels' positions, or the finest
+// voxel the view asks for changes. Shared: the clipmap's levels point to each other.
+struct KeptGrid {
+  std::uint64_t key = 0;
+  Clipmap map;
+  LevelFields field;
+  GridOptions used;
+  std::uint64_t voxel_bytes = 0, memory_bytes = 0;
+};
+
+std::uint64_t kept_key(const SolveContext& ctx, const GridOptions& o,
+                       const std::vector<ClipLevel>& plan) {
+  Fnv1a f;
+  f.value(ctx.kept->scene_key);
+  f.value(o.voxel);
+  f.value(o.levels);
+  f.value(o.probe_spacing);
+  f.value(o.directions);
+  f.value(o.interval);
+  f.value(o.cascades);
+  f.value(o.extend_length);
+  f.value(o.fix);
+  f.value(o.specular);
+  f.value(ctx.bounces);
+  f.value(ctx.light_exponent);
+  f.value(ctx.max_memory);
+  f.value(ctx.sun_rays);
+  for (const ClipLevel& l : plan) {
+    f.value(l.size);
+    f.value(l.box.first);
+    f.value(l.box.dims);
+    f.value(l.cut);
+  }
+  return f.h;
+}
+
+// Voxelises the planned levels and solves their cascades, once per bounce.
+Status solve_grid(const SolveContext& ctx, const GridOptions& o, std::vector<ClipLevel> plan,
+                  const Background& bg, const SunLight& sun, KeptGrid& out, SolveReport& report) {
   Stopwatch watch;
-  // A quarter of the limit for the voxels, the rest for the cascades (and what render holds).
   const bool bounces = ctx.bounces > 1;
-  Expected<Clipmap> map = Clipmap::build(
-      ctx.scene, plan_levels(ctx.scene, o, ctx.max_memory / 4, bounces, focus_distance(ctx.g)),
-      ctx.max_memory / 4, spread_voxels(o));
-  if (!map) return map.error();
+  Expected<Clipmap> built =
+      Clipmap::build(ctx.scene, std::move(plan), ctx.max_memory / 4, spread_voxels(o));
+  if (!built) return built.error();
+  out.map = std::move(*built);
+  Clipmap* map = &out.map;
   report.stages.push_back({"voxelise", watch.ms()});
-  // Far geometry makes the levels' voxels grow until the last holds the scene: near the camera
-  // the grid then resolves nothing, silently (a sphere 1e17 away took the indirect light).
-  const float wanted = focus_distance(ctx.g) / kFocusVoxels;
-  if (o.voxel == 0 && wanted > 0 && (*map)[0].size > 8 * wanted)
-    report.warnings.push_back(
-        "the probe grid's finest voxel is " + io::format_number((*map)[0].size) + ", " +
-        io::format_rounded((*map)[0].size / wanted) + " times what the view asks for (" +
-        io::format_number(wanted) +
-        "): the scene is too large for the grid's levels to reach from the camera, so light "
-        "within a voxel of the surfaces seen is lost; leave the far geometry out or use spwi");
-  used.voxel = (*map)[0].size;
-  used.levels = int(map->size());
+  out.used.voxel = (*map)[0].size;
+  out.used.levels = int(map->size());
   watch.restart();
-  const Background bg(ctx.scene);
-  const SunLight sun(ctx.scene, ctx.rays, ctx.sun_rays);
   const std::uint64_t voxel_memory = voxel_bytes(map->voxels(), bounces);
   const std::uint64_t left = ctx.max_memory - std::min(ctx.max_memory, voxel_memory);
   const std::vector<cascade::SphereLights> lights = map->lights(ctx.scene);
@@ -157,21 +189,67 @@ Expected<ImageRgb> render(const SolveContext& ctx, const GridOptions& o, SolveRe
       report.stages.push_back({"bounce " + std::to_string(b + 1), watch.ms()});
     }
   }
-  const RadianceField& finest = field->fields[0];
-  used.cascades = int(finest.cascades().size());
-  used.interval = finest.cascades()[0].t_end;
-  report.voxel_bytes = voxel_memory;
+  out.field = std::move(*field);
+  const RadianceField& finest = out.field.fields[0];
+  out.used.cascades = int(finest.cascades().size());
+  out.used.interval = finest.cascades()[0].t_end;
+  out.voxel_bytes = voxel_memory;
   // The largest level's cascades while the others' fields are held.
   std::uint64_t fields = 0, cascades = 0;
   for (std::size_t l = 0; l < map->size(); ++l) {
-    const RadianceField& f = field->fields[l];
+    const RadianceField& f = out.field.fields[l];
     fields += f.bytes();
     const std::uint64_t solving = cascades_bytes(f.cascades(), level_options(o, l), (*map)[l].size,
                                                  !lights[l].empty(), f.cone_top());
     cascades = std::max(cascades, solving - std::min(solving, f.bytes()));
   }
-  report.memory_bytes += voxel_memory + fields + cascades;
-  watch.restart();
+  out.memory_bytes = voxel_memory + fields + cascades;
+  return {};
+}
+
+}  // namespace
+
+Expected<ImageRgb> render(const SolveContext& ctx, const GridOptions& o, SolveReport& report,
+                          GridOptions& used) {
+  // A quarter of the limit for the voxels, the rest for the cascades (and what render holds).
+  std::vector<ClipLevel> plan =
+      plan_levels(ctx.scene, o, ctx.max_memory / 4, ctx.bounces > 1, focus_distance(ctx.g));
+  const Background bg(ctx.scene);
+  const SunLight sun(ctx.scene, ctx.rays, ctx.sun_rays);
+  // A Renderer's views share the solved grid while its levels stay where they are.
+  using Shared = std::shared_ptr<KeptGrid>;
+  const Shared* kept = ctx.kept ? std::any_cast<Shared>(&ctx.kept->method) : nullptr;
+  const std::uint64_t key = ctx.kept ? kept_key(ctx, o, plan) : 0;
+  Shared grid;
+  if (kept && *kept && (*kept)->key == key) {
+    grid = *kept;
+  } else {
+    if (ctx.kept) ctx.kept->method.reset();  // the old grid goes before a new one is made
+    grid = std::make_shared<KeptGrid>();
+    grid->key = key;
+    if (Status s = solve_grid(ctx, o, std::move(plan), bg, sun, *grid, report); !s)
+      return s.error();
+    if (ctx.kept) ctx.kept->method = grid;
+  }
+  const Clipmap* map = &grid->map;
+  const LevelFields* field = &grid->field;
+  // Far geometry makes the levels' voxels grow until the last holds the scene: near the camera
+  // the grid then resolves nothing, silently (a sphere 1e17 away took the indirect light).
+  const float wanted = focus_distance(ctx.g) / kFocusVoxels;
+  if (o.voxel == 0 && wanted > 0 && (*map)[0].size > 8 * wanted)
+    report.warnings.push_back(
+        "the probe grid's finest voxel is " + io::format_number((*map)[0].size) + ", " +
+        io::format_rounded((*map)[0].size / wanted) + " times what the view asks for (" +
+        io::format_number(wanted) +
+        "): the scene is too large for the grid's levels to reach from the camera, so light "
+        "within a voxel of the surfaces seen is lost; leave the far geometry out or use spwi");
+  used.voxel = grid->used.voxel;
+  used.levels = grid->used.levels;
+  used.cascades = grid->used.cascades;
+  used.interval = grid->used.interval;
+  report.voxel_bytes = grid->voxel_bytes;
+  report.memory_bytes += grid->memory_bytes;
+  Stopwatch watch;
 
   ImageRgb img = shade_pixels(
       ctx.g, bg, report.rays, [&](int, int, std::size_t k, const Hit& h, std::uint64_t& local) {

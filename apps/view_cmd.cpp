@@ -54,6 +54,11 @@ std::unique_ptr<ViewCommand> add_view_command(CLI::App& app) {
                 "The frame time the automatic internal resolution aims at")
       ->check(real_range(1, 10000))
       ->capture_default_str();
+  c->add_option("--upscale", a.upscale,
+                "Below the view's resolution: guided (by the view's depth, normals and albedo) or "
+                "bilinear")
+      ->check(CLI::IsMember({"guided", "bilinear"}))
+      ->capture_default_str();
   c->add_flag("!--no-still-full", a.still_full,
               "Keep the internal resolution when the camera stops (default: a still camera gets "
               "a full-resolution frame)");
@@ -125,6 +130,7 @@ int run_view(const ViewArgs& args) {
   }
   settings.scale = a.scale;
   settings.target_ms = a.target_ms;
+  settings.guided = a.upscale == "guided";
   settings.exposure = a.exposure;
   if (!a.atlas.empty() && o.method != sl::Method::surface) {
     std::cerr << "penumbra view: --atlas applies to --method surface only, not "

@@ -20,6 +20,8 @@ struct ViewArgs {
   float scale = 0;         // internal resolution over the view's (0: from --target-ms)
   float target_ms = 33;    // the frame time the automatic internal resolution aims at
   bool still_full = true;  // a still camera gets a frame at the view's full resolution
+  std::string upscale =
+      "guided";  // or bilinear: how a frame below the view's size is brought to it
   int bounces = 1;
   int threads = 0;
   std::string max_memory = "8G";

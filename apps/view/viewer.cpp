@@ -88,52 +88,61 @@ Job Viewer::make_job() {
                             (!args_.screenshot.empty() || args_.frames > 0);
   const bool still =
       args_.frames == 0 && args_.still_full && (still_s_ >= kStillSeconds || scripted_end);
-  Job j;
+  bool automatic = false;
   float s = settings_.scale;
   if (s == 0) {
-    j.automatic = !still;
+    automatic = !still;
     s = still ? 1.0f : auto_scale_;
   }
+  sl::Camera c = fly_.camera(scene_.camera);
+  c.width = std::max(8, int(std::lround(w * s)));
+  c.height = std::max(8, int(std::lround(h * s)));
+  const Vec3 sun =
+      scene_.has_sun && settings_.sun_moved ? as_loaded(sun_direction()) : scene_.sun.direction;
+  // A new view (and a copy of the scene for the worker) only when something the frame depends
+  // on changed.
+  const bool changed = !job_.scene || job_.automatic != automatic ||
+                       c.width != job_.scene->camera.width ||
+                       c.height != job_.scene->camera.height ||
+                       std::memcmp(&c.position, &job_.scene->camera.position, sizeof(Vec3)) != 0 ||
+                       std::memcmp(&c.look_at, &job_.scene->camera.look_at, sizeof(Vec3)) != 0 ||
+                       std::memcmp(&sun, &job_.scene->sun.direction, sizeof(Vec3)) != 0 ||
+                       diff_settings(settings_, job_settings_, true) != nlohmann::json() ||
+                       settings_.exposure != job_.exposure;
+  if (!changed) return job_;
+  Job j;
+  j.automatic = automatic;
   auto scene = std::make_shared<sl::Scene>(scene_);
-  scene->camera = fly_.camera(scene_.camera);
-  scene->camera.width = std::max(8, int(std::lround(w * s)));
-  scene->camera.height = std::max(8, int(std::lround(h * s)));
-  if (scene->has_sun && settings_.sun_moved) scene->sun.direction = as_loaded(sun_direction());
-  if (settings_.guided && (scene->camera.width != w || scene->camera.height != h)) {
+  scene->camera = c;
+  scene->sun.direction = sun;
+  if (settings_.guided && (c.width != w || c.height != h)) {
     auto view = std::make_shared<sl::Scene>(*scene);
     view->camera.width = w;
     view->camera.height = h;
     j.view = std::move(view);
   }
+  j.scene = std::move(scene);
   j.options = settings_.options;
   j.options.surface.atlas = args_.atlas;
   j.exposure = settings_.exposure;
-  // A new version only when something the frame depends on changed.
-  const sl::Camera& c = scene->camera;
-  const bool changed =
-      !job_.scene || job_.automatic != j.automatic || c.width != job_.scene->camera.width ||
-      c.height != job_.scene->camera.height ||
-      std::memcmp(&c.position, &job_.scene->camera.position, sizeof(Vec3)) != 0 ||
-      std::memcmp(&c.look_at, &job_.scene->camera.look_at, sizeof(Vec3)) != 0 ||
-      std::memcmp(&scene->sun.direction, &job_.scene->sun.direction, sizeof(Vec3)) != 0 ||
-      diff_settings(settings_, job_settings_, true) != nlohmann::json() ||
-      j.exposure != job_.exposure;
-  j.scene = std::move(scene);
-  j.version = changed ? ++version_ : version_;
-  if (changed) {
-    job_settings_ = settings_;
-    current_frames_ = 0;
-  }
+  j.version = ++version_;
+  job_settings_ = settings_;
+  current_frames_ = 0;
   return j;
 }
 
 void Viewer::update_scale(const Frame& f) {
   if (!f.automatic || !f.error.empty() || f.version != version_) return;
-  const double took = f.solve_ms + f.display_ms;
-  const double target = settings_.target_ms;
-  if (took > 1.15 * target || took < 0.7 * target)
+  // The method's part grows with the internal pixels; the upscaling (a G-buffer at the view's
+  // size) and the tone mapping do not. The method gets what they leave of the target, at least
+  // a quarter of it, and the scale moves by the square root of how far off its part was.
+  const double fixed = f.upscale_ms + f.display_ms;
+  const double method = std::max(f.solve_ms - f.upscale_ms, 0.05);
+  const double budget = std::max(settings_.target_ms - fixed, 0.25 * settings_.target_ms);
+  const double ratio = budget / method;
+  if (ratio > 1.3 || ratio < 0.85)
     auto_scale_ =
-        std::clamp(float(auto_scale_ * std::sqrt(target / std::max(took, 0.1))), 1.0f / 16, 1.0f);
+        std::clamp(float(auto_scale_ * std::clamp(std::sqrt(ratio), 0.5, 2.0)), 1.0f / 16, 1.0f);
 }
 
 void Viewer::upload(const Frame& f) {

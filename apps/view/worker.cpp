@@ -74,8 +74,9 @@ void Worker::loop() {
         } else {
           r->radiance =
               upscale(r->radiance, Guide::from(std::move(*low)), Guide::from(std::move(*high)));
-          r->stages.push_back({"upscale", watch.ms()});
-          f.solve_ms += watch.ms();
+          f.upscale_ms = watch.ms();
+          r->stages.push_back({"upscale", f.upscale_ms});
+          f.solve_ms += f.upscale_ms;
           f.width = job.view->camera.width;
           f.height = job.view->camera.height;
         }

@@ -37,7 +37,8 @@ struct Frame {
   int internal_width = 0, internal_height = 0;  // what the method rendered (then upscaled)
   std::vector<penumbra::StageTime> stages;
   double solve_ms = 0, display_ms = 0;
-  float exposure = 0;  // EV the picture was shown with
+  double upscale_ms = 0;  // of solve_ms: the guides and the upscaling
+  float exposure = 0;     // EV the picture was shown with
   std::uint64_t version = 0;
   bool automatic = false;    // Job::automatic
   std::uint64_t serial = 0;  // counts rendered frames

@@ -170,6 +170,7 @@ TEST_F(ViewWindow, BadInputIsReportedBeforeTheWindow) {
       {{"--save", tmp_.file("view.txt")}, "expected a .json name"},
       {{"--atlas", tmp_.file("a.exr")}, "--atlas applies to --method surface only"},
       {{"--size", "64by48"}, "--size: expected WxH"},
+      {{"--upscale", "nearest"}, "--upscale: nearest not in"},
       {{"--save", scene_}, "would overwrite the scene file"},
       {{"--screenshot", shot, "--record", shot}, "would both write"},
   };

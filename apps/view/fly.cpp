@@ -56,7 +56,10 @@ void Fly::turn(float yaw_degrees, float pitch_degrees) {
 penumbra::spaceland::Camera Fly::camera(const penumbra::spaceland::Camera& base) const {
   penumbra::spaceland::Camera c = base;
   c.position = position;
-  c.look_at = position + forward();
+  // look_at as far ahead as the position is from the origin (at least a unit), so that its
+  // floats keep the direction's precision far from the origin.
+  const float ahead = std::max(1.0f, std::sqrt(dot(position, position)));
+  c.look_at = position + forward() * ahead;
   c.up = up;
   return c;
 }

@@ -22,7 +22,8 @@ struct Fly {
   // within 89 degrees of the horizon).
   void move(penumbra::Vec3 right_up_forward);
   void turn(float yaw_degrees, float pitch_degrees);
-  // The scene camera looking from here: look_at one unit ahead, fov and size from `base`.
+  // The scene camera looking from here: look_at ahead (a unit, or as far as the position is from
+  // the origin), fov and size from `base`.
   penumbra::spaceland::Camera camera(const penumbra::spaceland::Camera& base) const;
 };
 

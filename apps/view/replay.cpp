@@ -232,11 +232,19 @@ Expected<Replay> load_replay(const std::string& path) {
     for (std::size_t i = 0; i < events.size(); ++i) {
       const std::string p = "events[" + std::to_string(i) + "]";
       const json& e = events[i];
-      if (!e.is_object() || e.size() != 1)
+      // One event key, beside any comment keys.
+      std::string kind;
+      int kinds = 0;
+      if (e.is_object())
+        for (const auto& [key, value] : e.items())
+          if (!JsonReader::is_comment_key(key)) {
+            kind = key;
+            ++kinds;
+          }
+      if (kinds != 1)
         r.expected(p, "an object with one of \"camera\", \"move\", \"set\", \"wait\"", e);
       Event ev;
-      const std::string kind = e.begin().key();
-      const json& v = e.begin().value();
+      const json& v = e[kind];
       const std::string q = p + "." + kind;
       if (kind == "camera") {
         ev.kind = Event::Kind::camera;

@@ -31,7 +31,8 @@ struct Settings {
 struct Event {
   enum class Kind { camera, move, set, wait };
   Kind kind = Kind::wait;
-  // camera: where the fly camera goes (yaw and pitch in degrees from the scene camera's view).
+  // camera: where the fly camera goes: yaw in degrees from the scene camera's heading (turning
+  // right), pitch in degrees above the plane normal to its up.
   penumbra::Vec3 position;
   float yaw = 0, pitch = 0;
   // move: right, up and forward in world units, and a turn in degrees.

@@ -50,12 +50,14 @@ penumbra::Status save_view(const json& doc, const std::string& to) {
   return penumbra::io::write_text_files({{to, doc.dump(2) + "\n"}});
 }
 
-std::string render_command(const std::string& file, const Settings& s, const std::string& atlas) {
+std::string render_command(const std::string& file, const Settings& s, const std::string& atlas,
+                           const std::string& max_memory) {
   const sl::RenderOptions& o = s.options;
   std::ostringstream c;
   c << "penumbra render " << file << " --method " << sl::to_string(o.method);
   if (o.bounces != 1) c << " --bounces " << o.bounces;
   if (o.threads != 0) c << " --threads " << o.threads;
+  if (o.max_memory != sl::RenderOptions{}.max_memory) c << " --max-memory " << max_memory;
   // The method's own settings where they differ from render's defaults (the panel's fields).
   const std::string prefix = std::string(sl::to_string(o.method)) + ".";
   Settings defaults;

@@ -24,6 +24,9 @@ penumbra::Status save_view(const nlohmann::json& doc, const std::string& to);
 // The render command that draws the saved file as the viewer shows it at full resolution: the
 // method and its options where they differ from render's defaults, bounces, threads, atlas, and
 // the exposure where it is not automatic.
-std::string render_command(const std::string& file, const Settings& s, const std::string& atlas);
+// `max_memory`: the --max-memory the viewer was given (the grid's voxels and every refusal
+// depend on it), printed where it is not render's default.
+std::string render_command(const std::string& file, const Settings& s, const std::string& atlas,
+                           const std::string& max_memory);
 
 }  // namespace viewer

@@ -15,8 +15,10 @@
 #include <csignal>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <iostream>
 #include <mutex>
+#include <optional>
 #include <type_traits>
 
 #include "core/median.hpp"
@@ -82,6 +84,10 @@ Vec3 Viewer::sun_direction() const {
   return (fly_.reference * std::cos(a) + side * std::sin(a)) * std::cos(e) + fly_.up * std::sin(e);
 }
 
+sl::Camera Viewer::camera() const {
+  return fly_.camera(scene_.camera);
+}
+
 Job Viewer::make_job() {
   const int w = scene_.camera.width, h = scene_.camera.height;
   const bool scripted_end = replayed_ >= replay_.events.size() && waiting_ == 0 &&
@@ -94,7 +100,7 @@ Job Viewer::make_job() {
     automatic = !still;
     s = still ? 1.0f : auto_scale_;
   }
-  sl::Camera c = fly_.camera(scene_.camera);
+  sl::Camera c = camera();
   c.width = std::max(8, int(std::lround(w * s)));
   c.height = std::max(8, int(std::lround(h * s)));
   const Vec3 sun =
@@ -112,6 +118,7 @@ Job Viewer::make_job() {
   if (!changed) return job_;
   Job j;
   j.automatic = automatic;
+  j.scale = s;
   auto scene = std::make_shared<sl::Scene>(scene_);
   scene->camera = c;
   scene->sun.direction = sun;
@@ -132,7 +139,9 @@ Job Viewer::make_job() {
 }
 
 void Viewer::update_scale(const Frame& f) {
-  if (!f.automatic || !f.error.empty() || f.version != version_) return;
+  // Frames of an older view count (while flying, every frame is of an older view), as long as
+  // they were rendered at the scale now in use.
+  if (!f.automatic || !f.error.empty() || f.scale != auto_scale_) return;
   // The method's part grows with the internal pixels; the upscaling (a G-buffer at the view's
   // size) and the tone mapping do not. The method gets what they leave of the target, at least
   // a quarter of it, and the scale moves by the square root of how far off its part was.
@@ -251,10 +260,16 @@ void Viewer::record_camera() {
 }
 
 void Viewer::save_view_now(const std::string& path) {
-  sl::Camera c = fly_.camera(scene_.camera);
+  std::error_code ec1, ec2;
+  if (std::filesystem::weakly_canonical(path, ec1) ==
+      std::filesystem::weakly_canonical(args_.scene, ec2)) {
+    message_ = path + " is the scene file: save the view under another name";
+    std::cerr << "penumbra view: " << message_ << "\n";
+    return;
+  }
   std::optional<Vec3> sun;
   if (scene_.has_sun && settings_.sun_moved) sun = sun_direction();
-  const nlohmann::json saved = saved_view(doc_, args_.scene, path, c, sun);
+  const nlohmann::json saved = saved_view(doc_, args_.scene, path, camera(), sun);
   if (Status s = save_view(saved, path); !s) {
     message_ = s.error().message;
     std::cerr << "penumbra view: " << message_ << "\n";
@@ -262,7 +277,7 @@ void Viewer::save_view_now(const std::string& path) {
   }
   message_ = "saved " + path;
   std::cout << "penumbra view: saved " << path << "; render this view at full resolution:\n  "
-            << render_command(path, settings_, args_.atlas) << "\n"
+            << render_command(path, settings_, args_.atlas, args_.max_memory) << "\n"
             << std::flush;
 }
 
@@ -270,21 +285,28 @@ int Viewer::write_outputs(const std::vector<unsigned char>* shot, int w, int h) 
   std::vector<std::string> paths;
   if (shot) paths.push_back(args_.screenshot);
   if (!args_.record.empty()) paths.push_back(args_.record);
-  if (!paths.empty()) {
-    Status s = penumbra::io::write_all(
-        paths, [&](std::size_t i) -> penumbra::Expected<penumbra::io::StagedFile> {
-          if (shot && i == 0) return penumbra::io::stage_png8(paths[0], w, h, *shot);
+  if (!args_.save.empty()) paths.push_back(args_.save);
+  if (paths.empty()) return 0;
+  std::optional<Vec3> sun;
+  if (scene_.has_sun && settings_.sun_moved) sun = sun_direction();
+  const std::string view =
+      args_.save.empty() ? ""
+                         : saved_view(doc_, args_.scene, args_.save, camera(), sun).dump(2) + "\n";
+  Status s = penumbra::io::write_all(
+      paths, [&](std::size_t i) -> penumbra::Expected<penumbra::io::StagedFile> {
+        if (shot && i == 0) return penumbra::io::stage_png8(paths[0], w, h, *shot);
+        if (paths[i] == args_.record)
           return penumbra::io::stage_text(paths[i], replay_json(recorded_));
-        });
-    if (!s) {
-      std::cerr << "penumbra view: " << s.error().message << "; nothing written\n";
-      return kFailure;
-    }
+        return penumbra::io::stage_text(paths[i], view);
+      });
+  if (!s) {
+    std::cerr << "penumbra view: " << s.error().message << "; nothing written\n";
+    return kFailure;
   }
-  if (!args_.save.empty()) {
-    save_view_now(args_.save);
-    if (!message_.starts_with("saved")) return kFailure;
-  }
+  if (!args_.save.empty())
+    std::cout << "penumbra view: saved " << args_.save
+              << "; render this view at full resolution:\n  "
+              << render_command(args_.save, settings_, args_.atlas, args_.max_memory) << "\n";
   return 0;
 }
 
@@ -341,17 +363,27 @@ int Viewer::run() {
         for (const penumbra::StageTime& st : f.stages) stage_ms_[st.name].push_back(st.ms);
         update_scale(f);
         if (f.version == version_) ++current_frames_;
+      } else if (f.version == version_ && waiting_ > 0) {
+        // A refused view ends the wait: rendering it again would be refused again.
+        waiting_ = 0;
+        wait_refused_ = true;
       }
       shown_ = std::move(f);
     }
-    if (waiting_ > 0 && current_frames_ >= waiting_) waiting_ = 0;
+    bool wait_over = false;
+    if (waiting_ > 0 && current_frames_ >= waiting_) {
+      waiting_ = 0;
+      wait_over = true;
+    }
     draw_panel();
     record_camera();
     {
       Job j = make_job();
       const bool fresh = j.version != job_.version;
       job_ = j;
-      if (fresh || waiting_ > 0 || args_.frames > 0)
+      // A wait renders one view again and again, --frames every view; when a wait ends the
+      // worker goes back to rendering each view once.
+      if (fresh || waiting_ > 0 || args_.frames > 0 || wait_over)
         worker_->submit(j, waiting_ > 0 || args_.frames > 0);
     }
 
@@ -368,13 +400,15 @@ int Viewer::run() {
 
     const bool replay_done = replayed_ >= replay_.events.size() && waiting_ == 0;
     const bool current = replay_done && shown_.serial > 0 && shown_.version == version_;
-    if (scripted && current && !shown_.error.empty()) {
-      std::cerr << "penumbra view: the last view could not be rendered; nothing written\n";
+    if (scripted && ((current && !shown_.error.empty()) || wait_refused_)) {
+      std::cerr << "penumbra view: "
+                << (wait_refused_ ? "a view the replay waits on" : "the last view")
+                << " could not be rendered; nothing written\n";
       status = kFailure;
       break;
     }
-    if (args_.frames > 0 && replay_done && solve_ms_.size() >= std::size_t(args_.frames))
-      done = true;
+    // Measurements end with frames of the last view (the replay's last event applied).
+    if (args_.frames > 0 && current && solve_ms_.size() >= std::size_t(args_.frames)) done = true;
     if (!args_.screenshot.empty() && current && args_.frames == 0) done = true;
     if (done && !args_.screenshot.empty())
       shot = window_support::read_window(window_, shot_w, shot_h);

@@ -42,6 +42,7 @@ class Viewer {
   penumbra::Vec3 sun_direction() const;  // from the panel's azimuth and elevation
   void record_camera();
   void save_view_now(const std::string& path);
+  penumbra::spaceland::Camera camera() const;  // the view's, at its full size
 
   const ViewArgs& args_;
   penumbra::spaceland::Scene scene_;  // camera: the view's size
@@ -64,7 +65,8 @@ class Viewer {
   Job job_;                // the last view handed to the worker
   Settings job_settings_;  // the settings it was made with
   std::uint64_t version_ = 0;
-  int current_frames_ = 0;  // frames shown of the current version
+  int current_frames_ = 0;     // frames shown of the current version
+  bool wait_refused_ = false;  // a replay's wait ended on a refused view
   float auto_scale_ = 0.5f;
   double still_s_ = 0;  // seconds since the camera last moved
   bool looking_ = false, moving_ = false;

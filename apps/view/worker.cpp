@@ -57,6 +57,7 @@ void Worker::loop() {
     f.internal_height = f.height;
     f.version = job.version;
     f.automatic = job.automatic;
+    f.scale = job.scale;
     f.serial = ++serial;
     job.options.cancel = &cancel_;
     penumbra::Stopwatch watch;
@@ -72,8 +73,8 @@ void Worker::loop() {
         if (!high) {
           r = high.error();
         } else {
-          r->radiance =
-              upscale(r->radiance, Guide::from(std::move(*low)), Guide::from(std::move(*high)));
+          r->radiance = upscale(r->radiance, Guide::from(std::move(*low)),
+                                Guide::from(std::move(*high)), !job.scene->media.empty());
           f.upscale_ms = watch.ms();
           r->stages.push_back({"upscale", f.upscale_ms});
           f.solve_ms += f.upscale_ms;

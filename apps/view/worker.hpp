@@ -28,6 +28,7 @@ struct Job {
   std::optional<float> exposure;  // empty: automatic
   std::uint64_t version = 0;      // changes with anything above
   bool automatic = false;         // at the internal resolution the frame time chose
+  float scale = 1;                // the internal resolution over the view's
 };
 
 // What the worker shows: the display picture of one render, and how long it took.
@@ -41,6 +42,7 @@ struct Frame {
   float exposure = 0;     // EV the picture was shown with
   std::uint64_t version = 0;
   bool automatic = false;    // Job::automatic
+  float scale = 1;           // Job::scale
   std::uint64_t serial = 0;  // counts rendered frames
   std::string line;          // the method's parameters as it used them (describe_line)
   std::string error;         // the render was refused (the picture is the previous one)

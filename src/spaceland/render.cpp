@@ -281,6 +281,7 @@ struct Renderer::State {
   std::uint64_t scene_key = 0;
   std::optional<RayScene> rays;
   Kept kept;
+  Method method = Method::pt;  // whose state `kept` holds
 };
 
 namespace {
@@ -370,6 +371,12 @@ Expected<RenderResult> render_kept(const Scene& scene, const RenderOptions& opti
       const std::uint64_t held =
           result.memory_bytes + scene_bytes(scene) * (k ? 2 : 1);  // the copy, where dimmed
       const std::uint64_t room = options.max_memory - std::min(options.max_memory, held);
+      // One method's state at a time: another method's is dropped before this one runs, so
+      // that the memory it held is not held beside this one's.
+      if (state && state->method != options.method) {
+        state->kept.method.reset();
+        state->method = options.method;
+      }
       if (Status s = solve(*plan, k ? lit : scene, scene, *rays, g, room,
                            state ? &state->kept : nullptr, result);
           !s)

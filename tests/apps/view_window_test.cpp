@@ -5,6 +5,7 @@
 #include <sys/wait.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <sstream>
 #include <string>
@@ -286,12 +287,57 @@ TEST_F(ViewWindow, RecordingReplaysToTheSamePicture) {
   EXPECT_NE(recorded.find("\"yaw\": -15.0"), std::string::npos) << recorded;
 }
 
-// --frames renders continuously and --stats prints the frame time per stage.
+// A view saved into another folder keeps the scene's mesh files (named relative to the scene
+// file): the printed command draws the same pixels from there.
+TEST_F(ViewWindow, AViewSavedElsewhereKeepsItsMeshes) {
+  if (!have_display()) GTEST_SKIP() << x_server().why();
+  fs::create_directories(tmp_.root() / "elsewhere");
+  const std::string cornell = std::string(PENUMBRA_SOURCE_DIR) + "/scenes/3d/cornell.json";
+  const std::string replay = tmp_.write("r.json", R"({"penumbra_view": 1, "events": [
+      {"move": {"by": [20, 0, 100]}, "comment": "comment keys are allowed beside an event"},
+      {"set": {"scale": 1}}]})");
+  const std::string saved = (tmp_.root() / "elsewhere" / "view.json").string();
+  CliResult r = view({cornell, "--size", "48x48", "--replay", replay, "--screenshot",
+                      tmp_.file("shot.png"), "--save", saved});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(penumbra::testing::slurp(saved).find("\"cornell_box.obj\""), std::string::npos);
+  const std::string png = tmp_.file("render.png");
+  CliResult rendered = run_printed(r.out, png);
+  ASSERT_EQ(rendered.status, 0) << rendered.err;
+  expect_same_pixels(tmp_.file("shot.png"), png, 48, 48);
+}
+
+// A view the method refuses while a replay waits on it ends the run with a message (it is not
+// rendered again and again).
+TEST_F(ViewWindow, ARefusedViewEndsAWait) {
+  if (!have_display()) GTEST_SKIP() << x_server().why();
+  const std::string fog = tmp_.write("fog.json", R"({"penumbra": 1, "dimensions": 3,
+    "camera": {"position": [0, 1, 3], "look_at": [0, 0.5, 0], "fov_y": 50, "width": 32,
+               "height": 24},
+    "sky": [1, 1, 1],
+    "objects": [{"type": "quad", "corner": [-2, 0, -2], "u": [0, 0, 4], "v": [4, 0, 0]}],
+    "media": [{"type": "box", "center": [0, 0.5, 0], "size": [1, 1, 1], "extinction": 0.5,
+               "albedo": [0.5, 0.5, 0.5]}]})");
+  const std::string replay = tmp_.write("r.json", R"({"penumbra_view": 1, "events": [
+      {"set": {"method": "spwi"}}, {"wait": {"frames": 3}}]})");
+  CliResult r =
+      view({fog, "--method", "grid", "--replay", replay, "--screenshot", tmp_.file("shot.png")});
+  EXPECT_EQ(r.status, 1) << r.err;
+  EXPECT_NE(r.err.find("spwi cannot carry fog"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("could not be rendered; nothing written"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(tmp_.file("shot.png")));
+}
+
+// --frames renders continuously (at least N frames, the last of the view the internal
+// resolution settled on) and --stats prints the frame time per stage.
 TEST_F(ViewWindow, FramesPrintFrameTimesPerStage) {
   if (!have_display()) GTEST_SKIP() << x_server().why();
   CliResult r = view({scene_, "--method", "ssrc", "--frames", "4", "--stats"});
   ASSERT_EQ(r.status, 0) << r.err;
-  for (const char* line : {"4 frames", "internal resolution: median", "frame (render()): median",
+  const std::size_t at = r.out.find("method ssrc, ");
+  ASSERT_NE(at, std::string::npos) << r.out;
+  EXPECT_GE(std::atoi(r.out.c_str() + at + 13), 4) << r.out;
+  for (const char* line : {" frames\n", "internal resolution: median", "frame (render()): median",
                            "G-buffer", "cascade 0", "gather", "tone map: median", "window: median"})
     EXPECT_NE(r.out.find(line), std::string::npos) << line << "\n" << r.out;
 }

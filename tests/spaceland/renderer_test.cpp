@@ -202,13 +202,16 @@ TEST(Renderer3d, OneRendererThroughEveryMethodKeepsTheBvhAndTheAtlas) {
     RenderOptions o;
     bool kept_atlas;  // a surface radiance render that must not bake
   };
+  // G-buffer AOVs keep the atlas; a radiance render by another method drops it (one method's
+  // state at a time), so the surface method bakes again after it.
   const std::vector<Step> steps = {{camera_a(), options(Method::surface), false},
-                                   {camera_b(), options(Method::ssrc), false},
                                    {camera_a(), depth, false},
+                                   {camera_b(), object, false},
+                                   {camera_b(), options(Method::surface), true},
+                                   {camera_b(), options(Method::ssrc), false},
+                                   {camera_a(), options(Method::surface), false},
                                    {camera_b(), options(Method::spwi), false},
-                                   {camera_a(), object, false},
-                                   {camera_b(), options(Method::pt), false},
-                                   {camera_a(), options(Method::surface), true},
+                                   {camera_a(), options(Method::pt), false},
                                    {camera_b(), options(Method::grid), false},
                                    {camera_a(), options(Method::grid), false},
                                    {camera_b(), options(Method::surface), false},
@@ -220,6 +223,39 @@ TEST(Renderer3d, OneRendererThroughEveryMethodKeepsTheBvhAndTheAtlas) {
     EXPECT_EQ(built_bvh(r), i == 0) << what << ": " << stage_list(r);
     if (steps[i].kept_atlas) expect_kept_all(r, what);
   }
+}
+
+// The grid keeps its solved levels while they stay where they were placed: one grid over the
+// scene (levels 1) does not move with the camera, at any image size or a larger memory limit;
+// under a limit too small for it the Renderer refuses as render() does.
+TEST(Renderer3d, GridKeepsItsSolvedLevelsAcrossViewsAndSizes) {
+  Renderer renderer;
+  RenderOptions o = options(Method::grid);
+  auto solved = [](const RenderResult& r) {
+    for (const StageTime& st : r.stages)
+      if (st.name == "cascades") return true;
+    return false;
+  };
+  const RenderResult first = render_both(renderer, yard(camera_a()), o, "camera a");
+  EXPECT_TRUE(solved(first)) << stage_list(first);
+  const RenderResult b = render_both(renderer, yard(camera_b()), o, "camera b");
+  EXPECT_FALSE(solved(b)) << stage_list(b);
+  Camera big = camera_a();
+  big.width = 96;
+  big.height = 72;
+  const RenderResult c = render_both(renderer, yard(big), o, "camera a, 96x72");
+  EXPECT_FALSE(solved(c)) << stage_list(c);
+  RenderOptions more = o;
+  more.max_memory *= 2;
+  const RenderResult d = render_both(renderer, yard(camera_b()), more, "a larger limit");
+  EXPECT_FALSE(solved(d)) << stage_list(d);
+  RenderOptions less = o;
+  less.max_memory = d.voxel_bytes * 2;  // not even the voxels' quarter
+  Expected<RenderResult> refused = renderer.render(yard(camera_b()), less);
+  Expected<RenderResult> alone = render(yard(camera_b()), less);
+  ASSERT_FALSE(refused.ok());
+  ASSERT_FALSE(alone.ok());
+  EXPECT_EQ(refused.error().message, alone.error().message);
 }
 
 TEST(Renderer3d, SurfaceKeepsTheAtlasAndTheBvhWhenOnlyTheCameraMoves) {

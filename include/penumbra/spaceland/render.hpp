@@ -287,11 +287,13 @@ Expected<RenderResult> render(const Scene& scene, const RenderOptions& options);
 // depend on the camera: the ray tracer's BVH; the surface method's atlas once baked or read (for
 // the same surface options and bounces; an atlas file rewritten since is read again); the grid's
 // solved voxels while its levels stay where they were placed (a camera that moves less than a
-// voxel, or only turns, with the same finest voxel). One method's state at a time: picking
-// another drops it. Each render compares the scene but its camera with the last one's (geometry,
-// objects, materials, textures, sky, sun, fog) and drops what it kept when they differ, so its
-// results are always render()'s, bit for bit. Holds its memory until destroyed or clear(); one
-// thread at a time.
+// voxel, or only turns, with the same finest voxel). One method's state at a time: a radiance
+// render with another method drops it (G-buffer channels and AOVs keep it). Each render compares
+// the scene but its camera with the last one's (geometry, objects, materials, textures, sky, sun,
+// fog) and drops what it kept when they differ, and what was made under a larger memory limit
+// than the render's is made again; so its images, parameters, warnings and refusals are
+// render()'s, bit for bit (its stages, rays and times are what it did). Holds its memory until
+// destroyed or clear(); one thread at a time.
 class Renderer {
  public:
   Renderer();

@@ -232,7 +232,9 @@ Expected<ImageRgb> render(const SolveContext& ctx, const SurfaceOptions& o, Solv
   const std::uint64_t key = ctx.kept ? kept_key(ctx, o, glossy) : 0;
   std::optional<Baked> own;
   const Baked* baked = nullptr;
-  if (kept && kept->key == key) {
+  // Kept while the memory the render allows holds what the bake (or the read) needed, so that a
+  // render would not have refused it.
+  if (kept && kept->key == key && ctx.max_memory >= kept->memory_bytes) {
     baked = &kept->baked;
     report.memory_bytes += kept->memory_bytes;
     used = kept->used;

@@ -139,7 +139,6 @@ std::uint64_t kept_key(const SolveContext& ctx, const GridOptions& o,
   f.value(o.specular);
   f.value(ctx.bounces);
   f.value(ctx.light_exponent);
-  f.value(ctx.max_memory);
   f.value(ctx.sun_rays);
   for (const ClipLevel& l : plan) {
     f.value(l.size);
@@ -221,7 +220,11 @@ Expected<ImageRgb> render(const SolveContext& ctx, const GridOptions& o, SolveRe
   const Shared* kept = ctx.kept ? std::any_cast<Shared>(&ctx.kept->method) : nullptr;
   const std::uint64_t key = ctx.kept ? kept_key(ctx, o, plan) : 0;
   Shared grid;
-  if (kept && *kept && (*kept)->key == key) {
+  // Kept while the memory the render allows holds what the solve needed (the voxels within a
+  // quarter of it, as Clipmap::build asks, and everything within the whole), so that a render
+  // would not have refused it.
+  if (kept && *kept && (*kept)->key == key && ctx.max_memory >= (*kept)->memory_bytes &&
+      ctx.max_memory / 4 >= (*kept)->voxel_bytes) {
     grid = *kept;
   } else {
     if (ctx.kept) ctx.kept->method.reset();  // the old grid goes before a new one is made

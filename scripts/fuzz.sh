@@ -75,18 +75,37 @@ echo "{$hard}, \"materials\": {\"w\": {\"albedo\": [1, 1, 1], \"emission\": [1e3
   \"objects\": [{\"type\": \"box\", \"center\": [0, 0, 0], \"size\": [20, 20, 20],
   \"material\": \"w\"}]}" >"$work/seeds/scene3d/bright.json"
 
-failed=()
-for t in "${targets[@]}"; do
-  kind=${t#fuzz_}
-  corpus=$work/corpus/$kind
+# The targets run side by side, $jobs at a time (each libFuzzer process uses one core); their
+# summaries are printed in order once all have ended.
+run_target() {  # run_target TARGET: its log in $work/TARGET.log, its status in $work/TARGET.status
+  local t=$1 kind=${1#fuzz_}
+  local corpus=$work/corpus/$kind
   mkdir -p "$corpus"
   # Inputs up to 16 KiB: the largest example scene (124 KB) only slows each run, and an image
   # needs room for a header and an EXR's offset table (1024 entries for 16384 lines).
-  echo "== fuzz.sh: $t for ${seconds}s"
-  if (cd "$work" && "$root/$build/bin/$t" "$corpus" "$work/seeds/$kind" \
-      -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -max_len=16384 \
-      -artifact_prefix="$work/artifacts/$t-" -print_final_stats=1 \
-      >"$work/$t.log" 2>&1); then
+  local status=0
+  (cd "$work" && "$root/$build/bin/$t" "$corpus" "$work/seeds/$kind" \
+    -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -max_len=16384 \
+    -artifact_prefix="$work/artifacts/$t-" -print_final_stats=1 \
+    >"$work/$t.log" 2>&1) || status=$?
+  echo "$status" >"$work/$t.status"
+}
+echo "== fuzz.sh: ${targets[*]} for ${seconds}s each, $jobs at a time"
+running=0
+for t in "${targets[@]}"; do
+  rm -f "$work/$t.status"
+  if ((running >= jobs)); then
+    wait -n || true
+    running=$((running - 1))
+  fi
+  run_target "$t" &
+  running=$((running + 1))
+done
+wait
+failed=()
+for t in "${targets[@]}"; do
+  echo "== fuzz.sh: $t"
+  if [[ $(cat "$work/$t.status" 2>/dev/null) == 0 ]]; then
     grep -E '^#[0-9]+.*(DONE|pulse)' "$work/$t.log" | tail -1 || true
     grep -E '^stat::(number_of_executed_units|average_exec_per_sec|peak_rss_mb)' "$work/$t.log" || true
   else

@@ -65,6 +65,11 @@ std::unique_ptr<ViewCommand> add_view_command(CLI::App& app) {
   c->add_option("--bounces", a.bounces, "Diffuse bounces (1: direct light only)")
       ->check(CLI::Range(1, 64))
       ->capture_default_str();
+  c->add_option("--temporal", a.temporal,
+                "ssrc: temporal accumulation over this many frames, its directions turned each "
+                "frame (0: off; docs/VIEWER.md)")
+      ->check(CLI::Range(0, 1024))
+      ->capture_default_str();
   c->add_option("--threads", a.threads, "Worker threads (0: all cores)")
       ->check(CLI::Range(0, 1024))
       ->capture_default_str();
@@ -131,6 +136,7 @@ int run_view(const ViewArgs& args) {
   settings.scale = a.scale;
   settings.target_ms = a.target_ms;
   settings.guided = a.upscale == "guided";
+  settings.temporal = a.temporal;
   settings.exposure = a.exposure;
   if (!a.atlas.empty() && o.method != sl::Method::surface) {
     std::cerr << "penumbra view: --atlas applies to --method surface only, not "

@@ -23,6 +23,7 @@ struct ViewArgs {
   std::string upscale =
       "guided";  // or bilinear: how a frame below the view's size is brought to it
   int bounces = 1;
+  int temporal = 0;  // ssrc's temporal accumulation: the history's frames (0: off)
   int threads = 0;
   std::string max_memory = "8G";
   std::optional<float> exposure;  // empty: automatic

@@ -72,6 +72,11 @@ void Viewer::draw_panel() {
       choice("sectors", o.ssrc.sectors, {8, 16, 32});
       enum_choice("off screen", o.ssrc.offscreen,
                   {sl::SsrcOffscreen::sky, sl::SsrcOffscreen::world});
+      ImGui::SliderInt("temporal frames", &next.temporal, 0, 64);
+      if (ImGui::IsItemHovered())
+        ImGui::SetTooltip(
+            "directions turned each frame, blended into the last frames "
+            "reprojected; 0: off");
       break;
     case sl::Method::spwi:
       choice("directions", o.spwi.directions, {16, 64, 256});

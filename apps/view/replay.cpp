@@ -53,6 +53,11 @@ const std::vector<Field>& fields() {
          s.options.bounces = r.integer(j, p, 1, 64);
        },
        [](const Settings& s) { return json(s.options.bounces); }},
+      {"temporal",
+       [](const JsonReader& r, const json& j, const std::string& p, Settings& s) {
+         s.temporal = r.integer(j, p, 0, 1024);
+       },
+       [](const Settings& s) { return json(s.temporal); }},
       {"exposure",
        [](const JsonReader& r, const json& j, const std::string& p, Settings& s) {
          if (j.is_string() && j.get<std::string>() == "auto")

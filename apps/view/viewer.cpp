@@ -107,16 +107,27 @@ Job Viewer::make_job() {
       scene_.has_sun && settings_.sun_moved ? as_loaded(sun_direction()) : scene_.sun.direction;
   // A new view (and a copy of the scene for the worker) only when something the frame depends
   // on changed.
-  const bool changed = !job_.scene || job_.automatic != automatic ||
-                       c.width != job_.scene->camera.width ||
-                       c.height != job_.scene->camera.height ||
-                       std::memcmp(&c.position, &job_.scene->camera.position, sizeof(Vec3)) != 0 ||
-                       std::memcmp(&c.look_at, &job_.scene->camera.look_at, sizeof(Vec3)) != 0 ||
-                       std::memcmp(&sun, &job_.scene->sun.direction, sizeof(Vec3)) != 0 ||
-                       diff_settings(settings_, job_settings_, true) != nlohmann::json() ||
-                       settings_.exposure != job_.exposure;
-  if (!changed) return job_;
+  // The exposure alone only tone-maps the last image again (Job::image stays).
+  Settings without_exposure = settings_;
+  without_exposure.exposure = job_settings_.exposure;
+  const bool image_changed =
+      !job_.scene || job_.automatic != automatic || c.width != job_.scene->camera.width ||
+      c.height != job_.scene->camera.height ||
+      std::memcmp(&c.position, &job_.scene->camera.position, sizeof(Vec3)) != 0 ||
+      std::memcmp(&c.look_at, &job_.scene->camera.look_at, sizeof(Vec3)) != 0 ||
+      std::memcmp(&sun, &job_.scene->sun.direction, sizeof(Vec3)) != 0 ||
+      diff_settings(without_exposure, job_settings_, true) != nlohmann::json();
+  if (!image_changed && settings_.exposure == job_.exposure) return job_;
   Job j;
+  if (!image_changed) {  // the same scene copies, the image tone-mapped again
+    j = job_;
+    j.exposure = settings_.exposure;
+    j.version = ++version_;
+    job_settings_ = settings_;
+    current_frames_ = 0;
+    return j;
+  }
+  j.image = ++image_version_;
   j.automatic = automatic;
   j.scale = s;
   auto scene = std::make_shared<sl::Scene>(scene_);
@@ -131,6 +142,7 @@ Job Viewer::make_job() {
   j.scene = std::move(scene);
   j.options = settings_.options;
   j.options.surface.atlas = args_.atlas;
+  if (j.options.method == sl::Method::ssrc) j.options.temporal.frames = settings_.temporal;
   j.exposure = settings_.exposure;
   j.version = ++version_;
   job_settings_ = settings_;
@@ -141,7 +153,7 @@ Job Viewer::make_job() {
 void Viewer::update_scale(const Frame& f) {
   // Frames of an older view count (while flying, every frame is of an older view), as long as
   // they were rendered at the scale now in use.
-  if (!f.automatic || !f.error.empty() || f.scale != auto_scale_) return;
+  if (!f.automatic || !f.error.empty() || f.retoned || f.scale != auto_scale_) return;
   // The method's part grows with the internal pixels; the upscaling (a G-buffer at the view's
   // size) and the tone mapping do not. The method gets what they leave of the target, at least
   // a quarter of it, and the scale moves by the square root of how far off its part was.
@@ -357,11 +369,14 @@ int Viewer::run() {
       if (!f.error.empty() && f.error != shown_.error)
         std::cerr << "penumbra view: render refused: " << f.error << "\n";
       if (f.error.empty()) {
-        solve_ms_.push_back(f.solve_ms);
-        display_ms_.push_back(f.display_ms);
-        widths_.push_back(f.internal_width);
-        for (const penumbra::StageTime& st : f.stages) stage_ms_[st.name].push_back(st.ms);
-        update_scale(f);
+        retoned_ += f.retoned ? 1 : 0;
+        if (!f.retoned) {  // a picture tone-mapped again is no frame time
+          solve_ms_.push_back(f.solve_ms);
+          display_ms_.push_back(f.display_ms);
+          widths_.push_back(f.internal_width);
+          for (const penumbra::StageTime& st : f.stages) stage_ms_[st.name].push_back(st.ms);
+          update_scale(f);
+        }
         if (f.version == version_) ++current_frames_;
       } else if (f.version == version_ && waiting_ > 0) {
         // A refused view ends the wait: rendering it again would be refused again.
@@ -409,7 +424,10 @@ int Viewer::run() {
     }
     // Measurements end with frames of the last view (the replay's last event applied).
     if (args_.frames > 0 && current && solve_ms_.size() >= std::size_t(args_.frames)) done = true;
-    if (!args_.screenshot.empty() && current && args_.frames == 0) done = true;
+    // A screenshot with temporal accumulation waits for the history to fill (a still view).
+    const int temporal = job_.options.temporal.frames;
+    const bool settled = temporal == 0 || shown_.temporal_frame + 1 >= std::uint64_t(temporal);
+    if (!args_.screenshot.empty() && current && args_.frames == 0 && settled) done = true;
     if (done && !args_.screenshot.empty())
       shot = window_support::read_window(window_, shot_w, shot_h);
     glfwSwapBuffers(window_);
@@ -438,7 +456,10 @@ int Viewer::run() {
     for (const penumbra::StageTime& st : shown_.stages)
       std::printf("    %-22s median %7.2f ms\n", st.name.c_str(),
                   penumbra::median(stage_ms_[st.name]));
-    std::printf("  tone map: median %.2f ms\n", penumbra::median(display_ms_));
+    std::printf(
+        "  tone map: median %.2f ms; %d pictures tone-mapped again (the exposure alone "
+        "changed)\n",
+        penumbra::median(display_ms_), retoned_);
     std::printf("  window: median %.2f ms to draw a frame, %zu frames\n", penumbra::median(ui_ms_),
                 ui_ms_.size());
   }

@@ -65,8 +65,9 @@ class Viewer {
   Job job_;                // the last view handed to the worker
   Settings job_settings_;  // the settings it was made with
   std::uint64_t version_ = 0;
-  int current_frames_ = 0;     // frames shown of the current version
-  bool wait_refused_ = false;  // a replay's wait ended on a refused view
+  std::uint64_t image_version_ = 0;  // Job::image
+  int current_frames_ = 0;           // frames shown of the current version
+  bool wait_refused_ = false;        // a replay's wait ended on a refused view
   float auto_scale_ = 0.5f;
   double still_s_ = 0;  // seconds since the camera last moved
   bool looking_ = false, moving_ = false;
@@ -77,6 +78,7 @@ class Viewer {
   std::vector<double> solve_ms_, display_ms_, ui_ms_;
   std::map<std::string, std::vector<double>> stage_ms_;
   std::vector<int> widths_;  // internal width of each frame
+  int retoned_ = 0;          // frames that only tone-mapped the last picture again
 };
 
 }  // namespace viewer

@@ -27,6 +27,7 @@ struct Job {
   penumbra::spaceland::RenderOptions options;
   std::optional<float> exposure;  // empty: automatic
   std::uint64_t version = 0;      // changes with anything above
+  std::uint64_t image = 0;        // changes with anything above but the exposure
   bool automatic = false;         // at the internal resolution the frame time chose
   float scale = 1;                // the internal resolution over the view's
 };
@@ -44,8 +45,11 @@ struct Frame {
   bool automatic = false;    // Job::automatic
   float scale = 1;           // Job::scale
   std::uint64_t serial = 0;  // counts rendered frames
-  std::string line;          // the method's parameters as it used them (describe_line)
-  std::string error;         // the render was refused (the picture is the previous one)
+  // With temporal accumulation: the frame's index in its history (RenderResult::temporal_frame).
+  std::uint64_t temporal_frame = 0;
+  std::string line;      // the method's parameters as it used them (describe_line)
+  std::string error;     // the render was refused (the picture is the previous one)
+  bool retoned = false;  // the last frame's image, tone-mapped again (the exposure changed)
 };
 
 class Worker {
@@ -56,7 +60,8 @@ class Worker {
   ~Worker();
 
   // The view to render once the current frame is done; `continuous`: render it again and again
-  // (measurement), else once per version.
+  // (measurement), else once per version, or with temporal accumulation until its history holds
+  // temporal.frames frames (a still view then stops changing).
   void submit(Job job, bool continuous);
   // The latest frame if it is newer than `serial`.
   bool latest(std::uint64_t serial, Frame& out);
@@ -72,7 +77,11 @@ class Worker {
   bool continuous_ = false, quit_ = false;
   Frame frame_;
   penumbra::spaceland::Renderer renderer_;  // used by the worker thread only
-  std::thread thread_;                      // last: starts once the members above exist
+  // The last frame's radiance at the view's size and its Job::image: a change of the exposure
+  // alone tone-maps it again instead of rendering (worker thread only).
+  penumbra::ImageRgb radiance_;
+  std::uint64_t radiance_image_ = 0;
+  std::thread thread_;  // last: starts once the members above exist
 };
 
 }  // namespace viewer

@@ -32,6 +32,7 @@ const std::vector<Tool> kTools = {
     {"penumbra_gpu_passes", PENUMBRA_GPU_PASSES},
     {"penumbra_grid_scaling", PENUMBRA_GRID_SCALING},
     {"penumbra_quality_walls", PENUMBRA_QUALITY_WALLS},
+    {"penumbra_temporal", PENUMBRA_TEMPORAL},
 #endif
 };
 
@@ -78,6 +79,10 @@ TEST_F(ToolsCli, UsageErrorsExitTwo) {
   EXPECT_NE(r.err.find("folder"), std::string::npos) << r.err;
 #ifdef PENUMBRA_QUALITY
   EXPECT_EQ(run(PENUMBRA_QUALITY3D, {}).status, 2);
+  EXPECT_EQ(run(PENUMBRA_TEMPORAL, {}).status, 2);  // the scene is required
+  const CliResult missing = run(PENUMBRA_TEMPORAL, {"no-such-scene.json"});
+  EXPECT_EQ(missing.status, 1) << missing.err;
+  EXPECT_NE(missing.err.find("no-such-scene.json"), std::string::npos) << missing.err;
   // A malformed value.
   const CliResult runs = run(PENUMBRA_GPU_PASSES, {"--runs", "many"});
   EXPECT_EQ(runs.status, 2) << runs.err;

@@ -218,6 +218,17 @@ struct SurfaceOptions {
   SpecularQuery specular = SpecularQuery::wide;
 };
 
+// Temporal accumulation: a Renderer's frames of ssrc, each with its screen directions turned by
+// a new fraction of a cascade-0 direction, blended into the frames before it reprojected to the
+// new camera (docs/VIEWER.md, "Temporal reuse"). The history is kept across camera moves and
+// changes of the sun and the sky (which then show the old light for a few frames), and dropped when
+// anything else changes. render() makes the first frame, which is the frame without it.
+struct TemporalOptions {
+  // The history's length: in each pixel whose surface the last frame saw, a new frame weighs
+  // 1 / (frames behind it + 1), at least 1 / frames. 0: off.
+  int frames = 0;
+};
+
 struct RenderOptions {
   Method method = Method::pt;
   Device device = Device::cpu;
@@ -236,6 +247,7 @@ struct RenderOptions {
   // grid): this many exact shadow rays spread over its disk, equal solid angle each, so its
   // penumbrae are soft, in steps of 1 / sun_rays (1: one towards its centre, hard shadows).
   int sun_rays = 16;
+  TemporalOptions temporal;
   int threads = 0;                                    // 0: all hardware threads
   std::uint64_t max_memory = std::uint64_t(8) << 30;  // refuse work whose memory need is larger
   // Progressive methods call this from the calling thread between passes.
@@ -255,7 +267,10 @@ struct RenderResult {
   std::uint64_t rays = 0;          // rays traced (closest-hit and shadow)
   std::uint64_t samples = 0;       // samples per pixel in the result
   bool cancelled = false;          // stopped early through RenderOptions::cancel
-  RenderOptions options;           // the options used
+  // With temporal accumulation: the frame's index in its history (0: the first, drawn without
+  // one). A still camera's frame is converged from index temporal.frames - 1 on.
+  std::uint64_t temporal_frame = 0;
+  RenderOptions options;  // the options used
   std::string device = "cpu";
   // What the result lacks that the options asked for (the grid's voxels far coarser than the
   // view needs, so that light near the camera is lost); the command line prints them.

@@ -50,6 +50,9 @@ struct Layout {
   int bins = 8;         // per direction: stored radiance, sectors / bins sectors each
   int rays = 4;         // directions marched together
   bool glossy = false;  // a glossy material in the scene: its pixels keep more (bytes())
+  // Every cascade's screen directions turned by this angle, radians (temporal accumulation's
+  // jitter): the same for all, so that each direction's two children above stay its halves.
+  double rotation = 0;
 
   int count() const { return tiles.count(); }
   int directions(int i) const { return q0 << i; }
@@ -58,8 +61,10 @@ struct Layout {
   double start(int i) const { return i == 0 ? 0.0 : double(r0) * double(1u << (i - 1)); }
   double end(int i) const { return double(r0) * double(1u << i); }
   bool top(int i) const { return i == count() - 1; }
-  // The angle of cascade i's screen direction d: 2 pi (d + 1/2) / directions.
-  double phi(int i, int d) const { return 2 * std::numbers::pi * (d + 0.5) / directions(i); }
+  // The angle of cascade i's screen direction d: 2 pi (d + 1/2) / directions, turned by rotation.
+  double phi(int i, int d) const {
+    return 2 * std::numbers::pi * (d + 0.5) / directions(i) + rotation;
+  }
   // Cascade i's samples along a direction (fewer where it leaves the screen): its interval over
   // its level's step; the top cascade's, the image's diagonal over the step and 2.
   int samples(int i) const {

@@ -1,0 +1,122 @@
+// Temporal accumulation of ssrc in a Renderer (RenderOptions::temporal; docs/VIEWER.md, "Temporal
+// reuse"): how fast a new view converges and what a moving camera or sun leaves behind, against
+// the path tracer. Phase 1 renders a still view `--run` frames; phase 2 turns the camera about
+// its look_at (`--orbit`, degrees about the world's y) and the sun (`--sun-turn`) over `--steps`
+// frames and holds the new view `--run` frames more. Every frame's relative RMSE against the
+// path-traced reference of its phase's end view is printed, beside the same renders without
+// temporal accumulation (each frame then is the first frame, render()'s).
+//
+//   penumbra_temporal SCENE.json [--frames 16] [--run 32] [--orbit 10] [--sun-turn 0]
+//                     [--steps 8] [--spp 1024] [--width 160]
+#include <CLI/CLI.hpp>
+#include <cmath>
+#include <cstdio>
+#include <optional>
+#include <string>
+
+#include "core/math.hpp"
+#include "penumbra/compare.hpp"
+#include "penumbra/spaceland/render.hpp"
+#include "penumbra/spaceland/scene.hpp"
+#include "tool_cli.hpp"
+
+namespace {
+
+using namespace penumbra;
+using namespace penumbra::spaceland;
+
+// `v` turned by `degrees` about the world's y axis.
+Vec3 turn(Vec3 v, double degrees) {
+  const double a = degrees * kPi / 180, c = std::cos(a), s = std::sin(a);
+  return {float(c * v.x + s * v.z), v.y, float(-s * v.x + c * v.z)};
+}
+
+// The scene at fraction t of the move: the camera orbited about its look_at, the sun turned.
+Scene moved(const Scene& base, double orbit, double sun_turn, double t) {
+  Scene s = base;
+  const Vec3 at = base.camera.look_at;
+  s.camera.position = at + turn(base.camera.position - at, orbit * t);
+  s.sun.direction = turn(base.sun.direction, sun_turn * t);
+  return s;
+}
+
+ImageRgb reference(const Scene& scene, int spp) {
+  RenderOptions o;
+  o.method = Method::pt;
+  o.pt.spp = spp;
+  Expected<RenderResult> r = render(scene, o);
+  if (!r) {
+    std::fprintf(stderr, "reference: %s\n", r.error().message.c_str());
+    std::exit(1);
+  }
+  return std::move(r->radiance);
+}
+
+double error(const ImageRgb& test, const ImageRgb& ref) {
+  Expected<ErrorMetrics> m = compare_images(test, ref);
+  if (!m) {
+    std::fprintf(stderr, "%s\n", m.error().message.c_str());
+    std::exit(1);
+  }
+  return m->relative_rmse;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Temporal accumulation of ssrc: convergence and ghosting against the path tracer",
+               "penumbra_temporal"};
+  std::string path;
+  int frames = 16, run = 32, steps = 8, spp = 1024, width = 160;
+  double orbit = 10, sun_turn = 0;
+  app.add_option("scene", path, "A 3D scene")->required();
+  app.add_option("--frames", frames, "The history's length (RenderOptions::temporal.frames)")
+      ->check(CLI::Range(1, 1024))
+      ->capture_default_str();
+  app.add_option("--run", run, "Frames of each still view")->check(CLI::Range(1, 4096));
+  app.add_option("--orbit", orbit, "The camera's turn about its look_at, degrees")
+      ->capture_default_str();
+  app.add_option("--sun-turn", sun_turn, "The sun's turn about the y axis, degrees");
+  app.add_option("--steps", steps, "Frames the move takes")->check(CLI::Range(1, 4096));
+  app.add_option("--spp", spp, "The references' samples per pixel")->check(CLI::Range(1, 1 << 20));
+  app.add_option("--width", width, "The image's width (the height keeps the scene's aspect)")
+      ->check(CLI::Range(8, 4096));
+  if (const std::optional<int> stop = penumbra::tool::parse(app, argc, argv)) return *stop;
+
+  Expected<Scene> loaded = load_scene(path);
+  if (!loaded) {
+    std::fprintf(stderr, "%s\n", loaded.error().message.c_str());
+    return 1;
+  }
+  Scene a = *loaded;
+  a.camera.height = std::max(1, int(std::lround(double(a.camera.height) * width / a.camera.width)));
+  a.camera.width = width;
+  const Scene b = moved(a, orbit, sun_turn, 1);
+  const ImageRgb ref_a = reference(a, spp), ref_b = reference(b, spp);
+
+  RenderOptions on, off;
+  on.method = off.method = Method::ssrc;
+  on.temporal.frames = frames;
+  Renderer with, without;
+  std::printf("| frame | view | relative RMSE, temporal | without | ms, temporal | without |\n");
+  std::printf("| ---: | --- | ---: | ---: | ---: | ---: |\n");
+  int frame = 0;
+  const auto step = [&](const Scene& s, const ImageRgb* ref, const char* view) {
+    Expected<RenderResult> t = with.render(s, on), u = without.render(s, off);
+    if (!t || !u) {
+      std::fprintf(stderr, "%s\n", (!t ? t.error() : u.error()).message.c_str());
+      std::exit(1);
+    }
+    if (ref)
+      std::printf("| %d | %s | %.4f | %.4f | %.1f | %.1f |\n", frame, view,
+                  error(t->radiance, *ref), error(u->radiance, *ref), t->time_ms, u->time_ms);
+    else
+      std::printf("| %d | %s | | | %.1f | %.1f |\n", frame, view, t->time_ms, u->time_ms);
+    ++frame;
+  };
+  for (int f = 0; f < run; ++f) step(a, &ref_a, "still A");
+  for (int f = 1; f < steps; ++f)
+    step(moved(a, orbit, sun_turn, double(f) / steps), nullptr, "moving");
+  for (int f = 0; f < run; ++f) step(b, &ref_b, "still B");
+  return 0;
+}

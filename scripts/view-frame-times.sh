@@ -3,6 +3,7 @@
 # size and internal resolution (docs/PERFORMANCE.md, "The 3D viewer"). Needs a display: it starts
 # one with xvfb-run where DISPLAY is unset.
 #   scripts/view-frame-times.sh BUILD [FRAMES] > table.md
+# METHODS="grid" runs some methods only (default: ssrc spwi surface grid).
 set -euo pipefail
 build=${1:?usage: view-frame-times.sh BUILD [FRAMES]}
 frames=${2:-20}
@@ -13,7 +14,7 @@ run() {
 echo "| scene | method | view | internal (median) | frame median, ms | slowest stages (median ms) |"
 echo "|---|---|---|---|---|---|"
 for scene in scenes/3d/*.json; do
-  for method in ssrc spwi surface grid; do
+  for method in ${METHODS:-ssrc spwi surface grid}; do
     out=$(run "$cli" view "$scene" --method "$method" --frames "$frames" --stats 2>&1) || {
       why=$(printf '%s\n' "$out" | grep -m1 'refused\|penumbra view:' | sed 's/.*refused: //; s/|/\\|/g' | cut -c1-90)
       echo "| $(basename "$scene" .json) | $method | | | refused | $why |"

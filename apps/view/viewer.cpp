@@ -108,15 +108,15 @@ Job Viewer::make_job() {
   // A new view (and a copy of the scene for the worker) only when something the frame depends
   // on changed.
   // The exposure alone only tone-maps the last image again (Job::image stays).
-  Settings without_exposure = settings_;
-  without_exposure.exposure = job_settings_.exposure;
+  nlohmann::json changed_settings = diff_settings(settings_, job_settings_, true);
+  if (changed_settings.is_object()) changed_settings.erase("exposure");
   const bool image_changed =
       !job_.scene || job_.automatic != automatic || c.width != job_.scene->camera.width ||
       c.height != job_.scene->camera.height ||
       std::memcmp(&c.position, &job_.scene->camera.position, sizeof(Vec3)) != 0 ||
       std::memcmp(&c.look_at, &job_.scene->camera.look_at, sizeof(Vec3)) != 0 ||
       std::memcmp(&sun, &job_.scene->sun.direction, sizeof(Vec3)) != 0 ||
-      diff_settings(without_exposure, job_settings_, true) != nlohmann::json();
+      !(changed_settings.is_null() || changed_settings.empty());
   if (!image_changed && settings_.exposure == job_.exposure) return job_;
   Job j;
   if (!image_changed) {  // the same scene copies, the image tone-mapped again

@@ -10,6 +10,7 @@ namespace penumbra {
 
 struct Rgb {
   float r = 0, g = 0, b = 0;
+  bool operator==(const Rgb&) const = default;
 };
 
 // Row-major, row 0 at the top (y down, the scene convention), 3 floats per pixel.

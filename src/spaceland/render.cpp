@@ -229,11 +229,11 @@ namespace {
 // The method's image: the radiance cache first where it needs one, then its solve.
 // `room`: the memory limit less what is held already (the scene, the BVH, the pixel buffers),
 // which the method's own refusals (the grid's cascades, the radiance cache) are held to.
-// With `direct`, temporal accumulation's frame: the jitter passed on, and the exact part of the
-// image the method reports (SolveReport::direct) returned there.
+// With `exact`, temporal accumulation's frame: the jitter passed on, and what the method reports
+// for it (SolveReport::exact) returned there.
 Status solve(const Plan& plan, const Scene& scene, const Scene& given, const RayScene& rays,
              const GBuffer& g, std::uint64_t room, Kept* kept, double jitter,
-             std::vector<Rgb>* direct, RenderResult& result) {
+             temporal::Exact* exact, RenderResult& result) {
   const RenderOptions& o = plan.options;
   const MethodEntry& m = entry(o.method);
   SolveContext ctx{scene, rays, g, o.bounces, room, o.sun_rays};
@@ -243,7 +243,7 @@ Status solve(const Plan& plan, const Scene& scene, const Scene& given, const Ray
   ctx.cancel = o.cancel;
   ctx.kept = kept;
   ctx.jitter = jitter;
-  ctx.want_direct = direct != nullptr;
+  ctx.want_exact = exact != nullptr;
   std::optional<RadianceCache> cache;
   if (plan.radiance_cache) {
     Stopwatch watch;
@@ -264,7 +264,7 @@ Status solve(const Plan& plan, const Scene& scene, const Scene& given, const Ray
   Expected<ImageRgb> img = (o.device == Device::gpu ? m.gpu : m.cpu)(ctx, o, report, used);
   if (!img) return img.error();
   result.radiance = std::move(*img);
-  if (direct) *direct = std::move(report.direct);
+  if (exact) *exact = std::move(report.exact);
   for (StageTime& st : report.stages) result.stages.push_back(std::move(st));
   result.rays += report.rays;
   result.samples = report.samples;
@@ -320,35 +320,6 @@ std::uint64_t scene_key(const Scene& scene) {
   return f.h;
 }
 
-// What a temporal history's frames must share: the method and every option its image depends on
-// (not the camera, the image's size, the sun or the sky: those the history follows).
-std::uint64_t temporal_key(const RenderOptions& o) {
-  Fnv1a f;
-  f.value(int(o.method));
-  f.value(int(o.device));
-  f.value(o.bounces);
-  f.value(o.sun_rays);
-  f.value(o.cache_probe_spacing);
-  f.value(o.temporal.frames);
-  const SsrcOptions& s = o.ssrc;  // temporal accumulation is ssrc's (check_options)
-  for (int v : {s.probe_spacing, s.directions, s.interval, s.cascades, s.steps, s.sectors, s.rays,
-                int(s.backfaces), int(s.merge), int(s.gather), int(s.offscreen), int(s.specular)})
-    f.value(v);
-  for (float v : {s.thickness, s.merge_edge, s.gather_edge, s.gather_normal}) f.value(v);
-  return f.h;
-}
-
-bool same_light(const Sun& a, const Sun& b) {
-  return a.direction.x == b.direction.x && a.direction.y == b.direction.y &&
-         a.direction.z == b.direction.z && a.irradiance.r == b.irradiance.r &&
-         a.irradiance.g == b.irradiance.g && a.irradiance.b == b.irradiance.b &&
-         a.angular_radius == b.angular_radius;
-}
-bool same_light(const Sky& a, const Sky& b) {
-  const auto eq = [](Rgb x, Rgb y) { return x.r == y.r && x.g == y.g && x.b == y.b; };
-  return eq(a.zenith, b.zenith) && eq(a.horizon, b.horizon) && eq(a.ground, b.ground);
-}
-
 // The state's BVH for `scene`: kept where the scene but its camera is the same, else built
 // (dropping the method's state too). Sets `built` when it was built.
 Status keep_rays(const Scene& scene, std::uint64_t max_memory, Renderer::State& state,
@@ -396,16 +367,21 @@ Expected<RenderResult> render_kept(const Scene& scene, const RenderOptions& opti
       // The history goes with another method or options, and with a scene that changed in more
       // than its camera, sun and sky (a moved light is followed: the old light fades in frames).
       temporal::History& h = state->history;
-      const std::uint64_t key = temporal_key(options);
+      const temporal::Made made{options.method,
+                                options.device,
+                                options.bounces,
+                                options.sun_rays,
+                                options.cache_probe_spacing,
+                                options.temporal.frames,
+                                options.ssrc};
       // So does a new image size: its first frame at a new resolution would take the old one's
       // blur for frames (the viewer's still camera switching to full resolution).
-      if (!temporal || h.key != key || h.camera.width != scene.camera.width ||
+      if (!temporal || h.made != made || h.camera.width != scene.camera.width ||
           h.camera.height != scene.camera.height ||
-          (state->scene_key != before && same_light(h.sun, scene.sun) &&
-           same_light(h.sky, scene.sky)))
+          (state->scene_key != before && h.sun == scene.sun && h.sky == scene.sky))
         h.clear();
       if (temporal) {
-        h.key = key;
+        h.made = made;
         jitter = temporal::jitter(h.frame);
       }
       if (fresh) result.stages.push_back({"build BVH", stage.ms()});
@@ -439,10 +415,10 @@ Expected<RenderResult> render_kept(const Scene& scene, const RenderOptions& opti
         state->kept.method.reset();
         state->method = options.method;
       }
-      std::vector<Rgb> direct;
+      temporal::Exact exact;
       if (Status s =
               solve(*plan, k ? lit : scene, scene, *rays, g, room, state ? &state->kept : nullptr,
-                    jitter, temporal ? &direct : nullptr, result);
+                    jitter, temporal ? &exact : nullptr, result);
           !s)
         return s.error();
       if (k) {
@@ -468,9 +444,9 @@ Expected<RenderResult> render_kept(const Scene& scene, const RenderOptions& opti
         temporal::History& h = state->history;
         result.temporal_frame = h.frame;
         if (k)
-          for (Rgb& c : direct) c = {std::ldexp(c.r, k), std::ldexp(c.g, k), std::ldexp(c.b, k)};
-        temporal::accumulate(scene, g, aov_image(scene, g, Aov::albedo), direct,
-                             options.temporal.frames, result.radiance, h);
+          for (Rgb& c : exact.light)
+            c = {std::ldexp(c.r, k), std::ldexp(c.g, k), std::ldexp(c.b, k)};
+        temporal::accumulate(scene, g, exact, options.temporal.frames, result.radiance, h);
         result.memory_bytes += h.bytes();
         result.stages.push_back({"temporal", stage.ms()});
       }

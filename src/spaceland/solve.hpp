@@ -14,6 +14,7 @@
 #include "penumbra/spaceland/scene.hpp"
 #include "spaceland/embree/ray_scene.hpp"
 #include "spaceland/gbuffer.hpp"
+#include "spaceland/temporal.hpp"
 
 namespace penumbra::spaceland {
 
@@ -49,8 +50,8 @@ struct SolveContext {
   // Temporal accumulation's jitter of this frame, in [0, 1) (temporal::jitter): ssrc turns its
   // screen directions by this fraction of a cascade-0 direction. 0 in a single render().
   double jitter = 0;
-  // Temporal accumulation asks for SolveReport::direct (what the jitter does not change).
-  bool want_direct = false;
+  // Temporal accumulation asks for SolveReport::exact.
+  bool want_exact = false;
 };
 
 // What a solve reports besides the image.
@@ -62,11 +63,7 @@ struct SolveReport {
   std::uint64_t voxel_bytes = 0;   // the voxels' share of it (the probe grid)
   bool cancelled = false;
   std::vector<std::string> warnings;  // what the user should know about the result
-  // Where ctx.want_direct and the method adds it exactly: per G-buffer pixel, the part of the
-  // image no jitter changes (the emission and the sun's direct light), which temporal
-  // accumulation takes afresh each frame instead of blending it (a moved sun's shadows move at
-  // once). Empty otherwise.
-  std::vector<Rgb> direct;
+  temporal::Exact exact;              // where ctx.want_exact (temporal accumulation's frames)
 };
 
 // The refusal of a method that cannot carry fog (its check_scene): "<method> cannot carry fog:

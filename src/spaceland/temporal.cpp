@@ -58,10 +58,12 @@ struct Projection {
 
 }  // namespace
 
-void accumulate(const Scene& scene, const GBuffer& g, const ImageRgb& albedo,
-                const std::vector<Rgb>& direct, int frames, ImageRgb& image, History& h) {
+void accumulate(const Scene& scene, const GBuffer& g, const Exact& exact_part, int frames,
+                ImageRgb& image, History& h) {
   const std::size_t n = std::size_t(g.width) * g.height;
   const bool have = h.frame > 0 && !h.value.empty();
+  // A method that reports no exact part has all of its light blended, undivided.
+  const bool reported = exact_part.light.size() == n && exact_part.albedo.size() == n;
   const Projection previous(h.camera);
   std::vector<Rgb> value(n);
   std::vector<float> depth(n, -1.0f), count(n, 0.0f);
@@ -72,8 +74,8 @@ void accumulate(const Scene& scene, const GBuffer& g, const ImageRgb& albedo,
       const std::size_t k = std::size_t(j) * g.width + i;
       if (!g.found[k]) continue;  // the sky: exact in every frame
       const Hit& hit = g.hits[k];
-      const Rgb m = modulation(albedo.at(i, j));
-      const Rgb exact = direct.empty() ? Rgb{} : direct[k];
+      const Rgb m = reported ? modulation(exact_part.albedo[k]) : Rgb{1, 1, 1};
+      const Rgb exact = reported ? exact_part.light[k] : Rgb{};
       const Rgb c = image.at(i, j);
       const Rgb now{(c.r - exact.r) / m.r, (c.g - exact.g) / m.g, (c.b - exact.b) / m.b};
       depth[k] = g.linear_depth(k);

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "penumbra/image.hpp"
+#include "penumbra/spaceland/render.hpp"
 #include "penumbra/spaceland/scene.hpp"
 #include "spaceland/gbuffer.hpp"
 
@@ -31,9 +32,27 @@ inline constexpr float kMinAlbedo = 0.01f;
 // row cover the interval evenly.
 double jitter(std::uint64_t frame);
 
+// What a history's frames must share: the method and every option its image depends on (not the
+// camera, the image's size, the sun or the sky: those the history follows).
+struct Made {
+  Method method = Method::pt;
+  Device device = Device::cpu;
+  int bounces = 0, sun_rays = 0, cache_probe_spacing = 0, frames = 0;
+  SsrcOptions ssrc;  // temporal accumulation is ssrc's (check_options)
+  bool operator==(const Made&) const = default;
+};
+
+// What a method reports for a frame, per G-buffer pixel (SolveReport::exact): the part of its light
+// that no jitter changes (the emission and the sun's direct light), which is taken afresh each
+// frame instead of blended (a moved sun's shadows move at once), and the albedo its gathered light
+// is multiplied by, divided out of what is blended so that textures do not smear.
+struct Exact {
+  std::vector<Rgb> light, albedo;
+};
+
 // The frames before this one, at their last camera.
 struct History {
-  std::uint64_t key = 0;    // what the frames were made with (Renderer's; 0: none)
+  Made made;                // what the frames were made with
   std::uint64_t frame = 0;  // frames accumulated since the history began
   Camera camera;            // the last frame's
   Sun sun;                  // and its light, to tell a moved light from a changed scene
@@ -54,13 +73,12 @@ struct History {
 inline constexpr std::uint64_t kBytesPerPixel =
     sizeof(Rgb) + sizeof(float) + sizeof(Vec3) + sizeof(std::uint32_t) + sizeof(float);
 
-// Blends `image`, the method's frame of `scene` (whose G-buffer is `g` and albedo `albedo`), into
-// `h` reprojected to the scene's camera: each pixel that finds its surface in the history becomes
-// its history plus (frame - history) / n, n the history's frames plus one, at most `frames`;
-// others, and the sky, are the frame as it is. Then `h` holds the result at this camera.
-// `direct`, where not empty, is the part of each pixel's light that is exact in every frame
-// (SolveReport::direct): it is taken from the frame as it is and only the rest is blended.
-void accumulate(const Scene& scene, const GBuffer& g, const ImageRgb& albedo,
-                const std::vector<Rgb>& direct, int frames, ImageRgb& image, History& h);
+// Blends `image`, the method's frame of `scene` (whose G-buffer is `g`), less `exact.light` and
+// over `exact.albedo`, into `h` reprojected to the scene's camera: each pixel that finds its
+// surface in the history becomes its history plus (frame - history) / n, n the history's frames
+// plus one, at most `frames`; others, and the sky, are the frame as it is. Then `h` holds the
+// result at this camera.
+void accumulate(const Scene& scene, const GBuffer& g, const Exact& exact, int frames,
+                ImageRgb& image, History& h);
 
 }  // namespace penumbra::spaceland::temporal

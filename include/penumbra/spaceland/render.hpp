@@ -196,6 +196,7 @@ struct SsrcOptions {
   // Glossy materials' specular lobe: the widest query only (merged cascade 0's bins weighed by
   // the lobe); the cone query over ssrc's own intervals is not built.
   SpecularQuery specular = SpecularQuery::wide;
+  bool operator==(const SsrcOptions&) const = default;
 };
 
 // Surface radiance cascades (docs/METHODS.md, "Surface radiance cascades"): probes on the

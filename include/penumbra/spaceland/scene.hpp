@@ -37,6 +37,7 @@ struct Camera {
 // sky has all three equal; the default is black.
 struct Sky {
   Rgb zenith{}, horizon{}, ground{};
+  bool operator==(const Sky&) const = default;
 };
 
 // A disk of uniform radiance irradiance / (pi sin^2(angular_radius)) around `direction`.
@@ -44,6 +45,7 @@ struct Sun {
   Vec3 direction{0, 1, 0};       // unit, towards the sun
   Rgb irradiance{};              // on a surface facing the sun
   float angular_radius = 0.27f;  // degrees, in (0, 45]
+  bool operator==(const Sun&) const = default;
 };
 
 // Linear RGB texels, row 0 at v = 0 (glTF's convention: v runs down the image).

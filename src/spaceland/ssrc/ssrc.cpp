@@ -1057,7 +1057,7 @@ Expected<ImageRgb> render(const SolveContext& ctx, const SsrcOptions& o, const L
     });
   }
   report.stages.push_back({"sun", watch.ms()});
-  if (ctx.want_direct) report.direct = direct;
+  if (ctx.want_exact) report.exact = {direct, albedo};
 
   SpwiOptions probe_options;
   probe_options.merge = o.merge;

@@ -66,8 +66,8 @@ std::unique_ptr<ViewCommand> add_view_command(CLI::App& app) {
       ->check(CLI::Range(1, 64))
       ->capture_default_str();
   c->add_option("--temporal", a.temporal,
-                "ssrc: temporal accumulation over this many frames, its directions turned each "
-                "frame (0: off; docs/VIEWER.md)")
+                "ssrc, spwi: temporal accumulation over this many frames, each jittered (ssrc's "
+                "directions turned, spwi's probes moved) (0: off; docs/VIEWER.md)")
       ->check(CLI::Range(0, 1024))
       ->capture_default_str();
   c->add_option("--threads", a.threads, "Worker threads (0: all cores)")

@@ -1,13 +1,13 @@
-// Temporal accumulation of ssrc in a Renderer (RenderOptions::temporal; docs/VIEWER.md, "Temporal
-// reuse"): how fast a new view converges and what a moving camera or sun leaves behind, against
-// the path tracer. Phase 1 renders a still view `--run` frames; phase 2 turns the camera about
-// its look_at (`--orbit`, degrees about the world's y) and the sun (`--sun-turn`) over `--steps`
-// frames and holds the new view `--run` frames more. Every frame's relative RMSE against the
-// path-traced reference of its phase's end view is printed, beside the same renders without
+// Temporal accumulation of ssrc or spwi in a Renderer (RenderOptions::temporal; docs/VIEWER.md,
+// "Temporal reuse"): how fast a new view converges and what a moving camera or sun leaves behind,
+// against the path tracer. Phase 1 renders a still view `--run` frames; phase 2 turns the camera
+// about its look_at (`--orbit`, degrees about the world's y) and the sun (`--sun-turn`) over
+// `--steps` frames and holds the new view `--run` frames more. Every frame's relative RMSE against
+// the path-traced reference of its phase's end view is printed, beside the same renders without
 // temporal accumulation (each frame then is the first frame, render()'s).
 //
-//   penumbra_temporal SCENE.json [--frames 16] [--run 32] [--orbit 10] [--sun-turn 0]
-//                     [--steps 8] [--spp 1024] [--width 160]
+//   penumbra_temporal SCENE.json [--method ssrc|spwi] [--frames 16] [--run 32] [--orbit 10]
+//                     [--sun-turn 0] [--steps 8] [--spp 1024] [--width 160]
 #include <CLI/CLI.hpp>
 #include <cmath>
 #include <cstdio>
@@ -64,12 +64,16 @@ double error(const ImageRgb& test, const ImageRgb& ref) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"Temporal accumulation of ssrc: convergence and ghosting against the path tracer",
-               "penumbra_temporal"};
-  std::string path;
+  CLI::App app{
+      "Temporal accumulation of ssrc or spwi: convergence and ghosting against the path tracer",
+      "penumbra_temporal"};
+  std::string path, method = "ssrc";
   int frames = 16, run = 32, steps = 8, spp = 1024, width = 160;
   double orbit = 10, sun_turn = 0;
   app.add_option("scene", path, "A 3D scene")->required();
+  app.add_option("--method", method, "The method accumulated")
+      ->check(CLI::IsMember({"ssrc", "spwi"}))
+      ->capture_default_str();
   app.add_option("--frames", frames, "The history's length (RenderOptions::temporal.frames)")
       ->check(CLI::Range(1, 1024))
       ->capture_default_str();
@@ -95,7 +99,7 @@ int main(int argc, char** argv) {
   const ImageRgb ref_a = reference(a, spp), ref_b = reference(b, spp);
 
   RenderOptions on, off;
-  on.method = off.method = Method::ssrc;
+  on.method = off.method = method == "spwi" ? Method::spwi : Method::ssrc;
   on.temporal.frames = frames;
   Renderer with, without;
   std::printf("| frame | view | relative RMSE, temporal | without | ms, temporal | without |\n");

@@ -62,6 +62,12 @@ void Viewer::draw_panel() {
                ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse);
   Settings next = settings_;
   sl::RenderOptions& o = next.options;
+  // Temporal accumulation's history length, with what the method's jitter moves.
+  const auto temporal_slider = [&](const char* jitter) {
+    ImGui::SliderInt("temporal frames", &next.temporal, 0, 64);
+    if (ImGui::IsItemHovered())
+      ImGui::SetTooltip("%s, blended into the last frames reprojected; 0: off", jitter);
+  };
   section("Method");
   enum_choice(
       "method", o.method,
@@ -72,17 +78,14 @@ void Viewer::draw_panel() {
       choice("sectors", o.ssrc.sectors, {8, 16, 32});
       enum_choice("off screen", o.ssrc.offscreen,
                   {sl::SsrcOffscreen::sky, sl::SsrcOffscreen::world});
-      ImGui::SliderInt("temporal frames", &next.temporal, 0, 64);
-      if (ImGui::IsItemHovered())
-        ImGui::SetTooltip(
-            "directions turned each frame, blended into the last frames "
-            "reprojected; 0: off");
+      temporal_slider("directions turned each frame");
       break;
     case sl::Method::spwi:
       choice("directions", o.spwi.directions, {16, 64, 256});
       enum_choice("merge", o.spwi.merge,
                   {sl::SpwiMerge::bilinear, sl::SpwiMerge::bilateral, sl::SpwiMerge::bilinear3d,
                    sl::SpwiMerge::fix, sl::SpwiMerge::minmax});
+      temporal_slider("probes moved within a tile each frame");
       break;
     case sl::Method::grid:
       choice("probe spacing", o.grid.probe_spacing, {1, 2, 4});

@@ -21,8 +21,9 @@ struct Settings {
   float target_ms = 33;  // the frame time the automatic scale aims at
   // Below the view's resolution: upscaled guided by the first hits (upscale.hpp), or bilinearly.
   bool guided = true;
-  // ssrc's temporal accumulation: the history's length in frames (RenderOptions::temporal; 0:
-  // off). The other methods draw the same image every frame and take none.
+  // ssrc's and spwi's temporal accumulation: the history's length in frames
+  // (RenderOptions::temporal; 0: off). The other methods draw the same image every frame and take
+  // none.
   int temporal = 0;
   // The sun, where the scene has one: degrees about the scene camera's up from its heading, and
   // above the horizon.

@@ -142,7 +142,8 @@ Job Viewer::make_job() {
   j.scene = std::move(scene);
   j.options = settings_.options;
   j.options.surface.atlas = args_.atlas;
-  if (j.options.method == sl::Method::ssrc) j.options.temporal.frames = settings_.temporal;
+  if (j.options.method == sl::Method::ssrc || j.options.method == sl::Method::spwi)
+    j.options.temporal.frames = settings_.temporal;
   j.exposure = settings_.exposure;
   j.version = ++version_;
   job_settings_ = settings_;
@@ -453,6 +454,11 @@ int Viewer::run() {
     std::printf("  internal resolution: median %.0fx%.0f (scale %.3f)\n", mw,
                 std::round(mw * h / w), mw / w);
     std::printf("  frame (render()): median %.2f ms\n", penumbra::median(solve_ms_));
+    if (job_.options.temporal.frames > 0)
+      std::printf(
+          "  temporal accumulation: the last picture is frame %llu of its history (a "
+          "pixel blends at most %d)\n",
+          static_cast<unsigned long long>(shown_.temporal_frame + 1), job_.options.temporal.frames);
     for (const penumbra::StageTime& st : shown_.stages)
       std::printf("    %-22s median %7.2f ms\n", st.name.c_str(),
                   penumbra::median(stage_ms_[st.name]));

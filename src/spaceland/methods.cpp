@@ -124,7 +124,8 @@ void spwi_describe(const RenderResult& r, std::vector<Parameter>& p, std::string
 
 Expected<ImageRgb> spwi_solve(const SolveContext& ctx, const RenderOptions& o, SolveReport& report,
                               RenderOptions& used) {
-  const spwi::Layout layout = spwi::make_layout(ctx.scene, ctx.g, o.spwi);
+  spwi::Layout layout = spwi::make_layout(ctx.scene, ctx.g, o.spwi);
+  spwi::shift_lattice(layout, ctx.frame);
   used.spwi.interval = layout.levels.t0;
   used.spwi.cascades = layout.count();
   used.spwi.probe_spacing = layout.levels.spacing0;

@@ -157,9 +157,9 @@ Status check_options(const RenderOptions& o) {
   if (o.temporal.frames < 0 || o.temporal.frames > 1024)
     return Error{"`temporal.frames`: expected 0..1024 frames (0: off), found " +
                  std::to_string(o.temporal.frames)};
-  if (o.temporal.frames > 0 && o.method != Method::ssrc)
-    return Error{std::string("`temporal.frames`: temporal accumulation is ssrc's (its screen "
-                             "directions turned each frame); ") +
+  if (o.temporal.frames > 0 && o.method != Method::ssrc && o.method != Method::spwi)
+    return Error{std::string("`temporal.frames`: temporal accumulation is ssrc's and spwi's "
+                             "(their screen directions or probes moved each frame); ") +
                  m.title + " (" + m.name + ") draws the same image every frame"};
   if (o.sun_rays < 1 || o.sun_rays > 1024)
     return Error{"`sun_rays`: expected 1..1024 shadow rays, found " + std::to_string(o.sun_rays)};
@@ -229,10 +229,10 @@ namespace {
 // The method's image: the radiance cache first where it needs one, then its solve.
 // `room`: the memory limit less what is held already (the scene, the BVH, the pixel buffers),
 // which the method's own refusals (the grid's cascades, the radiance cache) are held to.
-// With `exact`, temporal accumulation's frame: the jitter passed on, and what the method reports
-// for it (SolveReport::exact) returned there.
+// With `exact`, temporal accumulation's frame `frame`: its index and jitter passed on, and what
+// the method reports for it (SolveReport::exact) returned there.
 Status solve(const Plan& plan, const Scene& scene, const Scene& given, const RayScene& rays,
-             const GBuffer& g, std::uint64_t room, Kept* kept, double jitter,
+             const GBuffer& g, std::uint64_t room, Kept* kept, std::uint64_t frame,
              temporal::Exact* exact, RenderResult& result) {
   const RenderOptions& o = plan.options;
   const MethodEntry& m = entry(o.method);
@@ -242,7 +242,8 @@ Status solve(const Plan& plan, const Scene& scene, const Scene& given, const Ray
   ctx.progress = &o.progress;
   ctx.cancel = o.cancel;
   ctx.kept = kept;
-  ctx.jitter = jitter;
+  ctx.frame = frame;
+  ctx.jitter = temporal::jitter(frame);
   ctx.want_exact = exact != nullptr;
   std::optional<RadianceCache> cache;
   if (plan.radiance_cache) {
@@ -359,7 +360,7 @@ Expected<RenderResult> render_kept(const Scene& scene, const RenderOptions& opti
     // Embree may not allocate past the limit (its estimate was checked above; this holds it).
     std::optional<RayScene> built;
     const bool temporal = state && options.temporal.frames > 0 && options.aov == Aov::radiance;
-    double jitter = 0;
+    std::uint64_t frame = 0;
     if (state) {
       const std::uint64_t before = state->scene_key;
       bool fresh = false;
@@ -373,7 +374,8 @@ Expected<RenderResult> render_kept(const Scene& scene, const RenderOptions& opti
                                 options.sun_rays,
                                 options.cache_probe_spacing,
                                 options.temporal.frames,
-                                options.ssrc};
+                                options.ssrc,
+                                options.spwi};
       // So does a new image size: its first frame at a new resolution would take the old one's
       // blur for frames (the viewer's still camera switching to full resolution).
       if (!temporal || h.made != made || h.camera.width != scene.camera.width ||
@@ -382,7 +384,7 @@ Expected<RenderResult> render_kept(const Scene& scene, const RenderOptions& opti
         h.clear();
       if (temporal) {
         h.made = made;
-        jitter = temporal::jitter(h.frame);
+        frame = h.frame;
       }
       if (fresh) result.stages.push_back({"build BVH", stage.ms()});
     } else {
@@ -418,7 +420,7 @@ Expected<RenderResult> render_kept(const Scene& scene, const RenderOptions& opti
       temporal::Exact exact;
       if (Status s =
               solve(*plan, k ? lit : scene, scene, *rays, g, room, state ? &state->kept : nullptr,
-                    jitter, temporal ? &exact : nullptr, result);
+                    frame, temporal ? &exact : nullptr, result);
           !s)
         return s.error();
       if (k) {

@@ -47,8 +47,10 @@ struct SolveContext {
   const std::atomic<bool>* cancel = nullptr;
   // A Renderer's store for what does not depend on the camera; null in a single render().
   Kept* kept = nullptr;
-  // Temporal accumulation's jitter of this frame, in [0, 1) (temporal::jitter): ssrc turns its
-  // screen directions by this fraction of a cascade-0 direction. 0 in a single render().
+  // Temporal accumulation's frame index in its history, 0 in a single render(), and its jitter
+  // in [0, 1) (temporal::jitter): ssrc turns its screen directions by this fraction of a
+  // cascade-0 direction; spwi moves its probe lattice by the frame's point (spwi::shift_lattice).
+  std::uint64_t frame = 0;
   double jitter = 0;
   // Temporal accumulation asks for SolveReport::exact.
   bool want_exact = false;

@@ -9,9 +9,12 @@
 namespace penumbra::spaceland::temporal {
 
 double jitter(std::uint64_t frame) {
-  double x = 0, bit = 0.5;
-  for (; frame; frame >>= 1, bit /= 2)
-    if (frame & 1) x += bit;
+  return radical_inverse(frame, 2);
+}
+
+double radical_inverse(std::uint64_t f, unsigned base) {
+  double x = 0, digit = 1.0 / base;
+  for (; f; f /= base, digit /= base) x += double(f % base) * digit;
   return x;
 }
 

@@ -1,7 +1,8 @@
 // Temporal accumulation of a Renderer's frames (RenderOptions::temporal; docs/VIEWER.md,
 // "Temporal reuse"; seed 001 section 4.5: "each cascade can be reprojected from the previous frame
 // to allow temporal accumulation"). Each frame turns ssrc's screen directions by a new fraction of
-// a cascade-0 direction (jitter()), so that successive frames sample other directions, and is
+// a cascade-0 direction (jitter()), or moves spwi's probe lattice by a new offset within a
+// cascade-0 tile (spwi::shift_lattice), so that successive frames sample elsewhere, and is
 // blended into the result of the frames before it, reprojected to the new camera through each
 // pixel's first hit. What is reprojected is the resolved image, not each cascade: the cascades'
 // stores are two at a time (ssrc::Layout::bytes), and keeping every cascade of the last frame would
@@ -31,6 +32,8 @@ inline constexpr float kMinAlbedo = 0.01f;
 // 3/4, 1/8, ...), so that frame 0 is the unjittered frame render() makes and any 2^k frames in a
 // row cover the interval evenly.
 double jitter(std::uint64_t frame);
+// The radical inverse of f in `base` (jitter() is base 2's): f's digits mirrored about the point.
+double radical_inverse(std::uint64_t f, unsigned base);
 
 // What a history's frames must share: the method and every option its image depends on (not the
 // camera, the image's size, the sun or the sky: those the history follows).
@@ -38,7 +41,8 @@ struct Made {
   Method method = Method::pt;
   Device device = Device::cpu;
   int bounces = 0, sun_rays = 0, cache_probe_spacing = 0, frames = 0;
-  SsrcOptions ssrc;  // temporal accumulation is ssrc's (check_options)
+  SsrcOptions ssrc;  // temporal accumulation is ssrc's and spwi's (check_options)
+  SpwiOptions spwi;
   bool operator==(const Made&) const = default;
 };
 

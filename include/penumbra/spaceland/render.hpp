@@ -130,6 +130,7 @@ struct SpwiOptions {
   // pixel's (0: off, as the thesis).
   float gather_normal = 1;
   SpecularQuery specular = SpecularQuery::cone;  // glossy materials' specular lobe
+  bool operator==(const SpwiOptions&) const = default;
 };
 
 // The world-space probe grid (docs/METHODS.md, "The world-space probe grid").
@@ -219,11 +220,14 @@ struct SurfaceOptions {
   SpecularQuery specular = SpecularQuery::wide;
 };
 
-// Temporal accumulation: a Renderer's frames of ssrc, each with its screen directions turned by
-// a new fraction of a cascade-0 direction, blended into the frames before it reprojected to the
-// new camera (docs/VIEWER.md, "Temporal reuse"). The history is kept across camera moves and
-// changes of the sun and the sky (which then show the old light for a few frames), and dropped when
-// anything else changes. render() makes the first frame, which is the frame without it.
+// Temporal accumulation: a Renderer's frames of a screen-space method, each jittered (ssrc's
+// screen directions turned by a new fraction of a cascade-0 direction; spwi's probe lattice moved
+// by a new whole-pixel offset within a cascade-0 tile), blended into the frames before it
+// reprojected to the new camera (docs/VIEWER.md, "Temporal reuse"). The exact part of the light
+// (emission, the sun's direct light) is taken afresh each frame. The history is kept across camera
+// moves and changes of the sun and the sky (whose indirect light then lags for a few frames), and
+// dropped when anything else changes. render() makes the first frame, which is the frame without
+// it.
 struct TemporalOptions {
   // The history's length: in each pixel whose surface the last frame saw, a new frame weighs
   // 1 / (frames behind it + 1), at least 1 / frames. 0: off.

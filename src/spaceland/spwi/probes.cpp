@@ -151,8 +151,8 @@ Corners minmax_corners(const Corners& c, const std::vector<Probe>& probes, float
 // A probe on the surface pixel (x, y) sees, if it sees one.
 Probe probe_at(const Scene& scene, const GBuffer& g, int x, int y, float depth_bias) {
   Probe p;
-  x = std::min(x, g.width - 1);
-  y = std::min(y, g.height - 1);
+  x = std::clamp(x, 0, g.width - 1);
+  y = std::clamp(y, 0, g.height - 1);
   const std::size_t k = std::size_t(y) * g.width + x;
   if (!g.found[k]) return p;
   const Hit& h = g.hits[k];
@@ -174,8 +174,9 @@ std::vector<Probe> place_minmax_probes(const Scene& scene, const GBuffer& g, con
     for (int tx = 0; tx < nx; ++tx) {
       float lo = std::numeric_limits<float>::infinity(), hi = -lo;
       int lx = -1, ly = -1, hx = -1, hy = -1;
-      for (int y = ty * s; y < std::min((ty + 1) * s, g.height); ++y)
-        for (int x = tx * s; x < std::min((tx + 1) * s, g.width); ++x) {
+      const int x0 = tx * s + layout.shift_x, y0 = ty * s + layout.shift_y;
+      for (int y = std::max(y0, 0); y < std::min(y0 + s, g.height); ++y)
+        for (int x = std::max(x0, 0); x < std::min(x0 + s, g.width); ++x) {
           const std::size_t k = std::size_t(y) * g.width + x;
           if (!g.found[k]) continue;
           const float d = g.linear_depth(k);
@@ -200,23 +201,23 @@ std::vector<Probe> place_probes(const Scene& scene, const GBuffer& g, const Layo
   std::vector<Probe> probes(std::size_t(nx) * ny);
   for (int y = 0; y < ny; ++y)
     for (int x = 0; x < nx; ++x)
-      probes[std::size_t(y) * nx + x] =
-          probe_at(scene, g, x * s + s / 2, y * s + s / 2, o.depth_bias);
+      probes[std::size_t(y) * nx + x] = probe_at(scene, g, x * s + s / 2 + layout.shift_x,
+                                                 y * s + s / 2 + layout.shift_y, o.depth_bias);
   return probes;
 }
 
 std::vector<std::array<Probe, 4>> place_sub_probes(const Scene& scene, const GBuffer& g,
                                                    const Layout& layout, int i, float depth_bias) {
   const int s = layout.spacing(i), nx = layout.nx[std::size_t(i)], ny = layout.ny[std::size_t(i)];
-  const int q1 = s / 4, q3 = (3 * s) / 4;
+  const int q1 = s / 4, q3 = (3 * s) / 4, dx = layout.shift_x, dy = layout.shift_y;
   std::vector<std::array<Probe, 4>> subs(std::size_t(nx) * ny);
   for (int y = 0; y < ny; ++y)
     for (int x = 0; x < nx; ++x) {
       std::array<Probe, 4>& sp = subs[std::size_t(y) * nx + x];
-      sp[0] = probe_at(scene, g, x * s + q1, y * s + q1, depth_bias);
-      sp[1] = probe_at(scene, g, x * s + q3, y * s + q1, depth_bias);
-      sp[2] = probe_at(scene, g, x * s + q1, y * s + q3, depth_bias);
-      sp[3] = probe_at(scene, g, x * s + q3, y * s + q3, depth_bias);
+      sp[0] = probe_at(scene, g, x * s + q1 + dx, y * s + q1 + dy, depth_bias);
+      sp[1] = probe_at(scene, g, x * s + q3 + dx, y * s + q1 + dy, depth_bias);
+      sp[2] = probe_at(scene, g, x * s + q1 + dx, y * s + q3 + dy, depth_bias);
+      sp[3] = probe_at(scene, g, x * s + q3 + dx, y * s + q3 + dy, depth_bias);
     }
   return subs;
 }
@@ -226,6 +227,9 @@ bool upper_corners(const Layout& layout, int up, double x, double y, const Probe
   const int spacing = layout.spacing(up), nx = layout.nx[std::size_t(up)],
             ny = layout.ny[std::size_t(up)];
   float fx = 0, fy = 0;
+  // The lattice's own coordinates: its shift taken off.
+  x -= layout.shift_x;
+  y -= layout.shift_y;
   if (o.merge == SpwiMerge::minmax) {
     c = minmax_corners(screen_corners(x, y, spacing, nx, ny, fx, fy), upper, probe.depth);
     return normalise(c, upper);
@@ -243,10 +247,12 @@ bool gather_corners(const Layout& layout, int i, int x, int y, float depth, Vec3
                     const std::vector<Probe>& probes, const SpwiOptions& o, Corners& c) {
   float fx = 0, fy = 0;
   const int s = layout.spacing(i), nx = layout.nx[std::size_t(i)], ny = layout.ny[std::size_t(i)];
+  // The pixel's centre in the lattice's own coordinates.
+  const double cx = x + 0.5 - layout.shift_x, cy = y + 0.5 - layout.shift_y;
   if (o.merge == SpwiMerge::minmax) {
-    c = minmax_corners(screen_corners(x + 0.5, y + 0.5, s, nx, ny, fx, fy), probes, depth);
+    c = minmax_corners(screen_corners(cx, cy, s, nx, ny, fx, fy), probes, depth);
   } else {
-    c = valid_corners(x + 0.5, y + 0.5, s, nx, ny, probes, fx, fy);
+    c = valid_corners(cx, cy, s, nx, ny, probes, fx, fy);
     bilateral(c, probes, depth, o.gather_edge);
   }
   if (o.gather_normal > 0) {

@@ -208,6 +208,17 @@ Layout make_layout(const Scene& scene, const GBuffer& g, const SpwiOptions& o) {
   return l;
 }
 
+void shift_lattice(Layout& layout, std::uint64_t frame) {
+  const int s = layout.spacing(0);
+  // Frame 0's point (0, 0) is moved to the tile's middle, where the unshifted probe sits.
+  const auto shift = [s](double u) {
+    const double v = u + 0.5;
+    return int(std::floor((v - std::floor(v)) * s)) - s / 2;
+  };
+  layout.shift_x = shift(temporal::radical_inverse(frame, 2));
+  layout.shift_y = shift(temporal::radical_inverse(frame, 3));
+}
+
 namespace {
 
 // What a ray along `dir` sees at a surface hit: the emission, and with a cache the light
@@ -518,8 +529,9 @@ struct ScreenCascade {
     const Probe& pr = probes[std::size_t(q)];
     if (!pr.valid) return;
     row.merge =
-        !top && upper_corners(layout, i + 1, tile_centre(px, layout.spacing(i)),
-                              tile_centre(py, layout.spacing(i)), pr, upper_probes, o, row.c);
+        !top && upper_corners(layout, i + 1, tile_centre(px, layout.spacing(i)) + layout.shift_x,
+                              tile_centre(py, layout.spacing(i)) + layout.shift_y, pr, upper_probes,
+                              o, row.c);
     const bool fix = row.merge && o.merge == SpwiMerge::fix;
     // With the fix, a segment above cascade 0 starts where the cascade below aimed: at this
     // probe's interval start, not a sub-probe's, so only cascade 0 is pre-averaged there.
@@ -575,11 +587,12 @@ struct KeptCascade {
 // The final gather (Alg. 11): the 4 nearest cascade-0 probes, depth-aware weights, each probe's
 // cosine-weighted mean radiance over the pixel's hemisphere; the sun by one shadow ray per pixel
 // unless the top cascade carries it. Glossy pixels add their specular lobe (o.specular), the cone
-// query reading `kept`.
+// query reading `kept`. With ctx.want_exact, `exact` gets each pixel's emission and direct sun
+// light and its diffuse albedo (temporal accumulation's SolveReport::exact).
 ImageRgb gather(const SolveContext& ctx, const SpwiOptions& o, const Layout& layout,
                 const RadianceStore& store, const std::vector<Probe>& probes, const Background& bg,
-                const Surfaces& surface, const std::vector<KeptCascade>& kept,
-                std::uint64_t& rays) {
+                const Surfaces& surface, const std::vector<KeptCascade>& kept, std::uint64_t& rays,
+                temporal::Exact& exact) {
   const std::vector<Vec3> dirs = cascade::direction_map(layout.levels, 0);
   const std::uint64_t count = layout.probes(0);
   const SunLight sun(ctx.scene, ctx.rays, ctx.sun_rays);
@@ -677,9 +690,15 @@ ImageRgb gather(const SolveContext& ctx, const SpwiOptions& o, const Layout& lay
     return merged;
   };
   const int top = std::max(0, int(kept.size()) - 1);
+  if (ctx.want_exact) {
+    const std::size_t pixels = std::size_t(ctx.g.width) * ctx.g.height;
+    exact.light.assign(pixels, Rgb{});
+    exact.albedo.assign(pixels, Rgb{});
+  }
   return shade_pixels(
       ctx.g, bg, rays, [&](int x, int y, std::size_t k, const Hit& h, std::uint64_t& local) {
-        Rgb l = emission_at(ctx.scene, h);
+        const Rgb emitted = emission_at(ctx.scene, h);
+        Rgb l = emitted;
         const Brdf brdf = brdf_at(ctx.scene, h);
         const Vec3 wo = normalize(-ctx.g.directions[k]);
         const Vec3 n = h.shading_normal;
@@ -718,9 +737,12 @@ ImageRgb gather(const SolveContext& ctx, const SpwiOptions& o, const Layout& lay
           }
           if (used > 0) l += lobes.diffuse * e * (1 / used);
         }
-        l += specular;
-        if (sun_direct) l += sun.reflected(h, brdf, wo, local);
-        return l;
+        const Rgb from_sun = sun_direct ? sun.reflected(h, brdf, wo, local) : Rgb{};
+        if (ctx.want_exact) {
+          exact.light[k] = emitted + from_sun;
+          exact.albedo[k] = lobes.diffuse;
+        }
+        return l + specular + from_sun;
       });
 }
 
@@ -773,7 +795,8 @@ Expected<ImageRgb> render(const SolveContext& ctx, const SpwiOptions& o, const L
       });
   Stopwatch watch;
   report.rays += rays;
-  ImageRgb img = gather(ctx, o, layout, store, upper_probes, bg, surface, kept, report.rays);
+  ImageRgb img =
+      gather(ctx, o, layout, store, upper_probes, bg, surface, kept, report.rays, report.exact);
   report.stages.push_back({"gather", watch.ms()});
   return img;
 }

@@ -26,6 +26,9 @@ struct Layout {
   bool preaverage = false;  // 2x2 sub-probes per probe
   int layers = 1;           // probes per tile: 2 with the min-max merge (nearest, farthest)
   std::vector<int> nx, ny;  // tiles of each cascade
+  // Temporal accumulation's jitter (shift_lattice): every cascade's tiles and probes moved by
+  // this many pixels, at most half a cascade-0 spacing either way. 0 in a single render().
+  int shift_x = 0, shift_y = 0;
 
   int count() const { return levels.count; }
   int spacing(int i) const { return levels.spacing(i); }
@@ -60,6 +63,12 @@ std::uint64_t bytes_upper_bound(const Scene& scene, const SpwiOptions& o);
 
 // The layout for a G-buffer: t0 and the cascade count derived where the options leave them 0.
 Layout make_layout(const Scene& scene, const GBuffer& g, const SpwiOptions& o);
+
+// Temporal accumulation's frame `frame` (SolveContext::frame) moves the probe lattice by the
+// Halton point (2, 3) of its index within a cascade-0 tile, in whole pixels (probes sit on
+// pixels): frame 0 not at all, and any run of frames spreads over the tile. The same shift for
+// every cascade keeps each cascade's probes among the ones above as they were.
+void shift_lattice(Layout& layout, std::uint64_t frame);
 
 // The cascade-0 probe spacing for a width x height image: o.probe_spacing, or derived (0):
 // kSpwiSpacing, or its half where that leaves under kSpwiProbesAcross probes across the image's

@@ -130,6 +130,17 @@ inline std::string quote(const std::string& s) {
   return q + "'";
 }
 
+// A shell snippet for a script that started a program in the background ($pid): waits until it
+// catches SIGINT (its handler set: the SigCgt mask of Linux's /proc/PID/status), at most 60 s,
+// then sends it one. A non-interactive shell starts background jobs with SIGINT ignored, so a
+// signal sent before the handler is set is lost and the job runs on: a fixed `sleep 1` lost that
+// race on a loaded machine under the sanitizers, and the render of 10^8 samples never ended.
+inline std::string interrupt_once_caught() {
+  return "for i in $(seq 6000); do m=$(sed -n 's/^SigCgt:[[:space:]]*//p' /proc/$pid/status "
+         "2>/dev/null); [ -n \"$m\" ] && (( 0x$m & 2 )) && break; sleep 0.01; done; "
+         "kill -INT $pid";
+}
+
 struct CliResult {
   int status = -1;  // the exit code, or -1 when the process did not exit normally
   std::string out, err;

@@ -787,7 +787,7 @@ TEST_F(Cli3d, InterruptWritesTheSamplesSoFarAndATimeLimitStops) {
   for (const std::string& piece :
        {std::string(" render "), quote(scene_), std::string(" --spp 100000000 -q -o "),
         quote(out("i.pfm")), std::string(" 2>"), quote((tmp_.root() / "err.txt").string()),
-        std::string(" & pid=$!; sleep 1; kill -INT $pid; wait $pid; exit $?")})
+        " & pid=$!; " + penumbra::testing::interrupt_once_caught() + "; wait $pid; exit $?"})
     cmd += piece;
   const int raw = std::system(("bash -c " + quote(cmd)).c_str());
   ASSERT_TRUE(WIFEXITED(raw));

@@ -317,7 +317,7 @@ TEST_F(Cli, InterruptWritesWhatItHas) {
   for (const std::string& piece :
        {std::string(" render "), quote(scene_), std::string(" --method pt --spp 100000000 -q -o "),
         quote(out("i.pfm")), std::string(" 2>"), quote((dir_ / "int_err.txt").string()),
-        std::string(" & pid=$!; sleep 1; kill -INT $pid; wait $pid; exit $?")})
+        " & pid=$!; " + penumbra::testing::interrupt_once_caught() + "; wait $pid; exit $?"})
     cmd += piece;
   std::string shell = "bash -c ";
   shell += quote(cmd);

@@ -331,7 +331,7 @@ TEST_F(PaintWindow, InterruptWritesASessionButFailsAMeasurement) {
     const std::string script = "export DISPLAY=" + x_server().display() + "\n" +
                                quote(PENUMBRA_CLI) + " paint --size 64x64 " + args + " >" +
                                quote(tmp_.file("paint.out")) + " 2>&1 &\npid=$!\nsleep 2\n" +
-                               "kill -INT $pid\nwait $pid\n";
+                               penumbra::testing::interrupt_once_caught() + "\nwait $pid\n";
     const int raw = std::system(("bash -c " + quote(script)).c_str());
     return raw != -1 && WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
   };

@@ -70,6 +70,12 @@ std::unique_ptr<ViewCommand> add_view_command(CLI::App& app) {
                 "directions turned, spwi's probes moved) (0: off; docs/VIEWER.md)")
       ->check(CLI::Range(0, 1024))
       ->capture_default_str();
+  c->add_option("--grid-slabs", a.grid_slabs,
+                "grid: where the view needs its grid solved again (the sun moved, the levels "
+                "moved), show the last grid while the new one is solved this many probe slabs a "
+                "frame (0: off, solved whole; docs/VIEWER.md)")
+      ->check(CLI::Range(0, 1 << 20))
+      ->capture_default_str();
   c->add_option("--threads", a.threads, "Worker threads (0: all cores)")
       ->check(CLI::Range(0, 1024))
       ->capture_default_str();
@@ -137,6 +143,7 @@ int run_view(const ViewArgs& args) {
   settings.target_ms = a.target_ms;
   settings.guided = a.upscale == "guided";
   settings.temporal = a.temporal;
+  settings.grid_slabs = a.grid_slabs;
   settings.exposure = a.exposure;
   if (!a.atlas.empty() && o.method != sl::Method::surface) {
     std::cerr << "penumbra view: --atlas applies to --method surface only, not "

@@ -23,7 +23,8 @@ struct ViewArgs {
   std::string upscale =
       "guided";  // or bilinear: how a frame below the view's size is brought to it
   int bounces = 1;
-  int temporal = 0;  // ssrc's temporal accumulation: the history's frames (0: off)
+  int temporal = 0;    // ssrc's and spwi's temporal accumulation: the history's frames (0: off)
+  int grid_slabs = 0;  // the grid's solve spread over frames, slabs a frame (0: off)
   int threads = 0;
   std::string max_memory = "8G";
   std::optional<float> exposure;  // empty: automatic

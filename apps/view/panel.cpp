@@ -90,6 +90,15 @@ void Viewer::draw_panel() {
     case sl::Method::grid:
       choice("probe spacing", o.grid.probe_spacing, {1, 2, 4});
       choice("directions", o.grid.directions, {16, 64});
+      ImGui::SliderInt("slabs a frame", &next.grid_slabs, 0, 64);
+      if (ImGui::IsItemHovered())
+        ImGui::SetTooltip(
+            "a grid solved again (the sun or the levels moved) a slab at a time, the last one "
+            "shown meanwhile; 0: solved whole");
+      if (shown_.grid_slabs > 0)
+        ImGui::Text("new grid: %llu of %llu slabs",
+                    static_cast<unsigned long long>(shown_.grid_slabs_done),
+                    static_cast<unsigned long long>(shown_.grid_slabs));
       break;
     case sl::Method::surface: {
       int texels = int(o.surface.texels);

@@ -58,6 +58,11 @@ const std::vector<Field>& fields() {
          s.temporal = r.integer(j, p, 0, 1024);
        },
        [](const Settings& s) { return json(s.temporal); }},
+      {"grid_slabs",
+       [](const JsonReader& r, const json& j, const std::string& p, Settings& s) {
+         s.grid_slabs = r.integer(j, p, 0, 1 << 20);
+       },
+       [](const Settings& s) { return json(s.grid_slabs); }},
       {"exposure",
        [](const JsonReader& r, const json& j, const std::string& p, Settings& s) {
          if (j.is_string() && j.get<std::string>() == "auto")

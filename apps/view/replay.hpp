@@ -25,6 +25,9 @@ struct Settings {
   // (RenderOptions::temporal; 0: off). The other methods draw the same image every frame and take
   // none.
   int temporal = 0;
+  // The grid's solve spread over frames, this many slabs a frame (RenderOptions::temporal's
+  // grid_slabs; 0: off).
+  int grid_slabs = 0;
   // The sun, where the scene has one: degrees about the scene camera's up from its heading, and
   // above the horizon.
   float sun_azimuth = 0, sun_elevation = 0;

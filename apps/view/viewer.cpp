@@ -144,6 +144,7 @@ Job Viewer::make_job() {
   j.options.surface.atlas = args_.atlas;
   if (j.options.method == sl::Method::ssrc || j.options.method == sl::Method::spwi)
     j.options.temporal.frames = settings_.temporal;
+  if (j.options.method == sl::Method::grid) j.options.temporal.grid_slabs = settings_.grid_slabs;
   j.exposure = settings_.exposure;
   j.version = ++version_;
   job_settings_ = settings_;
@@ -371,6 +372,7 @@ int Viewer::run() {
         std::cerr << "penumbra view: render refused: " << f.error << "\n";
       if (f.error.empty()) {
         retoned_ += f.retoned ? 1 : 0;
+        stale_ += !f.retoned && f.grid_slabs > 0 ? 1 : 0;
         if (!f.retoned) {  // a picture tone-mapped again is no frame time
           solve_ms_.push_back(f.solve_ms);
           display_ms_.push_back(f.display_ms);
@@ -427,7 +429,9 @@ int Viewer::run() {
     if (args_.frames > 0 && current && solve_ms_.size() >= std::size_t(args_.frames)) done = true;
     // A screenshot with temporal accumulation waits for the history to fill (a still view).
     const int temporal = job_.options.temporal.frames;
-    const bool settled = temporal == 0 || shown_.temporal_frame + 1 >= std::uint64_t(temporal);
+    // So does one whose grid is solved a slab at a time, for the view's own grid.
+    const bool settled = (temporal == 0 || shown_.temporal_frame + 1 >= std::uint64_t(temporal)) &&
+                         shown_.grid_slabs == 0;
     if (!args_.screenshot.empty() && current && args_.frames == 0 && settled) done = true;
     if (done && !args_.screenshot.empty())
       shot = window_support::read_window(window_, shot_w, shot_h);
@@ -454,6 +458,9 @@ int Viewer::run() {
     std::printf("  internal resolution: median %.0fx%.0f (scale %.3f)\n", mw,
                 std::round(mw * h / w), mw / w);
     std::printf("  frame (render()): median %.2f ms\n", penumbra::median(solve_ms_));
+    if (job_.options.temporal.grid_slabs > 0)
+      std::printf("  grid slabs: %d frames showed the last grid while a new one was solved\n",
+                  stale_);
     if (job_.options.temporal.frames > 0)
       std::printf(
           "  temporal accumulation: the last picture is frame %llu of its history (a "

@@ -79,6 +79,7 @@ class Viewer {
   std::map<std::string, std::vector<double>> stage_ms_;
   std::vector<int> widths_;  // internal width of each frame
   int retoned_ = 0;          // frames that only tone-mapped the last picture again
+  int stale_ = 0;            // frames that showed the last grid while a new one was solved
 };
 
 }  // namespace viewer

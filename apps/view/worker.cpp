@@ -113,6 +113,11 @@ void Worker::loop() {
         f.temporal_frame = frame_temporal;
         const int frames = job.options.temporal.frames;
         accumulating = !retone && frames > 0 && r->temporal_frame + 1 < std::uint64_t(frames);
+        if (!retone) {
+          f.grid_slabs_done = r->grid_slabs_done;
+          f.grid_slabs = r->grid_slabs;
+          accumulating = accumulating || r->grid_slabs > 0;  // the view's grid is under way
+        }
         f.stages = std::move(r->stages);
         f.line = frame_line;
         watch.restart();

@@ -47,6 +47,9 @@ struct Frame {
   std::uint64_t serial = 0;  // counts rendered frames
   // With temporal accumulation: the frame's index in its history (RenderResult::temporal_frame).
   std::uint64_t temporal_frame = 0;
+  // With the grid solved a slab at a time: the new grid's slabs done and in all (0, 0: the frame
+  // shows its own grid; RenderResult::grid_slabs_done, grid_slabs).
+  std::uint64_t grid_slabs_done = 0, grid_slabs = 0;
   std::string line;      // the method's parameters as it used them (describe_line)
   std::string error;     // the render was refused (the picture is the previous one)
   bool retoned = false;  // the last frame's image, tone-mapped again (the exposure changed)
@@ -61,7 +64,8 @@ class Worker {
 
   // The view to render once the current frame is done; `continuous`: render it again and again
   // (measurement), else once per version, or with temporal accumulation until its history holds
-  // temporal.frames frames (a still view then stops changing).
+  // temporal.frames frames, or with the grid solved a slab at a time until the view's own grid
+  // is shown (a still view then stops changing).
   void submit(Job job, bool continuous);
   // The latest frame if it is newer than `serial`.
   bool latest(std::uint64_t serial, Frame& out);

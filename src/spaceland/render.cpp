@@ -19,6 +19,7 @@
 #include "spaceland/gbuffer.hpp"
 #include "spaceland/method.hpp"
 #include "spaceland/radiance_cache.hpp"
+#include "spaceland/sky.hpp"
 #include "spaceland/temporal.hpp"
 
 namespace penumbra::spaceland {
@@ -161,6 +162,12 @@ Status check_options(const RenderOptions& o) {
     return Error{std::string("`temporal.frames`: temporal accumulation is ssrc's and spwi's "
                              "(their screen directions or probes moved each frame); ") +
                  m.title + " (" + m.name + ") draws the same image every frame"};
+  if (o.temporal.grid_slabs < 0 || o.temporal.grid_slabs > (1 << 20))
+    return Error{"`temporal.grid_slabs`: expected 0..1048576 slabs a frame (0: off), found " +
+                 std::to_string(o.temporal.grid_slabs)};
+  if (o.temporal.grid_slabs > 0 && o.method != Method::grid)
+    return Error{std::string("`temporal.grid_slabs`: the grid's solve spread over frames; ") +
+                 m.title + " (" + m.name + ") has no grid"};
   if (o.sun_rays < 1 || o.sun_rays > 1024)
     return Error{"`sun_rays`: expected 1..1024 shadow rays, found " + std::to_string(o.sun_rays)};
   if (!needs_cache(o)) return {};
@@ -245,6 +252,7 @@ Status solve(const Plan& plan, const Scene& scene, const Scene& given, const Ray
   ctx.frame = frame;
   ctx.jitter = temporal::jitter(frame);
   ctx.want_exact = exact != nullptr;
+  ctx.grid_slabs = kept ? std::uint64_t(o.temporal.grid_slabs) : 0;
   std::optional<RadianceCache> cache;
   if (plan.radiance_cache) {
     Stopwatch watch;
@@ -273,6 +281,8 @@ Status solve(const Plan& plan, const Scene& scene, const Scene& given, const Ray
   for (std::string& w : report.warnings) result.warnings.push_back(std::move(w));
   result.memory_bytes += report.memory_bytes;
   result.voxel_bytes = report.voxel_bytes;
+  result.grid_slabs_done = report.grid_slabs_done;
+  result.grid_slabs = report.grid_slabs;
   result.options = used;
   return {};
 }
@@ -302,10 +312,11 @@ struct Renderer::State {
 
 namespace {
 
-// The scene but its camera (and names): what the BVH and a method's kept state are made from.
-std::uint64_t scene_key(const Scene& scene) {
+// The scene but its camera (and names): what the BVH and a method's kept state are made from;
+// `geometry` without its sky and sun.
+std::uint64_t scene_key(const Scene& scene, std::uint64_t& geometry) {
   Fnv1a f;
-  f.value(atlas::scene_hash(scene));  // geometry, materials, textures, sky, sun
+  f.value(atlas::scene_hash(scene, false));  // geometry, materials, textures
   // Which object each shape belongs to (the BVH reports it: the object AOV, ssrc's back faces).
   for (const TriangleMesh& m : scene.meshes) f.value(m.object);
   for (const Sphere& sp : scene.spheres) f.value(sp.object);
@@ -318,18 +329,24 @@ std::uint64_t scene_key(const Scene& scene) {
     f.value(m.albedo);
     f.value(m.emission);
   }
+  geometry = f.h;
+  hash_light(f, scene);
   return f.h;
 }
 
 // The state's BVH for `scene`: kept where the scene but its camera is the same, else built
-// (dropping the method's state too). Sets `built` when it was built.
-Status keep_rays(const Scene& scene, std::uint64_t max_memory, Renderer::State& state,
-                 bool& built) {
-  const std::uint64_t key = scene_key(scene);
+// (dropping the method's state too, unless `keep_method`: a method that checks its state against
+// the scene itself). Sets `built` when it was built.
+Status keep_rays(const Scene& scene, std::uint64_t max_memory, Renderer::State& state, bool& built,
+                 bool keep_method = false) {
+  std::uint64_t geometry = 0;
+  const std::uint64_t key = scene_key(scene, geometry);
   built = false;
+  state.kept.geometry_key = geometry;
   if (key != state.scene_key || !state.rays) {
     state.rays.reset();
-    state.kept = Kept{key, {}};
+    state.kept.scene_key = key;
+    if (!keep_method) state.kept.method.reset();
     state.scene_key = key;
     Expected<RayScene> r = RayScene::build(scene, max_memory);
     if (!r) {
@@ -364,7 +381,11 @@ Expected<RenderResult> render_kept(const Scene& scene, const RenderOptions& opti
     if (state) {
       const std::uint64_t before = state->scene_key;
       bool fresh = false;
-      if (Status s = keep_rays(scene, options.max_memory, *state, fresh); !s) return s.error();
+      // The grid keys its grids by the scene itself: a changed sun or sky solves over the last
+      // grid's voxels, and with temporal.grid_slabs shows that grid until the new one is solved.
+      const bool grid = options.method == Method::grid;
+      if (Status s = keep_rays(scene, options.max_memory, *state, fresh, grid); !s)
+        return s.error();
       // The history goes with another method or options, and with a scene that changed in more
       // than its camera, sun and sky (a moved light is followed: the old light fades in frames).
       temporal::History& h = state->history;

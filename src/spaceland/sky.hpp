@@ -3,10 +3,26 @@
 
 #include <cmath>
 
+#include "core/fnv.hpp"
 #include "core/math.hpp"
 #include "penumbra/spaceland/scene.hpp"
 
 namespace penumbra::spaceland {
+
+// Feeds `f` the scene's sky and, with `sun`, whether it has a sun and its light: the part of a
+// scene's fingerprint that lights it from outside.
+inline void hash_light(Fnv1a& f, const Scene& s, bool sun = true) {
+  f.value(s.sky.zenith);
+  f.value(s.sky.horizon);
+  f.value(s.sky.ground);
+  if (!sun) return;
+  f.value(s.has_sun);
+  if (s.has_sun) {
+    f.value(s.sun.direction);
+    f.value(s.sun.irradiance);
+    f.value(s.sun.angular_radius);
+  }
+}
 
 // The sky's radiance in unit direction d, without the sun.
 inline Rgb sky_radiance(const Sky& s, Vec3 d) {

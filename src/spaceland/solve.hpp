@@ -23,7 +23,8 @@ class RadianceCache;
 // What a Renderer keeps for a method between frames of one scene (the surface method's atlas):
 // the method stores its own type in `method` with what it was made from, and checks that itself.
 struct Kept {
-  std::uint64_t scene_key = 0;  // Renderer::scene_key of the scene it was made for
+  std::uint64_t scene_key = 0;     // Renderer::scene_key of the scene it was made for
+  std::uint64_t geometry_key = 0;  // and of this frame's scene without its sky and sun
   std::any method;
 };
 
@@ -54,6 +55,8 @@ struct SolveContext {
   double jitter = 0;
   // Temporal accumulation asks for SolveReport::exact.
   bool want_exact = false;
+  // RenderOptions::temporal.grid_slabs, in a Renderer (0 in a single render()).
+  std::uint64_t grid_slabs = 0;
 };
 
 // What a solve reports besides the image.
@@ -66,6 +69,8 @@ struct SolveReport {
   bool cancelled = false;
   std::vector<std::string> warnings;  // what the user should know about the result
   temporal::Exact exact;              // where ctx.want_exact (temporal accumulation's frames)
+  // The grid's solve under way, a slab at a time (RenderResult's).
+  std::uint64_t grid_slabs_done = 0, grid_slabs = 0;
 };
 
 // The refusal of a method that cannot carry fog (its check_scene): "<method> cannot carry fog:

@@ -83,8 +83,8 @@ TEST_F(ToolsCli, UsageErrorsExitTwo) {
   const CliResult missing = run(PENUMBRA_TEMPORAL, {"no-such-scene.json"});
   EXPECT_EQ(missing.status, 1) << missing.err;
   EXPECT_NE(missing.err.find("no-such-scene.json"), std::string::npos) << missing.err;
-  const CliResult method = run(PENUMBRA_TEMPORAL, {"x.json", "--method", "grid"});
-  EXPECT_EQ(method.status, 2) << method.err;  // accumulated: ssrc or spwi only
+  const CliResult method = run(PENUMBRA_TEMPORAL, {"x.json", "--method", "pt"});
+  EXPECT_EQ(method.status, 2) << method.err;  // ssrc, spwi or grid only
   // A malformed value.
   const CliResult runs = run(PENUMBRA_GPU_PASSES, {"--runs", "many"});
   EXPECT_EQ(runs.status, 2) << runs.err;

@@ -223,6 +223,29 @@ TEST_F(ViewWindow, ScreenshotIsWhatThePrintedRenderCommandDraws) {
   }
 }
 
+// The grid solved a few slabs a frame: after the sun moves (with two bounces, which light the
+// voxels with it), frames show the last grid while the new one is solved, and the screenshot
+// waits for it: the picture is the printed render command's, which solves it whole.
+TEST_F(ViewWindow, GridSlabsEndOnWhatThePrintedRenderCommandDraws) {
+  if (!have_display()) GTEST_SKIP() << x_server().why();
+  const std::string replay = tmp_.write("sun.json", R"({"penumbra_view": 1, "events": [
+      {"set": {"bounces": 2}}, {"wait": {"frames": 2}},
+      {"set": {"sun_azimuth": 40, "sun_elevation": 35}}]})");
+  const std::string shot = tmp_.file("slabs_shot.png");
+  CliResult r =
+      view({scene_, "--method", "grid", "--scale", "1", "--grid-slabs", "2", "--replay", replay,
+            "--screenshot", shot, "--save", tmp_.file("slabs_view.json"), "--stats"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::string counted = "grid slabs: ";
+  const std::size_t at = r.out.find(counted);
+  ASSERT_NE(at, std::string::npos) << r.out;
+  EXPECT_GE(std::atoi(r.out.c_str() + at + counted.size()), 1) << r.out;
+  const std::string png = tmp_.file("slabs_render.png");
+  CliResult rendered = run_printed(r.out, png);
+  ASSERT_EQ(rendered.status, 0) << rendered.err;
+  expect_same_pixels(shot, png, 64, 48);
+}
+
 // Below the view's resolution, guided upscaling (depth, normals, albedo at the view's pixels)
 // is closer to the full-resolution render than bilinear filtering, and the frame is shown at the
 // view's size. The surface method's pixels look up an atlas that does not depend on the camera,

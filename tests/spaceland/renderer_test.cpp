@@ -258,6 +258,123 @@ TEST(Renderer3d, GridKeepsItsSolvedLevelsAcrossViewsAndSizes) {
   EXPECT_EQ(refused.error().message, alone.error().message);
 }
 
+// The yard's light changed as a viewer's panel changes it: the sun turned and the sky's zenith
+// another colour (`k`: which of a few), which the grid's cascades carry.
+void relight(Scene& s, int k) {
+  const Vec3 suns[] = {{-0.5f, 0.7f, 0.2f}, {0.2f, 0.6f, -0.6f}, {0.4f, 0.8f, 0.3f}};
+  s.sun.direction = normalize(suns[k]);
+  s.sky.zenith = {0.1f + 0.2f * float(k), 0.3f, 0.5f - 0.1f * float(k)};
+}
+
+// Renders `s` with the renderer until the grid it asks for is shown (RenderResult::grid_slabs
+// 0), checking each frame in between: the slabs done grow from `done` by 1..`slabs` a frame
+// towards a total that stays the same. Returns the last frame; `frames` counts them.
+RenderResult render_until_solved(Renderer& renderer, const Scene& s, const RenderOptions& o,
+                                 std::uint64_t done, int& frames) {
+  const std::uint64_t slabs = std::uint64_t(o.temporal.grid_slabs);
+  std::uint64_t total = 0;
+  RenderResult r;
+  frames = 0;
+  do {
+    r = render_kept(renderer, s, o);
+    ++frames;
+    if (r.grid_slabs == 0) break;
+    EXPECT_GT(r.grid_slabs_done, done) << "frame " << frames;
+    EXPECT_LE(r.grid_slabs_done, done + slabs) << "frame " << frames;
+    EXPECT_LT(r.grid_slabs_done, r.grid_slabs) << "frame " << frames;
+    if (total > 0) {
+      EXPECT_EQ(r.grid_slabs, total) << "frame " << frames;
+    }
+    EXPECT_FALSE(has_stage(r, "build BVH") && frames > 1) << stage_list(r);
+    done = r.grid_slabs_done;
+    total = r.grid_slabs;
+  } while (frames < 10000);
+  return r;
+}
+
+// With temporal.grid_slabs a grid solved again (here: the sun and the sky changed) is solved that
+// many slabs a frame while the last one is shown: the first view is solved whole, render()'s bits;
+// then each frame shows the old grid (another image than render()'s of the moved sun) and counts
+// the new grid's slabs; the frame that finishes it is render()'s bit for bit. The slabs are z
+// layers of probes, which read only the finished cascade above them: however a solve is split, its
+// field is the same. One and two bounces (the voxels lit by the first solve before the second).
+TEST(Renderer3d, GridSolvedASlabAtATimeShowsTheLastGridThenRendersBits) {
+  for (int bounces : {1, 2}) {
+    SCOPED_TRACE("bounces " + std::to_string(bounces));
+    Renderer renderer;
+    RenderOptions o = options(Method::grid);
+    o.bounces = bounces;
+    o.temporal.grid_slabs = 3;
+    Scene s = yard();
+    const RenderResult first = render_both(renderer, s, o, "first");
+    EXPECT_EQ(first.grid_slabs, 0u);
+    EXPECT_TRUE(has_stage(first, "cascades")) << stage_list(first);
+    relight(s, 0);
+    const RenderResult moved = render_ok(s, o);
+    const RenderResult next = render_kept(renderer, s, o);
+    ASSERT_GT(next.grid_slabs, 3u) << stage_list(next);
+    EXPECT_EQ(next.grid_slabs_done, 3u);
+    // The voxels are the scene's without its sky and sun: kept where no bounce lit them.
+    EXPECT_EQ(has_stage(next, "voxelise"), bounces > 1) << stage_list(next);
+    EXPECT_FALSE(same_bits(next.radiance, moved.radiance));
+    int frames = 0;
+    const RenderResult last = render_until_solved(renderer, s, o, next.grid_slabs_done, frames);
+    // Every frame but the last took 3 slabs, the last the rest.
+    EXPECT_EQ(std::uint64_t(frames + 1), (next.grid_slabs + 2) / 3);
+    expect_same(last, moved, "the new grid shown");
+    // The view kept: the grid is not solved again.
+    const RenderResult again = render_kept(renderer, s, o);
+    EXPECT_EQ(again.grid_slabs, 0u);
+    EXPECT_FALSE(has_stage(again, "cascades")) << stage_list(again);
+    expect_same(again, moved, "again");
+  }
+}
+
+// A solve under way goes on to its end though the view moves on (a flying camera moves the
+// levels nearly every frame); then the view's own grid is solved the same way, and shown as
+// render() draws it. Without temporal.grid_slabs a changed view is solved whole at once, over
+// the last grid's voxels where only the sky and the sun changed.
+TEST(Renderer3d, GridSlabsFinishTheSolveUnderWayThenTheViewsOwn) {
+  Renderer renderer;
+  RenderOptions o = options(Method::grid);
+  o.temporal.grid_slabs = 4;
+  Scene s = yard();
+  render_both(renderer, s, o, "first");
+  relight(s, 0);
+  const RenderResult started = render_kept(renderer, s, o);
+  ASSERT_GT(started.grid_slabs, 8u);
+  relight(s, 1);
+  const RenderResult on = render_kept(renderer, s, o);
+  EXPECT_EQ(on.grid_slabs_done, 8u) << "the solve under way did not go on";
+  int frames = 0;
+  RenderResult r = render_until_solved(renderer, s, o, on.grid_slabs_done, frames);
+  // The first solve's grid is shown, not the view's: its own solve starts with the next frame.
+  ASSERT_EQ(r.grid_slabs, 0u);
+  r = render_kept(renderer, s, o);
+  EXPECT_GT(r.grid_slabs, 0u) << "the view's own grid was not solved";
+  r = render_until_solved(renderer, s, o, r.grid_slabs_done, frames);
+  expect_same(r, render_ok(s, o), "the view's own grid");
+  RenderOptions whole = o;
+  whole.temporal.grid_slabs = 0;
+  relight(s, 2);
+  const RenderResult at_once = render_both(renderer, s, whole, "solved whole");
+  EXPECT_EQ(at_once.grid_slabs, 0u);
+  EXPECT_TRUE(has_stage(at_once, "cascades")) << stage_list(at_once);
+  EXPECT_FALSE(has_stage(at_once, "voxelise")) << stage_list(at_once);
+  // Another scene: voxelised again.
+  Scene other = s;
+  other.spheres[0].radius *= 1.1f;
+  const RenderResult changed = render_both(renderer, other, whole, "another scene");
+  EXPECT_TRUE(has_stage(changed, "voxelise")) << stage_list(changed);
+  // With one bounce the cascades see the sky without the sun's disk (each pixel takes the sun
+  // through its own shadow ray): a moved sun keeps the grid, and the frame is still render()'s.
+  Scene sunny = other;
+  sunny.sun.direction = normalize(Vec3{-0.3f, 0.9f, 0.1f});
+  const RenderResult sun_moved = render_both(renderer, sunny, o, "the sun moved, one bounce");
+  EXPECT_FALSE(has_stage(sun_moved, "cascades")) << stage_list(sun_moved);
+  EXPECT_EQ(sun_moved.grid_slabs, 0u);
+}
+
 TEST(Renderer3d, SurfaceKeepsTheAtlasAndTheBvhWhenOnlyTheCameraMoves) {
   const RenderOptions o = options(Method::surface);
   Renderer renderer;

@@ -253,7 +253,7 @@ TEST_P(TemporalOf, SameBitsOnOneAndTwoThreads) {
   EXPECT_TRUE(same_bits(last[0], last[1]));
 }
 
-TEST(Temporal, OtherMethodsAndFramesOutOfRangeAreRefused) {
+TEST(Temporal, OtherMethodsAndValuesOutOfRangeAreRefused) {
   RenderOptions o = ssrc_temporal(1025);
   Status s = check_options(o);
   ASSERT_FALSE(s.ok());
@@ -272,6 +272,20 @@ TEST(Temporal, OtherMethodsAndFramesOutOfRangeAreRefused) {
     Renderer r;
     EXPECT_FALSE(r.render(pool(8).s, o).ok()) << to_string(m);
   }
+  // The grid's slabs a frame: the grid's, within range.
+  o = RenderOptions{};
+  o.method = Method::grid;
+  o.temporal.grid_slabs = (1 << 20) + 1;
+  s = check_options(o);
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.error().message.find("`temporal.grid_slabs`: expected 0..1048576"), std::string::npos)
+      << s.error().message;
+  o.temporal.grid_slabs = 8;
+  EXPECT_TRUE(check_options(o).ok());
+  o.method = Method::ssrc;
+  s = check_options(o);
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.error().message.find("has no grid"), std::string::npos) << s.error().message;
 }
 
 INSTANTIATE_TEST_SUITE_P(Methods, TemporalOf, ::testing::Values(Method::ssrc, Method::spwi),

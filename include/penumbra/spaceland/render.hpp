@@ -232,6 +232,12 @@ struct TemporalOptions {
   // The history's length: in each pixel whose surface the last frame saw, a new frame weighs
   // 1 / (frames behind it + 1), at least 1 / frames. 0: off.
   int frames = 0;
+  // The grid's: where a Renderer's view needs its grid solved again (the sun or the sky moved, the
+  // levels moved with the camera), the grid it last solved is shown while the new one is solved
+  // this many slabs (z layers of one cascade's probes) a frame, then shown in its turn. 0: off
+  // (solved whole in the frame that needs it, render()'s way). The frames between show the old
+  // grid's light (a moved sun's direct light is each frame's own).
+  int grid_slabs = 0;
 };
 
 struct RenderOptions {
@@ -275,6 +281,10 @@ struct RenderResult {
   // With temporal accumulation: the frame's index in its history (0: the first, drawn without
   // one). A still camera's frame is converged from index temporal.frames - 1 on.
   std::uint64_t temporal_frame = 0;
+  // With temporal.grid_slabs: the grid this frame's view asks for is under way, these slabs of it
+  // done in all, and the frame shows the last grid solved; render again to go on. 0 and 0: the
+  // frame shows its own grid.
+  std::uint64_t grid_slabs_done = 0, grid_slabs = 0;
   RenderOptions options;  // the options used
   std::string device = "cpu";
   // What the result lacks that the options asked for (the grid's voxels far coarser than the

@@ -10,6 +10,7 @@
 
 #include "core/fnv.hpp"
 #include "io/image_io.hpp"
+#include "spaceland/sky.hpp"
 
 namespace penumbra::spaceland::atlas {
 namespace {
@@ -52,17 +53,9 @@ Error damaged(const std::string& path, const std::string& what) {
 
 }  // namespace
 
-std::uint64_t scene_hash(const Scene& s) {
+std::uint64_t scene_hash(const Scene& s, bool light) {
   Fnv1a f;
-  f.value(s.sky.zenith);
-  f.value(s.sky.horizon);
-  f.value(s.sky.ground);
-  f.value(s.has_sun);
-  if (s.has_sun) {
-    f.value(s.sun.direction);
-    f.value(s.sun.irradiance);
-    f.value(s.sun.angular_radius);
-  }
+  if (light) hash_light(f, s);
   f.value(s.materials.size());
   for (const Material& m : s.materials) {
     f.value(m.albedo);

@@ -35,7 +35,8 @@ struct Record {
 // A hash (64-bit FNV-1a) of what the baked light depends on: the geometry (positions, normals,
 // uvs, lightmap uvs, triangles), the materials and textures, the sky and the sun. Not the camera,
 // the names or the file's path: a scene moved or looked at from elsewhere keeps its atlas.
-std::uint64_t scene_hash(const Scene& scene);
+// `light` false: without the sky and the sun (what the grid's voxels are made from).
+std::uint64_t scene_hash(const Scene& scene, bool light = true);
 
 // The bake's file, built in memory (its `radiance`, where kept, in 16-bit floats unless a value
 // passes their range) and written atomically: nothing at `path` unless all of it is.

@@ -415,52 +415,52 @@ struct GridCascade {
 
 }  // namespace
 
-Expected<RadianceField> solve(const Voxels& v, const Background& bg, const GridOptions& o,
-                              std::uint64_t max_bytes, const cascade::SphereLights* lights,
-                              float narrowest) {
-  Expected<cascade::Levels> levels = grid_levels(v, o);
-  if (!levels) return levels.error();
-  const std::vector<CascadePlan> plan = cascades_of(v, *levels);
-  const bool spread = lights && !lights->empty();
-  const int cone_top =
-      o.specular == SpecularQuery::cone ? cascade::cone_top(*levels, narrowest) : 0;
-  const std::uint64_t need = cascades_bytes(plan, o, v.size, spread, cone_top);
-  if (need > max_bytes)
-    return Error{"the probe grid's cascades need " +
-                 io::format_rounded(double(need) / double(1 << 20)) +
-                 " MiB, more than the `max_memory` limit of " +
-                 io::format_rounded(double(max_bytes) / double(1 << 20)) +
-                 " MiB; use a larger --voxel or fewer --directions" +
-                 (cone_top > 0 ? std::string(", or --specular wide (the cone query keeps "
-                                             "cascades 0..") +
-                                     std::to_string(cone_top) + " for the glossy materials)"
-                               : std::string())};
-
+struct CascadeSolve::State {
+  const Voxels* v = nullptr;
+  GridOptions o;
+  const cascade::SphereLights* lights = nullptr;
+  cascade::Levels levels;
+  std::vector<CascadePlan> plan;
+  bool spread = false;
+  int cone_top = 0;
+  int i = -1;          // the cascade at hand (-1: all done)
+  int z = 0;           // its next layer of probes
+  bool begun = false;  // its directions and stores made
+  std::uint64_t slabs = 0, done = 0;
+  RadianceStore upper, lower;
   std::vector<Vec3> dirs, up_dirs;  // this cascade's directions and the one above's
   std::vector<float> upper_reach, lower_reach;
-  std::atomic<std::uint64_t> traced{0};
-  std::vector<double> ms(plan.size());
+  Extended ext;
+  int doublings = 0;
+  std::uint64_t traced = 0;
+  std::vector<double> ms;
   // What the cone query reads of cascades 0..top: their own intervals below top, their merged
   // radiance and directions above 0 (cascade 0's are the field's).
-  std::vector<RadianceField::Kept> kept(cone_top > 0 ? std::size_t(cone_top) + 1 : 0);
-  RadianceStore cascade0 = cascade::top_down(*levels, [&](int i, const RadianceStore& upper,
-                                                          RadianceStore& lower) {
-    Stopwatch watch;
+  std::vector<RadianceField::Kept> kept;
+
+  // Cascade i's directions, store and extension, before its first layer.
+  void begin() {
     const CascadePlan& c = plan[std::size_t(i)];
-    const bool top = levels->top(i);
     dirs = {};  // map i + 2's, freed before map i is made (two maps at once, as estimated)
-    dirs = cascade::direction_map(*levels, i);
+    dirs = cascade::direction_map(levels, i);
     lower.assign(c.probes(), c.side);
     if (spread) {
       const std::size_t rays = std::size_t(c.probes()) * std::size_t(c.side) * c.side;
       if (rays != lower_reach.capacity()) lower_reach = {};  // never old and new at once
       lower_reach.assign(rays, -1.0f);
     }
-    const int doublings = extension_doublings(c, o, v.size, top);
-    const Extended ext = doublings > 0 ? extend_cascade(v, c, dirs, doublings) : Extended{};
+    doublings = extension_doublings(c, o, v->size, levels.top(i));
+    ext = doublings > 0 ? extend_cascade(*v, c, dirs, doublings) : Extended{};
     if (i < cone_top)
       kept[std::size_t(i)].intervals.assign(std::size_t(c.probes()) * dirs.size(), {});
-    const GridCascade solver{v,
+    begun = true;
+  }
+
+  // Layers [z, z + n) of cascade i.
+  void layers(const Background& bg, int n) {
+    const CascadePlan& c = plan[std::size_t(i)];
+    const bool top = levels.top(i);
+    const GridCascade solver{*v,
                              o,
                              c,
                              top ? nullptr : &plan[std::size_t(i) + 1],
@@ -469,39 +469,125 @@ Expected<RadianceField> solve(const Voxels& v, const Background& bg, const GridO
                              upper,
                              ext,
                              doublings,
-                             VoxelTracer{v, bg},
+                             VoxelTracer{*v, bg},
                              lights,
                              &upper_reach,
                              &lower_reach,
                              i == 0,
                              i < cone_top ? kept[std::size_t(i)].intervals.data() : nullptr};
-    parallel_for(c.nz, [&](int z) {
+    std::atomic<std::uint64_t> count{0};
+    const int first = z;
+    parallel_for(n, [&](int k) {
       std::uint64_t local = 0;
-      for (std::uint64_t q = std::uint64_t(z) * c.ny * c.nx, end = q + std::uint64_t(c.ny) * c.nx;
-           q < end; ++q)
+      const std::uint64_t layer = std::uint64_t(c.ny) * c.nx;
+      for (std::uint64_t q = std::uint64_t(first + k) * layer, end = q + layer; q < end; ++q)
         local += solver.probe(q, lower.probe(q));
-      traced.fetch_add(local, std::memory_order_relaxed);
+      count.fetch_add(local, std::memory_order_relaxed);
     });
+    traced += count.load();
+    z += n;
+  }
+
+  // Cascade i merged: it becomes the upper of the one below.
+  void end() {
     if (i > 0 && i <= cone_top) {
       kept[std::size_t(i)].merged = lower;
       kept[std::size_t(i)].dirs = dirs;
     }
+    std::swap(upper, lower);
     std::swap(up_dirs, dirs);
     std::swap(upper_reach, lower_reach);
-    ms[std::size_t(i)] = watch.ms();
-  });
-  // cascade 0's directions, swapped up last
-  RadianceField f =
-      RadianceField::make(v, plan, std::move(up_dirs), std::move(cascade0), std::move(ms));
-  f.rays_ = traced.load();
-  f.kept_ = std::move(kept);
-  f.levels_ = *levels;
-  if (spread) {
-    f.lights_ = *lights;
-    f.reach_ = std::move(upper_reach);                        // cascade 0's, swapped up last
-    if (plan.size() > 1) f.reach1_ = std::move(lower_reach);  // and cascade 1's before it
+    ext = Extended{};
+    --i;
+    z = 0;
+    begun = false;
+  }
+};
+
+CascadeSolve::CascadeSolve(std::unique_ptr<State> s) : s_(std::move(s)) {}
+CascadeSolve::CascadeSolve(CascadeSolve&&) noexcept = default;
+CascadeSolve& CascadeSolve::operator=(CascadeSolve&&) noexcept = default;
+CascadeSolve::~CascadeSolve() = default;
+
+Expected<CascadeSolve> CascadeSolve::start(const Voxels& v, const GridOptions& o,
+                                           std::uint64_t max_bytes,
+                                           const cascade::SphereLights* lights, float narrowest) {
+  Expected<cascade::Levels> levels = grid_levels(v, o);
+  if (!levels) return levels.error();
+  auto s = std::make_unique<State>();
+  s->v = &v;
+  s->o = o;
+  s->lights = lights;
+  s->levels = *levels;
+  s->plan = cascades_of(v, *levels);
+  s->spread = lights && !lights->empty();
+  s->cone_top = o.specular == SpecularQuery::cone ? cascade::cone_top(*levels, narrowest) : 0;
+  const std::uint64_t need = cascades_bytes(s->plan, o, v.size, s->spread, s->cone_top);
+  if (need > max_bytes)
+    return Error{"the probe grid's cascades need " +
+                 io::format_rounded(double(need) / double(1 << 20)) +
+                 " MiB, more than the `max_memory` limit of " +
+                 io::format_rounded(double(max_bytes) / double(1 << 20)) +
+                 " MiB; use a larger --voxel or fewer --directions" +
+                 (s->cone_top > 0 ? std::string(", or --specular wide (the cone query keeps "
+                                                "cascades 0..") +
+                                        std::to_string(s->cone_top) + " for the glossy materials)"
+                                  : std::string())};
+  s->i = levels->count - 1;
+  for (const CascadePlan& c : s->plan) s->slabs += std::uint64_t(c.nz);
+  s->ms.assign(s->plan.size(), 0.0);
+  s->kept.resize(s->cone_top > 0 ? std::size_t(s->cone_top) + 1 : 0);
+  return CascadeSolve(std::move(s));
+}
+
+bool CascadeSolve::step(const Background& bg, std::uint64_t& slabs) {
+  State& s = *s_;
+  while (s.i >= 0 && slabs > 0) {
+    Stopwatch watch;
+    if (!s.begun) s.begin();
+    const int nz = s.plan[std::size_t(s.i)].nz;
+    const int n = int(std::min<std::uint64_t>(slabs, std::uint64_t(nz - s.z)));
+    s.layers(bg, n);
+    slabs -= std::uint64_t(n);
+    s.done += std::uint64_t(n);
+    s.ms[std::size_t(s.i)] += watch.ms();
+    if (s.z == nz) s.end();
+  }
+  return s.i < 0;
+}
+
+std::uint64_t CascadeSolve::slabs() const {
+  return s_->slabs;
+}
+
+std::uint64_t CascadeSolve::done() const {
+  return s_->done;
+}
+
+RadianceField CascadeSolve::finish() {
+  State& s = *s_;
+  // cascade 0's directions and store, swapped up last
+  RadianceField f = RadianceField::make(*s.v, std::move(s.plan), std::move(s.up_dirs),
+                                        std::move(s.upper), std::move(s.ms));
+  f.rays_ = s.traced;
+  f.kept_ = std::move(s.kept);
+  f.levels_ = s.levels;
+  if (s.spread) {
+    f.lights_ = *s.lights;
+    f.reach_ = std::move(s.upper_reach);                           // cascade 0's, swapped up last
+    if (f.plan_.size() > 1) f.reach1_ = std::move(s.lower_reach);  // and cascade 1's before it
   }
   return f;
+}
+
+Expected<RadianceField> solve(const Voxels& v, const Background& bg, const GridOptions& o,
+                              std::uint64_t max_bytes, const cascade::SphereLights* lights,
+                              float narrowest) {
+  Expected<CascadeSolve> s = CascadeSolve::start(v, o, max_bytes, lights, narrowest);
+  if (!s) return s.error();
+  std::uint64_t all = s->slabs();
+  s->step(bg, all);
+  return s->finish();
 }
 
 RadianceField RadianceField::make(const Voxels& v, std::vector<CascadePlan> plan,

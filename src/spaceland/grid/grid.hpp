@@ -13,6 +13,7 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <numbers>
 #include <string>
 #include <vector>
@@ -104,8 +105,7 @@ class RadianceField {
   std::uint64_t bytes() const;
 
  private:
-  friend Expected<RadianceField> solve(const Voxels&, const Background&, const GridOptions&,
-                                       std::uint64_t, const cascade::SphereLights*, float);
+  friend class CascadeSolve;
   // Cascade 0's field: each probe's validity and its mean over the sphere.
   static RadianceField make(const Voxels& v, std::vector<CascadePlan> plan, std::vector<Vec3> dirs,
                             cascade::RadianceStore radiance, std::vector<double> ms);
@@ -184,6 +184,35 @@ Expected<RadianceField> solve(const Voxels& v, const Background& bg, const GridO
                               std::uint64_t max_bytes,
                               const cascade::SphereLights* lights = nullptr,
                               float narrowest = cascade::kInfinity);
+
+// solve() a slab at a time: each step() traces and merges up to a number of z layers of probes
+// ("slabs") of the cascade at hand, top down and each cascade's layers in order, so that a
+// Renderer can spread a solve over frames (RenderOptions::temporal.grid_slabs). A probe reads
+// only the finished cascade above it, so the field is solve()'s bit for bit however the layers
+// are split.
+class CascadeSolve {
+ public:
+  // As solve() refuses. `v` and `lights` must outlive it (a Renderer's kept clipmap holds both).
+  static Expected<CascadeSolve> start(const Voxels& v, const GridOptions& o,
+                                      std::uint64_t max_bytes,
+                                      const cascade::SphereLights* lights = nullptr,
+                                      float narrowest = cascade::kInfinity);
+  CascadeSolve(CascadeSolve&&) noexcept;
+  CascadeSolve& operator=(CascadeSolve&&) noexcept;
+  ~CascadeSolve();
+  // Up to `slabs` layers, taken off it, rays leaving the grid seeing `bg` (each call's own: the
+  // scene is the same, its objects may be other ones); true once every cascade is merged.
+  bool step(const Background& bg, std::uint64_t& slabs);
+  std::uint64_t slabs() const;  // layers in all: the cascades' nz summed
+  std::uint64_t done() const;   // and traced so far
+  // The field, once step() has returned true.
+  RadianceField finish();
+
+ private:
+  struct State;
+  explicit CascadeSolve(std::unique_ptr<State> s);
+  std::unique_ptr<State> s_;
+};
 
 // Every level's cascades (level_options), level l spreading lights[l] (Clipmap::lights); the
 // fields solved first hold part of `max_bytes`, the next level's cascades have the rest.

@@ -6,6 +6,8 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <optional>
+#include <string>
 #include <vector>
 
 #include "core/fnv.hpp"
@@ -19,6 +21,7 @@
 #include "spaceland/grid/grid.hpp"
 #include "spaceland/media.hpp"
 #include "spaceland/shade.hpp"
+#include "spaceland/sky.hpp"
 #include "spaceland/surface.hpp"
 
 namespace penumbra::spaceland::grid {
@@ -118,16 +121,34 @@ namespace {
 // voxel the view asks for changes. Shared: the clipmap's levels point to each other.
 struct KeptGrid {
   std::uint64_t key = 0;
-  Clipmap map;
+  // What its voxels are made from (voxel_key): a grid for the same scene and plan lit otherwise
+  // (the sun, the sky) shares them where no bounce lit them.
+  std::uint64_t voxel_key = 0;
+  std::shared_ptr<Clipmap> map;
+  bool own_voxels = false;  // made for this grid, not shared from the one before
   LevelFields field;
   GridOptions used;
   std::uint64_t voxel_bytes = 0, memory_bytes = 0;
 };
 
+// Feeds `f` where the levels lie.
+void hash_plan(Fnv1a& f, const std::vector<ClipLevel>& plan) {
+  for (const ClipLevel& l : plan) {
+    f.value(l.size);
+    f.value(l.box.first);
+    f.value(l.box.dims);
+    f.value(l.cut);
+  }
+}
+
+// What a solved grid is made from: the scene but its camera, and its sun only where a later
+// bounce lights the voxels with it (the cascades see the sky without the sun's disk; each pixel
+// takes the sun through its own shadow ray), so that a sun moved with one bounce keeps the grid.
 std::uint64_t kept_key(const SolveContext& ctx, const GridOptions& o,
                        const std::vector<ClipLevel>& plan) {
   Fnv1a f;
-  f.value(ctx.kept->scene_key);
+  f.value(ctx.kept->geometry_key);
+  hash_light(f, ctx.scene, ctx.bounces > 1);
   f.value(o.voxel);
   f.value(o.levels);
   f.value(o.probe_spacing);
@@ -140,71 +161,183 @@ std::uint64_t kept_key(const SolveContext& ctx, const GridOptions& o,
   f.value(ctx.bounces);
   f.value(ctx.light_exponent);
   f.value(ctx.sun_rays);
-  for (const ClipLevel& l : plan) {
-    f.value(l.size);
-    f.value(l.box.first);
-    f.value(l.box.dims);
-    f.value(l.cut);
-  }
+  hash_plan(f, plan);
   return f.h;
 }
 
-// Voxelises the planned levels and solves their cascades, once per bounce.
-Status solve_grid(const SolveContext& ctx, const GridOptions& o, std::vector<ClipLevel> plan,
-                  const Background& bg, const SunLight& sun, KeptGrid& out, SolveReport& report) {
-  Stopwatch watch;
-  const bool bounces = ctx.bounces > 1;
-  Expected<Clipmap> built =
-      Clipmap::build(ctx.scene, std::move(plan), ctx.max_memory / 4, spread_voxels(o));
-  if (!built) return built.error();
-  out.map = std::move(*built);
-  Clipmap* map = &out.map;
-  report.stages.push_back({"voxelise", watch.ms()});
-  out.used.voxel = (*map)[0].size;
-  out.used.levels = int(map->size());
-  watch.restart();
-  const std::uint64_t voxel_memory = voxel_bytes(map->voxels(), bounces);
-  const std::uint64_t left = ctx.max_memory - std::min(ctx.max_memory, voxel_memory);
-  const std::vector<cascade::SphereLights> lights = map->lights(ctx.scene);
-  // The cone query reads the last solve's cascades only: earlier ones light the voxels.
-  const float narrowest = cascade::narrowest_lobe(ctx.scene);
-  Expected<LevelFields> field =
-      solve_levels(*map, bg, o, left, lights, bounces ? cascade::kInfinity : narrowest);
-  if (!field) return field.error();
-  report.rays += field->rays();
-  report.stages.push_back({"cascades", watch.ms()});
-  // Later bounces: the surfaces' and the fog's own emission plus what the last field (and the
-  // sun) brings them, solved again (the voxels' light after b bounces gives the pixels b + 1).
-  if (bounces) {
-    const std::vector<std::vector<Rgb>> base = map->emission();
-    for (int b = 1; b < ctx.bounces; ++b) {
-      watch.restart();
-      report.rays += add_bounces(*map, *field, base, &sun);
-      *field = LevelFields{};  // their radiance freed before the next solve's
-      field = solve_levels(*map, bg, o, left, lights,
-                           b + 1 == ctx.bounces ? narrowest : cascade::kInfinity);
-      if (!field) return field.error();
-      report.rays += field->rays();
-      report.stages.push_back({"bounce " + std::to_string(b + 1), watch.ms()});
-    }
-  }
-  out.field = std::move(*field);
-  const RadianceField& finest = out.field.fields[0];
-  out.used.cascades = int(finest.cascades().size());
-  out.used.interval = finest.cascades()[0].t_end;
-  out.voxel_bytes = voxel_memory;
-  // The largest level's cascades while the others' fields are held.
-  std::uint64_t fields = 0, cascades = 0;
-  for (std::size_t l = 0; l < map->size(); ++l) {
-    const RadianceField& f = out.field.fields[l];
-    fields += f.bytes();
-    const std::uint64_t solving = cascades_bytes(f.cascades(), level_options(o, l), (*map)[l].size,
-                                                 !lights[l].empty(), f.cone_top());
-    cascades = std::max(cascades, solving - std::min(solving, f.bytes()));
-  }
-  out.memory_bytes = voxel_memory + fields + cascades;
-  return {};
+// What a grid's voxels are made from: the scene without its sky and sun, its dimming, the
+// levels' placement and what the voxelising and the bounces' buffers depend on.
+std::uint64_t voxel_key(const SolveContext& ctx, const GridOptions& o,
+                        const std::vector<ClipLevel>& plan) {
+  Fnv1a f;
+  f.value(ctx.kept->geometry_key);
+  f.value(ctx.light_exponent);
+  f.value(spread_voxels(o));
+  f.value(ctx.bounces > 1);
+  hash_plan(f, plan);
+  return f.h;
 }
+
+// The solve of a grid, a slab at a time: voxelise the planned levels, then solve their cascades
+// once per bounce (CascadeSolve, level by level), lighting the voxels with the last bounce's
+// fields before the next. advance() does as many slabs as it is given; voxelising and each
+// lighting count as one. What it reads of the scene comes from each call's context: the voxels
+// and sphere lights from the first call's, the sky and the sun (the bounces' light) from each
+// call's, so a solve that goes on while the sun moves mixes the two (it is shown only until the
+// next solve, from the view then, ends).
+class GridSolve {
+ public:
+  // `reuse`: voxels made from the same scene and plan, not lit by bounces (the grid shown's,
+  // shared), to solve over instead of voxelising again.
+  GridSolve(std::uint64_t key, std::uint64_t voxel_key, std::vector<ClipLevel> plan, int bounces,
+            float narrowest, std::shared_ptr<Clipmap> reuse)
+      : plan_(std::move(plan)),
+        bounces_(bounces),
+        narrowest_(narrowest),
+        reuse_(bounces == 1 ? std::move(reuse) : nullptr) {
+    out_ = std::make_shared<KeptGrid>();
+    out_->key = key;
+    out_->voxel_key = voxel_key;
+  }
+
+  bool done() const { return done_; }
+  // Slabs done and in all (known once voxelised: 1 before).
+  std::uint64_t slabs_done() const { return done_slabs_; }
+  std::uint64_t slabs() const { return slabs_; }
+  const std::shared_ptr<KeptGrid>& grid() const { return out_; }
+
+  Status advance(const SolveContext& ctx, const GridOptions& o, const Background& bg,
+                 const SunLight& sun, std::uint64_t budget, SolveReport& report) {
+    KeptGrid& out = *out_;
+    while (budget > 0 && !done_) {
+      Stopwatch watch;
+      if (!voxelised_) {
+        if (reuse_) {
+          out.map = std::move(reuse_);  // the grid shown's voxels, unlit: this scene's
+        } else {
+          Expected<Clipmap> built =
+              Clipmap::build(ctx.scene, std::move(plan_), ctx.max_memory / 4, spread_voxels(o));
+          if (!built) return built.error();
+          out.map = std::make_shared<Clipmap>(std::move(*built));
+          out.own_voxels = true;
+        }
+        Clipmap& map = *out.map;
+        out.used.voxel = map[0].size;
+        out.used.levels = int(map.size());
+        lights_ = map.lights(ctx.scene);
+        out.voxel_bytes = voxel_bytes(map.voxels(), bounces_ > 1);
+        left_ = ctx.max_memory - std::min(ctx.max_memory, out.voxel_bytes);
+        if (bounces_ > 1) base_ = map.emission();
+        slabs_ = 1 + std::uint64_t(bounces_ - 1);
+        for (std::size_t l = 0; l < map.size(); ++l) {
+          Expected<std::vector<CascadePlan>> p = plan_cascades(map[l], level_options(o, l));
+          if (!p) return p.error();
+          for (const CascadePlan& c : *p) slabs_ += std::uint64_t(c.nz) * std::uint64_t(bounces_);
+        }
+        voxelised_ = true;
+        take(budget);
+        if (out.own_voxels) report.stages.push_back({"voxelise", watch.ms()});
+        continue;
+      }
+      const std::string stage = bounce_ == 0 ? "cascades" : "bounce " + std::to_string(bounce_ + 1);
+      if (!solving_) {
+        if (level_ == 0 && bounce_ > 0 && !lit_) {
+          // The voxels lit by the last bounce's fields (the sun's light included), which then go.
+          report.rays += add_bounces(*out.map, last_, base_, &sun);
+          last_ = LevelFields{};
+          lit_ = true;
+          take(budget);
+          report.stages.push_back({stage, watch.ms()});
+          continue;
+        }
+        // The fields solved first hold part of what is left; this level's cascades the rest.
+        const float narrowest = bounce_ + 1 == bounces_ ? narrowest_ : cascade::kInfinity;
+        Expected<CascadeSolve> started =
+            CascadeSolve::start((*out.map)[level_], level_options(o, level_),
+                                left_ - std::min(left_, held_), &lights_[level_], narrowest);
+        if (!started) return started.error();
+        solving_.emplace(std::move(*started));
+      }
+      const std::uint64_t before = budget;
+      const bool finished = solving_->step(bg, budget);
+      done_slabs_ += before - budget;
+      if (finished) {
+        RadianceField f = solving_->finish();
+        solving_.reset();
+        report.rays += f.rays();
+        held_ += f.bytes();
+        fields_.map = out.map.get();
+        fields_.fields.push_back(std::move(f));
+        if (++level_ == out.map->size()) {
+          if (bounce_ + 1 == bounces_) {
+            finish(o);
+          } else {  // the next bounce: these fields light the voxels first
+            last_ = std::move(fields_);
+            fields_ = LevelFields{};
+            ++bounce_;
+            level_ = 0;
+            held_ = 0;
+            lit_ = false;
+          }
+        }
+      }
+      // One stage per solve a frame takes part in, with its name.
+      if (!report.stages.empty() && report.stages.back().name == stage)
+        report.stages.back().ms += watch.ms();
+      else
+        report.stages.push_back({stage, watch.ms()});
+    }
+    return {};
+  }
+
+ private:
+  void take(std::uint64_t& budget) {
+    --budget;
+    ++done_slabs_;
+  }
+
+  void finish(const GridOptions& o) {
+    KeptGrid& out = *out_;
+    out.field = std::move(fields_);
+    out.field.map = out.map.get();
+    const RadianceField& finest = out.field.fields[0];
+    out.used.cascades = int(finest.cascades().size());
+    out.used.interval = finest.cascades()[0].t_end;
+    // The largest level's cascades while the others' fields are held.
+    std::uint64_t fields = 0, cascades = 0;
+    for (std::size_t l = 0; l < out.map->size(); ++l) {
+      const RadianceField& f = out.field.fields[l];
+      fields += f.bytes();
+      const std::uint64_t solving = cascades_bytes(
+          f.cascades(), level_options(o, l), (*out.map)[l].size, !lights_[l].empty(), f.cone_top());
+      cascades = std::max(cascades, solving - std::min(solving, f.bytes()));
+    }
+    out.memory_bytes = out.voxel_bytes + fields + cascades;
+    done_ = true;
+  }
+
+  std::shared_ptr<KeptGrid> out_;
+  std::vector<ClipLevel> plan_;
+  int bounces_ = 1;
+  float narrowest_ = cascade::kInfinity;
+  std::shared_ptr<Clipmap> reuse_;
+  bool voxelised_ = false, lit_ = false, done_ = false;
+  std::vector<cascade::SphereLights> lights_;
+  std::vector<std::vector<Rgb>> base_;
+  std::uint64_t left_ = 0, held_ = 0;
+  int bounce_ = 0;
+  std::size_t level_ = 0;
+  std::optional<CascadeSolve> solving_;
+  LevelFields fields_, last_;  // this bounce's fields solved so far; the last bounce's
+  std::uint64_t done_slabs_ = 0, slabs_ = 1;
+};
+
+// What a Renderer keeps for the grid: the grid shown, and with temporal.grid_slabs the solve of
+// the one the scene now asks for, under way.
+struct GridState {
+  std::shared_ptr<KeptGrid> shown;
+  std::unique_ptr<GridSolve> pending;
+};
 
 }  // namespace
 
@@ -216,25 +349,60 @@ Expected<ImageRgb> render(const SolveContext& ctx, const GridOptions& o, SolveRe
   const Background bg(ctx.scene);
   const SunLight sun(ctx.scene, ctx.rays, ctx.sun_rays);
   // A Renderer's views share the solved grid while its levels stay where they are.
-  using Shared = std::shared_ptr<KeptGrid>;
-  const Shared* kept = ctx.kept ? std::any_cast<Shared>(&ctx.kept->method) : nullptr;
+  using Shared = std::shared_ptr<GridState>;
+  Shared* kept = ctx.kept ? std::any_cast<Shared>(&ctx.kept->method) : nullptr;
+  GridState* state = kept ? kept->get() : nullptr;
   const std::uint64_t key = ctx.kept ? kept_key(ctx, o, plan) : 0;
-  Shared grid;
+  const std::uint64_t voxels = ctx.kept ? voxel_key(ctx, o, plan) : 0;
+  // The grid shown's voxels, where this view's would be the same.
+  std::shared_ptr<Clipmap> reuse =
+      state && state->shown && state->shown->voxel_key == voxels ? state->shown->map : nullptr;
   // Kept while the memory the render allows holds what the solve needed (the voxels within a
   // quarter of it, as Clipmap::build asks, and everything within the whole), so that a render
   // would not have refused it.
-  if (kept && *kept && (*kept)->key == key && ctx.max_memory >= (*kept)->memory_bytes &&
-      ctx.max_memory / 4 >= (*kept)->voxel_bytes) {
-    grid = *kept;
+  const auto fits = [&](const KeptGrid& k, std::uint64_t times) {
+    return ctx.max_memory / times >= k.memory_bytes && ctx.max_memory / 4 / times >= k.voxel_bytes;
+  };
+  std::shared_ptr<KeptGrid> grid;
+  const float narrowest = cascade::narrowest_lobe(ctx.scene);
+  if (state && state->shown && state->shown->key == key && fits(*state->shown, 1)) {
+    grid = state->shown;
+    state->pending.reset();  // the view came back to the grid shown
+  } else if (state && state->shown && ctx.grid_slabs > 0 && fits(*state->shown, 2)) {
+    // The grid shown stays while the new one is solved, ctx.grid_slabs slabs a frame (the two
+    // at once within the limit: the new one taken as large as the old). A solve under way goes
+    // on to its end though the view has moved on since it began (a flying camera moves the
+    // levels nearly every frame: starting again each time would never end); the next starts
+    // from the view then.
+    if (!state->pending)
+      state->pending = std::make_unique<GridSolve>(key, voxels, std::move(plan), ctx.bounces,
+                                                   narrowest, std::move(reuse));
+    GridSolve& pending = *state->pending;
+    if (Status s = pending.advance(ctx, o, bg, sun, ctx.grid_slabs, report); !s) return s.error();
+    if (pending.done()) {
+      state->shown = pending.grid();
+      state->pending.reset();
+    } else {
+      report.grid_slabs_done = pending.slabs_done();
+      report.grid_slabs = pending.slabs();
+      if (pending.grid()->own_voxels) report.memory_bytes += pending.grid()->voxel_bytes;
+    }
+    grid = state->shown;
   } else {
     if (ctx.kept) ctx.kept->method.reset();  // the old grid goes before a new one is made
-    grid = std::make_shared<KeptGrid>();
-    grid->key = key;
-    if (Status s = solve_grid(ctx, o, std::move(plan), bg, sun, *grid, report); !s)
+    GridSolve whole(key, voxels, std::move(plan), ctx.bounces, narrowest, std::move(reuse));
+    if (Status s =
+            whole.advance(ctx, o, bg, sun, std::numeric_limits<std::uint64_t>::max(), report);
+        !s)
       return s.error();
-    if (ctx.kept) ctx.kept->method = grid;
+    grid = whole.grid();
+    if (ctx.kept) {
+      auto fresh = std::make_shared<GridState>();
+      fresh->shown = grid;
+      ctx.kept->method = std::move(fresh);
+    }
   }
-  const Clipmap* map = &grid->map;
+  const Clipmap* map = grid->map.get();
   const LevelFields* field = &grid->field;
   // Far geometry makes the levels' voxels grow until the last holds the scene: near the camera
   // the grid then resolves nothing, silently (a sphere 1e17 away took the indirect light).

@@ -378,7 +378,10 @@ Expected<ImageRgb> render(const SolveContext& ctx, const GridOptions& o, SolveRe
       state->pending = std::make_unique<GridSolve>(key, voxels, std::move(plan), ctx.bounces,
                                                    narrowest, std::move(reuse));
     GridSolve& pending = *state->pending;
-    if (Status s = pending.advance(ctx, o, bg, sun, ctx.grid_slabs, report); !s) return s.error();
+    if (Status s = pending.advance(ctx, o, bg, sun, ctx.grid_slabs, report); !s) {
+      state->pending.reset();  // refused (the memory limit): the next frame starts again
+      return s.error();
+    }
     if (pending.done()) {
       state->shown = pending.grid();
       state->pending.reset();

@@ -244,7 +244,7 @@ Expected<ImageRgb> ssrc_run(const SolveContext& ctx, const RenderOptions& o, Sol
                             RenderOptions& used, ssrc::Port port) {
   ssrc::Layout layout = ssrc::make_layout(ctx.g.width, ctx.g.height, o.ssrc);
   layout.glossy = cascade::any_glossy(ctx.scene);
-  layout.rotation = ctx.jitter * 2 * kPi / layout.q0;
+  layout.rotation = temporal::jitter(ctx.frame) * 2 * kPi / layout.q0;
   used.ssrc.probe_spacing = layout.tiles.levels.spacing0;
   used.ssrc.interval = layout.r0;
   used.ssrc.cascades = layout.count();

@@ -236,7 +236,7 @@ namespace {
 // The method's image: the radiance cache first where it needs one, then its solve.
 // `room`: the memory limit less what is held already (the scene, the BVH, the pixel buffers),
 // which the method's own refusals (the grid's cascades, the radiance cache) are held to.
-// With `exact`, temporal accumulation's frame `frame`: its index and jitter passed on, and what
+// With `exact`, temporal accumulation's frame `frame`: its index passed on, and what
 // the method reports for it (SolveReport::exact) returned there.
 Status solve(const Plan& plan, const Scene& scene, const Scene& given, const RayScene& rays,
              const GBuffer& g, std::uint64_t room, Kept* kept, std::uint64_t frame,
@@ -250,7 +250,6 @@ Status solve(const Plan& plan, const Scene& scene, const Scene& given, const Ray
   ctx.cancel = o.cancel;
   ctx.kept = kept;
   ctx.frame = frame;
-  ctx.jitter = temporal::jitter(frame);
   ctx.want_exact = exact != nullptr;
   ctx.grid_slabs = kept ? std::uint64_t(o.temporal.grid_slabs) : 0;
   std::optional<RadianceCache> cache;

@@ -48,11 +48,10 @@ struct SolveContext {
   const std::atomic<bool>* cancel = nullptr;
   // A Renderer's store for what does not depend on the camera; null in a single render().
   Kept* kept = nullptr;
-  // Temporal accumulation's frame index in its history, 0 in a single render(), and its jitter
-  // in [0, 1) (temporal::jitter): ssrc turns its screen directions by this fraction of a
-  // cascade-0 direction; spwi moves its probe lattice by the frame's point (spwi::shift_lattice).
+  // Temporal accumulation's frame index in its history, 0 in a single render(): ssrc turns its
+  // screen directions by temporal::jitter(frame) of a cascade-0 direction; spwi moves its probe
+  // lattice by the frame's point (spwi::shift_lattice).
   std::uint64_t frame = 0;
-  double jitter = 0;
   // Temporal accumulation asks for SolveReport::exact.
   bool want_exact = false;
   // RenderOptions::temporal.grid_slabs, in a Renderer (0 in a single render()).
